@@ -221,7 +221,9 @@ class EquilibriumSolver:
         order = check_order(order, disc.n_tendons)
         u = disc.straight() if start is None else start.u.copy()
         p_now = np.zeros(disc.n_tendons) if start is None else np.asarray(start.p, float)
-        keep_stable = self.inertia.negative_eigenvalues(u, p_now) == 0
+        self._modes = (start.unstable_modes if start is not None
+                       else self.inertia.negative_eigenvalues(u, p_now))
+        keep_stable = self._modes == 0
         self._snaps = []
         iterations = steps = 0
         reason = "CONVERGED_FNORM_ABS"
@@ -233,7 +235,7 @@ class EquilibriumSolver:
             if not ok:
                 break
         result = dict(converged=ok, reason=reason, iterations=iterations, load_steps=steps,
-                      unstable_modes=self.inertia.negative_eigenvalues(u, p_now),
+                      unstable_modes=self._modes,
                       snaps=tuple(self._snaps), p_requested=p)
         if not ok:
             result["message"] = self._failure_message(u, p_now, p, reason)
@@ -256,7 +258,8 @@ class EquilibriumSolver:
             limit_point = step <= min_fraction
             if self.converged():
                 jumped = np.max(np.abs(u_new[:n_angles] - predictor[:n_angles])) > self.jump_tol
-                if keep_stable and self.inertia.negative_eigenvalues(u_new, target) > 0:
+                modes = self.inertia.negative_eigenvalues(u_new, target)
+                if keep_stable and modes > 0:
                     reason = "UNSTABLE_STATE"
                 elif jumped and not limit_point:
                     reason = "BRANCH_JUMP"
@@ -266,7 +269,7 @@ class EquilibriumSolver:
                         u_prev = None          # no secant across a snap
                     else:
                         u_prev, dlam_prev = u, step
-                    u, lam, steps = u_new, lam + step, steps + 1
+                    u, lam, steps, self._modes = u_new, lam + step, steps + 1, modes
                     if its <= 4:
                         dlam = min(2.0 * dlam, full)
                     continue

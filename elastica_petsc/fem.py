@@ -134,6 +134,17 @@ class Discretisation:
         g[:, :-1] += per_element[:, 1:]           # element k   = right of node k
         return g
 
+    def tendon_sums(self, values: np.ndarray) -> np.ndarray:
+        """sum over tendons i with e < m_i of values[i], for every element e.
+
+        ``values`` has shape (n, ...); the result (N, ...).  O(N + n): each
+        tendon's value is dropped at its attachment node, then summed from the
+        tip backwards.
+        """
+        drop = np.zeros((self.n_elements + 1,) + values.shape[1:])
+        np.add.at(drop, np.asarray(self.attach_nodes), values)
+        return np.cumsum(drop[::-1], axis=0)[::-1][1:]
+
     # --- energies (Eq. 21) ----------------------------------------------------
     def strain_energy(self, theta: np.ndarray) -> float:
         """int theta'^2/2 ds in units of B/l (multiply by 2 for units of SE_0)."""
@@ -160,12 +171,18 @@ class Discretisation:
         """F(u) of the bordered system (Eq. 9 with the midpoint rule, plus y - X(theta))."""
         theta, y = self.split(u)
         _, d = self.cables(y)
-        g = self.attachment_gradients(theta)
+        phi = self.element_angles(theta)
+        c, s = np.cos(phi), np.sin(phi)
+        force = self.tendon_sums(np.asarray(p, float)[:, None] * d)      # sum of F_i per element
+        # (h/2) t_e x F on each element: the load integral of Eq. (9), midpoint rule
+        q = 0.5 * self.h * (c * force[:, 1] - s * force[:, 0])
         jump = np.diff(theta)                                   # h * theta' per element
         f_theta = (jump - np.append(jump[1:], 0.0)) / self.h    # int theta' dtheta' ds
-        f_theta -= np.einsum("i,ikc,ic->k", np.asarray(p, float), g, d)   # int (t x F) dtheta
+        f_theta -= q
+        f_theta[:-1] -= q[1:]
         f_theta[-1] -= tip_moment
-        x_attach = self.node_positions(theta)[list(self.attach_nodes)]
+        cum = self.h * np.column_stack((np.cumsum(c), np.cumsum(s)))
+        x_attach = cum[np.asarray(self.attach_nodes) - 1]      # Eq. (2) at s_i
         return np.concatenate((f_theta, (y - x_attach).ravel()))
 
     def _bordered_pattern(self, supports, upper: bool = False):
@@ -214,10 +231,10 @@ class Discretisation:
         """Tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper)."""
         N, h = self.n_elements, self.h
         phi = self.element_angles(theta)
-        t = np.column_stack((np.cos(phi), np.sin(phi)))
-        # d/dtheta of -(h/2) p n_e.d on element e: (h/4) p t_e.d on its two nodes
-        w = 0.25 * h * np.einsum("i,ie,ec,ic->e", p, self.support, t, d)
-        band = np.zeros((N, 3))
+        force = self.tendon_sums(p[:, None] * d)
+        # d/dtheta of -(h/2) t_e x F on element e: (h/4) t_e.F on its two nodes
+        w = 0.25 * h * (np.cos(phi) * force[:, 0] + np.sin(phi) * force[:, 1])
+        band = np.empty((N, 3))
         band[:, 0], band[:, 2] = -1.0 / h, -1.0 / h
         band[:, 1] = 2.0 / h
         band[-1, 1] = 1.0 / h                                  # free end theta'(l) = 0
@@ -232,10 +249,11 @@ class Discretisation:
         p = np.asarray(p, float)
         theta, y = self.split(u)
         lengths, d = self.cables(y)
-        g = self.attachment_gradients(theta)
-        # dF_theta/dy_i = p_i/L_i (I - d d^T) g      (derivative of d_i, Eq. 17)
-        proj = np.eye(2)[None] - d[:, :, None] * d[:, None, :]
-        border = np.einsum("i,ikc,icb->kib", p / lengths, g, proj).reshape(N, 2 * n)
+        g = self.attachment_gradients(theta)                    # (n, N, 2)
+        # dF_theta/dy_i = p_i/L_i (I - d d^T) g = p_i/L_i (d_perp . g) d_perp   (Eq. 17)
+        d_perp = np.column_stack((-d[:, 1], d[:, 0]))
+        lever = (p / lengths)[:, None] * (g[..., 0] * d_perp[:, :1] + g[..., 1] * d_perp[:, 1:])
+        border = (lever[:, :, None] * d_perp[:, None, :]).transpose(1, 0, 2).reshape(N, 2 * n)
         yrows = -g.transpose(0, 2, 1).reshape(2 * n, N)        # dF_y/dtheta = -dX/dtheta
         source = np.concatenate((self._band(theta, d, p).ravel(), border.ravel(),
                                  yrows.ravel(), np.ones(2 * n)))
@@ -253,7 +271,7 @@ class Discretisation:
         lengths, d = self.cables(y)
         g = self.attachment_gradients(theta)
         d_perp = np.column_stack((-d[:, 1], d[:, 0]))
-        w = np.sqrt(p / lengths)[:, None] * np.einsum("ikc,ic->ik", g, d_perp)   # (n, N)
+        w = np.sqrt(p / lengths)[:, None] * (g[..., 0] * d_perp[:, :1] + g[..., 1] * d_perp[:, 1:])
         source = np.concatenate((self._band(theta, d, p).ravel(), w.T.ravel(), w.ravel(),
                                  -np.ones(self.n_tendons)))
         return source[self.stability_pattern[2]]
@@ -264,5 +282,5 @@ class Discretisation:
         _, d = self.cables(y)
         g = self.attachment_gradients(theta)
         out = np.zeros((self.n_tendons, self.size))
-        out[:, : self.n_elements] = -np.einsum("ikc,ic->ik", g, d)
+        out[:, : self.n_elements] = -(g[..., 0] * d[:, :1] + g[..., 1] * d[:, 1:])
         return out
