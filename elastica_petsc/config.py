@@ -11,6 +11,7 @@ from dataclasses import asdict
 from importlib import resources
 from pathlib import Path
 
+from .errors import InputError
 from .model import Arm, Limits, ModelError, Motor, Tendon
 
 REQUIRED = object()
@@ -42,7 +43,7 @@ SCHEMA: dict[str, dict[str, tuple[type | tuple, object, str]]] = {
 }
 
 
-class ConfigError(ValueError):
+class ConfigError(InputError):
     """A configuration file that cannot describe an arm; one line, names the key."""
 
 

@@ -16,6 +16,7 @@ from functools import cached_property
 import numpy as np
 from petsc4py import PETSc
 
+from .errors import InputError
 from .fem import Discretisation
 from .inertia import InertiaCounter
 
@@ -23,10 +24,6 @@ SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not
 
 # A cable shorter than this (in units of l) has collapsed onto its routing point.
 COLLAPSE_LENGTH = 2e-3
-
-
-class SolveError(RuntimeError):
-    """A load-controlled solve that could not reach the requested tensions."""
 
 
 @dataclass(frozen=True)
@@ -120,7 +117,7 @@ def check_order(order, n_tendons: int) -> tuple[int, ...] | None:
         return None
     order = tuple(int(k) for k in order)
     if sorted(order) != list(range(1, n_tendons + 1)):
-        raise ValueError(
+        raise InputError(
             f"loading order {','.join(map(str, order))} is not a permutation of the tendon "
             f"numbers 1..{n_tendons}")
     return order
@@ -130,12 +127,12 @@ def check_tensions(p, n_tendons: int) -> np.ndarray:
     """Non-negative, finite, one per tendon (a cable cannot push)."""
     p = np.asarray(p, dtype=float).ravel()
     if p.size != n_tendons:
-        raise ValueError(f"expected {n_tendons} tensions (one per tendon), got {p.size}")
+        raise InputError(f"expected {n_tendons} tensions (one per tendon), got {p.size}")
     if not np.all(np.isfinite(p)):
-        raise ValueError("tensions must be finite numbers")
+        raise InputError("tensions must be finite numbers")
     if np.any(p < 0):
         i = int(np.argmax(p < 0)) + 1
-        raise ValueError(f"tension of tendon {i} is negative ({p[i - 1]:g}): a cable cannot push")
+        raise InputError(f"tension of tendon {i} is negative ({p[i - 1]:g}): a cable cannot push")
     return p
 
 

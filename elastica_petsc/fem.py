@@ -42,10 +42,11 @@ from functools import cached_property
 
 import numpy as np
 
+from .errors import InputError
 from .model import Arm
 
 
-class DiscretisationError(ValueError):
+class DiscretisationError(InputError):
     """An arm that cannot be put on the requested mesh."""
 
 

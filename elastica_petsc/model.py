@@ -12,8 +12,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import InputError
 
-class ModelError(ValueError):
+
+class ModelError(InputError):
     """A physically or geometrically invalid arm; the message names the key."""
 
 
