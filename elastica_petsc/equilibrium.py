@@ -173,7 +173,10 @@ class EquilibriumSolver:
         snes.setType(PETSc.SNES.Type.NEWTONLS)
         snes.setFunction(self._form_function, self.f)
         snes.setJacobian(self._form_jacobian, self.J, self.J)
-        snes.setTolerances(rtol=1e-10, atol=1e-10, stol=1e-14, max_it=40)
+        # Round-off in the residual grows like N^(3/2) (entries ~ eps/h, N of them):
+        # an absolute tolerance below that floor would only make Newton stall.
+        atol = max(1e-10, 1e-14 * disc.n_elements ** 1.5)
+        snes.setTolerances(rtol=1e-10, atol=atol, stol=1e-14, max_it=40)
         ksp = snes.getKSP()
         ksp.setType(PETSc.KSP.Type.PREONLY)
         pc = ksp.getPC()
