@@ -257,7 +257,10 @@ class EquilibriumSolver:
             iterations += its
             limit_point = step <= min_fraction
             if self.converged():
-                jumped = np.max(np.abs(u_new[:n_angles] - predictor[:n_angles])) > self.jump_tol
+                # a branch jump only makes sense along a path: with fixed tensions
+                # (span 0) this is a plain Newton solve
+                jumped = span > 0 and \
+                    np.max(np.abs(u_new[:n_angles] - predictor[:n_angles])) > self.jump_tol
                 modes = self.inertia.negative_eigenvalues(u_new, target)
                 if keep_stable and modes > 0:
                     reason = "UNSTABLE_STATE"
