@@ -20,7 +20,7 @@ import sys
 
 from .errors import InputError
 
-COMMANDS = ("solve",)
+COMMANDS = ("solve", "stability")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed

@@ -150,3 +150,27 @@ def test_hdf5_round_trip_units_and_provenance(tmp_path):
 def test_help_lists_commands():
     run = cli("--help")
     assert run.returncode == 0 and "solve" in run.stdout and "PETSc options" in run.stdout
+
+
+def test_stability_command_json_and_hdf5(tmp_path):
+    """Issue 4: both Fig. 8 states stable, asymmetry at round-off, modes in HDF5."""
+    out = tmp_path / "stab.h5"
+    run = cli("stability", "--tensions", 25.2, 10.8, "--order", "2,1", "--modes", 3, "--json",
+              "--out", out)
+    assert run.returncode == 0, run.stderr
+    data = json.loads(run.stdout)
+    assert data["stable"] is True and data["negative_eigenvalues"] == 0
+    assert len(data["eigenvalues"]) >= 3 and data["eigenvalues"][0] > 0
+    assert data["asymmetry"] < 1e-10
+    # the raw eigenvalue of K scales like h * lambda (paper Fig. 5b normalisation)
+    assert 0.5 < data["lambda_min_raw"] * 180 / data["lambda_min"] < 1.5
+    assert data["frequencies_hz"]["load"][0] > 0 and data["max_tracing_speed_mm_s"] > 0
+    with h5py.File(out, "r") as fh:
+        assert fh.attrs["kind"] == "stability"
+        assert fh["stability/modes"].shape[1] == 181
+        assert fh["stability/eigenvalues"].attrs["units"] == "B/l^2"
+
+
+def test_stability_bad_modes():
+    run = cli("stability", "--tensions", 1, 1, "--modes", 0)
+    assert run.returncode == 2 and "--modes" in run.stderr
