@@ -345,6 +345,11 @@ class StabilitySolver:
         self.A = PETSc.Mat().createAIJ(size=(size, size), csr=(indptr, indices, values),
                                        comm=self.comm)
         self.B = _diag_mat(np.concatenate((self.m, np.zeros(self.n_border))))
+        # a fixed initial vector: each eigen solve is reproducible bit for bit,
+        # whatever solves the process did before (workspace results must not
+        # depend on how samples are spread over ranks)
+        self._v0 = self.A.createVecRight()
+        self._v0.setArray(np.random.default_rng(2019).standard_normal(size))
         self.eps = self._make_eps(self.A, self.B, nev, tol, prefix)
         self.nev = self.eps.getDimensions()[0]
         self._user_target = PETSc.Options(prefix).hasName("eps_target")
@@ -354,7 +359,6 @@ class StabilitySolver:
             self.eps_raw = self._make_eps(self.A, self.B_raw, 1, tol, prefix + "raw_")
             self._user_target_raw = PETSc.Options(prefix + "raw_").hasName("eps_target")
         self.inertia = InertiaCounter(disc)
-        self._rng = np.random.default_rng(20190406)
 
     def _make_eps(self, A, B, nev, tol, prefix):
         eps = SLEPc.EPS().create(self.comm)
@@ -412,7 +416,8 @@ class StabilitySolver:
         indptr, indices, _ = disc.pattern
         J = sp.csr_matrix((disc.jacobian_values(u, p), indices, indptr),
                           shape=(disc.size, disc.size))
-        return schur_asymmetry(J[:N, :N], J[:N, N:], J[N:, :N], self._rng, probes)
+        return schur_asymmetry(J[:N, :N], J[:N, N:], J[N:, :N], np.random.default_rng(20190406),
+                               probes)
 
     # --- stability ------------------------------------------------------------------------
     def _run(self, eps, B, u, p, nev: int, negatives: int, user_target: bool,
@@ -427,6 +432,7 @@ class StabilitySolver:
         if eps.getDimensions()[0] < nev:
             eps.setDimensions(nev)
         eps.setOperators(self.A, B)     # SLEPc must be told that A was reassembled
+        eps.setInitialSpace([self._v0])
         eps.solve()
         reason = eps.getConvergedReason()
         if reason < 0 or eps.getConverged() < 1:

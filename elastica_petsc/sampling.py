@@ -1,0 +1,121 @@
+"""What one workspace sample computes (paper Sec. 4.3, Figs. 4-5).
+
+``TargetSampler`` (mode ``targets``, Fig. 4): tip control to each target,
+warm-started from the previous sample of the chunk; classified as reached
+(P >= 0, E < eps), needing a negative tension (the optimiser stops on the
+bound P_i = 0 with E > eps: the paper's red points), or not converged.
+``TensionSampler`` (mode ``tensions``): the forward solve on a grid of
+tensions, each warm-started (continued) from the previous one.
+Both fill the same fields (:func:`elastica_petsc.workspace.fields`) and add
+the smallest stiffness eigenvalue (SLEPc) of every equilibrium reached.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .equilibrium import Equilibrium, EquilibriumSolver
+from .fem import Discretisation
+from .model import Arm
+from .stability import StabilityError, StabilitySolver
+from .workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, fields
+
+
+class _Sampler:
+    def __init__(self, arm: Arm, disc: Discretisation):
+        self.arm, self.disc = arm, disc
+        self.solver = EquilibriumSolver(disc)
+        self.stability = StabilitySolver(disc, nev=1)
+        self.schema = fields(disc.n_tendons)
+
+    def _empty(self, count: int) -> dict:
+        out = {}
+        for name, (shape, dtype, _, _) in self.schema.items():
+            fill = b"" if dtype.startswith("S") else (0 if dtype[0] == "i" else np.nan)
+            out[name] = np.full((count,) + shape, fill, dtype=dtype)
+        return out
+
+    def _record(self, out: dict, k: int, eq: Equilibrium) -> None:
+        """Fields of a solved state, with its smallest eigenvalue (Eq. 20)."""
+        l_mm = self.arm.length_mm
+        out["tip"][k] = eq.tip * l_mm
+        out["tensions"][k] = eq.p
+        out["tensions_N"][k] = self.arm.tensions_to_N(eq.p)
+        out["cable_lengths"][k] = eq.cable_lengths * l_mm
+        out["kappa_max"][k] = eq.kappa_max
+        out["strain_energy"][k] = eq.strain_energy
+        t0 = time.perf_counter()
+        try:
+            result = self.stability.solve(eq.u, eq.p)
+            out["lambda_min"][k] = result.lambda_min
+            out["lambda_min_raw"][k] = result.raw_min
+        except StabilityError:
+            pass                                        # NaN: eigen solve failed
+        out["seconds_eigen"][k] = time.perf_counter() - t0
+
+    def destroy(self) -> None:
+        self.stability.destroy()
+        self.solver.destroy()
+
+
+class TensionSampler(_Sampler):
+    """Forward solves over a chunk of tension points (non-dimensional p)."""
+
+    def solve_chunk(self, points: np.ndarray, stop) -> dict | None:
+        out = self._empty(len(points))
+        previous = None
+        for k, p in enumerate(points):
+            if stop():
+                return None
+            t0 = time.perf_counter()
+            eq = self.solver.solve(p, start=previous)
+            out["seconds_control"][k] = time.perf_counter() - t0
+            out["iterations"][k] = eq.iterations
+            out["reason"][k] = eq.reason.encode()[:48]
+            if eq.converged:
+                out["status"][k] = REACHED
+                self._record(out, k, eq)
+                previous = eq
+            else:
+                out["status"][k] = NOT_CONVERGED
+        return out
+
+
+class TargetSampler(_Sampler):
+    """Tip control over a chunk of targets (mm), Algorithm 1 with TAO BLMVM."""
+
+    def __init__(self, arm: Arm, disc: Discretisation):
+        from .control import TipController
+
+        super().__init__(arm, disc)
+        self.controller = TipController(arm, solver=self.solver)
+
+    def solve_chunk(self, points: np.ndarray, stop) -> dict | None:
+        out = self._empty(len(points))
+        out["target"][:] = points
+        previous = None
+        for k, target in enumerate(points):
+            if stop():
+                return None
+            t0 = time.perf_counter()
+            result = self.controller.solve_mm(target, start=previous)
+            out["seconds_control"][k] = time.perf_counter() - t0
+            out["iterations"][k] = result.iterations
+            out["reason"][k] = result.reason.encode()[:48]
+            out["tip_error"][k] = result.tip_error_mm
+            if result.converged:
+                out["status"][k] = REACHED
+                self._record(out, k, result.equilibrium)
+                previous = result.equilibrium
+            else:
+                lower = any(side == "lower" for _, side in result.on_bound)
+                out["status"][k] = NEEDS_NEGATIVE if (result.reachable is False and lower) \
+                    else NOT_CONVERGED
+                out["tip"][k] = result.tip * self.arm.length_mm
+                out["tensions"][k] = result.p
+        return out
+
+    def destroy(self) -> None:
+        self.controller.destroy()
+        super().destroy()
