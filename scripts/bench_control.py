@@ -6,6 +6,7 @@
    (Sec. 4.5 (v)) on the paper's arm at 180 elements: targets per second and
    iterations per point, median of repeated runs.  Targets: >= 300 targets/s,
    <= 5 iterations per point.
+   The paper's gradient descent (Algorithm 1) on the same path, one run.
 2. Fig. 2 (x_d = (535.8, 222.6) mm from P = 0), cold: wall time and
    iterations, BLMVM against the paper's gradient descent.
 3. Where the time goes on the path: equilibrium solves (SNES with load
@@ -94,6 +95,11 @@ def main(argv=None) -> int:
     median_run = sorted(prof, key=lambda r: prof[r][0])[len(prof) // 2]
     total, s_solve, n_solve, s_sens, n_sens, n_evals = prof[median_run]
 
+    # the paper's gradient descent on the same path (one run: it is slow)
+    with TipController(arm, method="gd", n_elements=args.elements) as ctl:
+        first_gd = ctl.solve_mm(targets[0])
+        gd_trace = paths.trace(ctl, targets[1:], p0=first_gd.p, start=first_gd.equilibrium)
+
     # --- 2. cold Fig. 2 -----------------------------------------------------------------
     fig2 = {}
     for method in ("blmvm", "gd"):
@@ -120,6 +126,10 @@ def main(argv=None) -> int:
           f"{all_its.max()} | <= 5 |")
     print(f"| equilibrium solves per point (median / max) | "
           f"{np.median(all_evals - 1):.0f} / {(all_evals - 1).max()} | |")
+    print(f"| gd (Algorithm 1), same path, 1 run: targets/s; iterations median / max | "
+          f"{gd_trace.n_points / gd_trace.seconds:.0f}; {np.median(gd_trace.iterations):.0f} / "
+          f"{gd_trace.iterations.max()} ({int(gd_trace.converged.sum())}/{gd_trace.n_points} "
+          "reached) | |")
     print(f"| per-tendon monotonic dL dP < 0 (fraction of steps) | "
           f"{', '.join(f'{m:.2f}' for m in mono)} | |")
     print()
