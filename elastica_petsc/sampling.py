@@ -83,7 +83,16 @@ class TensionSampler(_Sampler):
 
 
 class TargetSampler(_Sampler):
-    """Tip control over a chunk of targets (mm), Algorithm 1 with TAO BLMVM."""
+    """Tip control over a chunk of targets (mm), Algorithm 1 with TAO BLMVM.
+
+    The first target of a chunk (and any after an unreached one) starts from
+    ``head_guess`` in every tension, not from zero: at p = 0 the arm is
+    straight, its tip sensitivities have no x component, and every target on
+    the x axis is a stationary point of E (Eq. 12) — the optimiser would not
+    move.
+    """
+
+    head_guess = 2.0
 
     def __init__(self, arm: Arm, disc: Discretisation):
         from .control import TipController
@@ -99,7 +108,8 @@ class TargetSampler(_Sampler):
             if stop():
                 return None
             t0 = time.perf_counter()
-            result = self.controller.solve_mm(target, start=previous)
+            guess = None if previous is not None else np.full(self.disc.n_tendons, self.head_guess)
+            result = self.controller.solve_mm(target, p0=guess, start=previous)
             out["seconds_control"][k] = time.perf_counter() - t0
             out["iterations"][k] = result.iterations
             out["reason"][k] = result.reason.encode()[:48]

@@ -1,0 +1,115 @@
+"""Workspace figures from a workspace HDF5 file: Fig. 4 (samples) and Fig. 5
+(contours of l*kappa_max, the smallest eigenvalue, the strain energy and each
+tension over the reached samples), optionally with traced paths on top."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .plots import figure, save
+from .workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED
+
+
+def read_workspace(path) -> dict:
+    import h5py
+
+    with h5py.File(path, "r") as fh:
+        data = {name: fh["samples"][name][()] for name in fh["samples"]}
+        data["length_mm"] = float(json.loads(fh.attrs["config_json"])["arm"]["length_mm"])
+        data["mode"] = fh.attrs["mode"]
+        data["masks"] = {name: fh["masks"][name][()] for name in fh["masks"]}
+        data["limits"] = dict(fh["masks"].attrs)
+    return data
+
+
+def _paths_overlay(ax, paths) -> None:
+    for label, xy in paths or ():
+        ax.plot(xy[:, 0], xy[:, 1], "-", color="k", lw=1.4, label=label, zorder=6)
+
+
+def _rigid_link(ax, length_mm: float) -> None:
+    a = np.linspace(0, np.pi, 200)
+    ax.plot(length_mm * np.cos(a), length_mm * np.sin(a), "k--", lw=1.0,
+            label=f"rigid link of length l = {length_mm:g} mm")
+
+
+def plot_samples(data: dict, ax, paths=None) -> None:
+    """Fig. 4: reached samples (green), needing P_i < 0 (red), not converged (grey)."""
+    status, tip, target = data["status"], data["tip"], data["target"]
+    where = target if data["mode"] == "targets" else tip
+    for code, colour, marker, label in (
+            (REACHED, "tab:green", "o", "reached, P >= 0 (W_0)"),
+            (NEEDS_NEGATIVE, "tab:red", "o", "needs a negative tension"),
+            (NOT_CONVERGED, "0.6", "x", "not converged")):
+        sel = status == code
+        if sel.any():
+            pts = tip[sel] if code == REACHED else where[sel]
+            ax.plot(pts[:, 0], pts[:, 1], marker, color=colour, ms=2.5, ls="none",
+                    label=f"{label} ({int(sel.sum())})")
+    _rigid_link(ax, data["length_mm"])
+    _paths_overlay(ax, paths)
+    ax.plot(0, 0, "ks", ms=6)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_title("Sampled workspace (Fig. 4)")
+    ax.legend(fontsize=7, loc="lower left")
+
+
+def _contour(fig, ax, xy, values, title, label, levels=12, limit=None, paths=None) -> None:
+    ok = np.isfinite(values)
+    if ok.sum() < 4:
+        ax.set_title(title + " (too few samples)")
+        return
+    tcf = ax.tricontourf(xy[ok, 0], xy[ok, 1], values[ok], levels=levels, cmap="viridis")
+    fig.colorbar(tcf, ax=ax, label=label, shrink=0.85)
+    if limit is not None and np.nanmin(values[ok]) < limit < np.nanmax(values[ok]):
+        ax.tricontour(xy[ok, 0], xy[ok, 1], values[ok], levels=[limit], colors="r",
+                      linewidths=1.5)
+    _paths_overlay(ax, paths)
+    ax.plot(0, 0, "ks", ms=5)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_title(title)
+
+
+def plot_restrictions(data: dict, path, paths=None) -> None:
+    """Fig. 5a-d over the reached samples: curvature, smallest eigenvalue,
+    strain energy and every tension."""
+    reached = data["status"] == REACHED
+    xy = data["tip"][reached]
+    n = data["tensions"].shape[1]
+    panels = [("kappa_max", "(a) max curvature l*kappa_max", "l kappa_max",
+               data["limits"].get("kappa_limit")),
+              ("lambda_min_raw", "(b) smallest eigenvalue lambda_min(K)/(B/l)", "lambda_min / (B/l)",
+               0.0),
+              ("strain_energy", "(c) strain energy / SE_0", "SE / SE_0",
+               data["limits"].get("strain_energy_max"))]
+    count = len(panels) + n
+    cols = 3
+    rows = -(-count // cols)
+    fig, axes = figure(nrows=rows, ncols=cols, figsize=(5.2 * cols, 4.2 * rows))
+    axes = np.atleast_1d(axes).ravel()
+    for ax, (name, title, label, limit) in zip(axes, panels):
+        _contour(fig, ax, xy, data[name][reached], title, label, limit=limit, paths=paths)
+    for i in range(n):
+        _contour(fig, axes[len(panels) + i], xy, data["tensions"][reached, i],
+                 f"(d) tension of tendon {i + 1}, P l^2/B", "P l^2/B",
+                 limit=data["limits"].get("max_tension"), paths=paths)
+    for ax in axes[count:]:
+        ax.axis("off")
+    fig.suptitle("Restrictions on the workspace (Fig. 5); red lines: limits of Eqs. 19-22")
+    save(fig, path)
+
+
+def plot_workspace(h5_path, png_path, paths=None) -> None:
+    """Fig. 4 into ``png_path`` and Fig. 5 into ``<stem>_restrictions.png``."""
+    data = read_workspace(h5_path)
+    fig, ax = figure(figsize=(8, 5))
+    plot_samples(data, ax, paths)
+    save(fig, png_path)
+    png_path = Path(png_path)
+    plot_restrictions(data, png_path.with_name(png_path.stem + "_restrictions.png"), paths)
