@@ -135,3 +135,60 @@ def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
                          "message": eq.message, "iterations": int(eq.iterations),
                          "load_steps": int(eq.load_steps), "stable": bool(eq.stable),
                          "unstable_modes": int(eq.unstable_modes)})
+
+
+def write_control(group, arm: Arm, result) -> None:
+    """A tip-control solve (Eqs. 10-12): final state plus the iteration history."""
+    l_mm = arm.length_mm
+    write_equilibrium(group, arm, result.equilibrium)
+    ctl = group.create_group("control")
+    put(ctl, "target", result.target * l_mm, "mm", "desired tip position x_d")
+    put(ctl, "tip_error", result.tip_error * l_mm, "mm", "|x_t - x_d|")
+    put(ctl, "tip_sensitivity", result.sensitivity.tip * l_mm, "mm per (P l^2/B)",
+        "d x_t / d p_i (Eq. 13), one row per tendon")
+    put(ctl, "history_tensions", result.history_p, "P l^2/B", "tensions at iterations 0..k")
+    put(ctl, "history_tip", result.history_tip * l_mm, "mm", "tip at iterations 0..k")
+    put(ctl, "history_E", result.history_E * l_mm ** 2, "mm^2",
+        "objective E = |x_d - x_t|^2 / 2 at iterations 0..k (Eq. 10)")
+    write_attrs(ctl, {"converged": bool(result.converged),
+                      "reachable": str(result.reachable), "reason": result.reason,
+                      "tao_reason": result.tao_reason, "method": result.method,
+                      "iterations": int(result.iterations),
+                      "evaluations": int(result.evaluations), "message": result.message})
+
+
+def write_trace(group, arm: Arm, trace, schedule) -> None:
+    """A traced path (Sec. 4.2): per point k targets, tips, tensions, cable
+    lengths, shapes, sensitivities, and the motor schedule.
+
+    Layout (K points, n tendons, N elements): path/target (K,2) mm, path/tip
+    (K,2) mm, path/tensions (K,n) P l^2/B, path/tensions_N (K,n) N,
+    path/cable_lengths (K,n) mm, path/theta (K,N+1) rad, path/curvature (K,N),
+    path/tip_sensitivity (K,n,2) mm per unit p, path/iterations (K,),
+    path/converged (K,), path/tip_error (K,) mm; schedule/revolutions,
+    schedule/steps, schedule/rounding_error (K,n).
+    """
+    l_mm = arm.length_mm
+    results = trace.results
+    path = group.create_group("path")
+    put(path, "target", trace.targets_mm, "mm", "target tip positions, in tracing order")
+    put(path, "tip", trace.tips_mm, "mm", "tip positions reached")
+    put(path, "tip_error", trace.tip_errors_mm, "mm", "|tip - target|")
+    put(path, "tensions", trace.p, "P l^2/B", "non-dimensional tensions")
+    put(path, "tensions_N", trace.tensions_N, "N", "tensions")
+    put(path, "cable_lengths", trace.cable_lengths_mm, "mm", "cable lengths |r_i - x_i|")
+    put(path, "theta", np.array([r.equilibrium.theta for r in results]), "rad",
+        "nodal tangent angles of each equilibrium")
+    put(path, "curvature", np.array([r.equilibrium.curvature for r in results]), "1",
+        "l * theta' per element, each point")
+    put(path, "tip_sensitivity", np.array([r.sensitivity.tip for r in results]) * l_mm,
+        "mm per (P l^2/B)", "d x_t / d p_i (Eq. 13): [point, tendon, component]")
+    put(path, "iterations", trace.iterations, "1", "optimiser iterations per point")
+    put(path, "converged", trace.converged, "1", "tip within tolerance of the target")
+    sched = group.create_group("schedule")
+    put(sched, "revolutions", schedule.revolutions, "rev", "spool revolutions from the first point")
+    put(sched, "steps", schedule.steps, "microsteps", "motor microsteps from the first point")
+    put(sched, "rounding_error", schedule.rounding_error_mm, "mm",
+        "imposed minus requested cable length change (integer steps)")
+    write_attrs(sched, {"spool_radius_mm": schedule.spool_radius_mm,
+                        "steps_per_revolution": schedule.steps_per_revolution})

@@ -202,7 +202,8 @@ def monotonic_fraction(lengths, tensions, tol_L: float = 1e-9, tol_P: float = 1e
 
 
 def trace(controller: TipController, targets_mm, *, p0=None, start=None,
-          keep_results: bool = False, stop_on_failure: bool = False) -> TraceResult:
+          keep_results: bool = False, stop_on_failure: bool = False,
+          on_point=None) -> TraceResult:
     """Tip control at each target in turn (mm), warm-started from the previous
     point's tensions and equilibrium (Sec. 4.5 (v)).
 
@@ -211,6 +212,7 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
         provides the warm start for the next one only if its equilibrium is
         converged (it always is: the controller returns the last good state).
     stop_on_failure : stop at the first point that is not reached.
+    on_point : called with the number of points done after each point (progress).
     """
     targets = np.asarray(targets_mm, dtype=float)
     if targets.ndim != 2 or targets.shape[1] != 2 or len(targets) == 0:
@@ -221,6 +223,8 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
         res = controller.solve_mm(x_d, p0=p0, start=start)
         results.append(res)
         p0, start = res.p, res.equilibrium
+        if on_point is not None:
+            on_point(len(results))
         if stop_on_failure and not res.converged:
             break
     seconds = time.perf_counter() - t0
