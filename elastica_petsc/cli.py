@@ -20,7 +20,7 @@ import sys
 
 from .errors import InputError
 
-COMMANDS = ("solve", "stability", "workspace")
+COMMANDS = ("solve", "control", "trace", "stability", "workspace")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed
