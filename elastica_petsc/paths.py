@@ -91,6 +91,28 @@ def paper_triangle(center, circumradius: float = 80.0, points_per_edge: int = 2,
     return pts[keep]
 
 
+def convoluted_curve(center, width: float = 170.0, amplitude: float = 35.0, waves: float = 2.5,
+                     n: int = 400) -> np.ndarray:
+    """Our stand-in for the paper's Fig. 3b (whose points are not published): a
+    connected, non-self-intersecting meander about ``center`` (mm) — a sine of
+    ``waves`` periods across ``width`` mm whose amplitude grows from 40 % to
+    100 % of ``amplitude``, followed back along a parallel sine shifted down
+    by 2.6 amplitudes, so the tip sweeps right, turns and sweeps left through
+    alternating curvature.  Any large tracking error would show as a
+    self-intersection, as the paper notes."""
+    c = _as_point(center)
+    t = np.linspace(0.0, 1.0, n)
+    envelope = amplitude * (0.4 + 0.6 * t)
+    out_x = c[0] - width / 2 + width * t
+    out_y = c[1] + 1.3 * amplitude + envelope * np.sin(2 * np.pi * waves * t)
+    back_x = out_x[::-1]
+    back_y = c[1] - 1.3 * amplitude + (envelope * np.sin(2 * np.pi * waves * t + np.pi))[::-1]
+    turn = np.linspace(out_y[-1], back_y[0], 20)[1:-1]
+    return np.vstack((np.column_stack((out_x, out_y)),
+                      np.column_stack((np.full_like(turn, out_x[-1]), turn)),
+                      np.column_stack((back_x, back_y))))
+
+
 def densify(points, step_mm: float) -> np.ndarray:
     """Insert points on the straight segments between consecutive points so
     that consecutive points are at most ``step_mm`` apart (original points kept)."""

@@ -5,7 +5,7 @@ import sys
 
 from . import common
 
-SHAPES = ("paper-triangle", "circle", "line")
+SHAPES = ("paper-triangle", "convoluted", "circle", "line")
 
 
 def add_parser(sub) -> None:
@@ -19,7 +19,9 @@ def add_parser(sub) -> None:
     source.add_argument("--shape", choices=SHAPES,
                         help="paper-triangle: Fig. 3a (equilateral triangle of side 80 sqrt(3) "
                              "mm edge by edge, then its incircle r = 40 mm and circumcircle "
-                             "r = 80 mm); circle: --radius about --center; line: --center to --end")
+                             "r = 80 mm); convoluted: our stand-in for Fig. 3b (a meander, see "
+                             "paths.convoluted_curve); circle: --radius about --center; line: "
+                             "--center to --end")
     source.add_argument("--path", metavar="CSV", help="target points, columns x_mm,y_mm")
     parser.add_argument("--center", type=float, nargs=2, default=(400.0, 200.0),
                         metavar=("X", "Y"), help="centre of the shape in mm (default 400 200)")
@@ -47,6 +49,8 @@ def targets(args):
         points = paths.read_csv(args.path)
     elif args.shape == "paper-triangle":
         points = paths.paper_triangle(args.center)
+    elif args.shape == "convoluted":
+        points = paths.convoluted_curve(args.center)
     elif args.shape == "circle":
         points = paths.circle(args.center, args.radius)
     else:
