@@ -17,6 +17,7 @@ import scipy.sparse as sp
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
+from elastica_petsc.buckling import aligned_family, critical_configuration, segment_geometry
 from elastica_petsc.config import load_config
 from elastica_petsc.deflation import Deflation
 from elastica_petsc.equilibrium import EquilibriumSolver
@@ -309,55 +310,23 @@ def _column(disc, u, s_index):
     alignment = t x (r_2 - x_1) with t the chord direction x_1 -> tip (0 when
     the line of the segment passes through r_2); deviation = the largest
     distance of the segment from that chord (units of l, signed)."""
-    theta = disc.split(u)[0]
-    x = disc.node_positions(theta)
-    x1, tip = x[s_index], x[-1]
-    t = (tip - x1) / np.linalg.norm(tip - x1)
-    r2 = disc.routes[1]
-    X = x[s_index:] - x1
-    dev = X[:, 0] * t[1] - X[:, 1] * t[0]
-    return float(np.cross(t, r2 - x1)), float(dev[np.argmax(np.abs(dev))])
+    return segment_geometry(disc, u, s_index)
 
 
 @pytest.fixture(scope="module")
 def fig7(eqs, ls):
-    """The Fig. 7 scenario on the paper's arm.  With p_2 = 0 the arm beyond
-    x_1 is straight (no moment there); at p_1* the line of that segment
-    passes through r_2 (found by root finding): tendon 2 is just taut and
-    aligned with the segment (the paper's critical configuration).  Then
-    L_2 is shortened.  Keeping the segment exactly straight ("perfect
-    column") needs L_1 to be let out at the same time: the aligned family is
-    traced by a secant iteration on L_1 for each L_2 (length control)."""
-    disc = eqs.disc
-    m1 = disc.attach_nodes[0]
-    base = eqs.solve([23.0, 0.0])
-    p1s = brentq(lambda p1: _column(disc, eqs.solve([p1, 0.0], start=base).u, m1)[0],
-                 22.0, 25.0, xtol=1e-13)
-    e0 = eqs.solve([p1s, 0.0], start=base)
-    L0 = e0.cable_lengths.copy()
-    state = ls.solve(L0, e0)
-    aligned = {0.0: state}
-    history = [(0.0, L0[0])]
-    for dl in (0.5, 1.0, 1.5, 2.0):                          # mm of L_2 shortening
-        L2 = L0[1] - dl / L_MM
-        (a, La), (b, Lb) = history[-2:] if len(history) > 1 else (history[0], history[0])
-        L1 = Lb + (Lb - La) / (b - a) * (dl - b) if b > a else L0[0] + 2.2 * dl / L_MM
-        prev = None
-        for _ in range(20):                                  # secant on the alignment
-            s = ls.solve([L1, L2], state)
-            assert s.converged, s.message
-            c = _column(disc, s.u, m1)[0]
-            if abs(c) < 1e-13:
-                break
-            if prev is None:
-                prev, L1 = (L1, c), L1 + 1e-4 / L_MM
-            else:
-                (L1b, cb), prev = prev, (L1, c)
-                L1 = L1 - c * (L1 - L1b) / (c - cb)
-        state = s
-        aligned[dl] = s
-        history.append((dl, L1))
-    return dict(p1s=p1s, e0=e0, L0=L0, aligned=aligned, m1=m1)
+    """The Fig. 7 scenario on the paper's arm (:mod:`elastica_petsc.buckling`).
+    With p_2 = 0 the arm beyond x_1 is straight (no moment there); at p_1*
+    the line of that segment passes through r_2 (found by root finding):
+    tendon 2 is just taut and aligned with the segment (the paper's critical
+    configuration).  Then L_2 is shortened.  Keeping the segment exactly
+    straight ("perfect column") needs L_1 to be let out at the same time:
+    the aligned family is traced by a secant iteration on L_1 for each L_2
+    (length control)."""
+    p1s, e0 = critical_configuration(eqs)
+    aligned = aligned_family(eqs, ls, (0.5, 1.0, 1.5, 2.0), critical=(p1s, e0))
+    return dict(p1s=p1s, e0=e0, L0=e0.cable_lengths.copy(), aligned=aligned,
+                m1=eqs.disc.attach_nodes[0])
 
 
 def test_fig7_length_path_buckles_the_straight_segment(eqs, ls, fig7):
