@@ -20,7 +20,8 @@ import sys
 
 from .errors import InputError
 
-COMMANDS = ("solve", "control", "trace", "stability", "workspace")
+COMMANDS = ("solve", "control", "trace", "stability", "workspace", "lengths", "equilibria", "replay",
+            "reproduce")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed
