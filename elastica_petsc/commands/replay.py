@@ -204,13 +204,25 @@ def run(args) -> int:
     return 0
 
 
+SHOWN_AT_ENDS = 3
+
+
 def format_replay(data: dict, summary: str) -> str:
     lines = [summary, f"on-branch criterion: {data['branch_criterion']}"]
     if data["first_jump"] is not None:
         lines.append(f"first jump (snap/buckling): before point {data['first_jump']}")
     lines.append(f"{'point':>5} {'L [mm]':>20} {'planned tip [mm]':>20} {'replayed tip [mm]':>20} "
                  f"{'error [mm]':>10} {'p':>18} {'branch':>6} {'stable':>6} {'jump':>4}")
-    for e in data["points"]:
+    points = data["points"]
+    if len(points) > 2 * SHOWN_AT_ENDS + 1:      # long path: both ends and every event
+        shown = [e for e in points if e["index"] < SHOWN_AT_ENDS
+                 or e["index"] >= len(points) - SHOWN_AT_ENDS
+                 or not e["on_branch"] or e["jumped"] or not e["stable"]]
+        lines.insert(1, f"(table: first and last {SHOWN_AT_ENDS} points and every point off "
+                        "the branch, unstable or after a jump; all points in --json/--out)")
+    else:
+        shown = points
+    for e in shown:
         L = "(" + ", ".join(f"{v:.3f}" for v in e["lengths_mm"]) + ")"
         pt = f"({e['planned_tip_mm'][0]:.3f}, {e['planned_tip_mm'][1]:.3f})"
         t = f"({e['tip_mm'][0]:.3f}, {e['tip_mm'][1]:.3f})"
