@@ -14,7 +14,6 @@ Prints markdown tables for BENCHMARKS.md.
 from __future__ import annotations
 
 import argparse
-import statistics
 import time
 
 import numpy as np
@@ -22,17 +21,11 @@ import numpy as np
 from elastica_petsc.config import load_config
 from elastica_petsc.equilibrium import EquilibriumSolver
 from elastica_petsc.fem import Discretisation
+from timing import median_time
 
 P = np.array([25.2, 10.8])
 
 
-def median_time(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def paper_arm(repeats: int) -> None:

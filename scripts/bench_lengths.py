@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import collections
-import statistics
 import time
 
 import numpy as np
@@ -27,18 +26,12 @@ from elastica_petsc.equilibrium import EquilibriumSolver
 from elastica_petsc.fem import Discretisation
 from elastica_petsc.lengths import (LengthSolver, equilibria, length_equilibria,
                                     tension_starts)
+from timing import median_time
 
 L_MM = np.array([147.1, 472.5])
 P = np.array([25.2, 10.8])
 
 
-def median_time(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def single_solves(arm, n: int, repeats: int) -> None:

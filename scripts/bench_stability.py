@@ -15,21 +15,13 @@ Usage: bench_stability.py [--repeats R] [--max-n N] [PETSc options]
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 import time
 
 import petsc4py
+from timing import median_time
 
 
-def median_time(fn, repeats: int) -> float:
-    fn()                                    # warm-up (first factorisation, setup)
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def main(argv=None) -> None:
@@ -59,10 +51,10 @@ def main(argv=None) -> None:
         repeats = args.repeats if N <= 10002 else max(3, args.repeats // 4)
         with StabilitySolver(disc) as solver:
             solver.solve(e.u, e.p)
-            t_eig = median_time(lambda: solver.solve(e.u, e.p, raw=False), repeats)
-            t_full = median_time(lambda: solver.solve(e.u, e.p), repeats)
+            t_eig = median_time(lambda: solver.solve(e.u, e.p, raw=False), repeats, warmup=True)
+            t_full = median_time(lambda: solver.solve(e.u, e.p), repeats, warmup=True)
             t_freq = median_time(lambda: solver.frequencies(e.u, e.p, arm, nev=3),
-                                 max(3, repeats // 3))
+                                 max(3, repeats // 3), warmup=True)
             r = solver.solve(e.u, e.p)
             f = solver.frequencies(e.u, e.p, arm, nev=3)
         rows.append((N, t_eig, t_full, t_freq, r, f))

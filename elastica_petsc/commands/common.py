@@ -58,6 +58,14 @@ def tensions(args, arm: Arm):
     return args.tensions
 
 
+def guess(args, disc):
+    """Validated initial tensions from ``--guess`` (non-dimensional), or None."""
+    if args.guess is None:
+        return None
+    from ..equilibrium import check_tensions
+    return check_tensions(args.guess, disc.n_tendons)
+
+
 def order(args) -> tuple[int, ...] | None:
     if not args.order:
         return None

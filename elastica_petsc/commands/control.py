@@ -102,10 +102,7 @@ def run(args) -> int:
     common.check_outputs(args)
     if not args.tol_mm > 0:
         raise InputError(f"--tol-mm must be positive, got {args.tol_mm}")
-    guess = None
-    if args.guess is not None:
-        from ..equilibrium import check_tensions
-        guess = check_tensions(args.guess, disc.n_tendons)
+    guess = common.guess(args, disc)
     if not np.all(np.isfinite(args.target)):
         raise InputError("--target must be two finite numbers in mm")
     with TipController(arm, n_elements=disc.n_elements, method=args.method,

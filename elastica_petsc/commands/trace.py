@@ -118,10 +118,7 @@ def run(args) -> int:
         from ..h5io import check_output_path
         check_output_path(args.schedule, args.overwrite)
     points = targets(args)
-    guess = None
-    if args.guess is not None:
-        from ..equilibrium import check_tensions
-        guess = check_tensions(args.guess, disc.n_tendons)
+    guess = common.guess(args, disc)
     bar = Progress(len(points), "trace")
     with TipController(arm, n_elements=disc.n_elements) as controller:
         result = trace(controller, points, p0=guess, keep_results=True, on_point=bar.update)
