@@ -24,6 +24,24 @@ def read_workspace(path) -> dict:
     return data
 
 
+def read_overlays(files) -> list[tuple[str, np.ndarray]]:
+    """(label, targets in mm) of traced paths written by ``trace --out``."""
+    import h5py
+
+    from .errors import InputError
+
+    paths = []
+    for name in files:
+        try:
+            with h5py.File(name, "r") as fh:
+                if fh.attrs.get("kind") != "trace":
+                    raise InputError(f"--overlay {name}: not a file written by `trace --out`")
+                paths.append((Path(name).stem, fh["path/target"][()]))
+        except OSError as err:
+            raise InputError(f"--overlay {name}: cannot read it as HDF5: {err}") from None
+    return paths
+
+
 def _paths_overlay(ax, paths) -> None:
     for label, xy in paths or ():
         ax.plot(xy[:, 0], xy[:, 1], "-", color="k", lw=1.4, label=label, zorder=6)
@@ -69,11 +87,10 @@ def _contour(fig, ax, xy, values, title, label, levels=12, limit=None, paths=Non
         ax.tricontour(xy[ok, 0], xy[ok, 1], values[ok], levels=[limit], colors="r",
                       linewidths=1.5)
     _paths_overlay(ax, paths)
-    ax.plot(0, 0, "ks", ms=5)
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
-    ax.set_title(title)
+    ax.set_title(title, fontsize=10)
 
 
 def plot_restrictions(data: dict, path, paths=None) -> None:
@@ -84,14 +101,15 @@ def plot_restrictions(data: dict, path, paths=None) -> None:
     n = data["tensions"].shape[1]
     panels = [("kappa_max", "(a) max curvature l*kappa_max", "l kappa_max",
                data["limits"].get("kappa_limit")),
-              ("lambda_min_raw", "(b) smallest eigenvalue lambda_min(K)/(B/l)", "lambda_min / (B/l)",
+              ("lambda_min_raw", "(b) smallest eigenvalue of K", "lambda_min(K) / (B/l)",
                0.0),
               ("strain_energy", "(c) strain energy / SE_0", "SE / SE_0",
                data["limits"].get("strain_energy_max"))]
     count = len(panels) + n
     cols = 3
     rows = -(-count // cols)
-    fig, axes = figure(nrows=rows, ncols=cols, figsize=(5.2 * cols, 4.2 * rows))
+    fig, axes = figure(nrows=rows, ncols=cols, figsize=(5.2 * cols, 3.6 * rows),
+                       layout="constrained")
     axes = np.atleast_1d(axes).ravel()
     for ax, (name, title, label, limit) in zip(axes, panels):
         _contour(fig, ax, xy, data[name][reached], title, label, limit=limit, paths=paths)

@@ -32,7 +32,10 @@ def add_parser(sub) -> None:
     parser.add_argument("--chunk", type=int, default=24, metavar="K",
                         help="samples per work unit (warm-started in a row; default 24)")
     parser.add_argument("--resume", action="store_true",
-                        help="continue an interrupted run in --out, computing only what is missing")
+                        help="continue an interrupted run in --out, computing only what is missing "
+                             "(on a complete file: nothing to compute, e.g. to redraw --plot)")
+    parser.add_argument("--overlay", nargs="+", metavar="H5",
+                        help="traced paths (files from `trace --out`) drawn on the --plot maps")
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
@@ -65,6 +68,9 @@ def _run(args, comm) -> int:
     if args.chunk < 1:
         raise InputError(f"--chunk must be at least 1, got {args.chunk}")
     arm, disc = common.load_arm(args)
+    if args.overlay:
+        from ..plots_workspace import read_overlays
+        read_overlays(args.overlay)                 # refuse a bad file before computing
     out = Path(args.out)
     if args.resume and not out.exists():
         raise InputError(f"--resume: {out} does not exist")
@@ -108,8 +114,8 @@ def _run(args, comm) -> int:
               file=sys.stderr)
         return 130
     if args.plot:
-        from ..plots_workspace import plot_workspace
-        plot_workspace(out, args.plot)
+        from ..plots_workspace import plot_workspace, read_overlays
+        plot_workspace(out, args.plot, paths=read_overlays(args.overlay or ()))
     return 0
 
 
