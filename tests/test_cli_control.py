@@ -63,6 +63,8 @@ def test_trace_paper_triangle_schedule_and_hdf5(tmp_path):
     data = json.loads(run.stdout)
     assert data["all_reached"] and data["max_tip_error_mm"] < 1e-5
     assert data["iterations_max_warm"] < 5
+    # Sec. 4.5 (vi): a tracing speed from the lowest natural frequency (paper arm has a mass)
+    assert 0.5 < data["f1_min_hz"] < 5 and data["max_tracing_speed_mm_s"] > 0
     with open(sched, newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert len(rows) == data["points"]

@@ -34,6 +34,10 @@ def add_parser(sub) -> None:
     parser.add_argument("--guess", type=float, nargs="+", metavar="P",
                         help="initial tensions for the first point, non-dimensional")
     parser.add_argument("--schedule", metavar="CSV", help="write the motor schedule CSV here")
+    parser.add_argument("--amplitude-mm", type=float, default=1.0, metavar="MM",
+                        help="tolerated vibration amplitude for the suggested tracing speed "
+                             "v_max = 2 pi f_1 * amplitude (default 1 mm; needs "
+                             "mass_per_length_kg_m in the config)")
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
@@ -43,6 +47,8 @@ def targets(args):
     from .. import paths
     from ..errors import InputError
 
+    if not args.amplitude_mm > 0:
+        raise InputError(f"--amplitude-mm must be positive, got {args.amplitude_mm}")
     if not args.step > 0:
         raise InputError(f"--step must be positive, got {args.step}")
     if args.path:
@@ -103,7 +109,34 @@ def format_trace(s: dict) -> str:
                      "of the steps (Sec. 4.1)")
     lines.append(f"motor schedule: {s['mm_per_microstep']:.4g} mm per microstep, largest rounding "
                  f"error {s['max_rounding_error_mm']:.3g} mm")
+    if s.get("max_tracing_speed_mm_s") is not None:
+        lines.append(f"lowest natural frequency along the path {s['f1_min_hz']:.3g} Hz (tensions "
+                     f"held): suggested max tracing speed {s['max_tracing_speed_mm_s']:.3g} mm/s, "
+                     f"{s['path_length_mm'] / s['max_tracing_speed_mm_s']:.0f} s for the "
+                     f"{s['path_length_mm']:.0f} mm path")
     return "\n".join(lines)
+
+
+def tracing_speed(arm, disc, result, amplitude_mm: float, snapshots: int = 6) -> dict:
+    """Suggested maximum tracing speed (Sec. 4.5 (vi)): the lowest first
+    natural frequency f_1 over a few states along the path, tensions held
+    (the lower, conservative one), and v_max = 2 pi f_1 * amplitude — a jump
+    dv of the tip velocity excites a vibration of amplitude dv / (2 pi f_1)."""
+    import numpy as np
+
+    from ..stability import StabilitySolver, max_tracing_speed_mm_s
+
+    if arm.mass_per_length_kg_m is None:
+        return {}
+    picks = np.unique(np.linspace(0, result.n_points - 1, snapshots).round().astype(int))
+    with StabilitySolver(disc, nev=1) as stab:
+        f1 = min(stab.frequencies(result.results[k].equilibrium.u, result.results[k].p,
+                                  arm, nev=1).f1_hz for k in picks)
+    steps = np.linalg.norm(np.diff(result.targets_mm, axis=0), axis=1)
+    return {"f1_min_hz": round(f1, 4),
+            "max_tracing_speed_mm_s": round(max_tracing_speed_mm_s(f1, amplitude_mm), 4),
+            "path_length_mm": round(float(steps.sum()), 3),
+            "amplitude_mm": amplitude_mm}
 
 
 def run(args) -> int:
@@ -125,6 +158,7 @@ def run(args) -> int:
     bar.close(result.n_points)
     schedule = schedule_from_trace(result, arm)
     summary = trace_summary(arm, result, schedule)
+    summary.update(tracing_speed(arm, disc, result, args.amplitude_mm))
     if args.json:
         common.print_json(summary)
     else:
