@@ -19,6 +19,8 @@ def read_workspace(path) -> dict:
         data = {name: fh["samples"][name][()] for name in fh["samples"]}
         data["length_mm"] = float(json.loads(fh.attrs["config_json"])["arm"]["length_mm"])
         data["mode"] = fh.attrs["mode"]
+        grid = json.loads(fh.attrs.get("grid_json", "{}"))
+        data["spacing"] = grid.get("spacing") if data["mode"] == "targets" else None
         data["masks"] = {name: fh["masks"][name][()] for name in fh["masks"]}
         data["limits"] = dict(fh["masks"].attrs)
     return data
@@ -73,19 +75,37 @@ def plot_samples(data: dict, ax, paths=None) -> None:
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_title("Sampled workspace (Fig. 4)")
-    ax.legend(fontsize=7, loc="lower left")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))   # off the samples
 
 
-def _contour(fig, ax, xy, values, title, label, levels=12, limit=None, paths=None) -> None:
+def _triangulation(xy: np.ndarray, spacing: float | None):
+    """Delaunay triangles of the sample points; on a target lattice of
+    ``spacing``, triangles with an edge longer than 1.5 spacing (they bridge
+    samples that were not reached) are masked, so contours never fill
+    regions without samples."""
+    from matplotlib.tri import Triangulation
+
+    tri = Triangulation(xy[:, 0], xy[:, 1])
+    if spacing:
+        corners = xy[tri.triangles]                               # (n, 3, 2)
+        edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
+        long = edges.max(axis=1) > 1.5 * spacing
+        if not long.all():
+            tri.set_mask(long)
+    return tri
+
+
+def _contour(fig, ax, xy, values, title, label, levels=12, limit=None, paths=None,
+             spacing=None) -> None:
     ok = np.isfinite(values)
     if ok.sum() < 4:
         ax.set_title(title + " (too few samples)")
         return
-    tcf = ax.tricontourf(xy[ok, 0], xy[ok, 1], values[ok], levels=levels, cmap="viridis")
+    tri = _triangulation(xy[ok], spacing)
+    tcf = ax.tricontourf(tri, values[ok], levels=levels, cmap="viridis")
     fig.colorbar(tcf, ax=ax, label=label, shrink=0.85)
     if limit is not None and np.nanmin(values[ok]) < limit < np.nanmax(values[ok]):
-        ax.tricontour(xy[ok, 0], xy[ok, 1], values[ok], levels=[limit], colors="r",
-                      linewidths=1.5)
+        ax.tricontour(tri, values[ok], levels=[limit], colors="r", linewidths=1.5)
     _paths_overlay(ax, paths)
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
@@ -112,11 +132,13 @@ def plot_restrictions(data: dict, path, paths=None) -> None:
                        layout="constrained")
     axes = np.atleast_1d(axes).ravel()
     for ax, (name, title, label, limit) in zip(axes, panels):
-        _contour(fig, ax, xy, data[name][reached], title, label, limit=limit, paths=paths)
+        _contour(fig, ax, xy, data[name][reached], title, label, limit=limit, paths=paths,
+                 spacing=data.get("spacing"))
     for i in range(n):
         _contour(fig, axes[len(panels) + i], xy, data["tensions"][reached, i],
                  f"(d) tension of tendon {i + 1}, P l^2/B", "P l^2/B",
-                 limit=data["limits"].get("max_tension"), paths=paths)
+                 limit=data["limits"].get("max_tension"), paths=paths,
+                 spacing=data.get("spacing"))
     for ax in axes[count:]:
         ax.axis("off")
     fig.suptitle("Restrictions on the workspace (Fig. 5); red lines: limits of Eqs. 19-22")
@@ -126,7 +148,7 @@ def plot_restrictions(data: dict, path, paths=None) -> None:
 def plot_workspace(h5_path, png_path, paths=None) -> None:
     """Fig. 4 into ``png_path`` and Fig. 5 into ``<stem>_restrictions.png``."""
     data = read_workspace(h5_path)
-    fig, ax = figure(figsize=(8, 5))
+    fig, ax = figure(figsize=(9.5, 5))
     plot_samples(data, ax, paths)
     save(fig, png_path)
     png_path = Path(png_path)

@@ -12,20 +12,38 @@ atomic counter (``Fetch_and_op`` on rank 0's window), so a rank that drew
 slow chunks simply takes fewer; no rank is reserved as a master.  Every
 sample's PETSc/TAO/SLEPc objects live on ``COMM_SELF``.
 
-Output: ranks send finished chunks to rank 0, which holds the results and
-writes the whole file aside and renames it into place (a checkpoint) every
-few seconds and at the end.  A chunk is marked done only when all its
-samples are stored, so the file on disk is always valid: Ctrl-C or SIGTERM
-triggers a last checkpoint; a killed rank loses at most the chunks finished
-since the previous checkpoint.  ``resume`` recomputes only chunks not done.
+Output: ranks send finished chunks to rank 0 (non-blocking sends, so a
+rank never waits for rank 0 to finish its own chunk), which holds the
+results and writes the whole file aside and renames it into place (a
+checkpoint) every few seconds and at the end.  A chunk is marked done only
+when all its samples are stored, so the file on disk is always valid: Ctrl-C
+or SIGTERM triggers a last checkpoint (on rank 0 alone, it also exhausts the
+chunk counter, so the other ranks stop after their current chunk; rank 0
+waits for them at most ``STOP_GRACE`` seconds); a killed rank loses at most
+the chunks finished since the previous checkpoint (the MPI launcher ends the
+job: Open MPI's mpiexec does; with srun use ``--kill-on-bad-exit=1``).
+``resume`` recomputes only chunks not done.
 Gathering to one writer instead of parallel HDF5 (mpio) was chosen because
 the data are tiny (a few hundred bytes per sample) and an atomic rename is
 the only way to keep the file valid when a process dies mid-write; the
-measured I/O share is reported in the file (``timing`` attributes).
+measured I/O share is reported in the file (``timing`` attributes:
+``seconds_wall`` and ``seconds_io`` up to the start of the last write, which
+cannot time itself; ``ranks``).
+
+Checkpoint interval: 2 s by default; the environment variable
+``ELASTICA_PETSC_CHECKPOINT_SECONDS`` overrides it (0: after every chunk,
+as the interruption tests use; larger on a cluster with big grids, where
+each checkpoint rewrites the whole file).
+
+Errors in the input (a bad grid, a file to resume made for another grid or
+arm) are agreed on by all ranks before any work starts and raised on every
+rank as :class:`CollectiveInputError`, so the command line can report one
+line and exit with status 2 without ``MPI_Abort``.
 """
 from __future__ import annotations
 
 import json
+import os
 import signal
 import time
 from dataclasses import dataclass, field
@@ -36,12 +54,39 @@ import numpy as np
 from .errors import InputError
 
 TAG_RESULT, TAG_FINISHED = 11, 12
+CHECKPOINT_ENV = "ELASTICA_PETSC_CHECKPOINT_SECONDS"
+STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the chunks other ranks finish
 
 # status codes of a sample
 NOT_DONE, REACHED, NEEDS_NEGATIVE, NOT_CONVERGED = 0, 1, 2, 3
 STATUS_NAMES = {NOT_DONE: "not computed", REACHED: "reached with P >= 0",
                 NEEDS_NEGATIVE: "needs a negative tension (outside W_0)",
                 NOT_CONVERGED: "not converged"}
+
+
+class CollectiveInputError(InputError):
+    """An input error raised on every rank alike (see :func:`agree`)."""
+
+
+def agree(comm, error: str | None) -> None:
+    """Collective: raise :class:`CollectiveInputError` on every rank if any rank
+    found an input error (the first one by rank), so no rank is left waiting."""
+    errors = comm.allgather(error)
+    first = next((e for e in errors if e), None)
+    if first is not None:
+        raise CollectiveInputError(first)
+
+
+def checkpoint_interval() -> float:
+    """Seconds between checkpoints: ``$ELASTICA_PETSC_CHECKPOINT_SECONDS`` or 2."""
+    value = os.environ.get(CHECKPOINT_ENV, "2")
+    try:
+        seconds = float(value)
+    except ValueError:
+        seconds = float("nan")
+    if not seconds >= 0:
+        raise InputError(f"{CHECKPOINT_ENV}={value!r}: expected seconds >= 0")
+    return seconds
 
 
 def fields(n_tendons: int) -> dict[str, tuple[tuple, str, str, str]]:
@@ -231,15 +276,29 @@ def read_results(path: Path, grid: Grid, n_tendons: int, attrs: dict) -> Results
                 if isinstance(stored, bytes):
                     stored = stored.decode()
                 if stored != attrs[key]:
-                    raise InputError(
-                        f"{path}: cannot resume: it was made with a different {key} "
-                        f"(file: {str(stored)[:60]!r}, now: {str(attrs[key])[:60]!r})")
+                    raise InputError(f"{path}: cannot resume: it was made with "
+                                     f"{_difference(key, stored, attrs[key])}")
             results.chunk_done[:] = fh["grid/chunk_done"][()]
             for name in results.schema:
                 results.data[name][...] = fh["samples"][name][()]
     except OSError as err:
         raise InputError(f"{path}: cannot resume from this file: {err}") from None
     return results
+
+
+def _difference(key: str, stored, now) -> str:
+    """What differs between a file's grid attribute and this run's, in words."""
+    if key == "grid_json":
+        try:
+            a, b = json.loads(stored), json.loads(now)
+            diff = [f"{k} {a.get(k)!r} (now {b.get(k)!r})" for k in sorted(set(a) | set(b))
+                    if a.get(k) != b.get(k)]
+            return "another grid: " + "; ".join(diff)
+        except (TypeError, ValueError):
+            pass
+    if key == "config_json":
+        return "another arm configuration (--config/--elements)"
+    return f"another {key}: {stored!r} (now {now!r})"
 
 
 class _Stop:
@@ -266,7 +325,12 @@ class _Stop:
 
 
 class ChunkCounter:
-    """Shared counter for dynamic scheduling: an atomic fetch-and-add on rank 0."""
+    """Shared counter for dynamic scheduling: an atomic fetch-and-add on rank 0.
+
+    ``exhaust()`` (rank 0, on a stop) pushes it past any chunk index, so the
+    other ranks take no new chunk even if they were not signalled themselves."""
+
+    EXHAUSTED = 2 ** 60
 
     def __init__(self, comm):
         from mpi4py import MPI
@@ -278,37 +342,57 @@ class ChunkCounter:
             self.win.Unlock(0)
         comm.Barrier()
         self._one, self._got = np.ones(1, "i8"), np.zeros(1, "i8")
+        self.exhausted = False
 
-    def next(self) -> int:
+    def _add(self, value) -> int:
         self.win.Lock(0, self.MPI.LOCK_SHARED)
-        self.win.Fetch_and_op(self._one, self._got, 0, 0, self.MPI.SUM)
+        self.win.Fetch_and_op(value, self._got, 0, 0, self.MPI.SUM)
         self.win.Unlock(0)
         return int(self._got[0])
+
+    def next(self) -> int:
+        k = self._add(self._one)
+        if k >= self.EXHAUSTED:
+            self.exhausted = True
+        return k
+
+    def exhaust(self) -> None:
+        if not self.exhausted:
+            self._add(np.full(1, self.EXHAUSTED, "i8"))
+            self.exhausted = True
 
     def free(self) -> None:
         self.win.Free()
 
 
 def run(grid: Grid, sampler, out: Path, attrs: dict, limits: dict, *, comm, resume: bool,
-        checkpoint_seconds: float = 2.0, progress_label: str = "workspace") -> Results | None:
+        checkpoint_seconds: float | None = None,
+        progress_label: str = "workspace") -> Results | None:
     """Sample the whole grid over the ranks of ``comm``.
 
     ``sampler.solve_chunk(points, stop) -> dict of per-sample arrays`` (or
     None when ``stop()`` became true mid-chunk) is called on every rank.
     Returns the results on rank 0 (None elsewhere); ``results.chunk_done.all()``
-    is False after an interruption.
+    is False after an interruption.  ``checkpoint_seconds``: default
+    :func:`checkpoint_interval`.  A file that cannot be resumed raises
+    :class:`CollectiveInputError` on every rank.
     """
     from .progress import Progress
 
+    if checkpoint_seconds is None:
+        checkpoint_seconds = checkpoint_interval()
     n_tendons = attrs["n_tendons"]
-    results = None
+    results = chunk_done = error = None
     if comm.rank == 0:
-        results = (read_results(out, grid, n_tendons, attrs) if resume and out.exists()
-                   else Results(grid, n_tendons))
-        chunk_done = results.chunk_done
-    else:
-        chunk_done = None
-    chunk_done = comm.bcast(chunk_done, root=0)
+        try:
+            results = (read_results(out, grid, n_tendons, attrs) if resume and out.exists()
+                       else Results(grid, n_tendons))
+            chunk_done = results.chunk_done
+        except InputError as err:
+            error = str(err)
+    error, chunk_done = comm.bcast((error, chunk_done), root=0)
+    if error is not None:
+        raise CollectiveInputError(error)
     todo = np.flatnonzero(~chunk_done)
     counter = ChunkCounter(comm)
     timing = {"ranks": comm.size, "seconds_io": 0.0}
@@ -326,21 +410,31 @@ def run(grid: Grid, sampler, out: Path, attrs: dict, limits: dict, *, comm, resu
                 timing["seconds_io"] += time.perf_counter() - t0
 
             def drain(block: bool) -> None:
+                """Store the chunks other ranks sent; with ``block``, until every rank
+                has finished (after a stop: at most STOP_GRACE seconds more)."""
                 nonlocal finished
                 from mpi4py import MPI
                 status = MPI.Status()
-                while comm.iprobe(source=MPI.ANY_SOURCE, tag=MPI.ANY_TAG, status=status) or (
-                        block and finished < comm.size and not stop()):
-                    if not comm.iprobe(source=MPI.ANY_SOURCE, tag=MPI.ANY_TAG, status=status):
-                        time.sleep(0.002)
+                deadline = None
+                while True:
+                    if comm.iprobe(source=MPI.ANY_SOURCE, tag=MPI.ANY_TAG, status=status):
+                        message = comm.recv(source=status.Get_source(), tag=status.Get_tag())
+                        if status.Get_tag() == TAG_FINISHED:
+                            finished += 1
+                        else:
+                            results.store(*message)
                         continue
-                    message = comm.recv(source=status.Get_source(), tag=status.Get_tag())
-                    if status.Get_tag() == TAG_FINISHED:
-                        finished += 1
-                    else:
-                        results.store(*message)
+                    if not block or finished >= comm.size:
+                        break
+                    if stop():
+                        counter.exhaust()                   # others take no new chunk
+                        deadline = deadline or time.perf_counter() + STOP_GRACE
+                        if time.perf_counter() > deadline:
+                            break
+                    time.sleep(0.002)
                 bar.update(results.samples_done)
 
+        sends = []                                          # results on their way to rank 0
         while not stop():
             k = counter.next()
             if k >= len(todo):
@@ -356,14 +450,21 @@ def run(grid: Grid, sampler, out: Path, attrs: dict, limits: dict, *, comm, resu
                     checkpoint()
                     last_write = time.perf_counter()
             else:
-                comm.send((chunk, values), dest=0, tag=TAG_RESULT)
+                # non-blocking: a chunk's results exceed the eager limit of shared-memory
+                # MPI, and a blocking send would wait until rank 0 ends its own chunk
+                # (measured: 23% of a worker's time)
+                sends.append(comm.isend((chunk, values), dest=0, tag=TAG_RESULT))
         if comm.rank == 0:
             drain(block=True)
             checkpoint()
             bar.close(results.samples_done)
         else:
+            from mpi4py import MPI
+            MPI.Request.waitall(sends)
             comm.send(None, dest=0, tag=TAG_FINISHED)
-        interrupted = stop()
-    if not interrupted:
-        counter.free()
+        # Win.Free is collective: rank 0 decides (after a stop or a timed-out wait a rank
+        # may never get there; the window then goes with MPI_Finalize)
+        clean = comm.rank == 0 and not stop() and not counter.exhausted and finished == comm.size
+        if comm.bcast(clean, root=0):
+            counter.free()
     return results

@@ -44,9 +44,15 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from mpi4py import MPI
 
+    from ..workspace import CollectiveInputError
+
     comm = MPI.COMM_WORLD
     try:
         return _run(args, comm)
+    except CollectiveInputError:                   # raised on every rank alike: one line, exit 2
+        if comm.rank == 0:
+            raise
+        return 2
     except Exception as err:                       # never leave the other ranks waiting
         if comm.size == 1:
             raise
@@ -61,6 +67,53 @@ def _run(args, comm) -> int:
     from ..errors import InputError
     from ..h5io import provenance
     from ..sampling import TargetSampler, TensionSampler
+    from .. import workspace
+
+    # Input errors are agreed on by all ranks before any collective work (one line, exit 2).
+    try:
+        arm, disc, grid, out, checkpoint_seconds = _check_inputs(args)
+        error = None
+    except InputError as err:
+        error = str(err)
+    workspace.agree(comm, error)
+    if grid.mode == "targets":
+        sampler = TargetSampler(arm, disc)
+    else:
+        sampler = TensionSampler(arm, disc)
+    attrs = provenance(arm, "workspace")
+    attrs.update(mode=grid.mode, elements=disc.n_elements, n_tendons=disc.n_tendons,
+                 config_json=json.dumps(arm_to_dict(arm)), grid_json=json.dumps(grid.meta))
+    limits = {"kappa_limit": arm.kappa_limit,
+              "strain_energy_max": arm.limits.strain_energy_max_SE0,
+              "max_tension": arm.max_tension}
+    try:
+        results = workspace.run(grid, sampler, out, attrs, limits, comm=comm, resume=args.resume,
+                                checkpoint_seconds=checkpoint_seconds,
+                                progress_label=f"workspace ({grid.mode}, {comm.size} rank(s))")
+    finally:
+        sampler.destroy()
+    if comm.rank != 0:
+        return 0
+    summary = workspace_summary(results, limits, out)
+    if args.json:
+        common.print_json(summary)
+    else:
+        print(format_summary(summary))
+    if not summary["complete"]:
+        print(f"elastica-petsc: interrupted: {summary['samples_done']} of "
+              f"{summary['samples_total']} samples saved in {out}; continue with --resume",
+              file=sys.stderr)
+        return 130
+    if args.plot:
+        from ..plots_workspace import plot_workspace, read_overlays
+        plot_workspace(out, args.plot, paths=read_overlays(args.overlay or ()))
+    return 0
+
+
+def _check_inputs(args):
+    """Everything that can be refused before computing:
+    (arm, discretisation, grid, output path, checkpoint seconds)."""
+    from ..errors import InputError
     from .. import workspace
 
     if not args.out:
@@ -85,38 +138,10 @@ def _run(args, comm) -> int:
                              "use --mode tensions")
         grid = workspace.target_grid(arm.length_mm, args.spacing,
                                      None if args.box is None else tuple(args.box), args.chunk)
-        sampler = TargetSampler(arm, disc)
     else:
         grid = workspace.tension_grid(disc.n_tendons, args.tension_spacing, args.tension_max,
                                       args.chunk)
-        sampler = TensionSampler(arm, disc)
-    attrs = provenance(arm, "workspace")
-    attrs.update(mode=grid.mode, elements=disc.n_elements, n_tendons=disc.n_tendons,
-                 config_json=json.dumps(arm_to_dict(arm)), grid_json=json.dumps(grid.meta))
-    limits = {"kappa_limit": arm.kappa_limit,
-              "strain_energy_max": arm.limits.strain_energy_max_SE0,
-              "max_tension": arm.max_tension}
-    try:
-        results = workspace.run(grid, sampler, out, attrs, limits, comm=comm, resume=args.resume,
-                                progress_label=f"workspace ({grid.mode}, {comm.size} rank(s))")
-    finally:
-        sampler.destroy()
-    if comm.rank != 0:
-        return 0
-    summary = workspace_summary(results, limits, out)
-    if args.json:
-        common.print_json(summary)
-    else:
-        print(format_summary(summary))
-    if not summary["complete"]:
-        print(f"elastica-petsc: interrupted: {summary['samples_done']} of "
-              f"{summary['samples_total']} samples saved in {out}; continue with --resume",
-              file=sys.stderr)
-        return 130
-    if args.plot:
-        from ..plots_workspace import plot_workspace, read_overlays
-        plot_workspace(out, args.plot, paths=read_overlays(args.overlay or ()))
-    return 0
+    return arm, disc, grid, out, workspace.checkpoint_interval()
 
 
 def workspace_summary(results, limits: dict, out: Path) -> dict:

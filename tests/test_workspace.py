@@ -1,0 +1,432 @@
+"""Workspace maps (issue 4; paper Sec. 4.3, Eqs. 18-22, Figs. 4-5), run as a user does:
+``elastica-petsc workspace`` in a subprocess, on 1 rank and under ``mpiexec -n 2``.
+
+Grids are coarse (60 mm, 60 elements; tensions on a 5 x 5 lattice at 30 elements)
+so that the whole file runs in well under 90 s.  The target box
+x in [-120, 480], y in [60, 420] mm holds both reached targets (green in Fig. 4)
+and targets outside W_0 on the P_1 < 0 side (red), and no target of the
+hard band near y = 0 where the paper also reports convergence difficulties.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+MPIEXEC = shutil.which("mpiexec")
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1")
+# checkpoint after every chunk (workspace.CHECKPOINT_ENV), so an interruption finds a file early
+FAST_CHECKPOINTS = dict(ENV, ELASTICA_PETSC_CHECKPOINT_SECONDS="0")
+
+ELEMENTS = 60                                                  # multiple of 3: s_1 = l/3 on a node
+TARGETS = ["--box", "-120", "480", "60", "420", "--spacing", "60",
+           "--elements", str(ELEMENTS), "--chunk", "4"]
+# a finer grid for the MPI interruptions: Open MPI passes a signal on to the ranks ~2 s
+# after mpiexec receives it, so the run must last longer than that
+SLOW_TARGETS = ["--box", "-120", "480", "60", "420", "--spacing", "30",
+                "--elements", str(ELEMENTS), "--chunk", "4"]
+TENSIONS = ["--mode", "tensions", "--tension-spacing", "5", "--tension-max", "20",
+            "--elements", "30", "--chunk", "4"]
+TIMEOUT = 120
+needs_mpi = pytest.mark.skipif(MPIEXEC is None, reason="mpiexec not found")
+
+
+def command(*args, ranks: int = 1) -> list[str]:
+    cli = [sys.executable, "-m", "elastica_petsc.cli", "workspace", *map(str, args)]
+    return cli if ranks == 1 else [MPIEXEC, "-n", str(ranks), "--oversubscribe", *cli]
+
+
+def workspace(*args, ranks: int = 1, env=None) -> subprocess.CompletedProcess:
+    return subprocess.run(command(*args, ranks=ranks), capture_output=True, text=True,
+                          cwd=ROOT, env=env or ENV, timeout=TIMEOUT)
+
+
+def ok(run: subprocess.CompletedProcess) -> subprocess.CompletedProcess:
+    assert run.returncode == 0, run.stderr[-3000:]
+    return run
+
+
+def samples(path) -> dict[str, np.ndarray]:
+    with h5py.File(path, "r") as fh:
+        return {name: fh["samples"][name][()] for name in fh["samples"]}
+
+
+def assert_same_samples(a, b) -> None:
+    """Every dataset under /samples except the wall times: bitwise, NaN-aware."""
+    da, db = samples(a), samples(b)
+    assert set(da) == set(db)
+    compared = [name for name in da if not name.startswith("seconds_")]
+    assert {"tip", "tensions", "status", "lambda_min", "lambda_min_raw"} <= set(compared)
+    for name in compared:
+        x, y = da[name], db[name]
+        same = (np.array_equal(x, y, equal_nan=True) if x.dtype.kind == "f"
+                else np.array_equal(x, y))
+        assert same, f"/samples/{name} differs between {a} and {b}"
+
+
+def attrs_of(path) -> dict:
+    with h5py.File(path, "r") as fh:
+        return dict(fh.attrs)
+
+
+# --- reference runs (module scope: each is used by several tests) ----------------------
+@pytest.fixture(scope="module")
+def targets_1(tmp_path_factory):
+    """The target grid on one rank, with --plot (Fig. 4 and Fig. 5)."""
+    d = tmp_path_factory.mktemp("targets_1")
+    ok(workspace(*TARGETS, "--out", d / "ws.h5", "--plot", d / "ws.png", "--json"))
+    return d / "ws.h5"
+
+
+@pytest.fixture(scope="module")
+def slow_targets_1(tmp_path_factory):
+    d = tmp_path_factory.mktemp("slow_targets_1")
+    ok(workspace(*SLOW_TARGETS, "--out", d / "ws.h5"))
+    return d / "ws.h5"
+
+
+@pytest.fixture(scope="module")
+def tensions_1(tmp_path_factory):
+    d = tmp_path_factory.mktemp("tensions_1")
+    ok(workspace(*TENSIONS, "--out", d / "ws.h5"))
+    return d / "ws.h5"
+
+
+# --- a. MPI equals serial ------------------------------------------------------------------
+@needs_mpi
+@pytest.mark.parametrize("mode", ["targets", "tensions"])
+def test_two_ranks_equal_one_rank(mode, targets_1, tensions_1, tmp_path):
+    reference, args = (targets_1, TARGETS) if mode == "targets" else (tensions_1, TENSIONS)
+    out = tmp_path / "ws2.h5"
+    ok(workspace(*args, "--out", out, ranks=2))
+    assert_same_samples(reference, out)
+    a, b = attrs_of(reference), attrs_of(out)
+    assert a["complete"] and b["complete"]
+    with h5py.File(out, "r") as fh:
+        assert fh["timing"].attrs["ranks"] == 2
+        assert fh["grid/chunk_done"][()].all()
+
+
+# --- b. interruption and resume --------------------------------------------------------------
+def wait_for_checkpoint(path: Path, proc: subprocess.Popen, timeout: float = 60.0) -> int:
+    """Poll the file until some chunks are stored; returns samples_done."""
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        if proc.poll() is not None:
+            pytest.fail(f"the run ended (status {proc.returncode}) before it could be "
+                        "interrupted: " + proc.stderr.read()[-2000:])
+        if path.exists():
+            try:
+                done = int(attrs_of(path)["samples_done"])
+            except (OSError, KeyError):
+                done = 0                                      # being replaced: try again
+            if done > 0:
+                return done
+        time.sleep(0.01)
+    pytest.fail("no checkpoint appeared")
+
+
+def start(*args, ranks: int = 1) -> subprocess.Popen:
+    return subprocess.Popen(command(*args, ranks=ranks), cwd=ROOT, env=FAST_CHECKPOINTS,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+
+
+def finish(proc: subprocess.Popen) -> tuple[int, str]:
+    """Wait for the run (no hang allowed: its process group is killed after 60 s);
+    returns (exit status, stderr)."""
+    try:
+        _, stderr = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate()
+        pytest.fail("the run did not end after the signal (hang)")
+    return proc.returncode, stderr
+
+
+def assert_valid_partial(path: Path) -> None:
+    """A partial file opens, says it is incomplete, and its per-chunk and
+    per-sample bookkeeping agree."""
+    with h5py.File(path, "r") as fh:
+        assert not fh.attrs["complete"]
+        order, bounds = fh["grid/chunk_order"][()], fh["grid/chunk_bounds"][()]
+        chunk_done = fh["grid/chunk_done"][()]
+        done = fh["samples/done"][()]
+        status = fh["samples/status"][()]
+        expected = np.zeros_like(done)
+        for c in np.flatnonzero(chunk_done):
+            expected[order[bounds[c]:bounds[c + 1]]] = True
+        assert np.array_equal(done, expected)
+        assert fh.attrs["samples_done"] == done.sum() > 0
+        assert done.sum() < fh.attrs["samples_total"]
+        assert np.all(status[done] > 0) and np.all(status[~done] == 0)
+        assert np.all(np.isnan(fh["samples/tip"][()][~done]))
+
+
+def test_interrupt_and_resume_one_rank(targets_1, tmp_path):
+    out = tmp_path / "ws.h5"
+    proc = start(*TARGETS, "--out", out)
+    wait_for_checkpoint(out, proc)
+    proc.send_signal(signal.SIGINT)
+    status, stderr = finish(proc)
+    assert status == 130, stderr
+    assert "continue with --resume" in stderr
+    assert_valid_partial(out)
+    ok(workspace(*TARGETS, "--out", out, "--resume"))
+    assert attrs_of(out)["complete"]
+    assert_same_samples(targets_1, out)
+
+
+@needs_mpi
+@pytest.mark.parametrize("target", ["mpiexec", "rank 0"])
+def test_interrupt_and_resume_two_ranks(target, slow_targets_1, tmp_path):
+    """SIGINT to mpiexec (Open MPI passes a SIGTERM on to every rank), or SIGTERM to
+    rank 0 alone (it stops the other ranks through the chunk counter): rank 0 writes a
+    last checkpoint and the job ends."""
+    out = tmp_path / "ws.h5"
+    proc = start(*SLOW_TARGETS, "--out", out, ranks=2)
+    wait_for_checkpoint(out, proc)
+    if target == "mpiexec":
+        proc.send_signal(signal.SIGINT)
+    else:
+        os.kill(rank_pids(proc.pid)[0], signal.SIGTERM)
+    status, stderr = finish(proc)
+    assert status == 130 if target == "rank 0" else status != 0
+    assert "continue with --resume" in stderr
+    assert_valid_partial(out)
+    ok(workspace(*SLOW_TARGETS, "--out", out, "--resume", ranks=2))
+    assert_same_samples(slow_targets_1, out)
+
+
+def rank_pids(mpiexec_pid: int) -> dict[int, int]:
+    """{rank: pid} of the processes that mpiexec started (from their environment)."""
+    ranks = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            if int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1]) != mpiexec_pid:
+                continue
+            env = (entry / "environ").read_bytes().split(b"\0")
+        except (OSError, IndexError, ValueError):
+            continue
+        for item in env:
+            if item.startswith(b"OMPI_COMM_WORLD_RANK="):
+                ranks[int(item.split(b"=")[1])] = int(entry.name)
+    return ranks
+
+
+@needs_mpi
+@pytest.mark.parametrize("victim", [1, 0], ids=["worker", "writer"])
+def test_killed_rank_ends_job_and_leaves_a_resumable_file(victim, slow_targets_1, tmp_path):
+    """SIGKILL one rank (the worker, or rank 0 which writes the file): the job ends
+    (no hang), the file on disk is a checkpoint (valid), and --resume completes it to
+    the uninterrupted result."""
+    out = tmp_path / "ws.h5"
+    proc = start(*SLOW_TARGETS, "--out", out, ranks=2)
+    wait_for_checkpoint(out, proc)
+    pids = rank_pids(proc.pid)
+    assert set(pids) == {0, 1}, pids
+    os.kill(pids[victim], signal.SIGKILL)
+    assert finish(proc)[0] != 0
+    assert_valid_partial(out)
+    ok(workspace(*SLOW_TARGETS, "--out", out, "--resume", ranks=2))
+    assert_same_samples(slow_targets_1, out)
+
+
+# --- c. HDF5 layout ------------------------------------------------------------------------
+def test_file_layout_attributes_and_units(targets_1):
+    with h5py.File(targets_1, "r") as fh:
+        for key in ("kind", "config_json", "mode", "grid_json", "petsc_version",
+                    "command_line", "complete", "samples_done", "samples_total", "elements"):
+            assert key in fh.attrs, key
+        assert fh.attrs["kind"] == "workspace" and fh.attrs["mode"] == "targets"
+        assert fh.attrs["complete"] and fh.attrs["samples_done"] == fh.attrs["samples_total"]
+        assert fh.attrs["elements"] == ELEMENTS
+        assert json.loads(fh.attrs["config_json"])["arm"]["length_mm"] == 600.0
+        assert json.loads(fh.attrs["grid_json"])["spacing"] == 60.0
+        assert "--spacing 60" in fh.attrs["command_line"]
+        n = int(fh.attrs["samples_total"])
+        assert n == 11 * 7
+        units = {"target": "mm", "tip": "mm", "tip_error": "mm", "tensions": "P l^2/B",
+                 "tensions_N": "N", "cable_lengths": "mm", "kappa_max": "1",
+                 "lambda_min": "B/l^2", "lambda_min_raw": "B/l", "strain_energy": "B/(2l)",
+                 "iterations": "1", "status": "1", "reason": "1", "done": "1",
+                 "seconds_control": "s", "seconds_eigen": "s"}
+        for name, unit in units.items():
+            dset = fh["samples"][name]
+            assert dset.attrs["units"] == unit, name
+            assert dset.attrs["description"], name
+            assert dset.shape[0] == n
+        assert fh["samples/tensions"].shape == (n, 2)
+        for group in ("grid", "masks"):
+            for name, dset in fh[group].items():
+                assert "units" in dset.attrs and "description" in dset.attrs, (group, name)
+        timing = dict(fh["timing"].attrs)
+        assert timing["ranks"] == 1 and timing["seconds_wall"] > 0 and timing["seconds_io"] >= 0
+        # masks W_0..W_P recomputed from the fields and the limits stored with them
+        limits = dict(fh["masks"].attrs)
+        assert limits["kappa_limit"] == pytest.approx(10.0)       # 2 eps_Y l / h (Eq. 19)
+        assert limits["strain_energy_max"] == 18.0
+        assert limits["max_tension"] == pytest.approx(112.9 / 0.2 * 0.36)   # P_crit l^2 / B
+        s = {name: fh["samples"][name][()] for name in fh["samples"]}
+        w0 = s["status"] == 1
+        expected = {
+            "W0": w0,
+            "WY": w0 & (s["kappa_max"] < limits["kappa_limit"]),
+            "WS": w0 & (s["lambda_min"] > 0),
+            "WE": w0 & (s["strain_energy"] < limits["strain_energy_max"]),
+            "WP": w0 & np.all(s["tensions"] < limits["max_tension"], axis=1),
+        }
+        for name, mask in expected.items():
+            assert np.array_equal(fh["masks"][name][()], mask), name
+        assert set(fh["masks"]) == set(expected)
+        assert 0 < expected["WE"].sum() < w0.sum()           # the energy limit cuts this grid
+
+
+def test_tensions_mode_fields(tensions_1):
+    s = samples(tensions_1)
+    with h5py.File(tensions_1, "r") as fh:
+        points = fh["grid/points"][()]
+        assert fh["grid/points"].attrs["units"] == "P l^2/B"
+        assert fh.attrs["mode"] == "tensions"
+    assert len(points) == 25
+    assert np.all(s["status"] == 1)                      # p_2 <= 20: no cable collapses
+    assert np.all(np.isnan(s["target"])) and np.all(np.isnan(s["tip_error"]))
+    np.testing.assert_array_equal(s["tensions"], points)
+    assert np.allclose(s["tensions_N"], points * 0.2 / 0.36)   # B / l^2 = 0.2 / 0.6^2 N
+    straight = np.all(points == 0, axis=1)
+    np.testing.assert_allclose(s["tip"][straight], [[600.0, 0.0]], atol=1e-9)
+
+
+# --- d. physics sanity (Fig. 4) ---------------------------------------------------------------
+def test_physics_of_the_target_map(targets_1):
+    s = samples(targets_1)
+    status, target, tip, p = s["status"], s["target"], s["tip"], s["tensions"]
+    reached, outside = status == 1, status == 2
+    assert reached.sum() >= 30 and outside.sum() >= 20 and not np.any(status == 0)
+    # reached: the tip on the target within 1e-5 mm (E < eps, Sec. 4.5 (iv)), P >= 0
+    assert np.all(s["tip_error"][reached] < 1e-5)
+    assert np.all(np.linalg.norm(tip[reached] - target[reached], axis=1) < 1e-5)
+    assert np.all(p[reached] >= 0)
+    # stable (Eq. 20): the smallest eigenvalue is positive at (almost) every reached sample
+    assert np.mean(s["lambda_min"][reached] > 0) >= 0.95
+    assert np.all(np.isfinite(s["lambda_min_raw"][reached]))
+    # the paper's raw eigenvalue of K scales with the element size: lambda l^2/B ~ N lambda_raw
+    ratio = s["lambda_min"][reached] / s["lambda_min_raw"][reached]
+    assert np.all((ratio > 0.99 * ELEMENTS) & (ratio < 1.03 * ELEMENTS))
+    # outside W_0 (Fig. 4, red): the closest tip is on the boundary P_1 = 0 ("require P_1 < 0")
+    assert np.all(p[outside, 0] == 0.0) and np.all(p[outside, 1] > 0)
+    assert np.all(s["tip_error"][outside] > 1.0)
+    # ... and bound W_0 from one side: on every row and column of the grid, the reached
+    # targets form one unbroken run (no red point between two green ones), and every red
+    # point of a row lies left of its green ones or beyond them (over the top of the P_1 = 0
+    # locus, which runs from (l, 0) up and to the left).
+    for axis in (0, 1):
+        for value in np.unique(target[:, 1 - axis]):
+            line = np.flatnonzero(target[:, 1 - axis] == value)
+            line = line[np.argsort(target[line, axis])]
+            green = np.flatnonzero(reached[line])
+            if green.size:
+                assert np.all(reached[line][green[0]:green[-1] + 1]), (axis, value)
+    for k in np.flatnonzero(outside):
+        row = reached & (target[:, 1] == target[k, 1])
+        if row.any() and target[k, 0] > target[row, 0].min():
+            # right of green: only over the top of the locus, which passes x ~ 580 mm at
+            # y ~ 130 mm (p_2 = 5) and (336, 379) mm (p_2 = 10)
+            assert target[k, 1] >= 240.0, target[k]
+        elif row.any():
+            assert target[k, 0] < target[row, 0].min()
+
+
+def test_outside_tips_lie_on_the_p1_zero_locus(targets_1):
+    """The tip recorded for a red target is the equilibrium at p = (0, p_2) (a forward
+    solve from the straight arm reproduces it): the boundary of Fig. 4 is x_t(0, P_2)."""
+    from elastica_petsc.config import load_config
+    from elastica_petsc.equilibrium import EquilibriumSolver
+    from elastica_petsc.fem import Discretisation
+
+    s = samples(targets_1)
+    outside = np.flatnonzero(s["status"] == 2)
+    arm = load_config(ROOT / "configs" / "paper.toml")
+    solver = EquilibriumSolver(Discretisation.from_arm(arm, ELEMENTS))
+    try:
+        for k in outside[:: max(1, len(outside) // 8)]:
+            eq = solver.solve(s["tensions"][k])
+            assert eq.converged
+            np.testing.assert_allclose(eq.tip * arm.length_mm, s["tip"][k], atol=1e-6)
+    finally:
+        solver.destroy()
+
+
+# --- e. errors -------------------------------------------------------------------------------
+def one_error_line(run: subprocess.CompletedProcess, *words: str) -> None:
+    assert run.returncode == 2, run.stderr
+    first = run.stderr.strip().splitlines()[0]
+    assert first.startswith("elastica-petsc: error:"), run.stderr
+    assert "Traceback" not in run.stderr and "MPI_ABORT" not in run.stderr
+    for word in words:
+        assert word in first, first
+
+
+@pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=needs_mpi)])
+def test_resume_with_another_spacing_is_refused(ranks, targets_1, tmp_path):
+    out = tmp_path / "ws.h5"
+    shutil.copy(targets_1, out)
+    changed = list(TARGETS)
+    changed[changed.index("--spacing") + 1] = "50"
+    run = workspace(*changed, "--out", out, "--resume", ranks=ranks)
+    one_error_line(run, "cannot resume", "spacing 60.0 (now 50.0)")
+    if ranks == 1:
+        assert len(run.stderr.strip().splitlines()) == 1
+    assert_same_samples(targets_1, out)                       # the file is untouched
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--out", "{existing}"], ["exists", "--overwrite"]),
+    ([], ["--out"]),
+    (["--out", "{new}", "--box", "0", "-10", "0", "100"], ["--box", "xmin < xmax"]),
+    (["--out", "{new}", "--box", "0", "100", "50", "50"], ["--box"]),
+    (["--out", "{new}", "--resume"], ["--resume", "does not exist"]),
+    (["--out", "{new}", "--spacing", "-5"], ["--spacing"]),
+])
+def test_bad_input_exits_2_with_one_line(args, words, targets_1, tmp_path):
+    args = [a.format(existing=targets_1, new=tmp_path / "new.h5") for a in args]
+    run = workspace("--elements", "30", *args)
+    one_error_line(run, *words)
+    assert len(run.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "new.h5").exists()
+
+
+def test_bad_checkpoint_interval_is_an_input_error(tmp_path):
+    env = dict(ENV, ELASTICA_PETSC_CHECKPOINT_SECONDS="soon")
+    run = workspace(*TARGETS, "--out", tmp_path / "ws.h5", env=env)
+    one_error_line(run, "ELASTICA_PETSC_CHECKPOINT_SECONDS")
+
+
+# --- f. plots ----------------------------------------------------------------------------------
+def test_plot_files(targets_1):
+    import matplotlib.image as mpimg
+
+    fig4 = targets_1.with_name("ws.png")
+    fig5 = targets_1.with_name("ws_restrictions.png")
+    for path in (fig4, fig5):
+        image = mpimg.imread(path)
+        assert image.shape[0] > 400 and image.shape[1] > 800, (path, image.shape)
+        assert image[..., :3].std() > 0.05                    # not blank
+    # Fig. 4 shows green (reached) and red (outside) points
+    rgb = mpimg.imread(fig4)[..., :3]
+    green = (rgb[..., 1] > 0.5) & (rgb[..., 0] < 0.3) & (rgb[..., 2] < 0.3)
+    red = (rgb[..., 0] > 0.7) & (rgb[..., 1] < 0.3) & (rgb[..., 2] < 0.3)
+    assert green.sum() > 200 and red.sum() > 200
