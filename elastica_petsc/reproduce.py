@@ -31,7 +31,7 @@ FIG8_LENGTHS_MM = np.array([147.1, 472.5])     # Fig. 8 states 1 and 2
 FIG2_TARGET_MM = np.array([535.8, 222.6])
 TRIANGLE_CENTER_MM = (400.0, 200.0)            # our choice: the paper gives no coordinates
 CURVE_CENTER_MM = (420.0, 190.0)
-FULL_SPACING_MM = 11.68                        # 4201 targets in the half-disc y >= 0, |x| <= l
+FULL_SPACING_MM = 11.67                        # 4202 targets in the half-disc y >= 0, |x| <= l
 
 
 @dataclass
