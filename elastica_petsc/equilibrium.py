@@ -19,6 +19,7 @@ from petsc4py import PETSc
 from .errors import InputError
 from .fem import Discretisation
 from .inertia import InertiaCounter
+from .linalg import use_bordered_lu
 
 SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
 
@@ -181,12 +182,7 @@ class EquilibriumSolver:
         # atol (tension change < ~1e-8) must still respond to the change, or the
         # tip would be piecewise constant in p at the optimiser's last steps
         snes.setForceIteration(True)
-        ksp = snes.getKSP()
-        ksp.setType(PETSc.KSP.Type.PREONLY)
-        pc = ksp.getPC()
-        pc.setType(PETSc.PC.Type.LU)
-        # theta unknowns first, border last: natural order fills only the border
-        pc.setFactorOrdering(PETSc.Mat.OrderingType.NATURAL)
+        use_bordered_lu(snes.getKSP())
         snes.setFromOptions()
         self.snes = snes
         self.inertia = InertiaCounter(disc)

@@ -14,6 +14,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from .fem import Discretisation
+from .linalg import bordered_ldlt
 
 
 class InertiaCounter:
@@ -27,10 +28,7 @@ class InertiaCounter:
         self.H = PETSc.Mat().createSBAIJ(
             size=(n, n), bsize=1, comm=PETSc.COMM_SELF,
             csr=(indptr, indices, disc.stability_values(disc.straight(), np.zeros(disc.n_tendons))))
-        self.pc = PETSc.PC().create(PETSc.COMM_SELF)
-        self.pc.setOperators(self.H)
-        self.pc.setType(PETSc.PC.Type.CHOLESKY)
-        self.pc.setFactorOrdering(PETSc.Mat.OrderingType.NATURAL)
+        self.pc = bordered_ldlt(self.H)
 
     def negative_eigenvalues(self, u: np.ndarray, p) -> int:
         """Number of negative eigenvalues of the tangent K at state ``u``."""

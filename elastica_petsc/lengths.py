@@ -94,6 +94,7 @@ from .equilibrium import (SNES_REASONS, Equilibrium, EquilibriumSolver, check_or
 from .errors import InputError
 from .fem import Discretisation
 from .inertia import InertiaCounter
+from .linalg import bordered_ldlt, use_bordered_lu
 
 # A tension below this (non-dimensional, p = P l^2/B) counts as zero: the
 # cable is slack or just taut and constrains nothing (module docstring).
@@ -277,11 +278,7 @@ class _AugmentedSystem:
         # residual round-off grows like N^(3/2) (see EquilibriumSolver)
         self.atol = max(1e-10, 1e-14 * N ** 1.5)
         snes.setTolerances(rtol=1e-10, atol=self.atol, stol=1e-14, max_it=max_it)
-        ksp = snes.getKSP()
-        ksp.setType(PETSc.KSP.Type.PREONLY)
-        pc = ksp.getPC()
-        pc.setType(PETSc.PC.Type.LU)
-        pc.setFactorOrdering(PETSc.Mat.OrderingType.NATURAL)   # theta first: fill in the border
+        use_bordered_lu(snes.getKSP())
         # defaults given in code go under the prefix only for setFromOptions and
         # only where the user has not set them; then they are removed again
         db = PETSc.Options()
@@ -435,10 +432,7 @@ class LengthInertia:
         self.H = PETSc.Mat().createSBAIJ(size=(size, size), bsize=1, comm=PETSc.COMM_SELF,
                                          csr=(indptr, indices,
                                               self.values(disc.straight(), np.zeros(n))[0]))
-        self.pc = PETSc.PC().create(PETSc.COMM_SELF)
-        self.pc.setOperators(self.H)
-        self.pc.setType(PETSc.PC.Type.CHOLESKY)
-        self.pc.setFactorOrdering(PETSc.Mat.OrderingType.NATURAL)
+        self.pc = bordered_ldlt(self.H)
 
     def values(self, u, p) -> tuple[np.ndarray, int]:
         """Upper-triangle entries of H_c and the number m of taut cables."""

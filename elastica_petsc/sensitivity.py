@@ -30,6 +30,7 @@ from petsc4py import PETSc
 
 from .equilibrium import Equilibrium, EquilibriumSolver
 from .fem import Discretisation
+from .linalg import use_bordered_lu
 
 
 class SensitivityError(RuntimeError):
@@ -87,10 +88,7 @@ class SensitivitySolver:
         ksp = PETSc.KSP().create(PETSc.COMM_SELF)
         ksp.setOptionsPrefix(prefix)
         ksp.setOperators(self.J)
-        ksp.setType(PETSc.KSP.Type.PREONLY)
-        pc = ksp.getPC()
-        pc.setType(PETSc.PC.Type.LU)
-        pc.setFactorOrdering(PETSc.Mat.OrderingType.NATURAL)
+        use_bordered_lu(ksp)
         ksp.setFromOptions()
         self.ksp = ksp
         # midpoint weights: element e gets (alpha_e + alpha_{e+1}) / 2

@@ -103,6 +103,7 @@ from slepc4py import SLEPc
 from .fem import Discretisation
 from .inertia import InertiaCounter
 from .model import Arm
+from .linalg import use_bordered_lu
 
 MASS_MODELS = ("lumped", "paper")
 OPERATORS = ("jacobian", "symmetric")
@@ -373,12 +374,7 @@ class StabilitySolver:
         st = eps.getST()
         st.setType(SLEPc.ST.Type.SINVERT)
         st.setMatStructure(PETSc.Mat.Structure.SUBSET)   # diag(M, 0) lies on A's diagonal
-        ksp = st.getKSP()
-        ksp.setType(PETSc.KSP.Type.PREONLY)
-        pc = ksp.getPC()
-        pc.setType(PETSc.PC.Type.LU)
-        # theta unknowns first, border last: natural order fills only the border
-        pc.setFactorOrdering(PETSc.Mat.OrderingType.NATURAL)
+        use_bordered_lu(st.getKSP())
         eps.setFromOptions()
         return eps
 
@@ -526,10 +522,7 @@ class StabilitySolver:
         ksp = PETSc.KSP().create(self.comm)
         ksp.setOptionsPrefix(self.prefix + "freq_inv_")
         ksp.setOperators(A)
-        ksp.setType(PETSc.KSP.Type.PREONLY)
-        pc = ksp.getPC()
-        pc.setType(PETSc.PC.Type.LU)
-        pc.setFactorOrdering(PETSc.Mat.OrderingType.NATURAL)
+        use_bordered_lu(ksp)
         ksp.setFromOptions()
         rhs, sol = A.createVecs()
         buf = np.zeros(size)
