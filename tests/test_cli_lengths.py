@@ -19,7 +19,6 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
 from elastica_petsc.config import arm_to_dict, load_config
 from elastica_petsc.equilibrium import EquilibriumSolver
@@ -308,17 +307,6 @@ def test_replay_of_a_short_path_stays_on_its_branch(planned_trace, tmp_path):
     assert data["start_method"].startswith("length continuation")
 
 
-def _column(disc, u, m1):
-    """(alignment of the segment beyond x_1 with r_2, signed max deviation)."""
-    x = disc.node_positions(disc.split(u)[0])
-    x1, tip = x[m1], x[-1]
-    t = (tip - x1) / np.linalg.norm(tip - x1)
-    X = x[m1:] - x1
-    dev = X[:, 0] * t[1] - X[:, 1] * t[0]
-    r2 = disc.routes[1]
-    return float(t[0] * (r2 - x1)[1] - t[1] * (r2 - x1)[0]), float(dev[np.argmax(np.abs(dev))])
-
-
 def test_replay_reports_the_fig7_buckling(tmp_path, arm, disc, eqs, ls):
     """Fig. 7 as a planned path: tendon 2 just taut and aligned with the
     straight segment beyond x_1, then L_2 shortened by 0.5 ... 2 mm with L_1
@@ -326,33 +314,12 @@ def test_replay_reports_the_fig7_buckling(tmp_path, arm, disc, eqs, ls):
     tests/test_lengths.py).  The library finds the constrained buckling at
     dL_2 = 1.61 mm: the replay reproduces the first four points and reaches
     the last one only after a jump, which the command reports."""
-    m1 = disc.attach_nodes[0]
-    base = eqs.solve([23.0, 0.0])
-    p1s = brentq(lambda p1: _column(disc, eqs.solve([p1, 0.0], start=base).u, m1)[0],
-                 22.0, 25.0, xtol=1e-13)
-    e0 = eqs.solve([p1s, 0.0], start=base)
-    L0 = e0.cable_lengths.copy()
-    state = ls.solve(L0, e0)
-    states, history = [state], [(0.0, L0[0])]
-    for dl in (0.5, 1.0, 1.5, 2.0):
-        L2 = L0[1] - dl / L_MM
-        (a, La), (b, Lb) = history[-2:] if len(history) > 1 else (history[0], history[0])
-        L1 = Lb + (Lb - La) / (b - a) * (dl - b) if b > a else L0[0] + 2.2 * dl / L_MM
-        prev = None
-        for _ in range(20):                                  # secant on the alignment
-            s = ls.solve([L1, L2], state)
-            assert s.converged
-            c = _column(disc, s.u, m1)[0]
-            if abs(c) < 1e-13:
-                break
-            if prev is None:
-                prev, L1 = (L1, c), L1 + 1e-4 / L_MM
-            else:
-                (L1b, cb), prev = prev, (L1, c)
-                L1 = L1 - c * (L1 - L1b) / (c - cb)
-        state = s
-        states.append(s)
-        history.append((dl, L1))
+    from elastica_petsc.buckling import aligned_family, critical_configuration
+
+    critical = critical_configuration(eqs)
+    L0 = critical[1].cable_lengths.copy()
+    family = aligned_family(eqs, ls, (0.5, 1.0, 1.5, 2.0), critical=critical)
+    states = [family[dl] for dl in sorted(family)]
     path = write_trace(tmp_path / "fig7.h5", arm, states)
     png = tmp_path / "fig7.png"
     run = cli("replay", path, "--json", "--plot", png)
