@@ -19,7 +19,7 @@ from .equilibrium import Equilibrium, EquilibriumSolver
 from .fem import Discretisation
 from .model import Arm
 from .stability import StabilityError, StabilitySolver
-from .workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, fields
+from .workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, empty_fields, fields
 
 
 class _Sampler:
@@ -30,11 +30,7 @@ class _Sampler:
         self.schema = fields(disc.n_tendons)
 
     def _empty(self, count: int) -> dict:
-        out = {}
-        for name, (shape, dtype, _, _) in self.schema.items():
-            fill = b"" if dtype.startswith("S") else (0 if dtype[0] == "i" else np.nan)
-            out[name] = np.full((count,) + shape, fill, dtype=dtype)
-        return out
+        return empty_fields(self.schema, count)
 
     def _record(self, out: dict, k: int, eq: Equilibrium) -> None:
         """Fields of a solved state, with its smallest eigenvalue (Eq. 20)."""

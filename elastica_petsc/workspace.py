@@ -190,16 +190,23 @@ def tension_grid(n_tendons: int, spacing: float, p_max: float, chunk: int = 24) 
     return Grid("tensions", np.array(points, float), _rows_to_chunks(rows, chunk), meta)
 
 
+def empty_fields(schema: dict, count: int) -> dict[str, np.ndarray]:
+    """Arrays for ``count`` samples of every field of ``schema`` (:func:`fields`):
+    NaN for floats, 0 for integers, b"" for strings (not computed yet)."""
+    out = {}
+    for name, (shape, dtype, _, _) in schema.items():
+        fill = b"" if dtype.startswith("S") else (0 if dtype[0] == "i" else np.nan)
+        out[name] = np.full((count,) + shape, fill, dtype=dtype)
+    return out
+
+
 class Results:
     """All samples' fields in memory (rank 0), with per-chunk done flags."""
 
     def __init__(self, grid: Grid, n_tendons: int):
         self.grid = grid
         self.schema = fields(n_tendons)
-        self.data = {}
-        for name, (shape, dtype, _, _) in self.schema.items():
-            fill = b"" if dtype.startswith("S") else (0 if dtype[0] == "i" else np.nan)
-            self.data[name] = np.full((grid.size,) + shape, fill, dtype=dtype)
+        self.data = empty_fields(self.schema, grid.size)
         self.chunk_done = np.zeros(len(grid.chunks), bool)
 
     def store(self, chunk: int, values: dict) -> None:
