@@ -24,7 +24,10 @@ Methods
     which TAO calls before each new direction), with the tensions held on a
     bound decoupled, and a Levenberg-Marquardt shift mu I (mu >= 1e-10 tr,
     since S is rank one on the straight arm; larger when the step would
-    change a tension by more than ``max(trust_tension, max p)``).  With that
+    change a tension by more than ``max(trust_tension, max p)`` or shorten a
+    cable by more than half its length).  The line search (More-Thuente,
+    curvature parameter 0.1) is confined to the box of that step, so it
+    cannot extrapolate past it into a cable collapse.  With that
     metric the BFGS history only hurts (measured on Fig. 2: 9 iterations with
     the default 5 pairs, 5 with none), so it is off by default
     (``lmvm_history=0``, i.e. ``-ctl_tao_blmvm_mat_lmvm_hist_size 0``): the
@@ -47,7 +50,14 @@ test; default eps = (1e-5 mm / l)^2 / 2: the tip within 1e-5 mm), plus: the
 iteration limit; a stationary point with E >= eps (projected gradient below
 ``stationary_rtol`` |x_t - x_d| |S|: the target cannot be reached from here,
 typically because a tension sits on a bound); and a stall (E not decreased
-over ``stall_its`` iterations).  TAO's own reason is always checked and
+over ``stall_its`` iterations); and CABLE_COLLAPSE (blmvm): a cable is
+shorter than ``COLLAPSE_STOP * COLLAPSE_LENGTH`` and the Gauss-Newton step
+would pull it onto its routing point, i.e. the optimiser is heading for the
+collapse corner of the tension domain (the tip at a routing point), a local
+end: the target may still be reachable from another start.  (Before this
+test and the step box, such targets, in the band y < 50 mm of the paper's
+workspace, ended in line-search failures after ~20 failed equilibria each,
+0.33 s per target.)  TAO's own reason is always checked and
 reported; a TAO line-search failure ends the solve with that reason.
 
 Failed equilibria: when the optimiser proposes tensions whose equilibrium
@@ -62,7 +72,8 @@ if that fails too, the objective returns the penalty E_fail = 10 (E_max + 1)
 (E_fail - E_good) dp / |dp|^2 towards the last good tensions, so the line
 search backtracks.  Failures are counted (``failed_evaluations``) and not
 retried within a solve.  Each costs a full continuation in
-:class:`EquilibriumSolver` (0.1-0.4 s at 180 elements).
+:class:`EquilibriumSolver` (up to 0.3 s at 180 elements); at most
+``max_failures`` are solved per tip-control solve.
 """
 from __future__ import annotations
 
@@ -90,6 +101,21 @@ STATIONARY = "STATIONARY"                # projected grad ~ 0 -> CONVERGED_GATOL
 STALLED = "STALLED"                      # no progress        -> CONVERGED_STEPTOL
 MAX_ITERATIONS = "MAX_ITERATIONS"        #                    -> DIVERGED_MAXITS
 MAX_EVALUATIONS = "MAX_EVALUATIONS"      #                    -> DIVERGED_MAXFCN
+CABLE_COLLAPSE = "CABLE_COLLAPSE"        # step would collapse a cable -> DIVERGED_USER
+
+# Gauss-Newton steps may shorten a cable by at most this fraction of its length
+# (linearised: L_j + dL_j/dp . s >= (1 - CABLE_FRACTION) L_j), so the iterates
+# approach a collapse geometrically instead of jumping past it.
+CABLE_FRACTION = 0.5
+# Stop (CABLE_COLLAPSE) when a cable is shorter than this many COLLAPSE_LENGTH
+# and the Gauss-Newton step would still pull it onto its routing point.
+COLLAPSE_STOP = 5.0
+# More-Thuente curvature parameter with the Gauss-Newton metric: 0.1 instead of
+# TAO's 0.9, so a step that overshoots a minimum along the line is refined
+# (outside targets, large residual: the Gauss-Newton step overshoots by ~1.8x
+# and the unit step was accepted; 47 iterations to the closest boundary point
+# became 4, and the workspace's outside targets cost 13.5 s instead of 28.7 s).
+LINE_SEARCH_GTOL = "0.1"
 
 
 def default_eps(length_mm: float, tip_tol_mm: float = 1e-5) -> float:
@@ -183,6 +209,7 @@ class _SolveState:
     best_E: list = field(default_factory=list)
     failure: str = ""
     failed_at: set = field(default_factory=set)   # tensions whose equilibrium failed
+    collapsing: int | None = None                  # cable (0-based) the GN step would collapse
 
 
 class TipController:
@@ -296,6 +323,8 @@ class TipController:
             ksp.setType(PETSc.KSP.Type.PREONLY)
             ksp.getPC().setType(PETSc.PC.Type.CHOLESKY)
         defaults = {}
+        if self.gauss_newton:
+            defaults["tao_ls_gtol"] = LINE_SEARCH_GTOL
         if self.lmvm_history is not None:
             defaults["tao_blmvm_mat_lmvm_hist_size"] = str(int(self.lmvm_history))
         defaults.update(options)
@@ -371,6 +400,12 @@ class TipController:
             st.failed_at.add(p.tobytes())
         return None
 
+    def _true_bounds(self) -> None:
+        """TAO's bounds back to 0 <= p <= upper (the step box of the last
+        iteration otherwise stays, see :meth:`_gauss_newton_H0`)."""
+        self.lb.set(0.0)
+        self.ub.set(PETSc.INFINITY if self.upper is None else self.upper)
+
     def _set_H0(self, H: np.ndarray) -> None:
         idx = list(range(self.n))
         self.H0.setValues(idx, idx, np.ascontiguousarray(H, dtype=float).ravel())
@@ -383,11 +418,18 @@ class TipController:
 
     def _gauss_newton_H0(self, ev: Evaluation, target: np.ndarray) -> None:
         """H0 = S^T S + mu I (S = d x_t / d p), the Gauss-Newton Hessian of E,
-        with the tensions held on a bound decoupled (reduced-space Newton).
+        with the tensions held on a bound decoupled (reduced-space Newton),
+        and the box of the step it gives as TAO's bounds for this iteration.
 
         mu = 1e-10 tr(S^T S) at least (S is rank one on the straight arm);
-        larger (Levenberg-Marquardt) when the Gauss-Newton step would change a
-        tension by more than max(trust_tension, max p)."""
+        larger (Levenberg-Marquardt) when the step s = -H0^{-1} g would change
+        a tension by more than max(trust_tension, max p) or shorten a cable by
+        more than CABLE_FRACTION of its length (linearised with
+        dL/dp of :mod:`sensitivity`).  The line search is then confined to the
+        box between p and p + s (intersected with the true bounds): the
+        More-Thuente search cannot extrapolate past the Levenberg-Marquardt
+        step, into a cable collapse or a snap of the arm.  The true bounds are
+        used for every stopping test and restored at each solve."""
         S = ev.sensitivity.tip                         # (n, 2), rows d x_t / d p_i
         g = S @ (ev.equilibrium.tip - target)
         H = S @ S.T
@@ -398,15 +440,24 @@ class TipController:
             H[active, :] = 0.0
             H[:, active] = 0.0
             H[active, active] = diag[active]
+        eye = np.eye(self.n)
+        L = ev.equilibrium.cable_lengths
+        dL = ev.sensitivity.cable_lengths               # [i, j] = d L_j / d p_i
         mu = 1e-10 * scale
-        if self.trust_tension is not None:
-            radius = max(self.trust_tension, float(np.max(ev.p)))
-            for _ in range(60):
-                step = np.linalg.solve(H + mu * np.eye(self.n), g)
-                if np.max(np.abs(step)) <= radius:
-                    break
-                mu *= 4.0
-        self._set_H0(H + mu * np.eye(self.n))
+        step = -np.linalg.solve(H + mu * eye, g)        # the Gauss-Newton step
+        doomed = (L + step @ dL < COLLAPSE_LENGTH) & (L < COLLAPSE_STOP * COLLAPSE_LENGTH)
+        self._state.collapsing = int(np.argmax(doomed)) if np.any(doomed) else None
+        radius = np.inf if self.trust_tension is None else max(self.trust_tension,
+                                                               float(np.max(ev.p)))
+        for _ in range(60):
+            if np.max(np.abs(step)) <= radius and np.all(step @ dL >= -CABLE_FRACTION * L):
+                break
+            mu *= 4.0
+            step = -np.linalg.solve(H + mu * eye, g)
+        self._set_H0(H + mu * eye)
+        upper = np.inf if self.upper is None else self.upper
+        self.lb.setArray(np.maximum(ev.p - np.abs(step), 0.0))
+        self.ub.setArray(np.minimum(ev.p + np.abs(step), upper))
 
     # --- TAO callbacks ---------------------------------------------------------
     def _objective_gradient(self, tao, X, G) -> float:
@@ -457,6 +508,8 @@ class TipController:
         st.best_E.append(E)
         if ev is not None and E < self.eps:                     # Algorithm 1, line 8
             return TARGET_REACHED, Reason.CONVERGED_USER
+        if st.collapsing is not None:
+            return CABLE_COLLAPSE, Reason.DIVERGED_USER
         if its >= self.max_it:
             return MAX_ITERATIONS, Reason.DIVERGED_MAXITS
         if st.evaluations >= self.max_evaluations:
@@ -478,6 +531,7 @@ class TipController:
         if ev is not None:
             r = ev.equilibrium.tip - st.target
             E = 0.5 * float(r @ r)
+            gnorm = float(np.linalg.norm(self._projected_gradient(p, ev.sensitivity.tip @ r)))
         stop = self._stop(its, E, gnorm, ev)
         if stop is None:
             st.reason = None
@@ -585,7 +639,11 @@ class TipController:
                 ev, tao_reason, iterations = self._solve_gd(p0)
             else:
                 self.x.setArray(p0)
-                self.tao.solve(self.x)
+                self._true_bounds()
+                try:
+                    self.tao.solve(self.x)
+                finally:
+                    self._true_bounds()
                 tao_reason = TAO_REASONS.get(self.tao.getConvergedReason(), "UNKNOWN")
                 iterations = self.tao.getIterationNumber()
                 p = np.maximum(self.x.getArray(readonly=True).copy(), 0.0)
@@ -638,6 +696,10 @@ class TipController:
             message = (f"stopped ({reason}, TAO {tao_reason}) with the tip "
                        f"{np.linalg.norm(r) * mm:.4g} mm from the target"
                        + (f"; {bound_txt}" if bound_txt else "")
+                       + (f"; tendon {st.collapsing + 1}'s cable is "
+                          f"{eq.cable_lengths[st.collapsing] * mm:.2f} mm long and the next step "
+                          "would pull its attachment point onto its routing point"
+                          if reason == CABLE_COLLAPSE else "")
                        + (f"; last equilibrium failure: {st.failure}" if st.failure else ""))
         hist = st.history or [(ev.p, eq.tip, E)]
         return ControlResult(

@@ -97,7 +97,15 @@ class TargetSampler(_Sampler):
       state of the chunk, else from ``head_guess`` in every tension, not from
       zero: at p = 0 the arm is straight, its tip sensitivities have no x
       component, and every target on the x axis is a stationary point of E
-      (Eq. 12) — the optimiser would not move.
+      (Eq. 12) — the optimiser would not move;
+    * then, backwards through the chunk: a target that ended not converged
+      before a reached one (a chunk that starts outside W_0, where the head
+      guess leads the optimiser to a cable collapse) is solved again from
+      its reached neighbour, with a failure budget of ``retry_failures``
+      failed equilibria (the retries that fail run into snaps and collapses
+      at 0.1 s per failed equilibrium; with the solve's default budget of 25
+      they cost 50 s on the paper's half-disc).  Measured there (4202
+      targets, 180 elements): 5 more targets reached, 4.2 s of work.
 
     ``stationary_rtol`` (passed to :class:`~elastica_petsc.control.TipController`)
     is looser than the controller's default 1e-7: a target is classified as
@@ -109,6 +117,7 @@ class TargetSampler(_Sampler):
 
     head_guess = 2.0
     stationary_rtol = 1e-5
+    retry_failures = 1
 
     def __init__(self, arm: Arm, disc: Discretisation):
         from .control import TipController
@@ -128,6 +137,7 @@ class TargetSampler(_Sampler):
         out["target"][:] = points
         head = np.full(self.disc.n_tendons, self.head_guess)
         reached = boundary = None          # last reached state; state after an outside target
+        states = {}                        # sample -> equilibrium, reached samples
         for k, target in enumerate(points):
             if stop():
                 return None
@@ -142,19 +152,48 @@ class TargetSampler(_Sampler):
                 result = self.controller.solve_mm(
                     target, p0=None if reached is not None else head, start=reached)
                 status = self._classify(result)
-            out["seconds_control"][k] = time.perf_counter() - t0
-            out["iterations"][k] = result.iterations
-            out["reason"][k] = result.reason.encode()[:48]
-            out["tip_error"][k] = result.tip_error_mm
-            out["status"][k] = status
+            self._store(out, k, result, status, time.perf_counter() - t0)
             boundary = result.equilibrium if status == NEEDS_NEGATIVE else None
             if status == REACHED:
-                self._record(out, k, result.equilibrium)
+                reached = states[k] = result.equilibrium
+        # backward sweep: a target not converged before a reached one is solved
+        # again from its reached neighbour on the other side
+        reached = None
+        for k in reversed(range(len(points))):
+            if k in states:
+                reached = states[k]
+                continue
+            if out["status"][k] != NOT_CONVERGED or reached is None:
+                continue
+            if stop():
+                return None
+            t0 = time.perf_counter()
+            budget, self.controller.max_failures = self.controller.max_failures, self.retry_failures
+            try:
+                result = self.controller.solve_mm(points[k], start=reached)
+            finally:
+                self.controller.max_failures = budget
+            status = self._classify(result)
+            seconds = out["seconds_control"][k] + time.perf_counter() - t0
+            if status == NOT_CONVERGED:
+                out["seconds_control"][k] = seconds
+                continue
+            self._store(out, k, result, status, seconds)
+            if status == REACHED:
                 reached = result.equilibrium
-            else:
-                out["tip"][k] = result.tip * self.arm.length_mm
-                out["tensions"][k] = result.p
         return out
+
+    def _store(self, out: dict, k: int, result, status: int, seconds: float) -> None:
+        out["seconds_control"][k] = seconds
+        out["iterations"][k] = result.iterations
+        out["reason"][k] = result.reason.encode()[:48]
+        out["tip_error"][k] = result.tip_error_mm
+        out["status"][k] = status
+        if status == REACHED:
+            self._record(out, k, result.equilibrium)
+        else:
+            out["tip"][k] = result.tip * self.arm.length_mm
+            out["tensions"][k] = result.p
 
     def destroy(self) -> None:
         self.controller.destroy()

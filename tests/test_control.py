@@ -12,7 +12,9 @@ import pytest
 from petsc4py import PETSc
 
 from elastica_petsc.config import load_config
-from elastica_petsc.control import (STATIONARY, TARGET_REACHED, TipController, default_eps)
+from elastica_petsc.control import (CABLE_COLLAPSE, COLLAPSE_STOP, STATIONARY, TARGET_REACHED,
+                                    TipController, default_eps)
+from elastica_petsc.equilibrium import COLLAPSE_LENGTH
 from elastica_petsc.errors import InputError
 from elastica_petsc.model import Tendon
 from elastica_petsc.sensitivity import objective_gradient
@@ -172,6 +174,39 @@ def test_failed_equilibria_are_penalised_not_fatal(arm):
         assert ctl.evaluate([0.0, 40.0]) is None          # the same failure, directly
     assert res.failed_evaluations >= 1
     assert res.converged and res.tip_error_mm < TOL_MM
+
+
+def test_heading_for_a_cable_collapse_stops_there(arm):
+    """(81.69, 11.67) mm, under tendon 2's routing point r_2 = (26.1, 51.1) mm, from the
+    head guess p = (2, 2): the optimiser curls the arm over until tendon 2 (attached at
+    the tip) would pull the tip onto r_2.  The step box and the cable-length limit let it
+    approach that corner without a single failed equilibrium, and it stops there
+    (before: a line-search failure after 18 failed equilibria, 0.27 s)."""
+    l_mm = arm.length_mm
+    with TipController(arm) as ctl:
+        res = ctl.solve_mm((81.69, 11.67), p0=[2.0, 2.0])
+        # the step box of the last iteration does not outlive the solve
+        assert np.all(ctl.lb.getArray() == 0.0) and np.all(ctl.ub.getArray() == arm.max_tension)
+    assert res.reason == CABLE_COLLAPSE and res.tao_reason == "DIVERGED_USER"
+    assert not res.converged and res.reachable is None
+    assert res.failed_evaluations == 0 and res.iterations <= 20
+    L2 = res.cable_lengths_mm[1]
+    assert COLLAPSE_LENGTH * l_mm <= L2 < COLLAPSE_STOP * COLLAPSE_LENGTH * l_mm
+    assert np.linalg.norm(res.tip_mm - [26.1, 51.1]) == pytest.approx(L2)
+    assert "tendon 2's cable" in res.message
+
+
+def test_closest_boundary_point_in_a_few_iterations(arm):
+    """Targets outside W_0 far from its boundary: the Gauss-Newton step overshoots the
+    closest boundary point (large residual), and the line search's curvature condition
+    (0.1) refines it: the neighbouring target, warm-started from the first one's end
+    state, is classified in a few iterations (47 with TAO's default 0.9)."""
+    with TipController(arm, stationary_rtol=1e-5) as ctl:
+        first = ctl.solve_mm((-93.36, 466.8), p0=[2.0, 2.0])
+        res = ctl.solve_mm((-81.69, 466.8), start=first.equilibrium)
+    for r in (first, res):
+        assert r.reason == STATIONARY and (1, "lower") in r.on_bound and r.p[0] == 0.0
+    assert first.iterations <= 10 and res.iterations <= 6
 
 
 def test_options_and_input_errors(arm):

@@ -370,6 +370,31 @@ def test_outside_tips_lie_on_the_p1_zero_locus(targets_1):
         solver.destroy()
 
 
+def test_backward_sweep_reaches_targets_behind_a_collapse():
+    """Row y = 46.68 mm from x = 23.3 to 116.7 mm, left to right: from the head guess the
+    first targets end at tendon 2's collapse (under its routing point), 105 mm is
+    reached; solved again backwards from their reached neighbours, 58-93 mm are reached
+    too (they are in W_0; only 23-47 mm are not reached either way)."""
+    from elastica_petsc.config import load_config
+    from elastica_petsc.control import CABLE_COLLAPSE
+    from elastica_petsc.fem import Discretisation
+    from elastica_petsc.sampling import TargetSampler
+    from elastica_petsc.workspace import NOT_CONVERGED, REACHED
+
+    arm = load_config(ROOT / "configs" / "paper.toml")
+    sampler = TargetSampler(arm, Discretisation.from_arm(arm, 60))
+    try:
+        points = np.column_stack([11.67 * np.arange(2, 11), np.full(9, 46.68)])
+        forward = sampler.controller.solve_mm(points[3], p0=[2.0, 2.0])
+        out = sampler.solve_chunk(points, lambda: False)
+    finally:
+        sampler.destroy()
+    assert forward.reason == CABLE_COLLAPSE
+    np.testing.assert_array_equal(out["status"], [NOT_CONVERGED] * 3 + [REACHED] * 6)
+    assert np.all(out["tip_error"][3:] < 1e-5)
+    assert [r.decode() for r in out["reason"][:3]] == [CABLE_COLLAPSE] * 3
+
+
 # --- e. errors -------------------------------------------------------------------------------
 def one_error_line(run: subprocess.CompletedProcess, *words: str) -> None:
     assert run.returncode == 2, run.stderr
