@@ -366,19 +366,20 @@ class TipController:
         st = self._state
         if st is not None and (p.tobytes() in st.failed_at or st.failed >= self.max_failures):
             return None                 # known to fail, or the failure budget is spent
-        starts = []
+        starts = []                     # (equilibrium, its du/dp for the predictor)
         if start is not None:
-            starts.append(start)
+            starts.append((start, None))
         elif st is not None:
             if st.last_good is not None:
-                starts.append(st.last_good.equilibrium)
-            if st.anchor is not None and all(st.anchor is not o for o in starts):
-                starts.append(st.anchor)
+                good = st.last_good
+                starts.append((good.equilibrium, good.sensitivity.state_derivative))
+            if st.anchor is not None and all(st.anchor is not o for o, _ in starts):
+                starts.append((st.anchor, None))
         if not starts:
-            starts.append(None)
+            starts.append((None, None))
         message = ""
-        for origin in starts:
-            eq = self.solver.solve(p, start=origin)
+        for origin, tangent in starts:
+            eq = self.solver.solve(p, start=origin, tangent=tangent)
             if not eq.converged:
                 message = eq.message
                 continue

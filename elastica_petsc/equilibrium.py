@@ -213,13 +213,17 @@ class EquilibriumSolver:
         return self._converged
 
     # --- load stepping ----------------------------------------------------------
-    def solve(self, p, order=None, start: Equilibrium | None = None) -> Equilibrium:
+    def solve(self, p, order=None, start: Equilibrium | None = None,
+              tangent: np.ndarray | None = None) -> Equilibrium:
         """Equilibrium at tensions ``p`` reached along a loading path.
 
         From ``start`` (a previous equilibrium; default the straight, unloaded
         arm), tensions follow :func:`loading_path`.  Never returns a silently
         wrong state: if the path cannot be followed, ``converged`` is False and
         ``message`` says why, at which tensions, and PETSc's reason.
+        ``tangent``: du/dp at ``start``, shape (n, size) (Eq. 14,
+        :meth:`Sensitivity.state_derivative`), for a first-order (Euler)
+        predictor of the first load step instead of ``start`` itself.
         """
         disc = self.disc
         p = check_tensions(p, disc.n_tendons)
@@ -234,7 +238,8 @@ class EquilibriumSolver:
         reason = "CONVERGED_FNORM_ABS"
         ok = True
         for pa, pb in loading_path(p_now, p, order):
-            u, p_now, its, nsteps, reason, ok = self._follow(u, pa, pb, keep_stable)
+            u, p_now, its, nsteps, reason, ok = self._follow(u, pa, pb, keep_stable, tangent)
+            tangent = None                               # valid at the start only
             iterations += its
             steps += nsteps
             if not ok:
@@ -246,8 +251,9 @@ class EquilibriumSolver:
             result["message"] = self._failure_message(u, p_now, p, reason)
         return Equilibrium(disc, p_now, u, **result)
 
-    def _follow(self, u, pa, pb, keep_stable: bool, min_fraction: float = 1e-5):
-        """Continuation from the equilibrium ``u`` at ``pa`` to tensions ``pb``."""
+    def _follow(self, u, pa, pb, keep_stable: bool, tangent=None, min_fraction: float = 1e-5):
+        """Continuation from the equilibrium ``u`` at ``pa`` to tensions ``pb``
+        (``tangent``: du/dp at ``pa`` for the first predictor, else a secant)."""
         span = float(np.max(np.abs(pb - pa))) if len(pa) else 0.0
         full = 1.0 if span <= self.max_step else self.max_step / span
         dlam, lam, iterations, steps = full, 0.0, 0, 0
@@ -256,7 +262,12 @@ class EquilibriumSolver:
         n_angles = self.disc.n_elements
         while lam < 1.0:
             step = min(dlam, 1.0 - lam)
-            predictor = u if u_prev is None else u + (u - u_prev) * (step / dlam_prev)
+            if u_prev is not None:
+                predictor = u + (u - u_prev) * (step / dlam_prev)
+            elif tangent is not None and lam == 0.0:
+                predictor = u + (step * (pb - pa)) @ tangent
+            else:
+                predictor = u
             target = pa + (lam + step) * (pb - pa)
             u_new, its, reason = self.newton(predictor, target)
             iterations += its

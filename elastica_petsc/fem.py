@@ -135,16 +135,18 @@ class Discretisation:
         g[:, :-1] += per_element[:, 1:]           # element k   = right of node k
         return g
 
+    @cached_property
+    def _support_matrix(self) -> np.ndarray:
+        """:attr:`support` as floats, (n, N), for sums over tendons or elements."""
+        return self.support.astype(float)
+
     def tendon_sums(self, values: np.ndarray) -> np.ndarray:
         """sum over tendons i with e < m_i of values[i], for every element e.
 
-        ``values`` has shape (n, ...); the result (N, ...).  O(N + n): each
-        tendon's value is dropped at its attachment node, then summed from the
-        tip backwards.
+        ``values`` has shape (n, k); the result (N, k).  One (N x n) product,
+        O(nN) (n, the number of tendons, is small).
         """
-        drop = np.zeros((self.n_elements + 1,) + values.shape[1:])
-        np.add.at(drop, np.asarray(self.attach_nodes), values)
-        return np.cumsum(drop[::-1], axis=0)[::-1][1:]
+        return self._support_matrix.T @ values
 
     # --- energies (Eq. 21) ----------------------------------------------------
     def strain_energy(self, theta: np.ndarray) -> float:
@@ -182,8 +184,8 @@ class Discretisation:
         f_theta -= q
         f_theta[:-1] -= q[1:]
         f_theta[-1] -= tip_moment
-        cum = self.h * np.column_stack((np.cumsum(c), np.cumsum(s)))
-        x_attach = cum[np.asarray(self.attach_nodes) - 1]      # Eq. (2) at s_i
+        support = self._support_matrix
+        x_attach = self.h * np.column_stack((support @ c, support @ s))   # Eq. (2) at s_i
         return np.concatenate((f_theta, (y - x_attach).ravel()))
 
     def _bordered_pattern(self, supports, upper: bool = False):

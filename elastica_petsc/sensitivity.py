@@ -59,6 +59,12 @@ class Sensitivity:
     cable_lengths: np.ndarray
 
     @property
+    def state_derivative(self) -> np.ndarray:
+        """(n, size) du/dp_i of the bordered unknowns (theta_1..N, y_1..n), Eq. 14."""
+        n = len(self.p)
+        return np.concatenate((self.alpha[:, 1:], self.attachments_border.reshape(n, -1)), axis=1)
+
+    @property
     def tip_jacobian(self) -> np.ndarray:
         """(2, n) matrix S with S[:, i] = d x_t / d p_i."""
         return self.tip.T
