@@ -17,7 +17,9 @@ def read_workspace(path) -> dict:
 
     with h5py.File(path, "r") as fh:
         data = {name: fh["samples"][name][()] for name in fh["samples"]}
-        data["length_mm"] = float(json.loads(fh.attrs["config_json"])["arm"]["length_mm"])
+        config = json.loads(fh.attrs["config_json"])
+        data["length_mm"] = float(config["arm"]["length_mm"])
+        data["routes_mm"] = np.array([t["route_mm"] for t in config["tendon"]], float)
         data["mode"] = fh.attrs["mode"]
         grid = json.loads(fh.attrs.get("grid_json", "{}"))
         data["spacing"] = grid.get("spacing") if data["mode"] == "targets" else None
@@ -55,8 +57,16 @@ def _rigid_link(ax, length_mm: float) -> None:
             label=f"rigid link of length l = {length_mm:g} mm")
 
 
+def _reasons(data: dict, sel: np.ndarray) -> str:
+    """'REASON count, ...' of the selected samples, most frequent first."""
+    names, counts = np.unique(data["reason"][sel], return_counts=True)
+    order = np.argsort(-counts)
+    return ", ".join(f"{names[k].decode()} {counts[k]}" for k in order)
+
+
 def plot_samples(data: dict, ax, paths=None) -> None:
-    """Fig. 4: reached samples (green), needing P_i < 0 (red), not converged (grey)."""
+    """Fig. 4: reached samples (green), needing P_i < 0 (red), not converged (grey,
+    with their stopping reasons), and the tendons' routing points."""
     status, tip, target = data["status"], data["tip"], data["target"]
     where = target if data["mode"] == "targets" else tip
     for code, colour, marker, label in (
@@ -66,8 +76,13 @@ def plot_samples(data: dict, ax, paths=None) -> None:
         sel = status == code
         if sel.any():
             pts = tip[sel] if code == REACHED else where[sel]
+            count = f"{int(sel.sum())}: {_reasons(data, sel)}" if code == NOT_CONVERGED \
+                else f"{int(sel.sum())}"
             ax.plot(pts[:, 0], pts[:, 1], marker, color=colour, ms=2.5, ls="none",
-                    label=f"{label} ({int(sel.sum())})")
+                    label=f"{label} ({count})")
+    routes = data["routes_mm"]
+    ax.plot(routes[:, 0], routes[:, 1], "k^", ms=6, ls="none",
+            label="routing points r_" + ", r_".join(str(i) for i in range(1, len(routes) + 1)))
     _rigid_link(ax, data["length_mm"])
     _paths_overlay(ax, paths)
     ax.plot(0, 0, "ks", ms=6)

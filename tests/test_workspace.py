@@ -455,3 +455,27 @@ def test_plot_files(targets_1):
     green = (rgb[..., 1] > 0.5) & (rgb[..., 0] < 0.3) & (rgb[..., 2] < 0.3)
     red = (rgb[..., 0] > 0.7) & (rgb[..., 1] < 0.3) & (rgb[..., 2] < 0.3)
     assert green.sum() > 200 and red.sum() > 200
+
+
+def test_fig4_legend_names_routing_points_and_reasons(targets_1):
+    """The legend of Fig. 4 counts the not-converged samples by stopping reason, and the
+    routing points r_i (the cable-collapse corners of the workspace) are drawn."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from elastica_petsc.plots_workspace import plot_samples, read_workspace
+
+    data = read_workspace(targets_1)
+    data["status"][:3] = 3                                   # pretend: 3 not converged
+    data["reason"][:3] = [b"CABLE_COLLAPSE", b"CABLE_COLLAPSE", b"MAX_ITERATIONS"]
+    fig, ax = plt.subplots()
+    try:
+        plot_samples(data, ax)
+        labels = ax.get_legend_handles_labels()[1]
+        routes = next(line for line in ax.lines if line.get_label().startswith("routing"))
+    finally:
+        plt.close(fig)
+    assert "not converged (3: CABLE_COLLAPSE 2, MAX_ITERATIONS 1)" in labels
+    assert "routing points r_1, r_2" in labels
+    np.testing.assert_allclose(np.column_stack(routes.get_data()), [[46.3, -97.1], [26.1, 51.1]])
