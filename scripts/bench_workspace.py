@@ -13,10 +13,14 @@ split (tip control by outcome, eigen solve, I/O) from the files'
 the reached samples (paper: ~1.8e-3) and the largest l*kappa_max.  Also checks
 that the files of all rank counts hold identical /samples (except seconds_*).
 
+Wall times are medians over ``--repeat`` runs per rank count, the rank
+counts interleaved (min and max shown); the cost split is read from the last
+1-rank file.
+
 Usage: bench_workspace.py [--spacing MM] [--elements N] [--ranks 1 2] [--chunk K]
-                          [--dir DIR]
-(about 3 minutes on 2 shared cores; as root, Open MPI's run-as-root variables
-are set for mpiexec).
+                          [--repeat R] [--dir DIR]
+(about 4 minutes with the default 5 repeats on 2 shared cores; as root, Open
+MPI's run-as-root variables are set for mpiexec).
 """
 from __future__ import annotations
 
@@ -24,6 +28,7 @@ import argparse
 import json
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -78,17 +83,20 @@ def main(argv=None) -> None:
     parser.add_argument("--elements", type=int, default=180)
     parser.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--chunk", type=int, default=24)
+    parser.add_argument("--repeat", type=int, default=5, help="runs per rank count (median)")
     parser.add_argument("--dir", help="keep the HDF5 files here (default: a temporary folder)")
     args = parser.parse_args(argv)
 
     folder = Path(args.dir) if args.dir else Path(tempfile.mkdtemp(prefix="bench_ws_"))
     folder.mkdir(parents=True, exist_ok=True)
-    runs = {}
-    for ranks in args.ranks:
-        out = folder / f"ws_{ranks}.h5"
-        wall, summary = run(ranks, args, out)
-        runs[ranks] = (wall, summary, *read(out))
-        print(f"# {ranks} rank(s): {wall:.1f} s", file=sys.stderr)
+    walls, summaries = {r: [] for r in args.ranks}, {}
+    for _ in range(max(1, args.repeat)):        # interleaved, so load drifts hit all alike
+        for ranks in args.ranks:
+            wall, summaries[ranks] = run(ranks, args, folder / f"ws_{ranks}.h5")
+            walls[ranks].append(wall)
+            print(f"# {ranks} rank(s): {wall:.1f} s", file=sys.stderr)
+    runs = {r: (statistics.median(walls[r]), summaries[r], *read(folder / f"ws_{r}.h5"))
+            for r in args.ranks}
 
     first = args.ranks[0]
     s, masks, _, attrs = runs[first][2:]
@@ -98,12 +106,14 @@ def main(argv=None) -> None:
           f"(all with y >= 0), chunks of {args.chunk}; {args.elements} elements; "
           f"PETSc {attrs['petsc_version']}, SLEPc {attrs.get('slepc_version', '?')}.\n")
 
-    print("| ranks | wall time of the command | sampling (file: seconds_wall) | I/O (checkpoints) "
-          "| speed-up (command) | speed-up (sampling) |")
+    print(f"| ranks | wall time of the command, median of {args.repeat} (min-max) "
+          "| sampling (file: seconds_wall, last run) | I/O (checkpoints) "
+          "| speed-up (command, medians) | speed-up (sampling) |")
     print("|---|---|---|---|---|---|")
     base_cmd, base_smp = runs[first][0], runs[first][4]["seconds_wall"]
     for ranks, (wall, _, _, _, timing, _) in runs.items():
-        print(f"| {ranks} | {wall:.1f} s | {timing['seconds_wall']:.1f} s | "
+        print(f"| {ranks} | {wall:.1f} s ({min(walls[ranks]):.1f}-{max(walls[ranks]):.1f}) | "
+              f"{timing['seconds_wall']:.1f} s | "
               f"{timing['seconds_io']:.2f} s | {base_cmd / wall:.2f} | "
               f"{base_smp / timing['seconds_wall']:.2f} |")
     identical = all(same_samples(s, runs[r][2]) for r in args.ranks[1:])
