@@ -46,9 +46,13 @@ def read_overlays(files) -> list[tuple[str, np.ndarray]]:
     return paths
 
 
+PATH_COLOURS = ("k", "tab:orange", "tab:purple", "tab:cyan", "tab:brown")
+
+
 def _paths_overlay(ax, paths) -> None:
-    for label, xy in paths or ():
-        ax.plot(xy[:, 0], xy[:, 1], "-", color="k", lw=1.4, label=label, zorder=6)
+    for k, (label, xy) in enumerate(paths or ()):
+        ax.plot(xy[:, 0], xy[:, 1], "-", color=PATH_COLOURS[k % len(PATH_COLOURS)], lw=1.4,
+                label=label, zorder=6)
 
 
 def _rigid_link(ax, length_mm: float) -> None:
