@@ -699,7 +699,8 @@ class TipController:
                        + (f"; {bound_txt}" if bound_txt else "")
                        + (f"; tendon {st.collapsing + 1}'s cable is "
                           f"{eq.cable_lengths[st.collapsing] * mm:.2f} mm long and the next step "
-                          "would pull its attachment point onto its routing point"
+                          "would pull its attachment point onto its routing point (a local "
+                          "end: other initial tensions may still reach the target)"
                           if reason == CABLE_COLLAPSE else "")
                        + (f"; last equilibrium failure: {st.failure}" if st.failure else ""))
         hist = st.history or [(ev.p, eq.tip, E)]
