@@ -107,7 +107,9 @@ def fields(n_tendons: int) -> dict[str, tuple[tuple, str, str, str]]:
         "strain_energy": ((), "f8", "B/(2l)", "strain energy / SE_0 (Fig. 5c, Eq. 21)"),
         "iterations": ((), "i4", "1", "optimiser iterations (targets) or Newton iterations"),
         "status": ((), "i1", "1", "; ".join(f"{k}: {v}" for k, v in STATUS_NAMES.items())),
-        "reason": ((), "S48", "1", "solver convergence reason"),
+        "reason": ((), "S48", "1", "why the solve stopped: TARGET_REACHED, STATIONARY, STALLED, "
+                   "CABLE_COLLAPSE, ... (tip control, control.py) or PETSc's SNES reason "
+                   "(mode tensions)"),
         "seconds_control": ((), "f8", "s", "wall time of tip control / forward solve"),
         "seconds_eigen": ((), "f8", "s", "wall time of the eigenvalue solve"),
     }
