@@ -199,6 +199,7 @@ class _SolveState:
 
     target: np.ndarray
     anchor: Equilibrium | None
+    max_failures: int
     last_good: Evaluation | None = None
     evaluations: int = 0
     failed: int = 0
@@ -364,7 +365,7 @@ class TipController:
         if cached is not None:
             return cached
         st = self._state
-        if st is not None and (p.tobytes() in st.failed_at or st.failed >= self.max_failures):
+        if st is not None and (p.tobytes() in st.failed_at or st.failed >= st.max_failures):
             return None                 # known to fail, or the failure budget is spent
         starts = []                     # (equilibrium, its du/dp for the predictor)
         if start is not None:
@@ -607,13 +608,15 @@ class TipController:
             its += 1
 
     # --- public API --------------------------------------------------------------
-    def solve(self, target, p0=None, start: Equilibrium | None = None) -> ControlResult:
+    def solve(self, target, p0=None, start: Equilibrium | None = None,
+              max_failures: int | None = None) -> ControlResult:
         """Tensions putting the tip at ``target`` (units of l), Algorithm 1.
 
         p0 : initial tensions (default: ``start.p`` if ``start`` is given, else 0).
         start : an equilibrium to warm-start the equilibrium solves from (e.g.
             the previous point of a path); default the straight arm, loaded
             proportionally to p0.
+        max_failures : failure budget of this solve (default: the controller's).
         """
         target = np.asarray(target, dtype=float).ravel()
         if target.shape != (2,) or not np.all(np.isfinite(target)):
@@ -626,7 +629,9 @@ class TipController:
         p0 = np.clip(p0, 0.0, np.inf if self.upper is None else self.upper)
         if start is not None and not start.converged:
             raise InputError("start must be a converged equilibrium")
-        self._state = st = _SolveState(target=target, anchor=start)
+        self._state = st = _SolveState(
+            target=target, anchor=start,
+            max_failures=self.max_failures if max_failures is None else int(max_failures))
         # evaluations are valid within one solve (the branch depends on the start);
         # keep only the one of ``start`` (the previous path point: its sensitivities)
         keep = [ev for ev in self._cache.values() if start is not None and ev.equilibrium is start]
@@ -659,9 +664,11 @@ class TipController:
         finally:
             self._state = None
 
-    def solve_mm(self, target_mm, p0=None, start: Equilibrium | None = None) -> ControlResult:
+    def solve_mm(self, target_mm, p0=None, start: Equilibrium | None = None,
+                 max_failures: int | None = None) -> ControlResult:
         """:meth:`solve` with the target in mm."""
-        return self.solve(np.asarray(target_mm, float) / self.length_mm, p0=p0, start=start)
+        return self.solve(np.asarray(target_mm, float) / self.length_mm, p0=p0, start=start,
+                          max_failures=max_failures)
 
     def _result(self, st: _SolveState, ev: Evaluation, tao_reason: str,
                 iterations: int) -> ControlResult:

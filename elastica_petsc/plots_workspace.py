@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .plots import figure, save
-from .workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED
+from .workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, reason_counts
 
 
 def read_workspace(path) -> dict:
@@ -61,13 +61,6 @@ def _rigid_link(ax, length_mm: float) -> None:
             label=f"rigid link of length l = {length_mm:g} mm")
 
 
-def _reasons(data: dict, sel: np.ndarray) -> str:
-    """'REASON count, ...' of the selected samples, most frequent first."""
-    names, counts = np.unique(data["reason"][sel], return_counts=True)
-    order = np.argsort(-counts)
-    return ", ".join(f"{names[k].decode()} {counts[k]}" for k in order)
-
-
 def plot_samples(data: dict, ax, paths=None) -> None:
     """Fig. 4: reached samples (green), needing P_i < 0 (red), not converged (grey,
     with their stopping reasons), and the tendons' routing points."""
@@ -80,8 +73,9 @@ def plot_samples(data: dict, ax, paths=None) -> None:
         sel = status == code
         if sel.any():
             pts = tip[sel] if code == REACHED else where[sel]
-            count = f"{int(sel.sum())}: {_reasons(data, sel)}" if code == NOT_CONVERGED \
-                else f"{int(sel.sum())}"
+            count = f"{int(sel.sum())}"
+            if code == NOT_CONVERGED:
+                count += f": {reason_counts(data['reason'][sel])}"
             ax.plot(pts[:, 0], pts[:, 1], marker, color=colour, ms=2.5, ls="none",
                     label=f"{label} ({count})")
     routes = data["routes_mm"]

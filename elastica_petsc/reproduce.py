@@ -240,7 +240,7 @@ def workspace(ctx: Context) -> Path:
 
 def fig4_5(ctx: Context, out: Path) -> None:
     from .plots_workspace import plot_workspace, read_workspace
-    from .workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED
+    from .workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, reason_counts
 
     ctx.files.setdefault("Figs. 4-5", []).append(out.name)
     data = read_workspace(out)
@@ -258,12 +258,11 @@ def fig4_5(ctx: Context, out: Path) -> None:
     failed = data["status"] == NOT_CONVERGED
     if failed.any():
         where = data["target"][failed]
-        names, counts = np.unique(data["reason"][failed], return_counts=True)
         ours = (f"{int(failed.sum())} not converged at x = {where[:, 0].min():.0f} to "
                 f"{where[:, 0].max():.0f} mm, y <= {where[:, 1].max():.0f} mm")
-        why = ", ".join(f"{n.decode()} {c}" for n, c in zip(names, counts))
-        comment = (f"stopping reasons: {why} (CABLE_COLLAPSE: the optimiser heads for a cable "
-                   "pulled onto its routing point); grey in fig4.png")
+        comment = (f"stopping reasons: {reason_counts(data['reason'][failed])} (CABLE_COLLAPSE: "
+                   "the optimiser heads for a cable pulled onto its routing point); grey in "
+                   "fig4.png")
     else:
         ours, comment = "every target converged", ""
     ctx.add("Fig. 4", "regions not sampled well (numerical convergence difficulties)",

@@ -168,11 +168,8 @@ class TargetSampler(_Sampler):
             if stop():
                 return None
             t0 = time.perf_counter()
-            budget, self.controller.max_failures = self.controller.max_failures, self.retry_failures
-            try:
-                result = self.controller.solve_mm(points[k], start=reached)
-            finally:
-                self.controller.max_failures = budget
+            result = self.controller.solve_mm(points[k], start=reached,
+                                              max_failures=self.retry_failures)
             status = self._classify(result)
             seconds = out["seconds_control"][k] + time.perf_counter() - t0
             if status == NOT_CONVERGED:

@@ -64,6 +64,14 @@ STATUS_NAMES = {NOT_DONE: "not computed", REACHED: "reached with P >= 0",
                 NOT_CONVERGED: "not converged"}
 
 
+def reason_counts(reasons: np.ndarray) -> str:
+    """'REASON count, ...' of the byte-string ``reason`` values of some samples,
+    most frequent first."""
+    names, counts = np.unique(reasons, return_counts=True)
+    order = np.argsort(-counts, kind="stable")
+    return ", ".join(f"{names[k].decode()} {counts[k]}" for k in order)
+
+
 class CollectiveInputError(InputError):
     """An input error raised on every rank alike (see :func:`agree`)."""
 
