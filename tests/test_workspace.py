@@ -33,8 +33,10 @@ ELEMENTS = 60                                                  # multiple of 3: 
 TARGETS = ["--box", "-120", "480", "60", "420", "--spacing", "60",
            "--elements", str(ELEMENTS), "--chunk", "4"]
 # a finer grid for the MPI interruptions: Open MPI passes a signal on to the ranks ~2 s
-# after mpiexec receives it, so the run must last longer than that
-SLOW_TARGETS = ["--box", "-120", "480", "60", "420", "--spacing", "30",
+# after mpiexec receives it, so the run must last well beyond that (1581 targets: 5.5 s on
+# 2 ranks; 30 mm spacing, 273 targets, took 1.6 s once tip control got faster, and the
+# ranks could finish before the signal reached them)
+SLOW_TARGETS = ["--box", "-120", "480", "60", "420", "--spacing", "12",
                 "--elements", str(ELEMENTS), "--chunk", "4"]
 TENSIONS = ["--mode", "tensions", "--tension-spacing", "5", "--tension-max", "20",
             "--elements", "30", "--chunk", "4"]
