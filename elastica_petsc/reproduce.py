@@ -2,7 +2,7 @@
 
 Each experiment is a thin layer over the library that the subcommands use
 (no second implementation): it writes its HDF5 file and figures into the
-output folder and returns rows for ``REPORT.md`` — every number of SPEC §6,
+output folder and returns rows for ``REPORT.md`` — every number of docs/model.md §6,
 the paper's value beside ours, the difference and a sentence where they
 differ.  ``quick`` uses coarse grids (tracing step 5 mm, workspace spacing
 50 mm); the full run uses the paper's resolution (180 elements, 1 mm steps,
@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .config import load_config
-from .model import Arm
+from .core.config import load_config
+from .core.model import Arm
 
 PAPER_P = np.array([25.2, 10.8])                # Fig. 8 tensions
 FIG8_LENGTHS_MM = np.array([147.1, 472.5])     # Fig. 8 states 1 and 2
@@ -82,11 +82,11 @@ def _diff(ours, paper, digits: int = 1) -> str:
 
 # --- Fig. 8: several equilibria under load and length control ----------------------------
 def fig8(ctx: Context) -> None:
-    from .equilibrium import EquilibriumSolver
-    from .fem import Discretisation
-    from .h5io import atomic_h5, provenance, write_attrs, write_equilibrium
-    from .lengths import LengthSolver, length_equilibria
-    from .plots import plot_equilibria
+    from .solvers.equilibrium import EquilibriumSolver
+    from .core.fem import Discretisation
+    from .io.hdf5 import atomic_h5, provenance, write_attrs, write_equilibrium
+    from .solvers.lengths import LengthSolver, length_equilibria
+    from .plots.common import plot_equilibria
 
     arm, l_mm = ctx.arm, ctx.arm.length_mm
     disc = Discretisation.from_arm(arm)
@@ -126,9 +126,9 @@ def fig8(ctx: Context) -> None:
 
 # --- Fig. 2: descent iterations ----------------------------------------------------------
 def fig2(ctx: Context) -> None:
-    from .control import TipController
-    from .h5io import atomic_h5, provenance, write_attrs, write_control
-    from .plots_control import plot_descent
+    from .solvers.control import TipController
+    from .io.hdf5 import atomic_h5, provenance, write_attrs, write_control
+    from .plots.control import plot_descent
 
     results = {}
     for method in ("gd", "blmvm"):
@@ -152,11 +152,11 @@ def fig2(ctx: Context) -> None:
 
 # --- Fig. 3 and Fig. 6: traced paths -------------------------------------------------------
 def _trace(ctx: Context, name: str, points, figure: str):
-    from .control import TipController
-    from .h5io import atomic_h5, provenance, write_attrs, write_trace
-    from .paths import densify, trace
-    from .plots_control import plot_trace
-    from .schedule import schedule_from_trace
+    from .solvers.control import TipController
+    from .io.hdf5 import atomic_h5, provenance, write_attrs, write_trace
+    from .studies.trace import densify, trace
+    from .plots.control import plot_trace
+    from .core.schedule import schedule_from_trace
 
     targets = densify(points, ctx.trace_step_mm)
     with TipController(ctx.arm) as controller:
@@ -174,8 +174,8 @@ def _trace(ctx: Context, name: str, points, figure: str):
 
 
 def fig3(ctx: Context) -> None:
-    from .paths import convoluted_curve, paper_triangle, triangle_vertices
-    from .plots_control import plot_curvature, plot_sensitivities, plot_tensions_lengths
+    from .studies.trace import convoluted_curve, paper_triangle, triangle_vertices
+    from .plots.control import plot_curvature, plot_sensitivities, plot_tensions_lengths
 
     tri = _trace(ctx, "fig3a", paper_triangle(TRIANGLE_CENTER_MM), "Fig. 3a")
     vertices = triangle_vertices(TRIANGLE_CENTER_MM)
@@ -220,7 +220,7 @@ def workspace(ctx: Context) -> Path:
     if ctx.comm.size == 1 and ctx.jobs > 1:
         mpiexec = shutil.which("mpiexec")
         if mpiexec is None:
-            from .errors import InputError
+            from .core.errors import InputError
             raise InputError("--jobs > 1 needs mpiexec on the PATH (package openmpi-bin)")
         env = dict(os.environ)
         if os.geteuid() == 0:
@@ -239,8 +239,8 @@ def workspace(ctx: Context) -> Path:
 
 
 def fig4_5(ctx: Context, out: Path) -> None:
-    from .plots_workspace import plot_workspace, read_workspace
-    from .workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, reason_counts
+    from .plots.workspace import plot_workspace, read_workspace
+    from .studies.workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, reason_counts
 
     ctx.files.setdefault("Figs. 4-5", []).append(out.name)
     data = read_workspace(out)
@@ -289,10 +289,10 @@ def fig4_5(ctx: Context, out: Path) -> None:
 
 # --- Fig. 7: buckling under length control ----------------------------------------------
 def fig7(ctx: Context) -> None:
-    from .buckling import fig7 as fig7_scenario, plot_fig7
-    from .equilibrium import EquilibriumSolver
-    from .fem import Discretisation
-    from .lengths import LengthSolver
+    from .studies.buckling import fig7 as fig7_scenario, plot_fig7
+    from .solvers.equilibrium import EquilibriumSolver
+    from .core.fem import Discretisation
+    from .solvers.lengths import LengthSolver
 
     with EquilibriumSolver(Discretisation.from_arm(ctx.arm)) as eqs, \
             LengthSolver.from_arm(ctx.arm) as ls:
@@ -312,10 +312,10 @@ def aluminium(ctx: Context, config: Path) -> None:
     p_max = max(float(np.max(t.p)) for t in ctx.traces.values())
     violated = []
     if kappa >= alu.kappa_limit:
-        violated.append(f"strain (l kappa_max {kappa:.2f} > {alu.kappa_limit:g}, Eq. 19)")
+        violated.append(f"strain (l kappa_max {kappa:.2f} > {alu.kappa_limit:g}, Eq. (19))")
     if alu.max_tension is not None and p_max >= alu.max_tension:
         violated.append(f"motor force ({p_max * alu.force_scale_N:.0f} N > "
-                        f"{alu.motor.max_tension_N:g} N, Eq. 22)")
+                        f"{alu.motor.max_tension_N:g} N, Eq. (22))")
     ctx.add("Sec. 4.3", "aluminium arm (B x 30, eps_Y / 10) on the same paths",
             "would yield and exceed the motor load", "violates " + " and ".join(violated)
             if violated else "violates nothing", "",
@@ -334,7 +334,7 @@ def write_report(ctx: Context, command: str) -> Path:
              f"- created {datetime.datetime.now(datetime.timezone.utc).isoformat(timespec='seconds')}",
              f"- wall time per experiment [s]: "
              + ", ".join(f"{k} {v:.1f}" for k, v in ctx.seconds.items()), "",
-             "Paper values are read from the text of the paper (SPEC §6). Differences are "
+             "Paper values are read from the text of the paper (docs/model.md §6). Differences are "
              "ours minus the paper's.", "",
              "| figure | item | paper | ours | difference | comment |",
              "|---|---|---|---|---|---|"]

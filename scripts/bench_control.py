@@ -59,9 +59,9 @@ def main(argv=None) -> int:
     petsc4py.init([sys.argv[0], *petsc_args])
     import numpy as np
 
-    from elastica_petsc import paths
-    from elastica_petsc.config import load_config
-    from elastica_petsc.control import TipController
+    from elastica_petsc.studies import trace as paths
+    from elastica_petsc.core.config import load_config
+    from elastica_petsc.solvers.control import TipController
 
     arm = load_config()
     center = [float(v) for v in args.center.split(",")]

@@ -18,9 +18,9 @@ import time
 
 import numpy as np
 
-from elastica_petsc.config import load_config
-from elastica_petsc.equilibrium import EquilibriumSolver
-from elastica_petsc.fem import Discretisation
+from elastica_petsc.core.config import load_config
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.core.fem import Discretisation
 from timing import median_time
 
 P = np.array([25.2, 10.8])

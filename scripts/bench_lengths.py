@@ -21,10 +21,10 @@ import time
 
 import numpy as np
 
-from elastica_petsc.config import load_config
-from elastica_petsc.equilibrium import EquilibriumSolver
-from elastica_petsc.fem import Discretisation
-from elastica_petsc.lengths import (LengthSolver, equilibria, length_equilibria,
+from elastica_petsc.core.config import load_config
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.solvers.lengths import (LengthSolver, equilibria, length_equilibria,
                                     tension_starts)
 from timing import median_time
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Timing of the SLEPc stability solve (elastica_petsc.stability), O(N) check.
+"""Timing of the SLEPc stability solve (elastica_petsc.solvers.stability), O(N) check.
 
 For the paper's arm (configs/paper.toml) at the Fig. 8 state p = (25.2, 10.8)
 (order (2, 1)), prints markdown tables of the median wall time of:
@@ -32,10 +32,10 @@ def main(argv=None) -> None:
     petsc4py.init([sys.argv[0]] + petsc_args)
 
     import numpy as np
-    from elastica_petsc.config import load_config
-    from elastica_petsc.equilibrium import EquilibriumSolver
-    from elastica_petsc.fem import Discretisation
-    from elastica_petsc.stability import StabilitySolver
+    from elastica_petsc.core.config import load_config
+    from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+    from elastica_petsc.core.fem import Discretisation
+    from elastica_petsc.solvers.stability import StabilitySolver
 
     arm = load_config()
     p = (25.2, 10.8)

@@ -9,7 +9,7 @@ that about 4201 targets lie in it (the paper's Fig. 4 count; 11.67 mm gives
 R > 1).  Prints markdown tables: wall time and speed-up; the per-sample cost
 split (tip control by outcome, eigen solve, I/O) from the files'
 /samples/seconds_* and /timing attributes; counts per status and per mask
-(W_0 .. W_P, Eqs. 18-22); the smallest raw eigenvalue lambda_min(K)/(B/l) over
+(W_0 .. W_P, Eqs. (18)-(22)); the smallest raw eigenvalue lambda_min(K)/(B/l) over
 the reached samples (paper: ~1.8e-3) and the largest l*kappa_max.  Also checks
 that the files of all rank counts hold identical /samples (except seconds_*).
 

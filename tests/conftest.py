@@ -1,7 +1,7 @@
 """Shared fixtures for the forward-statics tests.
 
-Units follow the package: arms are described in mm and N m^2 (SPEC §5); the
-solvers work non-dimensionally (SPEC §3: lengths / l, p = P l^2 / B).
+Units follow the package: arms are described in mm and N m^2 (docs/model.md §5); the
+solvers work non-dimensionally (docs/model.md §3: lengths / l, p = P l^2 / B).
 """
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from elastica_petsc.config import load_config
-from elastica_petsc.model import Arm, Tendon
+from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import Arm, Tendon
 
 REPO = Path(__file__).resolve().parents[1]
 PAPER_TOML = REPO / "configs" / "paper.toml"
@@ -41,7 +41,7 @@ def csr_to_dense(disc, values, pattern=None) -> np.ndarray:
 
 def reduced_tangent(disc, u, p) -> np.ndarray:
     """K = J_tt - J_ty J_yy^{-1} J_yt: the Schur complement of the bordered
-    Jacobian on the attachment unknowns (SPEC §2: the Hessian of Pi)."""
+    Jacobian on the attachment unknowns (docs/model.md §2: the Hessian of Pi)."""
     J = csr_to_dense(disc, disc.jacobian_values(u, p))
     N = disc.n_elements
     A, B, C, D = J[:N, :N], J[:N, N:], J[N:, :N], J[N:, N:]
@@ -57,9 +57,9 @@ def stability_dense(disc, u, p) -> np.ndarray:
 
 @pytest.fixture(scope="session")
 def paper_arm() -> Arm:
-    """The arm of the paper's Fig. 1 (SPEC §5), from configs/paper.toml."""
+    """The arm of the paper's Fig. 1 (docs/model.md §5), from configs/paper.toml."""
     arm = load_config(PAPER_TOML)
-    # guard against a silently edited reference configuration (SPEC §5)
+    # guard against a silently edited reference configuration (docs/model.md §5)
     assert arm.length_mm == 600.0 and arm.elements == 180
     assert [t.attach_mm for t in arm.tendons] == [200.0, 600.0]
     assert [t.route_mm for t in arm.tendons] == [(46.3, -97.1), (26.1, 51.1)]
@@ -69,8 +69,8 @@ def paper_arm() -> Arm:
 @pytest.fixture(scope="session")
 def paper_solver(paper_arm):
     """One EquilibriumSolver on the paper's 180-element mesh, shared."""
-    from elastica_petsc.equilibrium import EquilibriumSolver
-    from elastica_petsc.fem import Discretisation
+    from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+    from elastica_petsc.core.fem import Discretisation
 
     solver = EquilibriumSolver(Discretisation.from_arm(paper_arm, 180))
     yield solver

@@ -1,4 +1,4 @@
-"""Fig. 7 as a library function (paper Sec. 4.6; :mod:`elastica_petsc.buckling`).
+"""Fig. 7 as a library function (paper Sec. 4.6; :mod:`elastica_petsc.studies.buckling`).
 
 The physics of the scenario is asserted in tests/test_lengths.py (its fig7
 fixture calls this module's critical_configuration and aligned_family); here
@@ -14,15 +14,15 @@ import math
 import numpy as np
 import pytest
 
-from elastica_petsc.buckling import (BucklingError, Fig7Result, clamped_column_estimate,
+from elastica_petsc.studies.buckling import (BucklingError, Fig7Result, clamped_column_estimate,
                                      critical_configuration, fig7, plot_fig7, segment_geometry,
                                      segment_profile)
-from elastica_petsc.config import load_config
-from elastica_petsc.equilibrium import EquilibriumSolver
-from elastica_petsc.errors import InputError
-from elastica_petsc.fem import Discretisation
-from elastica_petsc.lengths import LengthSolver
-from elastica_petsc.model import Arm, Tendon
+from elastica_petsc.core.config import load_config
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.core.errors import InputError
+from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.solvers.lengths import LengthSolver
+from elastica_petsc.core.model import Arm, Tendon
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 """Length control and several equilibria from the command line (issue 5):
 ``lengths``, ``equilibria`` and ``replay`` run as subprocesses, as a user
-meets them.  Reference values: SPEC §6 (Fig. 8) and the library tests in
+meets them.  Reference values: docs/model.md §6 (Fig. 8) and the library tests in
 tests/test_lengths.py, whose tolerance reasoning is reused here.
 
 Trace files for ``replay`` are written by :func:`write_trace` in the layout of
@@ -20,10 +20,10 @@ import h5py
 import numpy as np
 import pytest
 
-from elastica_petsc.config import arm_to_dict, load_config
-from elastica_petsc.equilibrium import EquilibriumSolver
-from elastica_petsc.fem import Discretisation
-from elastica_petsc.lengths import LengthSolver
+from elastica_petsc.core.config import arm_to_dict, load_config
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.solvers.lengths import LengthSolver
 
 L_MM = 600.0
 P_FIG8 = np.array([25.2, 10.8])
@@ -150,7 +150,7 @@ def fig8_load(tmp_path_factory):
 
 
 def test_fig8_equilibria_load_control(fig8_load):
-    """SPEC §6: p = (25.2, 10.8) has states with L = (147.1, 472.5) mm (state 1)
+    """docs/model.md §6: p = (25.2, 10.8) has states with L = (147.1, 472.5) mm (state 1)
     and (96.2, 454.3) mm (state 3), both stable under load control (0.5 mm:
     the library test's tolerance; the paper rounds to 0.1 mm and discretises
     differently, measured (147.21, 472.48) and (96.30, 454.33))."""
@@ -174,7 +174,7 @@ def test_fig8_equilibria_load_control(fig8_load):
 
 
 def test_fig8_lengths_finds_states_1_and_2(fig8_lengths, fig8_load, disc, ls):
-    """SPEC §6: L = (147.1, 472.5) mm has equilibria with p = (25.2, 10.8)
+    """docs/model.md §6: L = (147.1, 472.5) mm has equilibria with p = (25.2, 10.8)
     (state 1) and p = (9.7, 12.6) (state 2).  Tolerance per tension, as in
     tests/test_lengths.py: the paper rounds p to 0.1 (+-0.05) and L to 0.1 mm
     (+-0.05 mm), and its discretisation differs from ours by dL_model (our L
@@ -314,7 +314,7 @@ def test_replay_reports_the_fig7_buckling(tmp_path, arm, disc, eqs, ls):
     tests/test_lengths.py).  The library finds the constrained buckling at
     dL_2 = 1.61 mm: the replay reproduces the first four points and reaches
     the last one only after a jump, which the command reports."""
-    from elastica_petsc.buckling import aligned_family, critical_configuration
+    from elastica_petsc.studies.buckling import aligned_family, critical_configuration
 
     critical = critical_configuration(eqs)
     L0 = critical[1].cable_lengths.copy()

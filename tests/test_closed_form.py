@@ -1,4 +1,4 @@
-"""Forward solver against closed-form solutions (SPEC §7).
+"""Forward solver against closed-form solutions (docs/model.md §7).
 
 (a) Pure end moment m = M l / B, no tendon tension: circular arc
     theta(s) = m s (exact at the nodes for P1), tip (sin m / m, (1 - cos m) / m).
@@ -6,9 +6,9 @@
     Small load: tip deflection p / 3 (P l^3 / (3B)); large load: the classical
     cantilever elastica (elliptic integrals), computed here independently.
 (c) Mesh convergence of the tip position: second order.
-(d) Buckling of the straight arm (SPEC §7): dead compressive tip load
+(d) Buckling of the straight arm (docs/model.md §7): dead compressive tip load
     p_cr = pi^2 / 4; load aimed at the clamp p_cr = pi^2.  The number of
-    negative eigenvalues of K changes there (energy criterion, SPEC §2).
+    negative eigenvalues of K changes there (energy criterion, docs/model.md §2).
 """
 from __future__ import annotations
 
@@ -17,9 +17,9 @@ import pytest
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
 
-from elastica_petsc.equilibrium import EquilibriumSolver
-from elastica_petsc.fem import Discretisation
-from elastica_petsc.inertia import InertiaCounter
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.solvers.inertia import InertiaCounter
 
 from conftest import reduced_tangent, tip_tendon_arm
 
@@ -89,7 +89,7 @@ def solve_tip_load(route, p, n_elements):
 
 @pytest.mark.parametrize("m", [0.4, 2.0, 4.0])
 def test_pure_end_moment_circular_arc(m):
-    """SPEC §7: M at the tip, p = 0: theta(s) = m s.  The P1 solution is exact
+    """docs/model.md §7: M at the tip, p = 0: theta(s) = m s.  The P1 solution is exact
     at the nodes (the exact solution is in the P1 space); the tip is the
     midpoint-rule sum of Eq. (2), whose error is exactly
     h^2 / 24 |f'(1) - f'(0)| + O(h^4) with f = e^{i m s}, i.e.
@@ -106,7 +106,7 @@ def test_pure_end_moment_circular_arc(m):
         assert eq.converged, eq.message
         s = np.arange(n + 1) / n
         np.testing.assert_allclose(eq.theta, m * s, rtol=0, atol=1e-10)
-        assert eq.strain_energy == pytest.approx(m**2, rel=1e-10)     # units of SE_0 (Eq. 21)
+        assert eq.strain_energy == pytest.approx(m**2, rel=1e-10)     # units of SE_0 (Eq. (21))
         assert eq.kappa_max == pytest.approx(abs(m), rel=1e-10)
         assert eq.unstable_modes == 0
         err = np.linalg.norm(eq.tip - exact_tip)
@@ -118,7 +118,7 @@ def test_pure_end_moment_circular_arc(m):
 
 @pytest.mark.parametrize("p", [1e-3, 1e-2])
 def test_small_tip_load_deflection(p):
-    """SPEC §7: small-load deflection P l^3 / (3B), i.e. y_tip = -p / 3."""
+    """docs/model.md §7: small-load deflection P l^3 / (3B), i.e. y_tip = -p / 3."""
     eq = solve_tip_load(DOWN, p, 100)
     # direction of the far-routed load stays fixed: d = (0, -1)
     np.testing.assert_allclose(eq.directions[0], [0.0, -1.0], atol=1e-8)
@@ -130,7 +130,7 @@ def test_small_tip_load_deflection(p):
 
 @pytest.mark.parametrize("p", [1.0, 2.0, 5.0, 10.0])
 def test_large_tip_load_against_elastica(p):
-    """SPEC §7: large deflection against the classical elastica (elliptic integrals)."""
+    """docs/model.md §7: large deflection against the classical elastica (elliptic integrals)."""
     n = 100
     eq = solve_tip_load(DOWN, p, n)
     alpha, x_ref, y_ref = cantilever_elastica(p)
@@ -182,7 +182,7 @@ def test_tip_position_converges_at_second_order():
     ((0.0, 0.0), np.pi**2, "load aimed at the clamp"),
 ])
 def test_buckling_inertia_crosses_at_critical_load(route, p_cr, label):
-    """SPEC §7: the smallest eigenvalue of K crosses zero at p_cr; the inertia
+    """docs/model.md §7: the smallest eigenvalue of K crosses zero at p_cr; the inertia
     count goes 0 -> 1 (N = 200, relative discretisation error ~1e-5)."""
     n = 200
     disc = Discretisation.from_arm(tip_tendon_arm(route, n), n)

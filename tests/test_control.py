@@ -1,4 +1,4 @@
-"""Tip control (Eqs. 10-12, Algorithm 1): gradient, Fig. 2, known answers, bounds.
+"""Tip control (Eqs. (10)-(12), Algorithm 1): gradient, Fig. 2, known answers, bounds.
 
 Targets in mm (paper units); the controller works with lengths / l and
 p = P l^2 / B.
@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 from petsc4py import PETSc
 
-from elastica_petsc.config import load_config
-from elastica_petsc.control import (CABLE_COLLAPSE, COLLAPSE_STOP, STATIONARY, TARGET_REACHED,
+from elastica_petsc.core.config import load_config
+from elastica_petsc.solvers.control import (CABLE_COLLAPSE, COLLAPSE_STOP, STATIONARY, TARGET_REACHED,
                                     TipController, default_eps)
-from elastica_petsc.equilibrium import COLLAPSE_LENGTH
-from elastica_petsc.errors import InputError
-from elastica_petsc.model import Tendon
-from elastica_petsc.sensitivity import objective_gradient
+from elastica_petsc.solvers.equilibrium import COLLAPSE_LENGTH
+from elastica_petsc.core.errors import InputError
+from elastica_petsc.core.model import Tendon
+from elastica_petsc.solvers.sensitivity import objective_gradient
 
 FIG2_TARGET_MM = (535.8, 222.6)
 TOL_MM = 1e-5
@@ -50,7 +50,7 @@ def test_default_tolerance_is_a_tip_within_1e5_mm(arm):
 
 @pytest.mark.parametrize("p", [(2.0, 7.0), (20.0, 9.0)])
 def test_gradient_of_E_taylor(arm, p):
-    """|E(p + t v) - E(p) - t grad E . v| falls as t^2 (Eq. 12 is exact)."""
+    """|E(p + t v) - E(p) - t grad E . v| falls as t^2 (Eq. (12) is exact)."""
     with TipController(arm, n_elements=90) as ctl:
         base = ctl.evaluate(p)
         target = np.array(FIG2_TARGET_MM) / arm.length_mm

@@ -1,4 +1,4 @@
-"""Load-controlled forward statics on PETSc SNES (SPEC §4.1, §6; paper Eq. 9, Fig. 8).
+"""Load-controlled forward statics on PETSc SNES (docs/model.md §4.1, §6; paper Eq. (9), Fig. 8).
 
 Every converged state is re-checked here independently of SNES's own test:
 the bordered residual of Eq. (9) evaluated by the numpy kernel must vanish.
@@ -8,12 +8,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from elastica_petsc.equilibrium import EquilibriumSolver
-from elastica_petsc.fem import Discretisation, DiscretisationError
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.core.fem import Discretisation, DiscretisationError
 
 from conftest import make_arm
 
-R1, R2 = (46.3, -97.1), (26.1, 51.1)      # paper routing points, mm (SPEC §5)
+R1, R2 = (46.3, -97.1), (26.1, 51.1)      # paper routing points, mm (docs/model.md §5)
 L_MM = 600.0
 
 
@@ -48,7 +48,7 @@ def solve(arm, p, n=None, **kw):
         solver.destroy()
 
 
-# --- paper's Fig. 8 (SPEC §6) ---------------------------------------------------
+# --- paper's Fig. 8 (docs/model.md §6) ---------------------------------------------------
 
 @pytest.mark.parametrize("order, expected_mm", [
     ((2, 1), (147.1, 472.5)),   # state 1: tendon 2 tensioned first
@@ -58,7 +58,7 @@ def solve(arm, p, n=None, **kw):
 def test_fig8_load_path_selects_equilibrium(paper_solver, order, expected_mm):
     """Fig. 8: p = (25.2, 10.8) (the paper's tensions, rounded to 0.1); the
     loading order selects state 1 or state 3; both are stable under load
-    control (K positive definite, SPEC §2)."""
+    control (K positive definite, docs/model.md §2)."""
     eq = paper_solver.solve([25.2, 10.8], order=order)
     assert_equilibrium(eq)
     assert_moment_balance(eq)
@@ -82,29 +82,29 @@ def test_fig8_states_1_and_3_differ(paper_solver):
 def test_result_units_and_derived_quantities(paper_solver):
     eq = paper_solver.solve([25.2, 10.8])
     disc = eq.disc
-    # Eq. 2: nodes from theta; attachments are nodes m_i; tip is the last node
+    # Eq. (2): nodes from theta; attachments are nodes m_i; tip is the last node
     np.testing.assert_allclose(eq.x, disc.node_positions(eq.theta))
     np.testing.assert_allclose(eq.attachments, eq.x[[60, 180]])
     np.testing.assert_array_equal(eq.tip, eq.x[-1])
     # bordered y equals the attachment positions at convergence
     np.testing.assert_allclose(disc.split(eq.u)[1], eq.attachments, atol=1e-10)
-    # Eq. 3: unit directions from the attachment to the routing point
+    # Eq. (3): unit directions from the attachment to the routing point
     np.testing.assert_allclose(np.linalg.norm(eq.directions, axis=1), 1.0)
     np.testing.assert_allclose(eq.attachments + eq.cable_lengths[:, None] * eq.directions,
                                disc.routes, atol=1e-12)
-    # Eq. 21 in units of SE_0 = B / (2l): 2 * int theta'^2 / 2 ds
+    # Eq. (21) in units of SE_0 = B / (2l): 2 * int theta'^2 / 2 ds
     assert eq.strain_energy == pytest.approx(np.sum(np.diff(eq.theta) ** 2) * 180, rel=1e-12)
     assert eq.kappa_max == pytest.approx(np.max(np.abs(np.diff(eq.theta))) * 180, rel=1e-12)
-    # inextensible: arc length of the node polygon is l (midpoint rule, Eq. 2)
+    # inextensible: arc length of the node polygon is l (midpoint rule, Eq. (2))
     assert np.sum(np.linalg.norm(np.diff(eq.x, axis=0), axis=1)) == pytest.approx(1.0, rel=1e-12)
 
 
-# --- geometries (SPEC §1, §7) -------------------------------------------------------
+# --- geometries (docs/model.md §1, §7) -------------------------------------------------------
 
 @pytest.mark.parametrize("p", [(5.0, 5.0), (2.0, 12.0)])
 def test_both_tendons_at_tip(p):
     """s_1 = s_2 = l: the cable lengths are the radii of the circles centred at
-    r_1, r_2 that meet at the tip (SPEC §7 last item; paper Sec. 4.5 (viii))."""
+    r_1, r_2 that meet at the tip (docs/model.md §7 last item; paper Sec. 4.5 (viii))."""
     arm = make_arm([(600.0, R1), (600.0, R2)])
     eq = solve(arm, p)
     assert_equilibrium(eq)
@@ -128,7 +128,7 @@ def test_second_tendon_short_of_the_tip():
 
 
 def test_three_tendons():
-    """n = 3 tendons (SPEC §1: any n >= 1), every loading order."""
+    """n = 3 tendons (docs/model.md §1: any n >= 1), every loading order."""
     arm = make_arm([(200.0, R1), (300.0, (350.0, 120.0)), (600.0, R2)])
     results = [solve(arm, [10.0, 3.0, 8.0], order=order)
                for order in (None, (1, 2, 3), (3, 2, 1))]
@@ -167,7 +167,7 @@ def test_invalid_tensions_and_order_are_refused(paper_solver):
 
 def test_collapse_onto_routing_point_is_reported(paper_solver):
     """Paper arm, p = (0, 30): tendon 2 pulls the tip onto r_2 before p_2 = 30
-    (at p_2 ~ 22.7; the cable direction of Eq. 3 is then undefined).  The
+    (at p_2 ~ 22.7; the cable direction of Eq. (3) is then undefined).  The
     solve must not report success and must say why."""
     eq = paper_solver.solve([0.0, 30.0])
     assert not eq.converged
@@ -181,7 +181,7 @@ def test_collapse_onto_routing_point_is_reported(paper_solver):
 # --- warm start -------------------------------------------------------------------
 
 def test_warm_start_from_nearby_equilibrium(paper_solver):
-    """SPEC §4.4 / Sec. 4.5 (v): a nearby converged state is a good start: one
+    """docs/model.md §4.4 / Sec. 4.5 (v): a nearby converged state is a good start: one
     load step, <= 3 Newton iterations, and the same branch (state 1) as a cold
     solve at the new tensions."""
     base = paper_solver.solve([25.2, 10.8], order=(2, 1))

@@ -1,30 +1,30 @@
-"""Kernels of the P1 elastica (elastica_petsc.fem) against finite differences.
+"""Kernels of the P1 elastica (elastica_petsc.core.fem) against finite differences.
 
-What is checked (SPEC §1-2, paper Eqs. 2-4, 9, 14):
+What is checked (docs/model.md §1-2, paper Eqs. (2)-(4), (9), (14)):
 - the consistent Jacobian of the bordered residual F(u) = (F_theta, y - X(theta))
   equals central finite differences of F, at loaded, non-equilibrium states
   with 2 and 3 tendons;
 - restricted to consistent states (y_i = X_i(theta)), F_theta is the gradient
   of the discrete total potential Pi = int theta'^2/2 + sum_i p_i L_i - m theta(l)
-  (SPEC §2: the tendon load with prescribed tensions is conservative);
+  (docs/model.md §2: the tendon load with prescribed tensions is conservative);
 - the reduced tangent K (Schur complement of the bordered Jacobian on y) is the
   Hessian of Pi: equal to FD of the reduced gradient and symmetric to round-off
-  (SPEC §2; the paper's Sec. 4.3 calls its K "in general non symmetric");
+  (docs/model.md §2; the paper's Sec. 4.3 calls its K "in general non symmetric");
 - the Schur complement T + W W^T of the stability matrix H equals K, and the
   inertia counted from H equals the number of negative eigenvalues of K;
-- dF/dp (right-hand sides of Eq. 14) equals FD of F in p.
+- dF/dp (right-hand sides of Eq. (14)) equals FD of F in p.
 """
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from elastica_petsc.fem import Discretisation
-from elastica_petsc.inertia import InertiaCounter
+from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.solvers.inertia import InertiaCounter
 
 from conftest import csr_to_dense, make_arm, reduced_tangent, stability_dense
 
-# Paper routing points (SPEC §5) plus a third tendon for the n >= 1 generality of SPEC §1.
+# Paper routing points (docs/model.md §5) plus a third tendon for the n >= 1 generality of docs/model.md §1.
 TWO = [(200.0, (46.3, -97.1)), (600.0, (26.1, 51.1))]
 THREE = TWO[:1] + [(300.0, (350.0, 120.0))] + TWO[1:]
 
@@ -76,14 +76,14 @@ def test_layout(case):
     assert u.shape == (disc.size,)
     theta, y = disc.split(u)
     assert theta[0] == 0.0 and np.all(theta == 0.0)
-    # straight arm: X_i = (s_i, 0)  (Eq. 2)
+    # straight arm: X_i = (s_i, 0)  (Eq. (2))
     s = np.asarray(disc.attach_nodes) / disc.n_elements
     np.testing.assert_allclose(y, np.column_stack((s, 0 * s)), atol=1e-15)
     np.testing.assert_array_equal(disc.join(*disc.split(u)), u)
 
 
 def test_jacobian_matches_central_differences(case):
-    """dF/du (consistent linearisation of Eq. 9 + the y-rows) vs FD, loaded states."""
+    """dF/du (consistent linearisation of Eq. (9) + the y-rows) vs FD, loaded states."""
     name, disc, p = case
     for k, u in enumerate(loaded_states(disc, seed=sorted(CASES).index(name))):
         J = csr_to_dense(disc, disc.jacobian_values(u, p))
@@ -96,7 +96,7 @@ def test_jacobian_matches_central_differences(case):
 
 
 def test_residual_is_gradient_of_potential(case):
-    """SPEC §2: on consistent states F_theta = dPi/dtheta (t x F_i = P_i n.d_i)."""
+    """docs/model.md §2: on consistent states F_theta = dPi/dtheta (t x F_i = P_i n.d_i)."""
     name, disc, p = case
     rng = np.random.default_rng(7)
     m = 0.7  # applied tip moment enters Pi as -m theta_N
@@ -118,7 +118,7 @@ def test_residual_is_gradient_of_potential(case):
 
 def test_reduced_tangent_is_symmetric_hessian(case):
     """K (Schur complement on y) = Hessian of Pi: FD of the reduced gradient, and
-    symmetric to round-off (SPEC §2)."""
+    symmetric to round-off (docs/model.md §2)."""
     name, disc, p = case
     N = disc.n_elements
     rng = np.random.default_rng(11)
@@ -145,7 +145,7 @@ def test_reduced_tangent_symmetric_off_consistency(case):
 
 
 def test_stability_matrix_schur_complement_is_K(case):
-    """H = [[T, W], [W^T, -I]]: T - W (-I)^{-1} W^T = T + W W^T = K (SPEC §2)."""
+    """H = [[T, W], [W^T, -I]]: T - W (-I)^{-1} W^T = T + W W^T = K (docs/model.md §2)."""
     name, disc, p = case
     N, n = disc.n_elements, disc.n_tendons
     for u in loaded_states(disc, seed=5):
@@ -179,7 +179,7 @@ def test_inertia_counter_matches_dense_eigenvalues(case):
 
 
 def test_load_derivative_matches_fd(case):
-    """dF/dp_i (Eq. 14 right-hand sides) vs central differences in p."""
+    """dF/dp_i (Eq. (14) right-hand sides) vs central differences in p."""
     name, disc, p = case
     for u in loaded_states(disc, seed=17):
         D = disc.load_derivative(u)
@@ -196,7 +196,7 @@ def test_load_derivative_matches_fd(case):
 
 
 def test_potential_and_energy_of_a_circular_arc():
-    """theta = m s: strain energy m^2/2 in units of B/l (Eq. 21) exactly for P1."""
+    """theta = m s: strain energy m^2/2 in units of B/l (Eq. (21)) exactly for P1."""
     disc = Discretisation.from_arm(make_arm(TWO, elements=30), 30)
     s = np.linspace(0, 1, 31)
     for m in (0.3, 2.0, -4.0):

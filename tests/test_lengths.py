@@ -1,4 +1,4 @@
-"""Length control (SPEC §4.7; paper Sec. 4.1, 4.6, Figs. 7-8, Eq. 23).
+"""Length control (docs/model.md §4.7; paper Sec. 4.1, 4.6, Figs. 7-8, Eq. (23)).
 
 Every converged state is checked independently of PETSc's own test by the
 numpy kernels (bordered residual, complementarity) inside the solver, and
@@ -17,16 +17,16 @@ import scipy.sparse as sp
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
-from elastica_petsc.buckling import aligned_family, critical_configuration, segment_geometry
-from elastica_petsc.config import load_config
-from elastica_petsc.deflation import Deflation
-from elastica_petsc.equilibrium import EquilibriumSolver
-from elastica_petsc.errors import InputError
-from elastica_petsc.fem import Discretisation
-from elastica_petsc.lengths import (LengthInertia, LengthSolver, _AugmentedSystem,
+from elastica_petsc.studies.buckling import aligned_family, critical_configuration, segment_geometry
+from elastica_petsc.core.config import load_config
+from elastica_petsc.core.deflation import Deflation
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.core.errors import InputError
+from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.solvers.lengths import (LengthInertia, LengthSolver, _AugmentedSystem,
                                     constrained_mode, equilibria, length_equilibria, replay,
                                     tension_starts)
-from elastica_petsc.model import Arm, Tendon
+from elastica_petsc.core.model import Arm, Tendon
 
 L_MM = 600.0
 P_FIG8 = np.array([25.2, 10.8])
@@ -278,7 +278,7 @@ def test_tendon_routed_at_the_clamp_is_a_pinned_column(chord):
     its force always passes through the clamp, so the moment there vanishes
     and the arm is Euler's pinned-pinned column of length l (rotated so that
     theta(0) = 0).  Under load control the straight arm buckles at
-    p = pi^2 (SPEC §7).  Under length control the cable fixes the chord
+    p = pi^2 (docs/model.md §7).  Under length control the cable fixes the chord
     |x_tip| = L.  At L = l (straight) the constraint is degenerate: grad L = 0,
     any p >= 0 balances the straight arm, so the tension is indeterminate
     (the bordered saddle matrix is singular there; not tested).  For L < l
@@ -315,7 +315,7 @@ def _column(disc, u, s_index):
 
 @pytest.fixture(scope="module")
 def fig7(eqs, ls):
-    """The Fig. 7 scenario on the paper's arm (:mod:`elastica_petsc.buckling`).
+    """The Fig. 7 scenario on the paper's arm (:mod:`elastica_petsc.studies.buckling`).
     With p_2 = 0 the arm beyond x_1 is straight (no moment there); at p_1*
     the line of that segment passes through r_2 (found by root finding):
     tendon 2 is just taut and aligned with the segment (the paper's critical

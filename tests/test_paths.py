@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from elastica_petsc import paths
-from elastica_petsc.config import load_config
-from elastica_petsc.control import TipController
-from elastica_petsc.errors import InputError
-from elastica_petsc.schedule import motor_schedule, schedule_from_trace, write_schedule_csv
+from elastica_petsc.studies import trace as paths
+from elastica_petsc.core.config import load_config
+from elastica_petsc.solvers.control import TipController
+from elastica_petsc.core.errors import InputError
+from elastica_petsc.core.schedule import motor_schedule, schedule_from_trace, write_schedule_csv
 
 CENTER = (400.0, 200.0)   # mm; the whole drawing lies in the workspace (see the trace test)
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-SPEC_ITEMS = [  # SPEC §6: every reference number appears in REPORT.md
+SPEC_ITEMS = [  # docs/model.md §6: every reference number appears in REPORT.md
     "(147.1, 472.5)", "(96.2, 454.3)", "(25.2, 10.8)", "(9.7, 12.6)", "over a dozen",
     "< 5", "< 1 s", "4201", "<= 6.5", "<= 18", "<= 40", "~1.8e-3", "138.56 / 40 / 80",
     "a few mm", "would yield and exceed the motor load"]

@@ -1,4 +1,4 @@
-"""Load sensitivities (Eqs. 13-17): Taylor tests, closed form, reciprocity.
+"""Load sensitivities (Eqs. (13)-(17)): Taylor tests, closed form, reciprocity.
 
 Non-dimensional: lengths / l, p = P l^2 / B.
 """
@@ -7,10 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from elastica_petsc.config import load_config
-from elastica_petsc.equilibrium import EquilibriumSolver
-from elastica_petsc.fem import Discretisation
-from elastica_petsc.sensitivity import (SensitivityError, SensitivitySolver, compute_sensitivity,
+from elastica_petsc.core.config import load_config
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.solvers.sensitivity import (SensitivityError, SensitivitySolver, compute_sensitivity,
                                         objective_gradient)
 
 
@@ -89,7 +89,7 @@ def test_state_derivative_taylor_and_euler_predictor(paper):
 
 def test_bordered_unknowns_agree_with_midpoint_rule(paper):
     """d y_j/dp_i from the bordered solve equals the midpoint-rule integral of
-    n alpha_i up to x_j (Eq. 13 at the attachment points); the tip entry of
+    n alpha_i up to x_j (Eq. (13) at the attachment points); the tip entry of
     tendon 2 (s_2 = l) is the tip sensitivity itself."""
     _, _, solver, sens = paper
     S = sens.compute(solver.solve([25.2, 10.8]))
@@ -101,7 +101,7 @@ def test_bordered_unknowns_agree_with_midpoint_rule(paper):
 
 @pytest.mark.parametrize("p", [(10.0, 5.0), (25.2, 10.8), (0.0, 12.0)])
 def test_cable_length_sensitivity_is_symmetric_negative_definite(paper, p):
-    """L_i = dPi*/dp_i for the potential at equilibrium Pi*(p) (SPEC §2), so
+    """L_i = dPi*/dp_i for the potential at equilibrium Pi*(p) (docs/model.md §2), so
     dL/dp = d^2 Pi*/dp^2 is symmetric (reciprocity) and, at a stable state,
     negative definite."""
     _, _, solver, sens = paper

@@ -1,6 +1,6 @@
-"""Stability indicator and eigenfrequencies (elastica_petsc.stability).
+"""Stability indicator and eigenfrequencies (elastica_petsc.solvers.stability).
 
-Closed-form checks (SPEC §7): buckling of the straight arm under a dead tip
+Closed-form checks (docs/model.md §7): buckling of the straight arm under a dead tip
 load (p_cr = pi^2/4) and under a tip load aimed at the clamp (p_cr = pi^2);
 the unloaded arm's lambda l^2/B -> pi^2/4 with the fitted order; the clamped-
 free Euler-Bernoulli frequency.  Reference states: Fig. 8 at p = (25.2, 10.8).
@@ -17,12 +17,12 @@ import scipy.sparse as sp
 from petsc4py import PETSc
 from scipy.optimize import brentq
 
-from elastica_petsc.config import load_config
-from elastica_petsc.equilibrium import EquilibriumSolver
-from elastica_petsc.fem import Discretisation
-from elastica_petsc.inertia import InertiaCounter
-from elastica_petsc.model import Arm, Tendon
-from elastica_petsc.stability import (EB_BETA1, StabilitySolver, euler_bernoulli_f1_hz,
+from elastica_petsc.core.config import load_config
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.solvers.inertia import InertiaCounter
+from elastica_petsc.core.model import Arm, Tendon
+from elastica_petsc.solvers.stability import (EB_BETA1, StabilitySolver, euler_bernoulli_f1_hz,
                                       frequency_scale_hz, kinetic_mass_apply,
                                       max_tracing_speed_mm_s, node_masses, schur_asymmetry)
 
@@ -141,7 +141,7 @@ def test_asymmetry_estimator_detects_asymmetry():
 
 
 def test_unloaded_raw_value_matches_paper_scaling(paper_arm):
-    """Raw lambda_min(K)/(B/l) at N = 180 ~ 2.4674 / 180 (SPEC §3)."""
+    """Raw lambda_min(K)/(B/l) at N = 180 ~ 2.4674 / 180 (docs/model.md §3)."""
     disc = Discretisation.from_arm(paper_arm, 180)
     with StabilitySolver(disc) as solver:
         r = solver.solve(disc.straight(), np.zeros(2))
@@ -168,7 +168,7 @@ def test_unloaded_eigenvalue_converges(mass, order):
     assert errors[-1] < (1e-4 if mass == "lumped" else 1e-2)
 
 
-# --- buckling of the straight arm (SPEC §7) -------------------------------------------------
+# --- buckling of the straight arm (docs/model.md §7) -------------------------------------------------
 def critical_load(route_l, N: int, p_hi: float) -> float:
     """Tension at which lambda_min of K on the straight state crosses zero."""
     disc = tip_disc(route_l, N)
@@ -244,7 +244,7 @@ def test_kinetic_mass_apply_matches_dense(paper_arm):
         e = eq.solve(P_FIG8)
     theta = e.theta
     N = disc.n_elements
-    # G = d x_nodes / d theta by central differences of the positions (Eq. 2)
+    # G = d x_nodes / d theta by central differences of the positions (Eq. (2))
     G = np.zeros((N, 2, N))
     for j in range(N):
         d = np.zeros(N + 1)

@@ -1,4 +1,4 @@
-"""Workspace maps (issue 4; paper Sec. 4.3, Eqs. 18-22, Figs. 4-5), run as a user does:
+"""Workspace maps (issue 4; paper Sec. 4.3, Eqs. (18)-(22), Figs. 4-5), run as a user does:
 ``elastica-petsc workspace`` in a subprocess, on 1 rank and under ``mpiexec -n 2``.
 
 Grids are coarse (60 mm, 60 elements; tensions on a 5 x 5 lattice at 30 elements)
@@ -279,7 +279,7 @@ def test_file_layout_attributes_and_units(targets_1):
         assert timing["ranks"] == 1 and timing["seconds_wall"] > 0 and timing["seconds_io"] >= 0
         # masks W_0..W_P recomputed from the fields and the limits stored with them
         limits = dict(fh["masks"].attrs)
-        assert limits["kappa_limit"] == pytest.approx(10.0)       # 2 eps_Y l / h (Eq. 19)
+        assert limits["kappa_limit"] == pytest.approx(10.0)       # 2 eps_Y l / h (Eq. (19))
         assert limits["strain_energy_max"] == 18.0
         assert limits["max_tension"] == pytest.approx(112.9 / 0.2 * 0.36)   # P_crit l^2 / B
         s = {name: fh["samples"][name][()] for name in fh["samples"]}
@@ -322,7 +322,7 @@ def test_physics_of_the_target_map(targets_1):
     assert np.all(s["tip_error"][reached] < 1e-5)
     assert np.all(np.linalg.norm(tip[reached] - target[reached], axis=1) < 1e-5)
     assert np.all(p[reached] >= 0)
-    # stable (Eq. 20): the smallest eigenvalue is positive at (almost) every reached sample
+    # stable (Eq. (20)): the smallest eigenvalue is positive at (almost) every reached sample
     assert np.mean(s["lambda_min"][reached] > 0) >= 0.95
     assert np.all(np.isfinite(s["lambda_min_raw"][reached]))
     # the paper's raw eigenvalue of K scales with the element size: lambda l^2/B ~ N lambda_raw
@@ -355,9 +355,9 @@ def test_physics_of_the_target_map(targets_1):
 def test_outside_tips_lie_on_the_p1_zero_locus(targets_1):
     """The tip recorded for a red target is the equilibrium at p = (0, p_2) (a forward
     solve from the straight arm reproduces it): the boundary of Fig. 4 is x_t(0, P_2)."""
-    from elastica_petsc.config import load_config
-    from elastica_petsc.equilibrium import EquilibriumSolver
-    from elastica_petsc.fem import Discretisation
+    from elastica_petsc.core.config import load_config
+    from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+    from elastica_petsc.core.fem import Discretisation
 
     s = samples(targets_1)
     outside = np.flatnonzero(s["status"] == 2)
@@ -377,11 +377,11 @@ def test_backward_sweep_reaches_targets_behind_a_collapse():
     first targets end at tendon 2's collapse (under its routing point), 105 mm is
     reached; solved again backwards from their reached neighbours, 58-93 mm are reached
     too (they are in W_0; only 23-47 mm are not reached either way)."""
-    from elastica_petsc.config import load_config
-    from elastica_petsc.control import CABLE_COLLAPSE
-    from elastica_petsc.fem import Discretisation
-    from elastica_petsc.sampling import TargetSampler
-    from elastica_petsc.workspace import NOT_CONVERGED, REACHED
+    from elastica_petsc.core.config import load_config
+    from elastica_petsc.solvers.control import CABLE_COLLAPSE
+    from elastica_petsc.core.fem import Discretisation
+    from elastica_petsc.studies.sampling import TargetSampler
+    from elastica_petsc.studies.workspace import NOT_CONVERGED, REACHED
 
     arm = load_config(ROOT / "configs" / "paper.toml")
     sampler = TargetSampler(arm, Discretisation.from_arm(arm, 60))
@@ -466,7 +466,7 @@ def test_fig4_legend_names_routing_points_and_reasons(targets_1):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from elastica_petsc.plots_workspace import plot_samples, read_workspace
+    from elastica_petsc.plots.workspace import plot_samples, read_workspace
 
     data = read_workspace(targets_1)
     data["status"][:3] = 3                                   # pretend: 3 not converged

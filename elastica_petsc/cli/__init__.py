@@ -1,0 +1,95 @@
+"""Command-line entry point: ``elastica-petsc COMMAND [options] [PETSc options]``.
+
+Every subcommand lives in :mod:`elastica_petsc.cli` as a module with
+``add_parser(subparsers)`` (argument definitions only, no PETSc import) and
+``run(args) -> exit status``.  Options that argparse does not know and that
+start with a single dash (``-eq_snes_monitor``, ``-ctl_tao_monitor``,
+``-stab_eps_view``) are handed to PETSc: ``petsc4py.init`` happens here,
+once, before any solver module is imported.
+
+Exit status: 0 success; 1 a solve that did not converge; 2 bad input (one
+line on stderr, no traceback); 3 a target outside the workspace; 130
+interrupted.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import signal
+import sys
+
+from ..core.errors import InputError
+
+COMMANDS = ("solve", "control", "trace", "stability", "workspace", "lengths", "equilibria", "replay",
+            "reproduce")
+
+EPILOG = """\
+PETSc options: any option starting with a single dash that is not listed
+above is passed to PETSc, e.g. -eq_snes_monitor, -eq_snes_rtol 1e-12
+(equilibrium Newton solver, prefix eq_), -ctl_tao_monitor (tip control,
+prefix ctl_), -stab_eps_view (eigen solver, prefix stab_).
+
+Exit status: 0 ok, 1 not converged, 2 bad input, 3 target unreachable."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from .. import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="elastica-petsc",
+        description="Equilibria, tip control, stability and workspaces of tendon-actuated "
+                    "elastic arms (Handral & Rangarajan 2019) with PETSc, TAO and SLEPc.",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name in COMMANDS:
+        importlib.import_module(f".{name}", __package__).add_parser(sub)
+    return parser
+
+
+def split_petsc_options(parser: argparse.ArgumentParser, rest: list[str]) -> list[str]:
+    """The leftovers of argparse that are PETSc options (``-name [value]``)."""
+    petsc, expecting_value = [], False
+    for token in rest:
+        if token.startswith("-") and not token.startswith("--") and len(token) > 1 \
+                and not _is_number(token):
+            petsc.append(token)
+            expecting_value = True
+        elif expecting_value and not token.startswith("--"):
+            petsc.append(token)
+            expecting_value = False
+        else:
+            parser.error(f"unrecognized argument: {token}")
+    return petsc
+
+
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+        return True
+    except ValueError:
+        return False
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser()
+    args, rest = parser.parse_known_args(argv)
+    petsc_options = split_petsc_options(parser, rest)
+    import petsc4py
+    petsc4py.init([parser.prog] + petsc_options)
+    from petsc4py import PETSc  # noqa: F401  (initialises PETSc with those options)
+    # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+    try:
+        return args.run(args)
+    except InputError as err:
+        print(f"elastica-petsc: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("elastica-petsc: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

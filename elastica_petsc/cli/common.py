@@ -1,0 +1,90 @@
+"""Options and helpers shared by the subcommands (no PETSc import here)."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from ..core.config import load_config
+from ..core.errors import InputError
+from ..core.model import Arm
+
+
+def add_arm_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--config", metavar="TOML",
+                        help="arm configuration (default: the paper's arm, configs/paper.toml)")
+    parser.add_argument("--elements", type=int, metavar="N",
+                        help="number of finite elements (overrides the config)")
+
+
+def add_output_options(parser: argparse.ArgumentParser, plot: bool = True) -> None:
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON object on stdout instead of the text summary")
+    parser.add_argument("--out", metavar="H5", help="write the results to this HDF5 file")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace an existing --out/--plot file")
+    if plot:
+        parser.add_argument("--plot", metavar="PNG", help="draw a figure into this PNG file")
+
+
+def add_tension_options(parser: argparse.ArgumentParser, required: bool = True) -> None:
+    group = parser.add_mutually_exclusive_group(required=required)
+    group.add_argument("--tensions", type=float, nargs="+", metavar="P",
+                       help="cable tensions, non-dimensional p_i = P_i l^2 / B, one per tendon")
+    group.add_argument("--tensions-N", type=float, nargs="+", metavar="P",
+                       help="cable tensions in newtons, one per tendon")
+
+
+def add_order_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--order", metavar="I,J,...",
+                        help="loading order: e.g. 2,1 brings tendon 2 to full tension first, "
+                             "then tendon 1 (default: all tendons proportionally from zero)")
+
+
+def load_arm(args) -> tuple[Arm, "Discretisation"]:
+    """The configured arm and its mesh (``--config``, ``--elements``)."""
+    from ..core.fem import Discretisation
+
+    arm = load_config(args.config)
+    if args.elements is not None and args.elements < 2:
+        raise InputError(f"--elements must be at least 2, got {args.elements}")
+    return arm, Discretisation.from_arm(arm, args.elements)
+
+
+def tensions(args, arm: Arm):
+    """Non-dimensional tensions from --tensions or --tensions-N (validated later)."""
+    if getattr(args, "tensions_N", None) is not None:
+        return list(arm.tensions_from_N(args.tensions_N))
+    return args.tensions
+
+
+def guess(args, disc):
+    """Validated initial tensions from ``--guess`` (non-dimensional), or None."""
+    if args.guess is None:
+        return None
+    from ..solvers.equilibrium import check_tensions
+    return check_tensions(args.guess, disc.n_tendons)
+
+
+def order(args) -> tuple[int, ...] | None:
+    if not args.order:
+        return None
+    try:
+        return tuple(int(k) for k in args.order.split(","))
+    except ValueError:
+        raise InputError(f"--order {args.order!r}: expected tendon numbers separated by commas, "
+                         "e.g. 2,1") from None
+
+
+def check_outputs(args) -> None:
+    """Fail early, before any computing, on output paths that would be refused."""
+    from ..io.hdf5 import check_output_path
+
+    for path in (getattr(args, "out", None), getattr(args, "plot", None)):
+        if path:
+            check_output_path(path, args.overwrite)
+
+
+def print_json(data: dict) -> None:
+    json.dump(data, sys.stdout, indent=2)
+    sys.stdout.write("\n")

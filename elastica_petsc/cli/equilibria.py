@@ -1,0 +1,55 @@
+"""``elastica-petsc equilibria``: several equilibria for fixed tensions (load control,
+paper Fig. 8: states 1 and 3 share p = (25.2, 10.8)).
+
+The multi-start search of :func:`lengths.equilibria`: loading paths from the
+straight arm (proportional and every order), loading paths from a spread of
+load-controlled starts, then deflated Newton solves.  Output layout as for
+``elastica-petsc lengths`` (see :mod:`.lengths`); ``stable`` is the stability
+under load control, and every state is also judged held at its own cable lengths.
+"""
+from __future__ import annotations
+
+from . import common
+from .lengths import add_search_options
+
+
+def add_parser(sub) -> None:
+    parser = sub.add_parser(
+        "equilibria", help="several equilibria for given tensions (load control, Fig. 8)",
+        description="Search for several equilibria of the arm at fixed cable tensions (load "
+                    "control): loading paths from the straight arm in every order, loading "
+                    "paths from a spread of load-controlled starts, and deflated Newton solves "
+                    "(Fig. 8: states 1 and 3 share p = (25.2, 10.8)). Each state is reported "
+                    "with tip, cable lengths and its stability under load control and, held "
+                    "at its own cable lengths, under length control. What the search finds is "
+                    "not proven to be everything.")
+    common.add_tension_options(parser)
+    add_search_options(parser)
+    common.add_arm_options(parser)
+    common.add_output_options(parser)
+    parser.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from ..solvers.equilibrium import EquilibriumSolver, check_tensions
+    from ..solvers.lengths import equilibria, tension_starts
+    from ..io.summary import rounded
+    from .lengths import NOT_COMPLETE, check_search_options, finish, search_summary, \
+        state_summary
+
+    arm, disc = common.load_arm(args)
+    p = check_tensions(common.tensions(args, arm), disc.n_tendons)
+    check_search_options(args)
+    common.check_outputs(args)
+    with EquilibriumSolver(disc) as eqs:
+        starts = tension_starts(eqs, levels=args.levels)
+        result = equilibria(eqs, p, starts, deflation_rounds=args.deflation_rounds,
+                            length_mm=arm.length_mm)
+    states = [f.state for f in result.states]
+    data = {"control": "load", "tensions": rounded(p), "tensions_N": rounded(arm.tensions_to_N(p)),
+            "elements": disc.n_elements,
+            "equilibria": [state_summary(arm, f.state, "load", f) for f in result.states],
+            "search": search_summary(result), "note": NOT_COMPLETE}
+    title = ("Equilibria found at p = (" + ", ".join(f"{v:g}" for v in p)
+             + ") (load control)")
+    return finish(args, arm, data, states, "load_equilibria", title)

@@ -1,0 +1,49 @@
+"""``elastica-petsc solve``: the load-controlled equilibrium (Eq. (9)) for given tensions."""
+from __future__ import annotations
+
+import sys
+
+from . import common
+
+
+def add_parser(sub) -> None:
+    parser = sub.add_parser(
+        "solve", help="equilibrium of the arm for given cable tensions (load control)",
+        description="Solve the equilibrium (paper Eq. (9)) for given tensions with PETSc SNES, "
+                    "stepping the load from the straight arm along the chosen loading order. "
+                    "Prints the tip, attachment points, cable lengths, energy and curvature.")
+    common.add_tension_options(parser)
+    common.add_order_option(parser)
+    common.add_arm_options(parser)
+    common.add_output_options(parser)
+    parser.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from ..solvers.equilibrium import EquilibriumSolver
+    from ..io.summary import equilibrium_summary, format_equilibrium
+
+    arm, disc = common.load_arm(args)
+    common.check_outputs(args)
+    with EquilibriumSolver(disc) as solver:
+        eq = solver.solve(common.tensions(args, arm), order=common.order(args))
+    summary = equilibrium_summary(arm, eq)
+    if args.json:
+        common.print_json(summary)
+    else:
+        print(format_equilibrium(arm, summary))
+    if args.out:
+        from ..io.hdf5 import atomic_h5, provenance, write_attrs, write_equilibrium
+        with atomic_h5(args.out, args.overwrite) as fh:
+            write_attrs(fh, provenance(arm, "equilibrium"))
+            fh.attrs["loading_order"] = args.order or "proportional"
+            write_equilibrium(fh, arm, eq)
+    if args.plot:
+        from ..plots.common import plot_equilibria, tension_label
+        order = f"order {args.order}" if args.order else "proportional loading"
+        plot_equilibria(arm, [(eq, tension_label(arm, eq.p))], args.plot,
+                        title=f"Equilibrium, {order}")
+    if not eq.converged:
+        print(f"elastica-petsc: solve failed: {eq.message}", file=sys.stderr)
+        return 1
+    return 0

@@ -1,0 +1,82 @@
+"""Deflation operator for finding several distinct equilibria with Newton.
+
+Farrell, Birkisson & Funke (2015), "Deflation techniques for finding
+distinct solutions of nonlinear partial differential equations", SIAM J.
+Sci. Comput. 37(4), A2026-A2045: once solutions z_1..z_K of F(z) = 0 are
+known, Newton is applied to the deflated residual
+
+    G(z) = M(z) F(z),      M(z) = prod_k ( 1 / ||z - z_k||^q + sigma ),
+
+(their "shifted" deflation operator, Sec. 3; here q = 2, sigma = 1).  G has
+the same zeros as F except the z_k, near which G stays away from zero
+(M -> infinity), so Newton started anywhere cannot converge to them again.
+Because M > 0, multiplying the equation rows of a complementarity problem by
+M keeps their sign, so the same operator deflates the variational inequality
+of length control (F_i >= 0 at a lower bound stays F_i >= 0).
+
+The norm is over the shape only: ||z - z_k||^2 = h sum_j (theta_j - theta_kj)^2,
+the discrete L2 norm of theta - theta_k on [0, l] (mesh independent).
+
+Jacobian.  dG/dz = M J + F (grad M)^T: a rank-one update of M J, dense
+(F has every row, grad M every theta column).  It is never formed.  Instead
+the solvers in :mod:`elastica_petsc.solvers.lengths` carry mu = M(z) as one extra
+unknown with the extra equation mu - M(z) = 0 and solve
+
+    [ mu F(z)     ]                       [ mu J     F ]
+    [ mu - M(z)   ] = 0,   with Jacobian  [ -grad M  1 ].
+
+The Newton step of this system, (mu J + F grad M^T) dz = -M F after
+eliminating d mu, is exactly the deflated Newton step of Farrell et al.
+(at mu = M), and the extra row and column are one more border of the
+bordered system: LU in the natural order still fills only the border, O(N).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+class Deflation:
+    """M(theta) = prod_k (||theta - theta_k||^-q + sigma) and its gradient.
+
+    ``h`` is the element size (weights of the discrete L2 norm); states are
+    the N free nodal angles theta_1..theta_N (radians).
+    """
+
+    def __init__(self, h: float, *, power: float = 2.0, shift: float = 1.0):
+        if power <= 0 or shift <= 0:
+            raise ValueError("deflation needs power > 0 and shift > 0")
+        self.h = float(h)
+        self.power = float(power)
+        self.shift = float(shift)
+        self.roots: list[np.ndarray] = []
+
+    def add(self, theta: np.ndarray) -> None:
+        """Deflate one more known solution (its free angles theta_1..theta_N)."""
+        self.roots.append(np.array(theta, dtype=float, copy=True))
+
+    def clear(self) -> None:
+        self.roots.clear()
+
+    def __len__(self) -> int:
+        return len(self.roots)
+
+    def distances(self, theta: np.ndarray) -> np.ndarray:
+        """||theta - theta_k|| (discrete L2 on [0, l]) to every deflated root."""
+        if not self.roots:
+            return np.zeros(0)
+        diff = theta[None, :] - np.asarray(self.roots)
+        return np.sqrt(self.h * np.sum(diff * diff, axis=1))
+
+    def factor_and_gradient(self, theta: np.ndarray) -> tuple[float, np.ndarray]:
+        """M(theta) and dM/dtheta; M = 1, grad = 0 when nothing is deflated."""
+        if not self.roots:
+            return 1.0, np.zeros_like(theta)
+        q, sigma = self.power, self.shift
+        diff = theta[None, :] - np.asarray(self.roots)             # (K, N)
+        s = np.maximum(self.h * np.sum(diff * diff, axis=1), 1e-300)   # ||.||^2
+        inv = s ** (-0.5 * q)                                       # ||.||^-q
+        factors = inv + sigma
+        M = float(np.prod(factors))
+        # d/dtheta log(s^(-q/2) + sigma) = -(q/2) s^(-q/2 - 1) * 2 h diff / factor
+        dlog = (-(q / 2.0) * inv / s / factors)[:, None] * (2.0 * self.h * diff)
+        return M, M * np.sum(dlog, axis=0)

@@ -1,0 +1,289 @@
+"""Pure-numpy kernels of the P1 finite-element elastica (no PETSc here).
+
+Non-dimensional throughout (docs/model.md §3): l = 1, B = 1, tensions p.
+
+Discretisation (Eq. (9))
+----------------------
+Nodes s_k = k h, k = 0..N, h = 1/N; theta is P1 with theta_0 = 0 (clamp).
+Every integral over an element uses the midpoint rule at the element angle
+phi_e = (theta_e + theta_{e+1}) / 2, with t_e = (cos phi_e, sin phi_e) and
+n_e = (-sin phi_e, cos phi_e):
+
+    x_k = sum_{e<k} h t_e                                   (Eq. (2))
+
+Because the positions and the tendon load integrals of Eq. (9) share this
+quadrature, the discrete residual is exactly the gradient of the discrete
+potential (docs/model.md §2)
+
+    Pi(theta) = sum_e (theta_{e+1} - theta_e)^2 / (2h) + sum_i p_i |r_i - X_i(theta)|
+                - m theta_N,
+
+with X_i = x_{m_i} the attachment node of tendon i and m an optional applied
+tip moment (used only for the closed-form check of docs/model.md §7).  Its Hessian,
+the consistent tangent K, is symmetric.
+
+Bordered system
+---------------
+X_i depends on every angle before the attachment point, so K has a dense
+rank-2 term per tendon.  To stay O(N) the attachment positions y_i are
+carried as extra unknowns, u = (theta_1..theta_N, y_1, ..., y_n), with
+
+    F_theta = d Pi/d theta evaluated with d_i = (r_i - y_i)/|r_i - y_i|   (Eqs. (3)-(4), (9))
+    F_y_i   = y_i - X_i(theta)                                           (Eq. (2))
+
+Its Jacobian is tridiagonal in the theta block with 2n dense border rows and
+columns; eliminating y (Schur complement) gives back K exactly.  With the
+theta unknowns first, LU in the natural order fills only the border.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from .errors import InputError
+from .model import Arm
+
+
+class DiscretisationError(InputError):
+    """An arm that cannot be put on the requested mesh."""
+
+
+@dataclass(frozen=True)
+class Discretisation:
+    """Mesh and tendon data of one arm, non-dimensional."""
+
+    n_elements: int
+    attach_nodes: tuple[int, ...]   # m_i: node index of tendon i's attachment
+    routes: np.ndarray              # (n, 2) routing points r_i / l
+
+    @classmethod
+    def from_arm(cls, arm: Arm, n_elements: int | None = None) -> "Discretisation":
+        """Put ``arm`` on a uniform mesh; attachments must fall on nodes."""
+        n = arm.elements if n_elements is None else n_elements
+        if n < 2:
+            raise DiscretisationError(f"need at least 2 elements, got {n}")
+        nodes = []
+        for i, s in enumerate(arm.attachments(), start=1):
+            k = int(round(s * n))
+            if abs(k - s * n) > 1e-9 * n:
+                h_mm = arm.length_mm / n
+                raise DiscretisationError(
+                    f"tendon {i}: attachment s = {s * arm.length_mm:g} mm is not on a node of "
+                    f"the {n}-element mesh (spacing {h_mm:g} mm); choose an element count that "
+                    f"makes s_i / l * N an integer (nearest node: {k * h_mm:g} mm)")
+            nodes.append(k)
+        return cls(n, tuple(nodes), arm.routes())
+
+    # --- sizes and layout ---------------------------------------------------
+    @property
+    def h(self) -> float:
+        return 1.0 / self.n_elements
+
+    @property
+    def n_tendons(self) -> int:
+        return len(self.attach_nodes)
+
+    @property
+    def size(self) -> int:
+        """Unknowns of the bordered system: N angles + 2 per tendon."""
+        return self.n_elements + 2 * self.n_tendons
+
+    @cached_property
+    def support(self) -> np.ndarray:
+        """(n, N) mask: element e lies before tendon i's attachment (e < m_i)."""
+        e = np.arange(self.n_elements)
+        return e[None, :] < np.asarray(self.attach_nodes)[:, None]
+
+    def split(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Nodal angles theta_0..theta_N (theta_0 = 0) and attachment unknowns (n, 2)."""
+        theta = np.concatenate(([0.0], u[: self.n_elements]))
+        return theta, u[self.n_elements:].reshape(-1, 2)
+
+    def join(self, theta: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Inverse of split (theta including the clamped node)."""
+        return np.concatenate((theta[1:], np.asarray(y, dtype=float).ravel()))
+
+    def straight(self) -> np.ndarray:
+        """The undeformed arm as a bordered state vector."""
+        theta = np.zeros(self.n_elements + 1)
+        return self.join(theta, self.node_positions(theta)[list(self.attach_nodes)])
+
+    def consistent_state(self, theta: np.ndarray) -> np.ndarray:
+        """Bordered state with y_i = X_i(theta) exactly."""
+        return self.join(theta, self.node_positions(theta)[list(self.attach_nodes)])
+
+    # --- geometry (Eqs. (1)-(2)) -------------------------------------------------
+    @staticmethod
+    def element_angles(theta: np.ndarray) -> np.ndarray:
+        """phi_e, the midpoint angle of each element."""
+        return 0.5 * (theta[:-1] + theta[1:])
+
+    def node_positions(self, theta: np.ndarray) -> np.ndarray:
+        """x_k at every node, shape (N+1, 2) (Eq. (2), midpoint rule)."""
+        phi = self.element_angles(theta)
+        steps = self.h * np.column_stack((np.cos(phi), np.sin(phi)))
+        return np.vstack((np.zeros((1, 2)), np.cumsum(steps, axis=0)))
+
+    def attachment_gradients(self, theta: np.ndarray) -> np.ndarray:
+        """g[i, k-1] = d X_i / d theta_k, shape (n, N, 2)."""
+        phi = self.element_angles(theta)
+        half_normals = 0.5 * self.h * np.column_stack((-np.sin(phi), np.cos(phi)))
+        per_element = self.support[:, :, None] * half_normals[None]        # (n, N, 2)
+        g = per_element.copy()                     # element k-1 = left of node k
+        g[:, :-1] += per_element[:, 1:]           # element k   = right of node k
+        return g
+
+    @cached_property
+    def _support_matrix(self) -> np.ndarray:
+        """:attr:`support` as floats, (n, N), for sums over tendons or elements."""
+        return self.support.astype(float)
+
+    def tendon_sums(self, values: np.ndarray) -> np.ndarray:
+        """sum over tendons i with e < m_i of values[i], for every element e.
+
+        ``values`` has shape (n, k); the result (N, k).  One (N x n) product,
+        O(nN) (n, the number of tendons, is small).
+        """
+        return self._support_matrix.T @ values
+
+    # --- energies (Eq. (21)) ----------------------------------------------------
+    def strain_energy(self, theta: np.ndarray) -> float:
+        """int theta'^2/2 ds in units of B/l (multiply by 2 for units of SE_0)."""
+        return float(np.sum(np.diff(theta) ** 2) / (2.0 * self.h))
+
+    def curvature(self, theta: np.ndarray) -> np.ndarray:
+        """l * theta' on each element (piecewise constant for P1)."""
+        return np.diff(theta) / self.h
+
+    def potential(self, theta: np.ndarray, p, tip_moment: float = 0.0) -> float:
+        """Discrete total potential Pi(theta) (docs/model.md §2)."""
+        x = self.node_positions(theta)[list(self.attach_nodes)]
+        lengths = np.linalg.norm(self.routes - x, axis=1)
+        return self.strain_energy(theta) + float(np.dot(p, lengths)) - tip_moment * theta[-1]
+
+    # --- bordered residual and Jacobian --------------------------------------
+    def cables(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Cable lengths L_i = |r_i - y_i| and unit directions d_i (Eq. (3))."""
+        chord = self.routes - y
+        lengths = np.linalg.norm(chord, axis=1)
+        return lengths, chord / lengths[:, None]
+
+    def residual(self, u: np.ndarray, p, tip_moment: float = 0.0) -> np.ndarray:
+        """F(u) of the bordered system (Eq. (9) with the midpoint rule, plus y - X(theta))."""
+        theta, y = self.split(u)
+        _, d = self.cables(y)
+        phi = self.element_angles(theta)
+        c, s = np.cos(phi), np.sin(phi)
+        force = self.tendon_sums(np.asarray(p, float)[:, None] * d)      # sum of F_i per element
+        # (h/2) t_e x F on each element: the load integral of Eq. (9), midpoint rule
+        q = 0.5 * self.h * (c * force[:, 1] - s * force[:, 0])
+        jump = np.diff(theta)                                   # h * theta' per element
+        f_theta = (jump - np.append(jump[1:], 0.0)) / self.h    # int theta' dtheta' ds
+        f_theta -= q
+        f_theta[:-1] -= q[1:]
+        f_theta[-1] -= tip_moment
+        support = self._support_matrix
+        x_attach = self.h * np.column_stack((support @ c, support @ s))   # Eq. (2) at s_i
+        return np.concatenate((f_theta, (y - x_attach).ravel()))
+
+    def _bordered_pattern(self, supports, upper: bool = False):
+        """CSR structure of a tridiagonal N x N block bordered by one column and
+        one row per entry of ``supports`` (column b is nonzero in rows
+        0..supports[b]-1), with a diagonal corner block.
+
+        Returns (indptr, indices, src): ``src`` maps each stored entry to the flat
+        source array concatenating band (N, 3), border columns (N, nb), border
+        rows (nb, N) and corner diagonal (nb,).  ``upper`` keeps col >= row only
+        (for symmetric SBAIJ storage).
+        """
+        N, nb = self.n_elements, len(supports)
+        rows, cols, src = [], [], []
+        k = np.arange(N)
+        for off in (-1, 0, 1):                          # band[r, off+1] = A[r, r+off]
+            ok = (k + off >= 0) & (k + off < N)
+            rows.append(k[ok]); cols.append(k[ok] + off); src.append(3 * k[ok] + off + 1)
+        col_base, row_base, corner_base = 3 * N, 3 * N + nb * N, 3 * N + 2 * nb * N
+        for b, m in enumerate(supports):
+            r = np.arange(m)
+            rows.append(r); cols.append(np.full(m, N + b)); src.append(col_base + r * nb + b)
+            rows.append(np.full(m, N + b)); cols.append(r); src.append(row_base + b * N + r)
+            rows.append(np.array([N + b])); cols.append(np.array([N + b]))
+            src.append(np.array([corner_base + b]))
+        rows, cols, src = (np.concatenate(a) for a in (rows, cols, src))
+        if upper:
+            keep = cols >= rows
+            rows, cols, src = rows[keep], cols[keep], src[keep]
+        order = np.lexsort((cols, rows))
+        indptr = np.searchsorted(rows[order], np.arange(N + nb + 1)).astype(np.int32)
+        return indptr, cols[order].astype(np.int32), src[order]
+
+    @cached_property
+    def pattern(self):
+        """CSR structure of the bordered Jacobian (2 border columns per tendon)."""
+        return self._bordered_pattern(np.repeat(self.attach_nodes, 2))
+
+    @cached_property
+    def stability_pattern(self):
+        """Upper-triangle CSR structure of the symmetric stability matrix H
+        (one border column per tendon)."""
+        return self._bordered_pattern(np.asarray(self.attach_nodes), upper=True)
+
+    def _band(self, theta, d, p) -> np.ndarray:
+        """Tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper)."""
+        N, h = self.n_elements, self.h
+        phi = self.element_angles(theta)
+        force = self.tendon_sums(p[:, None] * d)
+        # d/dtheta of -(h/2) t_e x F on element e: (h/4) t_e.F on its two nodes
+        w = 0.25 * h * (np.cos(phi) * force[:, 0] + np.sin(phi) * force[:, 1])
+        band = np.empty((N, 3))
+        band[:, 0], band[:, 2] = -1.0 / h, -1.0 / h
+        band[:, 1] = 2.0 / h
+        band[-1, 1] = 1.0 / h                                  # free end theta'(l) = 0
+        band[:, 1] += w + np.append(w[1:], 0.0)
+        band[:-1, 2] += w[1:]
+        band[1:, 0] += w[1:]
+        return band
+
+    def jacobian_values(self, u: np.ndarray, p) -> np.ndarray:
+        """Entries of dF/du in the order of :attr:`pattern` (consistent tangent)."""
+        N, n = self.n_elements, self.n_tendons
+        p = np.asarray(p, float)
+        theta, y = self.split(u)
+        lengths, d = self.cables(y)
+        g = self.attachment_gradients(theta)                    # (n, N, 2)
+        # dF_theta/dy_i = p_i/L_i (I - d d^T) g = p_i/L_i (d_perp . g) d_perp   (Eq. (17))
+        d_perp = np.column_stack((-d[:, 1], d[:, 0]))
+        lever = (p / lengths)[:, None] * (g[..., 0] * d_perp[:, :1] + g[..., 1] * d_perp[:, 1:])
+        border = (lever[:, :, None] * d_perp[:, None, :]).transpose(1, 0, 2).reshape(N, 2 * n)
+        yrows = -g.transpose(0, 2, 1).reshape(2 * n, N)        # dF_y/dtheta = -dX/dtheta
+        source = np.concatenate((self._band(theta, d, p).ravel(), border.ravel(),
+                                 yrows.ravel(), np.ones(2 * n)))
+        return source[self.pattern[2]]
+
+    def stability_values(self, u: np.ndarray, p) -> np.ndarray:
+        """Upper-triangle entries of H = [[T, W], [W^T, -I]] (:attr:`stability_pattern`).
+
+        W[:, i] = sqrt(p_i / L_i) dX_i/dtheta^T d_i^perp, so that the Schur
+        complement T + W W^T is the consistent tangent K (docs/model.md §2) and, by
+        Haynsworth's inertia additivity, In(K) = In(H) - (0, n, 0).
+        """
+        p = np.asarray(p, float)
+        theta, y = self.split(u)
+        lengths, d = self.cables(y)
+        g = self.attachment_gradients(theta)
+        d_perp = np.column_stack((-d[:, 1], d[:, 0]))
+        w = np.sqrt(p / lengths)[:, None] * (g[..., 0] * d_perp[:, :1] + g[..., 1] * d_perp[:, 1:])
+        source = np.concatenate((self._band(theta, d, p).ravel(), w.T.ravel(), w.ravel(),
+                                 -np.ones(self.n_tendons)))
+        return source[self.stability_pattern[2]]
+
+    def load_derivative(self, u: np.ndarray) -> np.ndarray:
+        """dF/dp, shape (n, size): row i is dF/dp_i (right-hand sides of Eq. (14))."""
+        theta, y = self.split(u)
+        _, d = self.cables(y)
+        g = self.attachment_gradients(theta)
+        out = np.zeros((self.n_tendons, self.size))
+        out[:, : self.n_elements] = -(g[..., 0] * d[:, :1] + g[..., 1] * d[:, 1:])
+        return out

@@ -1,0 +1,194 @@
+"""HDF5 output: layout, units and provenance.
+
+Every file carries, as root attributes, ``kind`` (what it holds), the
+resolved configuration (``config_json``), the package, PETSc and SLEPc
+versions, the command line and the creation time.  Every dataset carries a
+``units`` attribute and a ``description``.  Files are written aside and
+renamed into place, so the target path never holds a half-written file.
+
+Layout of an equilibrium group (``write_equilibrium``)::
+
+    mesh/s                 (N+1,)   mm      arc length of the nodes
+    state/theta            (N+1,)   rad     tangent angle at the nodes
+    state/x                (N+1, 2) mm      centreline at the nodes (Eq. (2))
+    state/curvature        (N,)     1       l * theta' per element
+    state/tip              (2,)     mm
+    state/strain_energy    ()       B/(2l)  (Eq. (21));  strain_energy_J: J
+    state/kappa_max        ()       1       max l|theta'|
+    tendons/attach_s       (n,)     mm      attachment arc lengths
+    tendons/routes         (n, 2)   mm      routing points r_i
+    tendons/attachments    (n, 2)   mm      x_i
+    tendons/directions     (n, 2)   1       d_i (Eq. (3))
+    tendons/cable_lengths  (n,)     mm      |r_i - x_i|
+    tendons/tensions       (n,)     P l^2/B
+    tendons/tensions_N     (n,)     N
+    solver (attributes)    converged, reason, message, iterations, load_steps,
+                           unstable_modes, stable
+"""
+from __future__ import annotations
+
+import contextlib
+import datetime
+import json
+import os
+import platform
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+from ..core.config import arm_to_dict
+from ..solvers.equilibrium import Equilibrium
+from ..core.errors import InputError
+from ..core.model import Arm
+
+
+def check_output_path(path: str | Path, overwrite: bool) -> Path:
+    """Refuse to clobber an existing file unless asked; the folder must exist."""
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise InputError(f"{path} exists; pass --overwrite to replace it")
+    if not path.parent.exists():
+        raise InputError(f"{path.parent}: no such directory for the output file")
+    return path
+
+
+@contextlib.contextmanager
+def atomic_h5(path: str | Path, overwrite: bool = False):
+    """An h5py.File open for writing at a temporary name, renamed to ``path`` on
+    success and removed on failure."""
+    import h5py
+
+    path = check_output_path(path, overwrite)
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        with h5py.File(tmp, "w") as fh:
+            yield fh
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def provenance(arm: Arm, kind: str) -> dict:
+    """Root attributes: what, from which config, by which software, how, when."""
+    from petsc4py import PETSc
+
+    info = {
+        "kind": kind,
+        "config_json": json.dumps(arm_to_dict(arm)),
+        "elastica_petsc_version": __version__,
+        "petsc_version": "%d.%d.%d" % PETSc.Sys.getVersion(),
+        "python_version": platform.python_version(),
+        "command_line": " ".join(sys.argv),
+        "created_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "length_unit": "mm",
+        "tension_unit": "P l^2/B (non-dimensional); *_N datasets in newtons",
+        "force_scale_N": arm.force_scale_N,
+        "energy_scale_J": arm.energy_scale_J,
+    }
+    try:
+        from slepc4py import SLEPc
+        info["slepc_version"] = "%d.%d.%d" % SLEPc.Sys.getVersion()
+    except ImportError:
+        pass
+    return info
+
+
+def write_attrs(obj, attrs: dict) -> None:
+    for key, value in attrs.items():
+        obj.attrs[key] = value
+
+
+def put(group, name: str, data, units: str, description: str):
+    """A dataset with its units and description."""
+    dset = group.create_dataset(name, data=np.asarray(data))
+    dset.attrs["units"] = units
+    dset.attrs["description"] = description
+    return dset
+
+
+def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
+    """One solved state under ``group`` (layout in the module docstring)."""
+    l_mm = arm.length_mm
+    mesh = group.create_group("mesh")
+    put(mesh, "s", np.linspace(0.0, l_mm, eq.disc.n_elements + 1), "mm", "arc length of nodes")
+    state = group.create_group("state")
+    put(state, "theta", eq.theta, "rad", "tangent angle at the nodes (P1)")
+    put(state, "x", eq.x * l_mm, "mm", "centreline position at the nodes (Eq. (2))")
+    put(state, "curvature", eq.curvature, "1", "l * dtheta/ds per element")
+    put(state, "tip", eq.tip * l_mm, "mm", "tip position x(l)")
+    put(state, "strain_energy", eq.strain_energy, "B/(2l)", "strain energy (Eq. (21)) / SE_0")
+    put(state, "strain_energy_J", eq.strain_energy * arm.energy_scale_J, "J", "strain energy")
+    put(state, "kappa_max", eq.kappa_max, "1", "max over s of l*|theta'| (Fig. 5a)")
+    tendons = group.create_group("tendons")
+    put(tendons, "attach_s", [t.attach_mm for t in arm.tendons], "mm", "attachment arc length s_i")
+    put(tendons, "routes", arm.routes() * l_mm, "mm", "routing points r_i")
+    put(tendons, "attachments", eq.attachments * l_mm, "mm", "attachment points x_i")
+    put(tendons, "directions", eq.directions, "1", "unit cable directions d_i (Eq. (3))")
+    put(tendons, "cable_lengths", eq.cable_lengths * l_mm, "mm", "cable lengths |r_i - x_i|")
+    put(tendons, "tensions", eq.p, "P l^2/B", "non-dimensional tensions p_i")
+    put(tendons, "tensions_N", arm.tensions_to_N(eq.p), "N", "tensions P_i")
+    solver = group.create_group("solver")
+    write_attrs(solver, {"converged": bool(eq.converged), "reason": eq.reason,
+                         "message": eq.message, "iterations": int(eq.iterations),
+                         "load_steps": int(eq.load_steps), "stable": bool(eq.stable),
+                         "unstable_modes": int(eq.unstable_modes)})
+
+
+def write_control(group, arm: Arm, result) -> None:
+    """A tip-control solve (Eqs. (10)-(12)): final state plus the iteration history."""
+    l_mm = arm.length_mm
+    write_equilibrium(group, arm, result.equilibrium)
+    ctl = group.create_group("control")
+    put(ctl, "target", result.target * l_mm, "mm", "desired tip position x_d")
+    put(ctl, "tip_error", result.tip_error * l_mm, "mm", "|x_t - x_d|")
+    put(ctl, "tip_sensitivity", result.sensitivity.tip * l_mm, "mm per (P l^2/B)",
+        "d x_t / d p_i (Eq. (13)), one row per tendon")
+    put(ctl, "history_tensions", result.history_p, "P l^2/B", "tensions at iterations 0..k")
+    put(ctl, "history_tip", result.history_tip * l_mm, "mm", "tip at iterations 0..k")
+    put(ctl, "history_E", result.history_E * l_mm ** 2, "mm^2",
+        "objective E = |x_d - x_t|^2 / 2 at iterations 0..k (Eq. (10))")
+    write_attrs(ctl, {"converged": bool(result.converged),
+                      "reachable": str(result.reachable), "reason": result.reason,
+                      "tao_reason": result.tao_reason, "method": result.method,
+                      "iterations": int(result.iterations),
+                      "evaluations": int(result.evaluations), "message": result.message})
+
+
+def write_trace(group, arm: Arm, trace, schedule) -> None:
+    """A traced path (Sec. 4.2): per point k targets, tips, tensions, cable
+    lengths, shapes, sensitivities, and the motor schedule.
+
+    Layout (K points, n tendons, N elements): path/target (K,2) mm, path/tip
+    (K,2) mm, path/tensions (K,n) P l^2/B, path/tensions_N (K,n) N,
+    path/cable_lengths (K,n) mm, path/theta (K,N+1) rad, path/curvature (K,N),
+    path/tip_sensitivity (K,n,2) mm per unit p, path/iterations (K,),
+    path/converged (K,), path/tip_error (K,) mm; schedule/revolutions,
+    schedule/steps, schedule/rounding_error (K,n).
+    """
+    l_mm = arm.length_mm
+    results = trace.results
+    path = group.create_group("path")
+    put(path, "target", trace.targets_mm, "mm", "target tip positions, in tracing order")
+    put(path, "tip", trace.tips_mm, "mm", "tip positions reached")
+    put(path, "tip_error", trace.tip_errors_mm, "mm", "|tip - target|")
+    put(path, "tensions", trace.p, "P l^2/B", "non-dimensional tensions")
+    put(path, "tensions_N", trace.tensions_N, "N", "tensions")
+    put(path, "cable_lengths", trace.cable_lengths_mm, "mm", "cable lengths |r_i - x_i|")
+    put(path, "theta", np.array([r.equilibrium.theta for r in results]), "rad",
+        "nodal tangent angles of each equilibrium")
+    put(path, "curvature", np.array([r.equilibrium.curvature for r in results]), "1",
+        "l * theta' per element, each point")
+    put(path, "tip_sensitivity", np.array([r.sensitivity.tip for r in results]) * l_mm,
+        "mm per (P l^2/B)", "d x_t / d p_i (Eq. (13)): [point, tendon, component]")
+    put(path, "iterations", trace.iterations, "1", "optimiser iterations per point")
+    put(path, "converged", trace.converged, "1", "tip within tolerance of the target")
+    sched = group.create_group("schedule")
+    put(sched, "revolutions", schedule.revolutions, "rev", "spool revolutions from the first point")
+    put(sched, "steps", schedule.steps, "microsteps", "motor microsteps from the first point")
+    put(sched, "rounding_error", schedule.rounding_error_mm, "mm",
+        "imposed minus requested cable length change (integer steps)")
+    write_attrs(sched, {"spool_radius_mm": schedule.spool_radius_mm,
+                        "steps_per_revolution": schedule.steps_per_revolution})

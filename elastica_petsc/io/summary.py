@@ -1,0 +1,71 @@
+"""Solved states as plain data with units: the JSON of the command line and
+the text summaries.  Internally everything is non-dimensional (docs/model.md §3);
+here lengths become mm, tensions both p = P l^2/B and newtons, energies
+SE_0 = B/(2l) and joules.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..solvers.equilibrium import Equilibrium
+from ..core.model import Arm
+
+
+def rounded(values, digits: int = 6) -> list:
+    """A JSON-friendly list of floats."""
+    return np.round(np.asarray(values, dtype=float), digits).tolist()
+
+
+def equilibrium_summary(arm: Arm, eq: Equilibrium) -> dict:
+    """The state of :class:`Equilibrium` in the user's units."""
+    l_mm = arm.length_mm
+    return {
+        "converged": bool(eq.converged),
+        "reason": eq.reason,
+        "message": eq.message,
+        "iterations": int(eq.iterations),
+        "load_steps": int(eq.load_steps),
+        "stable": bool(eq.stable),
+        "unstable_modes": int(eq.unstable_modes),
+        "snaps_at_tensions": [rounded(p) for p in eq.snaps],
+        "elements": int(eq.disc.n_elements),
+        "tensions": rounded(eq.p),
+        "tensions_N": rounded(arm.tensions_to_N(eq.p)),
+        "tip_mm": rounded(eq.tip * l_mm),
+        "attachments_mm": [rounded(x * l_mm) for x in eq.attachments],
+        "cable_lengths_mm": rounded(eq.cable_lengths * l_mm),
+        "cable_directions": [rounded(d) for d in eq.directions],
+        "strain_energy": round(eq.strain_energy, 6),
+        "strain_energy_J": round(eq.strain_energy * arm.energy_scale_J, 6),
+        "kappa_max": round(eq.kappa_max, 6),
+        "kappa_limit": round(arm.kappa_limit, 6),
+        "units": {"tensions": "P l^2/B", "tensions_N": "N", "tip_mm": "mm",
+                  "strain_energy": "B/(2l)", "kappa_max": "l*kappa"},
+    }
+
+
+def format_equilibrium(arm: Arm, summary: dict) -> str:
+    """A readable multi-line report of :func:`equilibrium_summary`."""
+    s = summary
+    lines = []
+    if s["converged"]:
+        lines.append(f"converged: yes ({s['reason']}, {s['iterations']} Newton iterations, "
+                     f"{s['load_steps']} load steps, {s['elements']} elements)")
+    else:
+        lines.append(f"converged: NO ({s['reason']}): {s['message']}")
+    lines.append("stable under load control: " + (
+        "yes" if s["stable"] else f"NO ({s['unstable_modes']} negative stiffness eigenvalue(s))"))
+    for p in s["snaps_at_tensions"]:
+        lines.append(f"note: the loading path snapped (limit point) at p = {p}")
+    lines.append(f"tip: ({s['tip_mm'][0]:.3f}, {s['tip_mm'][1]:.3f}) mm")
+    lines.append(f"{'tendon':>6} {'s [mm]':>8} {'p=Pl^2/B':>10} {'P [N]':>9} "
+                 f"{'attachment [mm]':>22} {'cable [mm]':>11}")
+    for i, tendon in enumerate(arm.tendons):
+        x = s["attachments_mm"][i]
+        lines.append(f"{i + 1:>6} {tendon.attach_mm:>8.1f} {s['tensions'][i]:>10.4f} "
+                     f"{s['tensions_N'][i]:>9.4f} {f'({x[0]:.3f}, {x[1]:.3f})':>22} "
+                     f"{s['cable_lengths_mm'][i]:>11.3f}")
+    lines.append(f"strain energy: {s['strain_energy']:.4f} SE0 = {s['strain_energy_J']:.4f} J")
+    lines.append(f"max curvature: l*kappa = {s['kappa_max']:.4f} "
+                 f"(strain limit {s['kappa_limit']:.4g}, Eq. (19))")
+    return "\n".join(lines)

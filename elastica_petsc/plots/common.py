@@ -1,0 +1,75 @@
+"""Figures (matplotlib, Agg backend): geometry in mm with equal aspect."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..solvers.equilibrium import Equilibrium
+from ..core.model import Arm
+
+TENDON_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown")
+
+
+def figure(**kwargs):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt.subplots(**kwargs)
+
+
+def save(fig, path: str | Path) -> None:
+    import matplotlib.pyplot as plt
+    fig.savefig(path, dpi=150, bbox_inches="tight")
+    plt.close(fig)
+
+
+def draw_arm(ax, arm: Arm, eq: Equilibrium, label: str | None = None, colour: str = "k",
+             tendons: bool = True) -> None:
+    """The deformed centreline, its tendons as straight segments to their routing points."""
+    l_mm = arm.length_mm
+    x = eq.x * l_mm
+    ax.plot(x[:, 0], x[:, 1], "-", color=colour, lw=2.2, label=label, zorder=3)
+    ax.plot(*x[-1], "o", color=colour, ms=5, zorder=4)
+    if tendons:
+        routes = arm.routes() * l_mm
+        for i, (a, r) in enumerate(zip(eq.attachments * l_mm, routes)):
+            ax.plot([a[0], r[0]], [a[1], r[1]], "-", lw=1.0,
+                    color=TENDON_COLOURS[i % len(TENDON_COLOURS)], zorder=2)
+
+
+def draw_setting(ax, arm: Arm) -> None:
+    """Undeformed arm (dashed), clamp and routing points."""
+    l_mm = arm.length_mm
+    ax.plot([0, l_mm], [0, 0], "--", color="0.6", lw=1.0, label="undeformed", zorder=1)
+    ax.plot(0, 0, "ks", ms=7, zorder=5)
+    for i, r in enumerate(arm.routes() * l_mm):
+        ax.plot(*r, "^", color=TENDON_COLOURS[i % len(TENDON_COLOURS)], ms=8, zorder=5,
+                label=f"routing point r{i + 1}")
+
+
+def finish_geometry(ax, title: str) -> None:
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.grid(True, lw=0.3, alpha=0.6)
+    ax.set_title(title)
+    ax.legend(loc="best", fontsize=8)
+
+
+def plot_equilibria(arm: Arm, states: list[tuple[Equilibrium, str]], path: str | Path,
+                    title: str = "Equilibrium of the tendon-actuated arm") -> None:
+    """Deformed arm(s) with tendons; undeformed arm dashed; axes in mm."""
+    fig, ax = figure(figsize=(7, 6))
+    draw_setting(ax, arm)
+    colours = ("k", "tab:red", "tab:cyan", "tab:olive", "tab:pink")
+    for j, (eq, label) in enumerate(states):
+        draw_arm(ax, arm, eq, label=label, colour=colours[j % len(colours)])
+    finish_geometry(ax, title)
+    save(fig, path)
+
+
+def tension_label(arm: Arm, p) -> str:
+    P = arm.tensions_to_N(p)
+    return "p = (" + ", ".join(f"{v:.1f}" for v in np.asarray(p)) + ") = (" + \
+        ", ".join(f"{v:.2f}" for v in P) + ") N"

@@ -1,0 +1,160 @@
+"""Figures of tip control and path tracing: Fig. 2 (descent), Fig. 3 (traced
+path with arm snapshots) and Fig. 6a-c (tensions and cable lengths along the
+path, tip sensitivities, curvature along the arm)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..core.model import Arm
+from .common import TENDON_COLOURS, draw_arm, draw_setting, figure, finish_geometry, save
+
+
+def plot_descent(arm: Arm, result, path) -> None:
+    """Fig. 2: (a) tip iterates approaching x_d, (b) load iterates in the
+    tension plane, (c) E against iteration (log scale)."""
+    l_mm = arm.length_mm
+    fig, (ax1, ax2, ax3) = figure(ncols=3, figsize=(16, 5))
+    draw_setting(ax1, arm)
+    draw_arm(ax1, arm, result.equilibrium, label="final state")
+    tips = result.history_tip * l_mm
+    ax1.plot(tips[:, 0], tips[:, 1], "o-", color="tab:purple", ms=4, lw=1, label="tip iterates")
+    ax1.plot(*(result.target * l_mm), "r*", ms=14, label="target x_d")
+    finish_geometry(ax1, f"(a) tip iterates ({result.method})")
+    P = arm.tensions_to_N(result.history_p)
+    if P.shape[1] >= 2:
+        ax2.plot(P[:, 0], P[:, 1], "o-", color="tab:purple", ms=4)
+        ax2.plot(P[0, 0], P[0, 1], "ks", label="initial guess")
+        ax2.plot(P[-1, 0], P[-1, 1], "r*", ms=12, label="final tensions")
+        ax2.set_xlabel("P1 [N]")
+        ax2.set_ylabel("P2 [N]")
+        ax2.axvline(0, color="0.6", lw=0.8)
+        ax2.axhline(0, color="0.6", lw=0.8)
+        ax2.legend(fontsize=8)
+    else:
+        ax2.plot(P[:, 0], "o-")
+        ax2.set_xlabel("iteration")
+        ax2.set_ylabel("P1 [N]")
+    ax2.set_title("(b) load iterates")
+    ax2.grid(True, lw=0.3)
+    E_mm2 = np.maximum(result.history_E * l_mm ** 2, 1e-300)
+    ax3.semilogy(np.arange(len(E_mm2)), E_mm2, "o-", color="tab:purple")
+    ax3.axhline(result.eps * l_mm ** 2, color="r", ls="--", label="tolerance eps")
+    ax3.set_xlabel("iteration")
+    ax3.set_ylabel("E = |x_d - x_t|^2 / 2 [mm^2]")
+    ax3.set_title("(c) cost function")
+    ax3.grid(True, which="both", lw=0.3)
+    ax3.legend(fontsize=8)
+    save(fig, path)
+
+
+def _snapshots(count: int, wanted: int = 8) -> np.ndarray:
+    return np.unique(np.linspace(0, count - 1, min(wanted, count)).round().astype(int))
+
+
+def plot_trace(arm: Arm, trace, path) -> None:
+    """Fig. 3: targets, tips reached and snapshots of the arm along the path."""
+    fig, ax = figure(figsize=(8, 6))
+    draw_setting(ax, arm)
+    for k in _snapshots(trace.n_points, 6):
+        draw_arm(ax, arm, trace.results[k].equilibrium, colour="0.55")
+    ax.plot(*trace.targets_mm.T, "-", color="tab:green", lw=3, alpha=0.5, label="targets")
+    ax.plot(*trace.tips_mm.T, "-", color="tab:red", lw=1, label="tip reached")
+    ax.plot(*trace.targets_mm[0], "go", label="start")
+    finish_geometry(ax, f"Traced path: {trace.n_points} points, max tip error "
+                        f"{np.max(trace.tip_errors_mm):.1e} mm")
+    save(fig, path)
+
+
+def plot_tensions_lengths(arm: Arm, trace, path) -> None:
+    """Fig. 6a: tensions and cable lengths along the path."""
+    fig, (ax1, ax2) = figure(nrows=2, figsize=(9, 6), sharex=True)
+    k = np.arange(trace.n_points)
+    for i in range(trace.p.shape[1]):
+        colour = TENDON_COLOURS[i % len(TENDON_COLOURS)]
+        ax1.plot(k, trace.tensions_N[:, i], color=colour, label=f"P{i + 1}")
+        ax2.plot(k, trace.cable_lengths_mm[:, i] - trace.cable_lengths_mm[0, i], color=colour,
+                 label=f"L{i + 1} - L{i + 1}(start), L{i + 1}(start) = "
+                       f"{trace.cable_lengths_mm[0, i]:.1f} mm")
+    ax1.set_ylabel("tension [N]")
+    ax1.set_title("(Fig. 6a) tensions and cable lengths along the path")
+    ax2.set_ylabel("cable length change [mm]")
+    ax2.set_xlabel("path point")
+    for ax in (ax1, ax2):
+        ax.grid(True, lw=0.3)
+        ax.legend(fontsize=8)
+    save(fig, path)
+
+
+def plot_sensitivities(arm: Arm, trace, path) -> None:
+    """Fig. 6b: tip sensitivity vectors d x_t / d P_i along the path (scaled)
+    and a polar plot of their magnitudes and directions."""
+    import matplotlib.pyplot as plt
+
+    sens = np.array([r.sensitivity.tip for r in trace.results]) * arm.length_mm  # mm per p
+    sens_N = sens / arm.force_scale_N                                               # mm per N
+    fig = plt.figure(figsize=(13, 5.5))
+    ax = fig.add_subplot(1, 2, 1)
+    every = max(1, trace.n_points // 40)
+    ax.plot(*trace.targets_mm.T, "-", color="0.6", lw=1)
+    scale = 20.0 / np.max(np.linalg.norm(sens_N, axis=2))
+    for i in range(sens.shape[1]):
+        v = sens_N[::every, i] * scale
+        xy = trace.tips_mm[::every]
+        ax.quiver(xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], angles="xy", scale_units="xy", scale=1,
+                  color=TENDON_COLOURS[i % len(TENDON_COLOURS)], width=0.004,
+                  label=f"d x_t / d P{i + 1} (scaled)")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_title("(Fig. 6b) tip sensitivities along the path")
+    ax.legend(fontsize=8)
+    polar = fig.add_subplot(1, 2, 2, projection="polar")
+    for i in range(sens.shape[1]):
+        angle = np.arctan2(sens_N[:, i, 1], sens_N[:, i, 0])
+        polar.plot(angle, np.linalg.norm(sens_N[:, i], axis=1), ".",
+                   color=TENDON_COLOURS[i % len(TENDON_COLOURS)], label=f"|d x_t / d P{i + 1}|")
+    polar.set_title("magnitude [mm/N] and direction", fontsize=10)
+    polar.legend(fontsize=8, loc="lower right")
+    save(fig, path)
+
+
+def plot_curvature(arm: Arm, trace, path) -> None:
+    """Fig. 6c: curvature along the arm at several path points against the
+    constant-curvature assumption (a circular arc between attachment points
+    with the same end angles)."""
+    fig, ax = figure(figsize=(9, 5))
+    disc = trace.results[0].equilibrium.disc
+    s_mid = (np.arange(disc.n_elements) + 0.5) / disc.n_elements * arm.length_mm
+    nodes = [0] + sorted(set(disc.attach_nodes))
+    for j, k in enumerate(_snapshots(trace.n_points, 5)):
+        eq = trace.results[k].equilibrium
+        line, = ax.plot(s_mid, eq.curvature, lw=1.6, label=f"point {k}")
+        piecewise = np.empty(disc.n_elements)
+        for a, b in zip(nodes[:-1], nodes[1:]):
+            piecewise[a:b] = (eq.theta[b] - eq.theta[a]) / ((b - a) / disc.n_elements)
+        piecewise[nodes[-1]:] = 0.0
+        ax.plot(s_mid, piecewise, "--", color=line.get_color(), lw=1)
+    for k in disc.attach_nodes:
+        ax.axvline(k / disc.n_elements * arm.length_mm, color="0.6", lw=0.8, ls=":")
+    ax.set_xlabel("arc length s [mm]")
+    ax.set_ylabel("curvature l * kappa")
+    ax.set_title("(Fig. 6c) curvature along the arm (solid) vs constant-curvature "
+                 "segments (dashed)")
+    ax.grid(True, lw=0.3)
+    ax.legend(fontsize=8)
+    save(fig, path)
+
+
+def plot_trace_figures(arm: Arm, trace, png) -> list[Path]:
+    """All tracing figures: ``png`` and ``<stem>_tensions``, ``_sensitivity``,
+    ``_curvature`` beside it."""
+    png = Path(png)
+    names = [png] + [png.with_name(f"{png.stem}_{tag}.png")
+                     for tag in ("tensions", "sensitivity", "curvature")]
+    plot_trace(arm, trace, names[0])
+    plot_tensions_lengths(arm, trace, names[1])
+    plot_sensitivities(arm, trace, names[2])
+    plot_curvature(arm, trace, names[3])
+    return names

@@ -1,0 +1,326 @@
+"""Load-controlled equilibrium (Eq. (9)) with PETSc SNES and load stepping.
+
+:class:`EquilibriumSolver` owns one SNES (Newton with line search, options
+prefix ``eq_``) on the bordered system of :mod:`elastica_petsc.core.fem`, its
+Jacobian matrix and work vectors.  :meth:`EquilibriumSolver.solve` follows a
+loading path in tension space (continuation with a secant predictor and
+adaptive step) so that the equilibrium reached is the one the loading
+history selects (Fig. 8).  Each arm is a small problem: it lives on
+``PETSc.COMM_SELF``; parallelism is across arms (see ``workspace``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from petsc4py import PETSc
+
+from ..core.errors import InputError
+from ..core.fem import Discretisation
+from .inertia import InertiaCounter
+from .linalg import use_bordered_lu
+
+SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
+
+# A cable shorter than this (in units of l) has collapsed onto its routing point.
+COLLAPSE_LENGTH = 2e-3
+
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """A solved state of the arm, non-dimensional (lengths / l, p = P l^2 / B)."""
+
+    disc: Discretisation
+    p: np.ndarray                 # tensions reached
+    u: np.ndarray                 # bordered state (theta_1..N, y_1..n)
+    converged: bool
+    reason: str                   # PETSc's SNES reason of the last solve
+    iterations: int               # Newton iterations, all load steps
+    load_steps: int
+    message: str = ""
+    unstable_modes: int = 0       # negative eigenvalues of K (0: stable under load control)
+    snaps: tuple = ()             # tensions at which the loading path snapped (limit points)
+    p_requested: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def stable(self) -> bool:
+        """Stable under load control: K positive definite (docs/model.md §2)."""
+        return self.unstable_modes == 0
+
+    @cached_property
+    def theta(self) -> np.ndarray:
+        """Nodal angles theta_0..theta_N [rad]."""
+        return self.disc.split(self.u)[0]
+
+    @cached_property
+    def x(self) -> np.ndarray:
+        """Centreline at the nodes, (N+1, 2), units of l (Eq. (2))."""
+        return self.disc.node_positions(self.theta)
+
+    @property
+    def tip(self) -> np.ndarray:
+        return self.x[-1]
+
+    @property
+    def attachments(self) -> np.ndarray:
+        return self.x[list(self.disc.attach_nodes)]
+
+    @cached_property
+    def cable_lengths(self) -> np.ndarray:
+        """L_i = |r_i - x_i| in units of l."""
+        return np.linalg.norm(self.disc.routes - self.attachments, axis=1)
+
+    @property
+    def directions(self) -> np.ndarray:
+        """Unit cable directions d_i (Eq. (3))."""
+        return (self.disc.routes - self.attachments) / self.cable_lengths[:, None]
+
+    @property
+    def strain_energy(self) -> float:
+        """Strain energy in units of SE_0 = B/(2l) (Eq. (21))."""
+        return 2.0 * self.disc.strain_energy(self.theta)
+
+    @property
+    def curvature(self) -> np.ndarray:
+        """l * theta' per element."""
+        return self.disc.curvature(self.theta)
+
+    @property
+    def kappa_max(self) -> float:
+        """max_s l |theta'| (Fig. 5a)."""
+        return float(np.max(np.abs(self.curvature)))
+
+
+def loading_path(p_start, p_end, order=None) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Segments of a piecewise-linear loading path in tension space.
+
+    ``order=None`` changes all tensions proportionally; ``order=(2, 1)`` (1-based
+    tendon numbers, a permutation) brings tendon 2 to its final tension first,
+    then tendon 1 (Fig. 8: the order selects the equilibrium).
+    """
+    p_start = np.asarray(p_start, float)
+    p_end = np.asarray(p_end, float)
+    if order is None:
+        return [(p_start, p_end)]
+    segments, current = [], p_start.copy()
+    for number in order:
+        nxt = current.copy()
+        nxt[number - 1] = p_end[number - 1]
+        segments.append((current, nxt))
+        current = nxt
+    return segments
+
+
+def check_order(order, n_tendons: int) -> tuple[int, ...] | None:
+    """Validate a loading order: a permutation of 1..n, or None."""
+    if order is None:
+        return None
+    order = tuple(int(k) for k in order)
+    if sorted(order) != list(range(1, n_tendons + 1)):
+        raise InputError(
+            f"loading order {','.join(map(str, order))} is not a permutation of the tendon "
+            f"numbers 1..{n_tendons}")
+    return order
+
+
+def check_tensions(p, n_tendons: int) -> np.ndarray:
+    """Non-negative, finite, one per tendon (a cable cannot push)."""
+    p = np.asarray(p, dtype=float).ravel()
+    if p.size != n_tendons:
+        raise InputError(f"expected {n_tendons} tensions (one per tendon), got {p.size}")
+    if not np.all(np.isfinite(p)):
+        raise InputError("tensions must be finite numbers")
+    if np.any(p < 0):
+        i = int(np.argmax(p < 0)) + 1
+        raise InputError(f"tension of tendon {i} is negative ({p[i - 1]:g}): a cable cannot push")
+    return p
+
+
+class EquilibriumSolver:
+    """SNES on the bordered system of one arm, reused across solves.
+
+    Parameters
+    ----------
+    disc : the discretised arm.
+    max_step : largest change of any tension (non-dimensional) per load step.
+    jump_tol : largest change of any nodal angle [rad] between the predictor
+        and the converged state of one load step; a larger change means Newton
+        jumped to another branch, and the step is halved.  Load steps that land
+        on an unstable state are refused likewise when the path started stable.
+        When the step cannot shrink further (a limit point), the arm snaps: a
+        distant state is accepted only if it is stable, and the snap recorded.
+    tip_moment : applied end moment M l / B (closed-form checks only).
+    prefix : PETSc options prefix; e.g. ``-eq_snes_monitor``.
+    """
+
+    def __init__(self, disc: Discretisation, *, max_step: float = 2.0, jump_tol: float = 0.5,
+                 tip_moment: float = 0.0, prefix: str = "eq_"):
+        self.disc = disc
+        self.max_step = max_step
+        self.jump_tol = jump_tol
+        self.tip_moment = tip_moment
+        self._p = np.zeros(disc.n_tendons)
+        indptr, indices, _ = disc.pattern
+        self._csr = (indptr, indices)
+        u0 = disc.straight()
+        self.J = PETSc.Mat().createAIJ(
+            size=(disc.size, disc.size), csr=(indptr, indices, disc.jacobian_values(u0, self._p)),
+            comm=PETSc.COMM_SELF)
+        self.x = PETSc.Vec().createSeq(disc.size)
+        self.f = self.x.duplicate()
+        snes = PETSc.SNES().create(PETSc.COMM_SELF)
+        snes.setOptionsPrefix(prefix)
+        snes.setType(PETSc.SNES.Type.NEWTONLS)
+        snes.setFunction(self._form_function, self.f)
+        snes.setJacobian(self._form_jacobian, self.J, self.J)
+        # Round-off in the residual grows like N^(3/2) (entries ~ eps/h, N of them):
+        # an absolute tolerance below that floor would only make Newton stall.
+        atol = max(1e-10, 1e-14 * disc.n_elements ** 1.5)
+        snes.setTolerances(rtol=1e-10, atol=atol, stol=1e-14, max_it=40)
+        # at least one Newton step: a warm start whose residual is already below
+        # atol (tension change < ~1e-8) must still respond to the change, or the
+        # tip would be piecewise constant in p at the optimiser's last steps
+        snes.setForceIteration(True)
+        use_bordered_lu(snes.getKSP())
+        snes.setFromOptions()
+        self.snes = snes
+        self.inertia = InertiaCounter(disc)
+
+    # --- PETSc callbacks ------------------------------------------------------
+    def _form_function(self, snes, X, F) -> None:
+        F.setArray(self.disc.residual(X.getArray(readonly=True), self._p, self.tip_moment))
+
+    def _form_jacobian(self, snes, X, J, P) -> None:
+        P.setValuesCSR(*self._csr, self.disc.jacobian_values(X.getArray(readonly=True), self._p))
+        P.assemble()
+
+    # --- one Newton solve -----------------------------------------------------
+    def newton(self, u0: np.ndarray, p) -> tuple[np.ndarray, int, str]:
+        """One SNES solve at fixed tensions from ``u0``: (u, iterations, reason)."""
+        self._p = np.asarray(p, dtype=float)
+        self.x.setArray(u0)
+        self.snes.solve(None, self.x)
+        reason = self.snes.getConvergedReason()
+        # a forced step from a state already at round-off cannot decrease the
+        # residual, and the line search then reports failure: still converged
+        self._converged = reason > 0 or self.snes.getFunctionNorm() <= self.snes.getTolerances()[1]
+        name = SNES_REASONS[reason] if reason > 0 or not self._converged else "CONVERGED_FNORM_ABS"
+        return self.x.getArray().copy(), self.snes.getIterationNumber(), name
+
+    def converged(self) -> bool:
+        """Whether the last :meth:`newton` converged."""
+        return self._converged
+
+    # --- load stepping ----------------------------------------------------------
+    def solve(self, p, order=None, start: Equilibrium | None = None,
+              tangent: np.ndarray | None = None) -> Equilibrium:
+        """Equilibrium at tensions ``p`` reached along a loading path.
+
+        From ``start`` (a previous equilibrium; default the straight, unloaded
+        arm), tensions follow :func:`loading_path`.  Never returns a silently
+        wrong state: if the path cannot be followed, ``converged`` is False and
+        ``message`` says why, at which tensions, and PETSc's reason.
+        ``tangent``: du/dp at ``start``, shape (n, size) (Eq. (14),
+        :meth:`Sensitivity.state_derivative`), for a first-order (Euler)
+        predictor of the first load step instead of ``start`` itself.
+        """
+        disc = self.disc
+        p = check_tensions(p, disc.n_tendons)
+        order = check_order(order, disc.n_tendons)
+        u = disc.straight() if start is None else start.u.copy()
+        p_now = np.zeros(disc.n_tendons) if start is None else np.asarray(start.p, float)
+        self._modes = (start.unstable_modes if start is not None
+                       else self.inertia.negative_eigenvalues(u, p_now))
+        keep_stable = self._modes == 0
+        self._snaps = []
+        iterations = steps = 0
+        reason = "CONVERGED_FNORM_ABS"
+        ok = True
+        for pa, pb in loading_path(p_now, p, order):
+            u, p_now, its, nsteps, reason, ok = self._follow(u, pa, pb, keep_stable, tangent)
+            tangent = None                               # valid at the start only
+            iterations += its
+            steps += nsteps
+            if not ok:
+                break
+        result = dict(converged=ok, reason=reason, iterations=iterations, load_steps=steps,
+                      unstable_modes=self._modes,
+                      snaps=tuple(self._snaps), p_requested=p)
+        if not ok:
+            result["message"] = self._failure_message(u, p_now, p, reason)
+        return Equilibrium(disc, p_now, u, **result)
+
+    def _follow(self, u, pa, pb, keep_stable: bool, tangent=None, min_fraction: float = 1e-5):
+        """Continuation from the equilibrium ``u`` at ``pa`` to tensions ``pb``
+        (``tangent``: du/dp at ``pa`` for the first predictor, else a secant)."""
+        span = float(np.max(np.abs(pb - pa))) if len(pa) else 0.0
+        full = 1.0 if span <= self.max_step else self.max_step / span
+        dlam, lam, iterations, steps = full, 0.0, 0, 0
+        u_prev, dlam_prev = None, None
+        reason = "CONVERGED_ITERATING"
+        n_angles = self.disc.n_elements
+        while lam < 1.0:
+            step = min(dlam, 1.0 - lam)
+            if u_prev is not None:
+                predictor = u + (u - u_prev) * (step / dlam_prev)
+            elif tangent is not None and lam == 0.0:
+                predictor = u + (step * (pb - pa)) @ tangent
+            else:
+                predictor = u
+            target = pa + (lam + step) * (pb - pa)
+            u_new, its, reason = self.newton(predictor, target)
+            iterations += its
+            limit_point = step <= min_fraction
+            if self.converged():
+                # a branch jump only makes sense along a path: with fixed tensions
+                # (span 0) this is a plain Newton solve
+                jumped = span > 0 and \
+                    np.max(np.abs(u_new[:n_angles] - predictor[:n_angles])) > self.jump_tol
+                modes = self.inertia.negative_eigenvalues(u_new, target)
+                if keep_stable and modes > 0:
+                    reason = "UNSTABLE_STATE"
+                elif jumped and not limit_point:
+                    reason = "BRANCH_JUMP"
+                else:
+                    if jumped:
+                        self._snaps.append(target)
+                        u_prev = None          # no secant across a snap
+                    else:
+                        u_prev, dlam_prev = u, step
+                    u, lam, steps, self._modes = u_new, lam + step, steps + 1, modes
+                    if np.min(self.disc.cables(self.disc.split(u)[1])[0]) < COLLAPSE_LENGTH:
+                        # a cable collapsed onto its routing point: no load beyond
+                        return u, pa + lam * (pb - pa), iterations, steps, "CABLE_COLLAPSED", False
+                    if its <= 4:
+                        dlam = min(2.0 * dlam, full)
+                    continue
+            if limit_point:
+                return u, pa + lam * (pb - pa), iterations, steps, reason, False
+            dlam = 0.5 * step
+        return u, pb, iterations, steps, reason, True
+
+    def _failure_message(self, u, p_reached, p_target, reason: str) -> str:
+        lengths = np.linalg.norm(self.disc.routes - self.disc.split(u)[1], axis=1)
+        shortest = int(np.argmin(lengths))
+        where = "tensions p = (" + ", ".join(f"{v:.4g}" for v in p_reached) + ")"
+        if lengths[shortest] < COLLAPSE_LENGTH:
+            return (f"tendon {shortest + 1} pulled its attachment point onto its routing point "
+                    f"(cable length {lengths[shortest]:.2e} l) at {where}: the cable direction "
+                    "is undefined beyond this load")
+        if reason in ("BRANCH_JUMP", "UNSTABLE_STATE"):
+            return (f"the stable equilibrium branch ends at {where} (limit point: the arm "
+                    "snaps) and no stable state to snap to was found")
+        return (f"no equilibrium reached beyond {where} on the way to ("
+                + ", ".join(f"{v:.4g}" for v in p_target) + f"); PETSc SNES reason {reason}")
+
+    def destroy(self) -> None:
+        self.inertia.destroy()
+        for obj in (self.snes, self.J, self.x, self.f):
+            obj.destroy()
+
+    def __enter__(self) -> "EquilibriumSolver":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.destroy()

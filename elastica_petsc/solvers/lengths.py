@@ -1,0 +1,1130 @@
+"""Length-controlled equilibria, their stability, and searching for several
+equilibria (Sec. 4.1, 4.6, Figs. 7-8; docs/model.md §4.7).
+
+Everything is non-dimensional (docs/model.md §3): lengths in units of l, tensions
+p = P l^2 / B; ``*_mm`` helpers convert with the arm length.
+
+Length control as a complementarity problem
+-------------------------------------------
+The experiments prescribe the cable lengths L_i, not the tensions.  The
+unknowns are z = (theta_1..theta_N, y_1..y_n, p_1..p_n): the bordered state
+of :mod:`elastica_petsc.core.fem` plus the tensions.  The equations are the
+bordered equilibrium residual F(u, p) = 0 (Eq. (9) and y_i = X_i(theta)) and,
+per tendon, the complementarity conditions of a cable that cannot push or
+stretch (Eq. (23)):
+
+    p_i >= 0,   g_i = L_i - |r_i - y_i| >= 0,   p_i g_i = 0.
+
+This is a mixed complementarity problem solved by PETSc's semismooth
+reduced-space Newton for variational inequalities (SNES ``vinewtonrsls``),
+options prefix ``len_``.  PETSc's convention: at a variable's lower bound
+its function must be >= 0, between the bounds it must vanish.  So the row of
+p_i is g_i = L_i - |r_i - y_i| (prescribed minus actual chord): a slack
+cable has p_i = 0 and g_i > 0; a taut one p_i >= 0 and g_i = 0.  Angles and
+attachment unknowns are unbounded.  The consistent Jacobian is the bordered
+Jacobian, the columns dF/dp_i (:meth:`Discretisation.load_derivative`), and
+the rows dg_i/dy_i = d_i^T; its CSR pattern extends ``disc.pattern`` once
+and is filled with ``setValuesCSR``.  Natural-order LU fills only the
+border: O(N) per Newton step.
+
+Deflation (several equilibria)
+------------------------------
+:mod:`elastica_petsc.core.deflation`: the equation rows are multiplied by
+M(z) = prod_k (1/||theta - theta_k||^2 + 1), with mu = M(z) carried as one
+extra unknown (so every system here has the unknowns (u, p, mu) and the
+extra row mu - M(z); without deflated roots M = 1 and mu stays 1).  M > 0,
+so the complementarity signs are unchanged.  Load control
+(:func:`equilibria`) uses the same system with the p rows p_i - p_i* = 0.
+Searches (:func:`length_equilibria`, :func:`equilibria`) start from a spread
+of load-controlled states (:func:`tension_starts`); deflated solves use their
+own SNES (prefixes ``len_defl_`` and ``defl_``) with the l2 line search,
+which leaves the start's basin far more often than backtracking.  A search
+reports what it found and from where, never that nothing else exists.
+
+Stability under length control (Sec. 4.6)
+-----------------------------------------
+With the cables rigid, the potential is the strain energy alone,
+constrained by L_i(theta) = L_i for the taut cables; the tensions are the
+Lagrange multipliers and the Hessian of the Lagrangian is the same tangent
+K as under load control (docs/model.md §2).  A taut state is stable iff K is
+positive definite on null(C^T), C = [grad_theta L_i] of the taut cables
+(N x m, full rank).  Counted with inertia, still O(N):
+
+    H_c = [[T, W, C], [W^T, -I_n, 0], [C^T, 0, 0]],
+    In(H_c) = (0, n, 0) + In([[K, C], [C^T, 0]])
+            = (0, n, 0) + (m, m, 0) + In(K restricted to null C^T)
+
+(Haynsworth on the -I block, then the saddle-point inertia theorem).  A
+slack cable gets a zero column and a corner entry +1 (one positive
+eigenvalue), so the matrix keeps its size.  A cable with p_i = 0 that is
+just taut (g_i = 0) counts as slack: with a zero multiplier the one-sided
+constraint |r_i - x_i| <= L_i leaves a half-space of admissible
+variations, on which the quadratic form v^T K v is positive iff it is
+positive on the whole space (it is even in v).  LDL^T in the natural order
+(zero block last; PETSc's own SBAIJ Cholesky accepts the negative pivots);
+if it meets a zero pivot the state is counted as marginal.
+
+Full rank of C fails where a cable's length is stationary, e.g. the
+straight arm with a cable along its axis (grad L = 0): the tension is then
+indeterminate under length control and the saddle matrix singular (zero
+pivot, reported as marginal); such states are limits of well-posed ones.
+
+Being stable under load control (K > 0) implies stability under length
+control (constraints only remove variations).  The two are tied by the
+folds of the load path (Maddocks 1987): along a load-controlled branch
+dL/dp = -C^T K^{-1} C (m x m), and the Schur complement of [[K, C],
+[C^T, 0]] gives neg_length = neg_load - pos(dL/dp) (tested): a state that
+is unstable under load control is stable under length control where the
+cable lengths grow with the tensions along the branch.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import itertools
+import math
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from petsc4py import PETSc
+
+from ..core.deflation import Deflation
+from .equilibrium import (SNES_REASONS, Equilibrium, EquilibriumSolver, check_order,
+                          check_tensions)
+from ..core.errors import InputError
+from ..core.fem import Discretisation
+from .inertia import InertiaCounter
+from .linalg import bordered_ldlt, use_bordered_lu
+
+# A tension below this (non-dimensional, p = P l^2/B) counts as zero: the
+# cable is slack or just taut and constrains nothing (module docstring).
+TAUT_TOL = 1e-8
+# Two states are the same equilibrium if no nodal angle differs by more (rad).
+SAME_SHAPE_TOL = 1e-4
+# PETSc options (under the solver's prefix) for deflated solves, unless the
+# user sets them: the secant ("l2") line search explores beyond the start's basin.
+DEFLATION_OPTIONS = {"snes_linesearch_type": "l2"}
+
+
+# --- results -----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class LengthEquilibrium(Equilibrium):
+    """An equilibrium found under length control (or a load-controlled one
+    re-examined under length control).
+
+    Inherited fields keep their meaning: ``p`` the tensions found,
+    ``unstable_modes`` the negative eigenvalues of K (stability under *load*
+    control, ``stable``).  Added:
+
+    lengths_requested : prescribed cable lengths L_i / l.
+    length_unstable_modes : negative eigenvalues of K on null(C^T) of the
+        taut cables (0: stable under length control); -1 if not computed.
+    length_mm : the arm length, for the ``*_mm`` properties (None: unknown).
+    jumps : cable lengths (units of l) at which a continuation path jumped
+        to a distant state (snap or buckling); empty for a smooth path.
+    instabilities : cable lengths at which the continued branch ended: it
+        lost stability under length control (bifurcation) or Newton could
+        not continue it at any step size (limit point).
+    label : where the state came from (start and method), for searches.
+    """
+
+    lengths_requested: np.ndarray | None = None
+    length_unstable_modes: int = -1
+    length_mm: float | None = None
+    jumps: tuple = ()
+    instabilities: tuple = ()
+    label: str = ""
+
+    @property
+    def slack(self) -> np.ndarray:
+        """L_i - |r_i - x_i| in units of l (>= 0; > 0 only for a slack cable)."""
+        return self.lengths_requested - self.cable_lengths
+
+    @property
+    def taut(self) -> np.ndarray:
+        """True for every cable that carries tension (p_i > TAUT_TOL)."""
+        return np.asarray(self.p) > TAUT_TOL
+
+    @property
+    def stable_under_length_control(self) -> bool:
+        return self.length_unstable_modes == 0
+
+    def _mm(self, values):
+        if self.length_mm is None:
+            raise ValueError("the arm length is unknown: build the solver with from_arm()")
+        return np.asarray(values) * self.length_mm
+
+    @property
+    def slack_mm(self) -> np.ndarray:
+        return self._mm(self.slack)
+
+    @property
+    def cable_lengths_mm(self) -> np.ndarray:
+        return self._mm(self.cable_lengths)
+
+    @property
+    def tip_mm(self) -> np.ndarray:
+        return self._mm(self.tip)
+
+
+@dataclass(frozen=True)
+class FoundState:
+    """One distinct equilibrium of a search and how it was found."""
+
+    state: Equilibrium            # LengthEquilibrium for length control
+    start: str                    # label of the first start that reached it
+    method: str                   # "loading path", "continuation" or "deflation"
+    hits: int                     # how many (start, method) attempts reached it
+
+
+@dataclass(frozen=True)
+class SearchResult:
+    """Distinct equilibria found from a set of starts.  Not a proof that no
+    other equilibrium exists: only what these starts and methods reached."""
+
+    control: str                  # "length" or "load"
+    target: np.ndarray            # L / l (length) or p (load)
+    states: tuple                 # FoundState, in order of discovery
+    starts: tuple                 # labels of every start tried
+    attempts: int                 # solves attempted (starts x methods)
+    failures: int                 # attempts that did not converge
+    duplicates: int               # converged attempts that re-found a known state
+    log: tuple = ()               # (start, method, outcome) per attempt
+
+    def __len__(self) -> int:
+        return len(self.states)
+
+    def closest(self, p=None, lengths=None) -> FoundState:
+        """The found state nearest to given tensions or cable lengths (units of l)."""
+        if (p is None) == (lengths is None):
+            raise ValueError("give exactly one of p, lengths")
+        ref = np.asarray(p if p is not None else lengths, float)
+        key = (lambda f: np.max(np.abs(f.state.p - ref))) if p is not None else \
+            (lambda f: np.max(np.abs(f.state.cable_lengths - ref)))
+        return min(self.states, key=key)
+
+    def summary(self) -> str:
+        what = "cable lengths L/l" if self.control == "length" else "tensions p"
+        lines = [f"{len(self.states)} distinct equilibria at {what} = "
+                 + ", ".join(f"{v:.6g}" for v in self.target)
+                 + f" from {len(self.starts)} starts ({self.attempts} attempts, "
+                 f"{self.failures} failed, {self.duplicates} re-found a known state); "
+                 "not a proof that there are no others"]
+        for k, f in enumerate(self.states, 1):
+            s = f.state
+            lm = getattr(s, "length_unstable_modes", -1)
+            lines.append(
+                f"  {k}: p = (" + ", ".join(f"{v:.4f}" for v in s.p) + "), L/l = ("
+                + ", ".join(f"{v:.6f}" for v in s.cable_lengths) + f"), tip = ({s.tip[0]:.6f}, "
+                f"{s.tip[1]:.6f}), unstable modes load/length = {s.unstable_modes}/{lm}; "
+                f"first from '{f.start}' by {f.method}, reached {f.hits}x")
+        return "\n".join(lines)
+
+
+def check_lengths(lengths, n_tendons: int) -> np.ndarray:
+    """Positive, finite, one per tendon (units of l)."""
+    L = np.asarray(lengths, dtype=float).ravel()
+    if L.size != n_tendons:
+        raise InputError(f"expected {n_tendons} cable lengths (one per tendon), got {L.size}")
+    if not np.all(np.isfinite(L)) or np.any(L <= 0):
+        raise InputError("cable lengths must be positive finite numbers")
+    return L
+
+
+def same_shape(a: Equilibrium, b: Equilibrium, tol: float = SAME_SHAPE_TOL) -> bool:
+    return float(np.max(np.abs(a.theta - b.theta))) <= tol
+
+
+# --- the augmented system (u, p, mu) on one SNES VI --------------------------------------
+class _AugmentedSystem:
+    """SNES ``vinewtonrsls`` on z = (theta, y, p, mu) (module docstring).
+
+    ``mode="length"``: p rows g_i = L_i - |r_i - y_i| with p_i >= 0.
+    ``mode="load"``: p rows p_i - p_i* (p fixed), no bounds on p.
+    Rows of F and g are multiplied by mu, and mu - M(theta) = 0 (deflation).
+    """
+
+    def __init__(self, disc: Discretisation, mode: str, prefix: str,
+                 deflation: Deflation | None = None, max_it: int = 50,
+                 options: dict | None = None):
+        if mode not in ("length", "load"):
+            raise ValueError(f"mode must be 'length' or 'load', got {mode!r}")
+        self.disc, self.mode = disc, mode
+        N, n = disc.n_elements, disc.n_tendons
+        self.nu, self.n = disc.size, n
+        self.ip, self.imu = disc.size, disc.size + n
+        self.size = disc.size + n + 1
+        self.deflation = deflation if deflation is not None else Deflation(disc.h)
+        self.target = np.zeros(n)
+        self._build_pattern()
+        z0 = self.augment(disc.straight(), np.zeros(n))
+        self.J = PETSc.Mat().createAIJ(size=(self.size, self.size), comm=PETSc.COMM_SELF,
+                                       csr=(self.indptr, self.indices, self.jacobian_values(z0)))
+        self.x = PETSc.Vec().createSeq(self.size, comm=PETSc.COMM_SELF)
+        self.f = self.x.duplicate()
+        self.xl, self.xu = self.x.duplicate(), self.x.duplicate()
+        lower = np.full(self.size, PETSc.NINFINITY)
+        if mode == "length":
+            lower[self.ip:self.imu] = 0.0                   # a cable cannot push
+        lower[self.imu] = 0.5                # mu = M >= shift^K at a solution (see newton)
+        self.xl.setArray(lower)
+        self.xu.set(PETSc.INFINITY)
+        snes = PETSc.SNES().create(PETSc.COMM_SELF)
+        snes.setOptionsPrefix(prefix)
+        snes.setType("vinewtonrsls")
+        snes.setFunction(self._form_function, self.f)
+        snes.setJacobian(self._form_jacobian, self.J, self.J)
+        snes.setVariableBounds(self.xl, self.xu)
+        # residual round-off grows like N^(3/2) (see EquilibriumSolver)
+        self.atol = max(1e-10, 1e-14 * N ** 1.5)
+        snes.setTolerances(rtol=1e-10, atol=self.atol, stol=1e-14, max_it=max_it)
+        use_bordered_lu(snes.getKSP())
+        # defaults given in code go under the prefix only for setFromOptions and
+        # only where the user has not set them; then they are removed again
+        db = PETSc.Options()
+        pushed = [k for k in (options or {}) if not db.hasName(prefix + k)]
+        for k in pushed:
+            db.setValue(prefix + k, options[k])
+        try:
+            snes.setFromOptions()
+        finally:
+            for k in pushed:
+                db.delValue(prefix + k)
+        self.snes = snes
+
+    # --- layout ----------------------------------------------------------------------
+    def augment(self, u, p, mu: float | None = None) -> np.ndarray:
+        z = np.empty(self.size)
+        z[: self.nu], z[self.ip:self.imu] = u, p
+        z[self.imu] = self.deflation.factor_and_gradient(np.asarray(u)[: self.disc.n_elements])[0] \
+            if mu is None else mu
+        return z
+
+    def parts(self, z):
+        return z[: self.nu], z[self.ip:self.imu], z[self.imu]
+
+    def _build_pattern(self) -> None:
+        disc = self.disc
+        N, n, nu, ip, imu = disc.n_elements, self.n, self.nu, self.ip, self.imu
+        indptr, indices, _ = disc.pattern
+        rows = [np.repeat(np.arange(nu), np.diff(indptr)), ]
+        cols = [np.asarray(indices)]
+        for i, m in enumerate(disc.attach_nodes):           # dF_theta/dp_i (rows < m_i)
+            rows.append(np.arange(m)); cols.append(np.full(m, ip + i))
+        for i in range(n):                                  # dg_i/dy_i
+            rows.append(np.full(2, ip + i)); cols.append(N + 2 * i + np.arange(2))
+        rows.append(ip + np.arange(n)); cols.append(ip + np.arange(n))   # p diagonal
+        rows.append(np.arange(imu)); cols.append(np.full(imu, imu))      # d/dmu = F, g
+        rows.append(np.full(N, imu)); cols.append(np.arange(N))          # -grad M
+        rows.append(np.array([imu])); cols.append(np.array([imu]))
+        rows, cols = np.concatenate(rows), np.concatenate(cols)
+        order = np.lexsort((cols, rows))
+        self._order = order
+        self.indptr = np.searchsorted(rows[order], np.arange(self.size + 1)).astype(np.int32)
+        self.indices = cols[order].astype(np.int32)
+
+    # --- residual and Jacobian ---------------------------------------------------------
+    def equations(self, z) -> tuple[np.ndarray, np.ndarray]:
+        """Unscaled residuals: F(u, p) (bordered) and the p rows."""
+        u, p, _ = self.parts(z)
+        F = self.disc.residual(u, p)
+        if self.mode == "length":
+            g = self.target - self.disc.cables(self.disc.split(u)[1])[0]
+        else:
+            g = p - self.target
+        return F, g
+
+    def residual(self, z) -> np.ndarray:
+        F, g = self.equations(z)
+        mu = z[self.imu]
+        M, _ = self.deflation.factor_and_gradient(z[: self.disc.n_elements])
+        return np.concatenate((mu * F, mu * g if self.mode == "length" else g, [mu - M]))
+
+    def jacobian_values(self, z) -> np.ndarray:
+        disc = self.disc
+        u, p, mu = self.parts(z)
+        F, g = self.equations(z)
+        _, gradM = self.deflation.factor_and_gradient(u[: disc.n_elements])
+        dFdp = disc.load_derivative(u)
+        blocks = [mu * disc.jacobian_values(u, p)]
+        blocks += [mu * dFdp[i, :m] for i, m in enumerate(disc.attach_nodes)]
+        if self.mode == "length":
+            d = disc.cables(disc.split(u)[1])[1]
+            blocks += [mu * d.ravel(), np.zeros(self.n), F, g]
+        else:
+            blocks += [np.zeros(2 * self.n), np.ones(self.n), F, np.zeros(self.n)]
+        blocks += [-gradM, [1.0]]
+        return np.concatenate(blocks)[self._order]
+
+    def _form_function(self, snes, X, Fv) -> None:
+        Fv.setArray(self.residual(X.getArray(readonly=True)))
+
+    def _form_jacobian(self, snes, X, J, P) -> None:
+        P.setValuesCSR(self.indptr, self.indices, self.jacobian_values(X.getArray(readonly=True)))
+        P.assemble()
+
+    def scipy_jacobian(self, z) -> sp.csr_matrix:
+        return sp.csr_matrix((self.jacobian_values(z), self.indices, self.indptr),
+                             shape=(self.size, self.size))
+
+    # --- one solve ---------------------------------------------------------------------
+    def newton(self, z0, target) -> tuple[np.ndarray, int, str, bool]:
+        """One VI Newton solve from z0: (z, iterations, reason, converged)."""
+        self.target = np.asarray(target, float)
+        z0 = np.array(z0, float)
+        if self.mode == "length":
+            z0[self.ip:self.imu] = np.maximum(z0[self.ip:self.imu], 0.0)
+        M, _ = self.deflation.factor_and_gradient(z0[: self.disc.n_elements])
+        z0[self.imu] = M
+        if not np.isfinite(M) or M > 1e12:       # the start sits on a deflated root
+            return z0, 0, "START_ON_DEFLATED_ROOT", False
+        # mu > 0 keeps the complementarity signs; M >= shift^K, so this bound never binds
+        floor = 0.5 * min(1.0, self.deflation.shift ** len(self.deflation))
+        self.xl.setValue(self.imu, floor)
+        self.xl.assemble()
+        self.x.setArray(z0)
+        try:
+            self.snes.solve(None, self.x)
+        except PETSc.Error:                      # e.g. a zero pivot in the LU
+            return z0, self.snes.getIterationNumber(), "PETSC_ERROR", False
+        reason = self.snes.getConvergedReason()
+        z = self.x.getArray().copy()
+        return z, self.snes.getIterationNumber(), SNES_REASONS.get(reason, str(reason)), \
+            reason > 0 and self.verified(z)
+
+    def verified(self, z) -> bool:
+        """Independent check of a converged state with the numpy kernels."""
+        F, g = self.equations(z)
+        if not (np.all(np.isfinite(F)) and np.all(np.isfinite(g))):
+            return False
+        tol = 1e-8 * max(1.0, (self.disc.n_elements / 180.0) ** 1.5)
+        if np.max(np.abs(F)) > tol:
+            return False
+        if self.mode == "length":
+            p = z[self.ip:self.imu]
+            gtol = 1e-9
+            if np.any(g < -gtol) or np.any(np.abs(g[p > TAUT_TOL]) > gtol):
+                return False
+        else:
+            if np.max(np.abs(g)) > 1e-12 * max(1.0, np.max(np.abs(self.target))):
+                return False
+        lengths = self.disc.cables(self.disc.split(z[: self.nu])[1])[0]
+        return bool(np.all(lengths > 1e-6))
+
+    def destroy(self) -> None:
+        for obj in (self.snes, self.J, self.x, self.f, self.xl, self.xu):
+            obj.destroy()
+
+
+# --- stability under length control ------------------------------------------------------
+class LengthInertia:
+    """Negative eigenvalues of K restricted to null(C^T) of the taut cables
+    (module docstring), by the LDL^T inertia of the bordered H_c, O(N)."""
+
+    def __init__(self, disc: Discretisation, taut_tol: float = TAUT_TOL):
+        self.disc, self.taut_tol = disc, taut_tol
+        n = disc.n_tendons
+        supports = np.concatenate((disc.attach_nodes, disc.attach_nodes))   # W cols, C cols
+        # Discretisation's own bordered-pattern builder (upper triangle for SBAIJ)
+        indptr, indices, self._src = disc._bordered_pattern(supports, upper=True)
+        self._csr = (indptr, indices)
+        size = disc.n_elements + 2 * n
+        self.H = PETSc.Mat().createSBAIJ(size=(size, size), bsize=1, comm=PETSc.COMM_SELF,
+                                         csr=(indptr, indices,
+                                              self.values(disc.straight(), np.zeros(n))[0]))
+        self.pc = bordered_ldlt(self.H)
+
+    def values(self, u, p) -> tuple[np.ndarray, int]:
+        """Upper-triangle entries of H_c and the number m of taut cables."""
+        disc = self.disc
+        p = np.asarray(p, float)
+        theta, y = disc.split(u)
+        lengths, d = disc.cables(y)
+        g = disc.attachment_gradients(theta)
+        d_perp = np.column_stack((-d[:, 1], d[:, 0]))
+        w = np.sqrt(np.maximum(p, 0.0) / lengths)[:, None] * \
+            (g[..., 0] * d_perp[:, :1] + g[..., 1] * d_perp[:, 1:])         # (n, N)
+        taut = p > self.taut_tol
+        C = disc.load_derivative(u)[:, : disc.n_elements] * taut[:, None]  # grad L_i (n, N)
+        border = np.vstack((w, C))                                          # (2n, N)
+        corner = np.concatenate((-np.ones(disc.n_tendons), np.where(taut, 0.0, 1.0)))
+        source = np.concatenate((disc._band(theta, d, p).ravel(), border.T.ravel(),
+                                 border.ravel(), corner))
+        return source[self._src], int(np.count_nonzero(taut))
+
+    def negative_eigenvalues(self, u, p) -> int:
+        """Negative (or zero) eigenvalues of K on null(C_taut^T); 0: stable
+        under length control."""
+        vals, m = self.values(u, p)
+        self.H.setValuesCSR(*self._csr, vals)
+        self.H.assemble()
+        self.pc.setOperators(self.H)
+        try:
+            self.pc.setUp()
+        except PETSc.Error:          # zero pivot: (numerically) singular, marginal at best
+            return 1
+        neg, zero, _ = self.pc.getFactorMatrix().getInertia()
+        return neg + zero - self.disc.n_tendons - m
+
+    def destroy(self) -> None:
+        self.pc.destroy()
+        self.H.destroy()
+
+
+def constrained_mode(system: _AugmentedSystem, z, iterations: int = 30) -> tuple[float, np.ndarray]:
+    """Eigenpair of K v = lambda h v on null(C_taut^T) with the smallest
+    |lambda| (the buckling mode near a loss of stability), by inverse
+    iteration with the length-control Jacobian [[J, dF/dp], [dg/du, 0]]
+    (sparse LU, O(N)).  Returns (lambda, v) with v the N nodal angle
+    increments, max |v| = 1.  Slack cables (p = 0) have no constraint."""
+    disc = system.disc
+    N = disc.n_elements
+    z = np.array(z, float)
+    z[system.imu] = 1.0
+    A = system.scipy_jacobian(z).tolil()
+    p = z[system.ip:system.imu]
+    for i in np.flatnonzero(p <= TAUT_TOL):       # slack: p_i stays 0, no constraint row
+        r = system.ip + i
+        A[r, :] = 0.0
+        A[:, r] = 0.0
+        A[r, r] = 1.0
+    lu = spla.splu(A.tocsc())
+    rng = np.random.default_rng(0)
+    v = rng.standard_normal(N)
+    lam = 0.0
+    for _ in range(iterations):
+        rhs = np.zeros(system.size)
+        rhs[:N] = disc.h * v
+        w = lu.solve(rhs)[:N]
+        lam = float(np.dot(v, disc.h * v) / np.dot(v, disc.h * w))
+        v = w / np.max(np.abs(w))
+    return lam, v
+
+
+# --- the length-control solver ----------------------------------------------------------
+class LengthSolver:
+    """Length-controlled equilibria of one discretised arm (SNES VI, prefix ``len_``).
+
+    Parameters
+    ----------
+    disc : the discretised arm.
+    length_mm : arm length for the ``*_mm`` helpers (set by :meth:`from_arm`).
+    jump_tol : largest change of any nodal angle [rad] between the predictor
+        and the converged state of one continuation step before the step is
+        halved (a larger change is a jump to another branch).
+    max_step : largest change of any cable length (units of l) per
+        continuation step.
+    prefix : PETSc options prefix, e.g. ``-len_snes_monitor``,
+        ``-len_snes_vi_monitor``.
+    """
+
+    def __init__(self, disc: Discretisation, *, length_mm: float | None = None,
+                 jump_tol: float = 0.5, max_step: float = 0.02, prefix: str = "len_"):
+        self.disc = disc
+        self.length_mm = length_mm
+        self.jump_tol = jump_tol
+        self.max_step = max_step
+        self.prefix = prefix
+        self.system = _AugmentedSystem(disc, "length", prefix)
+        # deflated solves explore: the l2 (secant) line search leaves the basin
+        # of the start far more often than backtracking (measured on Fig. 8)
+        self.deflated_system = _AugmentedSystem(disc, "length", prefix + "defl_",
+                                                options=DEFLATION_OPTIONS)
+        self.inertia = LengthInertia(disc)
+        self.load_inertia = InertiaCounter(disc)
+
+    @classmethod
+    def from_arm(cls, arm, n_elements: int | None = None, **kw) -> "LengthSolver":
+        return cls(Discretisation.from_arm(arm, n_elements), length_mm=arm.length_mm, **kw)
+
+    # --- helpers -----------------------------------------------------------------------
+    def _start(self, start) -> tuple[np.ndarray, np.ndarray]:
+        if start is None:
+            return self.disc.straight(), np.zeros(self.disc.n_tendons)
+        if isinstance(start, Equilibrium):
+            return np.asarray(start.u, float), np.asarray(start.p, float)
+        u, p = start
+        return np.asarray(u, float), np.asarray(p, float)
+
+    def lengths_of(self, u) -> np.ndarray:
+        """Cable chords |r_i - y_i| of a bordered state (units of l)."""
+        return self.disc.cables(self.disc.split(u)[1])[0]
+
+    def to_l(self, lengths_mm) -> np.ndarray:
+        if self.length_mm is None:
+            raise InputError("the arm length is unknown: build the solver with from_arm()")
+        return np.asarray(lengths_mm, float) / self.length_mm
+
+    def stability(self, u, p) -> tuple[int, int]:
+        """(negative eigenvalues of K, of K on null(C_taut^T)): load and length control."""
+        return (self.load_inertia.negative_eigenvalues(u, p),
+                self.inertia.negative_eigenvalues(u, p))
+
+    def _result(self, z, lengths, its, reason, ok, *, steps=1, message="", jumps=(),
+                instabilities=(), label="") -> LengthEquilibrium:
+        u, p, _ = self.system.parts(z)
+        p = np.where(p <= 0.0, 0.0, p)
+        modes = self.stability(u, p) if ok else (-1, -1)
+        return LengthEquilibrium(
+            self.disc, p.copy(), u.copy(), ok, reason, its, steps, message=message,
+            unstable_modes=modes[0], lengths_requested=np.asarray(lengths, float).copy(),
+            length_unstable_modes=modes[1], length_mm=self.length_mm, jumps=tuple(jumps),
+            instabilities=tuple(instabilities), label=label)
+
+    # --- one VI Newton solve ------------------------------------------------------------
+    def solve(self, lengths, start=None, *, deflate=None, label: str = "") -> LengthEquilibrium:
+        """Equilibrium with cable lengths ``lengths`` (units of l) by one VI
+        Newton solve from ``start`` (an Equilibrium, a pair (u, p), or None:
+        the straight arm with p = 0).  ``deflate``: a :class:`Deflation`
+        holding states Newton must not converge to again."""
+        L = check_lengths(lengths, self.disc.n_tendons)
+        u0, p0 = self._start(start)
+        if deflate is None:
+            sys = self.system
+            sys.deflation = Deflation(self.disc.h)
+            z, its, reason, ok = sys.newton(sys.augment(u0, p0), L)
+        else:
+            sys = self.deflated_system
+            sys.deflation = deflate
+            try:
+                z, its, reason, ok = sys.newton(sys.augment(u0, p0), L)
+            finally:
+                sys.deflation = Deflation(self.disc.h)
+        msg = "" if ok else (f"no length-controlled equilibrium reached from the start "
+                             f"(PETSc SNES reason {reason})")
+        return self._result(z, L, its, reason, ok, message=msg, label=label)
+
+    def solve_mm(self, lengths_mm, start=None, **kw) -> LengthEquilibrium:
+        return self.solve(self.to_l(lengths_mm), start, **kw)
+
+    # --- continuation in the cable lengths -------------------------------------------------
+    def follow(self, lengths, start=None, *, keep_stable: bool = True,
+               min_fraction: float = 1e-4, label: str = "") -> LengthEquilibrium:
+        """Continuation from ``start`` (an equilibrium; its own cable chords are
+        the initial lengths, or for a slack cable of a LengthEquilibrium its
+        prescribed length) to ``lengths`` (units of l) along the straight
+        segment in length space, warm-started with a secant predictor and an
+        adaptive step (at most ``max_step`` change of any length per step).
+
+        A step is halved when Newton fails, when its result is far from the
+        predictor (``jump_tol``: another branch) or, with ``keep_stable`` and
+        a stable path, when the result is unstable under length control.
+        When the step cannot shrink below ``min_fraction`` of the first one,
+        the path has reached a limit point or a bifurcation at the current
+        lengths: they are recorded in ``instabilities``, and the path jumps to
+        a stable state found by perturbing the last state along +- its
+        constrained buckling mode (:meth:`branches`), or to the distant state
+        Newton found if that one is stable; the lengths are recorded in
+        ``jumps``.  If no stable state is found the result has
+        ``converged=False`` and a message.  Without ``keep_stable`` unstable
+        states are followed like stable ones (used by searches).
+        """
+        L_end = check_lengths(lengths, self.disc.n_tendons)
+        u, p = self._start(start)
+        sys = self.system
+        sys.deflation = Deflation(self.disc.h)
+        L_start = self.lengths_of(u)
+        if isinstance(start, LengthEquilibrium) and start.lengths_requested is not None:
+            L_start = np.where(np.asarray(start.p) > TAUT_TOL, L_start,
+                               np.maximum(L_start, start.lengths_requested))
+        z = sys.augment(u, p, 1.0)
+        span = float(np.max(np.abs(L_end - L_start)))
+        full = 1.0 if span <= self.max_step else self.max_step / span
+        keep = keep_stable and self.inertia.negative_eigenvalues(u, p) == 0
+        lam, dlam, its_total, steps = 0.0, full, 0, 0
+        z_prev = dlam_prev = None
+        jumps, instabilities = [], []
+        reason = "CONVERGED_ITERATING"
+        n_ang = self.disc.n_elements
+
+        def where(t):
+            return L_start + t * (L_end - L_start)
+
+        while lam < 1.0:
+            step = min(dlam, 1.0 - lam)
+            pred = z if z_prev is None else z + (z - z_prev) * (step / dlam_prev)
+            pred[sys.ip:sys.imu] = np.maximum(pred[sys.ip:sys.imu], 0.0)
+            L_t = where(lam + step)
+            z_new, its, reason, ok = sys.newton(pred, L_t)
+            its_total += its
+            jumped = lost = False
+            if ok:
+                jumped = np.max(np.abs(z_new[:n_ang] - pred[:n_ang])) > self.jump_tol
+                lost = keep and self.inertia.negative_eigenvalues(
+                    z_new[: sys.nu], z_new[sys.ip:sys.imu]) > 0
+                if not (jumped or lost):
+                    z_prev, dlam_prev = z, step
+                    z, lam, steps = z_new, lam + step, steps + 1
+                    if its <= 4:
+                        dlam = min(2.0 * dlam, full)
+                    continue
+            if step > min_fraction * full:
+                dlam = 0.5 * step
+                continue
+            # a limit point or bifurcation at L_t: the branch cannot be followed
+            if lost or not ok:
+                instabilities.append(L_t.copy())
+            base = z_new if ok else z
+            # post-critical states: perturb along +- the buckling mode at L_t, or a
+            # little further along the path if the critical point is too close
+            candidates = []
+            for t in sorted({lam + step, min(1.0, lam + 0.1 * full), min(1.0, lam + 0.5 * full)}):
+                found = self.branches(base[: sys.nu], base[sys.ip:sys.imu], where(t))
+                candidates = [(t, sys.augment(b.u, b.p, 1.0)) for b in found]
+                if candidates:
+                    break
+            if ok and jumped and (not lost or not keep):
+                candidates.append((lam + step, z_new))
+            if candidates:
+                t_best, z_best = min(candidates, key=lambda c: (c[0], self.disc.strain_energy(
+                    self.disc.split(c[1][: sys.nu])[0])))
+                jumps.append(where(t_best))
+                z, z_prev, lam, dlam, steps = z_best, None, t_best, full, steps + 1
+                continue
+            msg = (("lost stability under length control" if lost else
+                    f"length continuation stopped (PETSc SNES reason {reason})")
+                   + " at L/l = (" + ", ".join(f"{v:.6g}" for v in where(lam))
+                   + ") on the way to (" + ", ".join(f"{v:.6g}" for v in L_end)
+                   + "), and no stable state to jump to was found")
+            return self._result(z, where(lam), its_total, "UNSTABLE_STATE" if lost else reason,
+                                False, steps=steps, message=msg, jumps=jumps,
+                                instabilities=instabilities, label=label)
+        return self._result(z, L_end, its_total, reason, True, steps=steps, jumps=jumps,
+                            instabilities=instabilities, label=label)
+
+    def _tension_guess(self, u) -> np.ndarray:
+        """Least-squares tensions for a shape: min_p |F(u, p)| (F is linear in p)."""
+        F0 = self.disc.residual(u, np.zeros(self.disc.n_tendons))
+        A = self.disc.load_derivative(u).T
+        p, *_ = np.linalg.lstsq(A, -F0, rcond=None)
+        return np.maximum(p, 0.0)
+
+    def branches(self, u, p, lengths, amplitudes=(0.05, 0.2)) -> list[LengthEquilibrium]:
+        """Stable states at ``lengths`` near the state (u, p): the state is
+        perturbed along +- its constrained buckling mode (the eigenvector of
+        K on null(C_taut^T) with the eigenvalue nearest zero,
+        :func:`constrained_mode`) by each amplitude (max nodal angle, rad)
+        and re-solved.  Distinct, converged, stable (length control) states
+        are returned; for a symmetric bifurcation these are the two
+        post-buckling states."""
+        L = check_lengths(lengths, self.disc.n_tendons)
+        sys = self.system
+        sys.deflation = Deflation(self.disc.h)
+        z_c = sys.augment(np.asarray(u, float), np.asarray(p, float), 1.0)
+        try:
+            _, v = constrained_mode(sys, z_c)
+        except RuntimeError:                 # singular saddle matrix: fall back to no mode
+            return []
+        found: list[LengthEquilibrium] = []
+        theta_c = self.disc.split(z_c[: sys.nu])[0]
+        for sign in (1.0, -1.0):
+            for a in amplitudes:
+                theta = theta_c.copy()
+                theta[1:] += sign * a * v
+                u0 = self.disc.consistent_state(theta)
+                z0 = sys.augment(u0, self._tension_guess(u0), 1.0)
+                z, its, reason, ok = sys.newton(z0, L)
+                if not ok:
+                    continue
+                state = self._result(z, L, its, reason, True,
+                                     label=f"mode {'+' if sign > 0 else '-'}{a:g}")
+                if state.length_unstable_modes != 0:
+                    continue
+                if not any(same_shape(state, f) for f in found):
+                    found.append(state)
+                break
+        return found
+
+    def path(self, schedule, start=None, *, keep_stable: bool = True) -> list[LengthEquilibrium]:
+        """Step through a schedule of cable lengths (K, n) (units of l), each
+        point reached by :meth:`follow` from the previous one (the first from
+        ``start``, default the straight arm).  Stops after a point that could
+        not be reached (its ``converged`` is False)."""
+        schedule = np.atleast_2d(np.asarray(schedule, float))
+        out, state = [], start
+        for k, L in enumerate(schedule):
+            state = self.follow(L, state, keep_stable=keep_stable, label=f"point {k}")
+            out.append(state)
+            if not state.converged:
+                break
+        return out
+
+    def follow_mm(self, lengths_mm, start=None, **kw) -> LengthEquilibrium:
+        return self.follow(self.to_l(lengths_mm), start, **kw)
+
+    def destroy(self) -> None:
+        self.system.destroy()
+        self.deflated_system.destroy()
+        self.inertia.destroy()
+        self.load_inertia.destroy()
+
+    def __enter__(self) -> "LengthSolver":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.destroy()
+
+
+# --- several equilibria: starts, continuation, deflation -----------------------------------
+def tension_starts(eq_solver: EquilibriumSolver, levels=(5.0, 10.0, 20.0), orders="all",
+                   include_straight: bool = True) -> list[tuple[str, Equilibrium]]:
+    """A spread of initial states: the straight arm and the load-controlled
+    equilibria at every combination of ``levels`` (one per tendon) reached
+    along every loading order (``orders="all"``: proportional and each
+    permutation), plus the intermediate states of the ordered paths (the
+    first tendons loaded, the others idle).  Paths that share a beginning
+    share its solves (warm starts); states reached several ways are kept
+    once (same shape, :data:`SAME_SHAPE_TOL`)."""
+    disc = eq_solver.disc
+    n = disc.n_tendons
+    levels = sorted(float(v) for v in levels if v > 0)
+    if orders == "all":
+        orders = [None] + list(itertools.permutations(range(1, n + 1)))
+    out: list[tuple[str, Equilibrium]] = []
+    straight = Equilibrium(disc, np.zeros(n), disc.straight(), True, "STRAIGHT", 0, 0,
+                           p_requested=np.zeros(n))
+    if include_straight:
+        out.append(("straight arm", straight))
+
+    def keep(eq, how):
+        if eq.converged and not any(same_shape(eq, s) for _, s in out):
+            out.append(("load p=(" + ", ".join(f"{v:g}" for v in eq.p) + f") {how}", eq))
+
+    def ordered(order, depth, state):
+        if depth == n:
+            return
+        k = order[depth] - 1
+        for level in levels:                  # raise tendon k through the levels, warm
+            target = np.array(state.p, float)
+            target[k] = level
+            nxt = eq_solver.solve(target, start=state)
+            if not nxt.converged:
+                break
+            keep(nxt, "order " + ",".join(map(str, order)))
+            ordered(order, depth + 1, nxt)
+            state = nxt
+
+    for order in orders:
+        order = check_order(order, n)
+        if order is None:
+            rays: dict[tuple, list[np.ndarray]] = {}
+            for p in itertools.product(levels, repeat=n):
+                p = np.array(p)
+                rays.setdefault(tuple(np.round(p / np.max(p), 12)), []).append(p)
+            for ps in rays.values():
+                state = straight
+                for p in sorted(ps, key=np.max):
+                    nxt = eq_solver.solve(p, start=state)
+                    if not nxt.converged:
+                        break
+                    keep(nxt, "proportional")
+                    state = nxt
+        else:
+            ordered(order, 0, straight)
+    return out
+
+
+class _Collector:
+    """Distinct states in order of discovery, compared by shape, and a log of
+    every attempt: (start, method, outcome) with outcome "new k", "again k"
+    (k: 1-based state number) or PETSc's reason of the failure."""
+
+    def __init__(self, tol: float):
+        self.tol = tol
+        self.found: list[list] = []          # [state, start, method, hits]
+        self.log: list[tuple[str, str, str]] = []
+        self.attempts = self.failures = self.duplicates = 0
+
+    def offer(self, state, start: str, method: str) -> bool:
+        self.attempts += 1
+        if state is None or not state.converged:
+            self.failures += 1
+            self.log.append((start, method, "failed" if state is None else
+                             f"failed ({state.reason})"))
+            return False
+        for k, entry in enumerate(self.found, 1):
+            if same_shape(entry[0], state, self.tol):
+                entry[3] += 1
+                self.duplicates += 1
+                self.log.append((start, method, f"again {k}"))
+                return False
+        self.found.append([state, start, method, 1])
+        self.log.append((start, method, f"new {len(self.found)}"))
+        return True
+
+    def result(self, control, target, starts) -> SearchResult:
+        return SearchResult(control, np.asarray(target, float),
+                            tuple(FoundState(*e) for e in self.found), tuple(starts),
+                            self.attempts, self.failures, self.duplicates, tuple(self.log))
+
+
+def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
+                      eq_solver: EquilibriumSolver | None = None, continuation: bool = True,
+                      deflation_rounds: int = 2, passes: int = 2,
+                      tol: float = SAME_SHAPE_TOL) -> SearchResult:
+    """Distinct equilibria with cable lengths ``lengths`` (units of l).
+
+    From every start (default :func:`tension_starts`): (1) continuation in
+    the cable lengths from the start's own lengths (:meth:`LengthSolver.follow`,
+    unstable states allowed), then (2) up to ``deflation_rounds`` deflated VI
+    Newton solves from the start itself, each deflating every state found so
+    far (Farrell et al. 2015, whose deflated solves here use the l2 line
+    search, :data:`DEFLATION_OPTIONS`).  While a sweep over the starts finds
+    new states, the deflated solves are repeated from every start (at most
+    ``passes`` sweeps), so early starts also see the roots found later.
+    States are distinct if some nodal angle
+    differs by more than ``tol`` rad.  Each state reports its stability under
+    load and length control.  What is returned is what these starts reached,
+    never a claim that no other equilibrium exists.
+    """
+    L = check_lengths(lengths, solver.disc.n_tendons)
+    if starts is None:
+        own = eq_solver is None
+        eq_solver = EquilibriumSolver(solver.disc) if own else eq_solver
+        try:
+            starts = tension_starts(eq_solver)
+        finally:
+            if own:
+                eq_solver.destroy()
+    found = _Collector(tol)
+    deflation = Deflation(solver.disc.h)
+    for sweep in range(max(1, passes)):
+        before = len(found.found)
+        for label, start in starts:
+            if continuation and sweep == 0:
+                state = solver.follow(L, start, keep_stable=False, label=f"{label}; continuation")
+                if found.offer(state, label, "continuation"):
+                    deflation.add(state.theta[1:])
+            for _ in range(deflation_rounds):
+                state = solver.solve(L, start, deflate=deflation, label=f"{label}; deflation")
+                if not found.offer(state, label, "deflation"):
+                    break
+                deflation.add(state.theta[1:])
+        if len(found.found) == before:
+            break
+    return found.result("length", L, [s[0] for s in starts])
+
+
+def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, deflation_rounds: int = 2,
+               passes: int = 2, tol: float = SAME_SHAPE_TOL, prefix: str = "defl_",
+               length_mm: float | None = None) -> SearchResult:
+    """Distinct load-controlled equilibria at fixed tensions ``p``.
+
+    (1) Loading paths from the straight arm: proportional and every order
+    (:meth:`EquilibriumSolver.solve`); (2) from every start (default
+    :func:`tension_starts`): the loading path from the start's tensions to
+    ``p``, then up to ``deflation_rounds`` deflated Newton solves on the
+    plain residual F(u; p) from the start, deflating every state found so
+    far (own SNES VI with unbounded p, options prefix ``defl_``, l2 line
+    search by default), repeated over all starts while a sweep finds new
+    states (at most ``passes`` sweeps).  Each state
+    is a :class:`LengthEquilibrium` whose prescribed lengths are its own
+    cable chords, with ``unstable_modes`` (load control) and
+    ``length_unstable_modes`` (the same state held at its cable lengths).
+    Not a proof of completeness.
+    """
+    disc = eq_solver.disc
+    p = check_tensions(p, disc.n_tendons)
+    found = _Collector(tol)
+    n = disc.n_tendons
+    length_inertia = LengthInertia(disc)
+
+    def examined(eq: Equilibrium | None, label: str):
+        if eq is None or not eq.converged:
+            return eq
+        lengths = disc.cables(disc.split(eq.u)[1])[0]
+        return LengthEquilibrium(
+            disc, np.asarray(eq.p, float).copy(), np.asarray(eq.u, float).copy(), True,
+            eq.reason, eq.iterations, eq.load_steps, unstable_modes=eq.unstable_modes,
+            snaps=eq.snaps, p_requested=p, lengths_requested=lengths,
+            length_unstable_modes=length_inertia.negative_eigenvalues(eq.u, eq.p),
+            length_mm=length_mm, label=label)
+
+    deflation = Deflation(disc.h)
+    system = _AugmentedSystem(disc, "load", prefix, deflation, options=DEFLATION_OPTIONS)
+    try:
+        for order in [None] + list(itertools.permutations(range(1, n + 1))):
+            how = "proportional" if order is None else "order " + ",".join(map(str, order))
+            label = f"straight arm, {how}"
+            if found.offer(examined(eq_solver.solve(p, order=order), label), label,
+                           "loading path"):
+                deflation.add(found.found[-1][0].theta[1:])
+        if starts is None:
+            starts = tension_starts(eq_solver)
+        for sweep in range(max(1, passes)):
+            before = len(found.found)
+            for label, start in starts:
+                if sweep == 0 and np.any(start.p != p):
+                    state = examined(eq_solver.solve(p, start=start), label)
+                    if found.offer(state, label, "loading path"):
+                        deflation.add(state.theta[1:])
+                for _ in range(deflation_rounds):
+                    z, its, reason, ok = system.newton(system.augment(start.u, p), p)
+                    state = None
+                    if ok:
+                        u = z[: system.nu]
+                        state = examined(Equilibrium(
+                            disc, p.copy(), u.copy(), True, reason, its, 0,
+                            unstable_modes=eq_solver.inertia.negative_eigenvalues(u, p),
+                            p_requested=p), label)
+                    if not found.offer(state, label, "deflation"):
+                        break
+                    deflation.add(state.theta[1:])
+            if len(found.found) == before:
+                break
+    finally:
+        system.destroy()
+        length_inertia.destroy()
+    return found.result("load", p, [s[0] for s in starts])
+
+
+# --- replaying a traced path under length control -------------------------------------------
+@dataclass(frozen=True)
+class ReplayPoint:
+    """One point of a replayed schedule (mm where named so, else units of l)."""
+
+    index: int
+    lengths_mm: np.ndarray        # prescribed cable lengths
+    planned_tip_mm: np.ndarray
+    state: LengthEquilibrium      # the replayed equilibrium (converged or not)
+    tip_error_mm: float           # |replayed tip - planned tip|
+    shape_error: float | None     # max |theta - planned theta| [rad], if planned shapes given
+    on_branch: bool               # shape (or tip) within tolerance of the plan
+    jumped: bool                  # a snap/buckling happened on the way to this point
+
+    @property
+    def tip_mm(self) -> np.ndarray:
+        return self.state.tip_mm
+
+    @property
+    def stable(self) -> bool:
+        """Stable under length control."""
+        return self.state.length_unstable_modes == 0
+
+
+@dataclass(frozen=True)
+class Replay:
+    """The length-controlled model stepped through a planned schedule."""
+
+    points: tuple                 # ReplayPoint per reached point
+    n_planned: int
+    start_method: str             # how the first point was reached
+
+    @property
+    def completed(self) -> bool:
+        return len(self.points) == self.n_planned and all(q.state.converged for q in self.points)
+
+    @property
+    def max_tip_error_mm(self) -> float:
+        return max((q.tip_error_mm for q in self.points), default=math.nan)
+
+    @property
+    def all_on_branch(self) -> bool:
+        return self.completed and all(q.on_branch for q in self.points)
+
+    @property
+    def first_departure(self) -> int | None:
+        """Index of the first point off the planned branch (or not reached)."""
+        for q in self.points:
+            if not (q.state.converged and q.on_branch):
+                return q.index
+        return None if self.completed else len(self.points)
+
+    @property
+    def jumps(self) -> list[tuple[int, np.ndarray]]:
+        """(point index, cable lengths in mm) of every snap/buckling on the way."""
+        return [(q.index, np.asarray(L) * q.state.length_mm)
+                for q in self.points for L in q.state.jumps]
+
+    def summary(self) -> str:
+        lines = [f"replayed {len(self.points)} of {self.n_planned} points under length control "
+                 f"(first point by {self.start_method}); max tip error "
+                 f"{self.max_tip_error_mm:.3g} mm; "
+                 + ("stayed on the planned branch" if self.all_on_branch else
+                    f"left the planned branch at point {self.first_departure}")]
+        for k, L in self.jumps:
+            lines.append(f"  jump (snap/buckling) before point {k} at L = ("
+                         + ", ".join(f"{v:.3f}" for v in L) + ") mm")
+        unstable = [q.index for q in self.points if q.state.converged and not q.stable]
+        if unstable:
+            lines.append(f"  unstable under length control at points {unstable}")
+        return "\n".join(lines)
+
+
+def replay(solver: LengthSolver, lengths_mm, planned_tips_mm, planned_tensions=None,
+           planned_thetas=None, *, eq_solver: EquilibriumSolver | None = None,
+           tip_tol_mm: float = 1e-3, shape_tol: float = 1e-3) -> Replay:
+    """Step the length-controlled arm through a schedule of cable lengths.
+
+    ``lengths_mm`` (K, n) and ``planned_tips_mm`` (K, 2) come from a traced
+    path (tip control at each point, Sec. 4.5 (v)); ``planned_tensions``
+    (K, n, non-dimensional p) and ``planned_thetas`` (K, N+1 nodal angles)
+    are optional.  The first point is reached from the straight arm: with
+    planned tensions, by the load-controlled state at the first planned
+    tensions (loading orders tried: proportional, then each permutation;
+    the one whose tip is nearest the plan is used) and a length-controlled
+    solve from it; without, by length continuation from the straight arm.
+    Every further point is reached by :meth:`LengthSolver.follow` from the
+    previous one (warm start, stability kept, snaps and buckling recorded).
+    A point is on the planned branch if its shape is within ``shape_tol``
+    rad of the planned shape (when given) or else its tip within
+    ``tip_tol_mm`` of the planned tip.  Stops after a point that cannot be
+    reached.
+    """
+    if solver.length_mm is None:
+        raise InputError("replay needs the arm length: build the solver with "
+                         "LengthSolver.from_arm()")
+    disc, l_mm = solver.disc, solver.length_mm
+    Ls = np.atleast_2d(np.asarray(lengths_mm, float))
+    tips = np.atleast_2d(np.asarray(planned_tips_mm, float))
+    K = Ls.shape[0]
+    if Ls.shape != (K, disc.n_tendons) or tips.shape != (K, 2):
+        raise InputError(f"replay needs lengths_mm of shape (K, {disc.n_tendons}) and "
+                         f"planned_tips_mm of shape (K, 2); got {Ls.shape} and {tips.shape}")
+    if planned_thetas is not None:
+        planned_thetas = np.atleast_2d(np.asarray(planned_thetas, float))
+        if planned_thetas.shape != (K, disc.n_elements + 1):
+            raise InputError(f"planned_thetas must have shape ({K}, {disc.n_elements + 1})")
+    for L in Ls:
+        check_lengths(L, disc.n_tendons)
+
+    start, method = None, "length continuation from the straight arm"
+    if planned_tensions is not None:
+        P = np.atleast_2d(np.asarray(planned_tensions, float))
+        if P.shape != (K, disc.n_tendons):
+            raise InputError(f"planned_tensions must have shape ({K}, {disc.n_tendons})")
+        own = eq_solver is None
+        eqs = EquilibriumSolver(disc) if own else eq_solver
+        try:
+            best = None
+            for order in [None] + list(itertools.permutations(range(1, disc.n_tendons + 1))):
+                eq = eqs.solve(P[0], order=order)
+                if eq.converged:
+                    err = np.linalg.norm(eq.tip * l_mm - tips[0])
+                    if best is None or err < best[0]:
+                        best = (err, eq, order)
+        finally:
+            if own:
+                eqs.destroy()
+        if best is not None:
+            start = best[1]
+            how = "proportional" if best[2] is None else "order " + ",".join(map(str, best[2]))
+            method = f"load-controlled state at the planned tensions ({how}), then length control"
+
+    points = []
+    state = start
+    for k in range(K):
+        state = solver.follow(Ls[k] / l_mm, state, keep_stable=True, label=f"point {k}")
+        tip_err = float(np.linalg.norm(state.tip * l_mm - tips[k]))
+        shape_err = None
+        if planned_thetas is not None:
+            shape_err = float(np.max(np.abs(state.theta - planned_thetas[k])))
+            on = shape_err <= shape_tol
+        else:
+            on = tip_err <= tip_tol_mm
+        points.append(ReplayPoint(k, Ls[k].copy(), tips[k].copy(), state, tip_err, shape_err,
+                                  bool(on and state.converged),
+                                  bool(state.jumps or state.instabilities)))
+        if not state.converged:
+            break
+    return Replay(tuple(points), K, method)

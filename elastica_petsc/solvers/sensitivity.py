@@ -1,0 +1,168 @@
+"""Load sensitivities of an equilibrium (Eqs. (13)-(17)).
+
+Differentiating the bordered equilibrium equations F(u(p), p) = 0 of
+:mod:`elastica_petsc.core.fem` with respect to the tension p_i gives one linear
+solve per tendon with the consistent tangent J = dF/du at the equilibrium:
+
+    J du/dp_i = -dF/dp_i                                          (Eq. (14))
+
+The theta block of du/dp_i is alpha_i = d theta / d p_i (nodal, alpha_i(0) = 0)
+and its border block holds d y_j / d p_i, the sensitivities of the
+attachment points; Eqs. (15)-(17) (derivatives of t, F_j and d_j) are all
+inside J, which is why the same factorisation serves every tendon.  The tip
+sensitivity is Eq. (13) with the midpoint rule of the positions (fem):
+
+    d x_t / d p_i = sum_e h n_e (alpha_{i,e} + alpha_{i,e+1}) / 2,
+
+likewise for every attachment point, and the cable lengths L_j = |r_j - x_j|
+change as dL_j / dp_i = -d_j . d x_j / d p_i.
+
+Everything is non-dimensional (docs/model.md §3): lengths per unit l, tensions
+p = P l^2 / B, so d x / d p is in units of l per unit p (multiply by
+l / (B / l^2) for mm per newton).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from petsc4py import PETSc
+
+from .equilibrium import Equilibrium, EquilibriumSolver
+from ..core.fem import Discretisation
+from .linalg import use_bordered_lu
+
+
+class SensitivityError(RuntimeError):
+    """The tangent at the equilibrium could not be factored (singular: a limit point)."""
+
+
+@dataclass(frozen=True)
+class Sensitivity:
+    """Derivatives of one equilibrium with respect to the tensions.
+
+    The first index is always the tendon i whose tension p_i is varied.
+
+    alpha : (n, N+1) nodal d theta / d p_i [rad per unit p], alpha[:, 0] = 0.
+    tip : (n, 2) d x_t / d p_i (Eq. (13)) [l per unit p].
+    attachments : (n, n, 2) [i, j] = d x_j / d p_i (midpoint rule).
+    attachments_border : (n, n, 2) the same read from the bordered unknowns y_j
+        (equal to ``attachments`` to round-off; kept as a consistency check).
+    cable_lengths : (n, n) [i, j] = d L_j / d p_i = -d_j . d x_j / d p_i.
+    """
+
+    p: np.ndarray
+    alpha: np.ndarray
+    tip: np.ndarray
+    attachments: np.ndarray
+    attachments_border: np.ndarray
+    cable_lengths: np.ndarray
+
+    @property
+    def state_derivative(self) -> np.ndarray:
+        """(n, size) du/dp_i of the bordered unknowns (theta_1..N, y_1..n), Eq. (14)."""
+        n = len(self.p)
+        return np.concatenate((self.alpha[:, 1:], self.attachments_border.reshape(n, -1)), axis=1)
+
+    @property
+    def tip_jacobian(self) -> np.ndarray:
+        """(2, n) matrix S with S[:, i] = d x_t / d p_i."""
+        return self.tip.T
+
+
+def objective_gradient(eq: Equilibrium, sens: Sensitivity, target) -> tuple[float, np.ndarray]:
+    """E = |x_d - x_t|^2 / 2 (Eq. (10)) and dE/dp (Eq. (12)); non-dimensional."""
+    r = eq.tip - np.asarray(target, float)
+    return 0.5 * float(r @ r), sens.tip @ r
+
+
+class SensitivitySolver:
+    """Owns a copy of the bordered Jacobian and one LU factorisation (KSP
+    preonly, natural ordering: fill only in the border) reused for every
+    equilibrium of one discretised arm.  Options prefix ``sens_``."""
+
+    def __init__(self, disc: Discretisation, *, prefix: str = "sens_"):
+        self.disc = disc
+        indptr, indices, _ = disc.pattern
+        self._csr = (indptr, indices)
+        u0 = disc.straight()
+        self.J = PETSc.Mat().createAIJ(
+            size=(disc.size, disc.size), comm=PETSc.COMM_SELF,
+            csr=(indptr, indices, disc.jacobian_values(u0, np.zeros(disc.n_tendons))))
+        self.rhs = PETSc.Vec().createSeq(disc.size, comm=PETSc.COMM_SELF)
+        self.sol = self.rhs.duplicate()
+        ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+        ksp.setOptionsPrefix(prefix)
+        ksp.setOperators(self.J)
+        use_bordered_lu(ksp)
+        ksp.setFromOptions()
+        self.ksp = ksp
+        # midpoint weights: element e gets (alpha_e + alpha_{e+1}) / 2
+        self._h = disc.h
+
+    @classmethod
+    def for_solver(cls, solver: EquilibriumSolver, **kw) -> "SensitivitySolver":
+        return cls(solver.disc, **kw)
+
+    def compute(self, eq: Equilibrium) -> Sensitivity:
+        """Sensitivities at the equilibrium ``eq`` (one factorisation, n solves)."""
+        disc = self.disc
+        if not eq.converged:
+            raise SensitivityError(
+                "sensitivities need a converged equilibrium: " + (eq.message or eq.reason))
+        u, p = eq.u, np.asarray(eq.p, float)
+        self.J.setValuesCSR(*self._csr, disc.jacobian_values(u, p))
+        self.J.assemble()
+        self.ksp.setOperators(self.J)
+        try:
+            self.ksp.setUp()
+        except PETSc.Error as err:
+            raise SensitivityError(
+                f"the tangent at p = {np.array2string(p, precision=4)} is singular "
+                "(a limit point: the sensitivities are unbounded)") from err
+        dFdp = disc.load_derivative(u)
+        n, N = disc.n_tendons, disc.n_elements
+        du = np.empty((n, disc.size))
+        for i in range(n):
+            self.rhs.setArray(-dFdp[i])
+            self.ksp.solve(self.rhs, self.sol)
+            reason = self.ksp.getConvergedReason()
+            if reason < 0:
+                raise SensitivityError(f"sensitivity solve failed, KSP reason {reason}")
+            du[i] = self.sol.getArray(readonly=True)
+        if not np.all(np.isfinite(du)):
+            raise SensitivityError("non-finite sensitivities: the tangent is singular")
+        alpha = np.zeros((n, N + 1))
+        alpha[:, 1:] = du[:, :N]
+        border = du[:, N:].reshape(n, n, 2)
+        theta = eq.theta
+        phi = disc.element_angles(theta)
+        normals = np.column_stack((-np.sin(phi), np.cos(phi)))          # n_e, (N, 2)
+        dphi = 0.5 * (alpha[:, :-1] + alpha[:, 1:])                     # (n, N)
+        steps = self._h * dphi[:, :, None] * normals[None]              # (n, N, 2)
+        cumulative = np.cumsum(steps, axis=1)                           # d x_{k+1} / dp_i
+        tip = cumulative[:, -1]                                         # Eq. (13)
+        nodes = np.asarray(disc.attach_nodes)
+        attach = cumulative[:, nodes - 1]                               # (n, n, 2)
+        d = eq.directions                                               # (n, 2)
+        dL = -np.einsum("ijc,jc->ij", attach, d)
+        return Sensitivity(p=p.copy(), alpha=alpha, tip=tip, attachments=attach,
+                           attachments_border=border, cable_lengths=dL)
+
+    def destroy(self) -> None:
+        for obj in (self.ksp, self.J, self.rhs, self.sol):
+            obj.destroy()
+
+    def __enter__(self) -> "SensitivitySolver":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.destroy()
+
+
+def compute_sensitivity(solver: EquilibriumSolver, eq: Equilibrium) -> Sensitivity:
+    """One-off sensitivities of ``eq`` (builds and destroys a SensitivitySolver).
+
+    For repeated use (optimisation, paths) keep a :class:`SensitivitySolver`."""
+    with SensitivitySolver.for_solver(solver) as sens:
+        return sens.compute(eq)

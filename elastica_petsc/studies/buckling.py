@@ -1,0 +1,723 @@
+"""Buckling of the straight segment under length control (paper Sec. 4.6, Fig. 7).
+
+Handral & Rangarajan (2019), Sec. 4.6: "At the critical state, the first
+tendon loads the arm and the second tendon is just taut.  The section of the
+arm between the two attachment points x_1 and x_2 is nominally straight,
+and crucially, aligned with the orientation of the second tendon.  Engaging
+the second tendon, by reducing its length by a few millimeters while leaving
+the length of the first tendon unchanged, compresses the straight section
+of the arm like an Euler column and causes it to buckle to one of two
+states."  This module computes that scenario on a two-tendon arm (tendon 1
+attached at s_1, tendon 2 further out at s_2 > s_1; the paper's arm: s_1 =
+200 mm, s_2 = l = 600 mm) and draws the figure.
+
+Non-dimensional internally (lengths in units of l, tensions p = P l^2/B,
+docs/model.md §3); lengths in mm at the boundary (``*_mm`` fields, from the length
+solver's arm length), tensions non-dimensional as everywhere in the package
+(``Arm.tensions_to_N`` converts; :meth:`Fig7Result.summary` does).
+
+Critical configuration
+----------------------
+With p_2 = 0 nothing loads the arm beyond x_1: the moment vanishes there and
+the segment beyond x_1 is straight, whatever p_1.  As p_1 grows the segment
+turns; at p_1* the line of that segment passes through the routing point
+r_2.  The alignment t x (r_2 - x_1) (t the unit chord x_1 -> tip,
+:func:`segment_geometry`) changes sign there; p_1* is its root, found by
+Brent's method on load-controlled equilibria at (p_1, 0)
+(:func:`critical_configuration`).  Its cable lengths are L0 = (L_1, L_2):
+cable 2 is just taut (p_2 = 0, g_2 = 0) and lies along the segment.
+
+The perfect column (aligned family)
+-----------------------------------
+Shortening L_2 puts tendon 2 in tension, and its force, along the segment
+towards r_2, compresses the segment.  The segment stays exactly straight
+only if the force stays aimed along it, i.e. only if the alignment stays
+zero; with L_1 held fixed it does not (the base x_1 rotates as p_2 loads
+the first segment).  The "perfect column" is the one-parameter family of
+length-controlled states with alignment 0: for every shortening dL_2 of L_2,
+L_1 is found by a secant iteration on the alignment (L_1 is let out as L_2
+is taken in, about 2 mm per mm), each state a VI Newton solve of the
+length-controlled problem (:class:`~elastica_petsc.solvers.lengths.LengthSolver`)
+warm-started from the previous one (:func:`aligned_family`).
+
+Constrained eigenvalue crossing
+-------------------------------
+Under length control a taut state is stable iff K (the tangent of the
+load-controlled problem) is positive definite on null(C^T), C = [grad L_i]
+of the taut cables (:mod:`elastica_petsc.solvers.lengths`).  Along the aligned
+family the eigenvalue of K v = lambda h v on null(C^T) nearest zero
+(:func:`~elastica_petsc.solvers.lengths.constrained_mode`) decreases about linearly
+with dL_2 and crosses zero: a bifurcation of the straight column.  The
+critical shortening dL_2,cr is the linear interpolation of the zero between
+the last aligned state with lambda > 0 and the next one; the critical
+lengths L_cr and tension p_2,cr are interpolated likewise.  (K alone, i.e.
+stability under load control, is lost earlier: the cable constraints
+stabilise the column.)
+
+Clamped-column estimate
+-----------------------
+The segment from x_1 to x_2 (length a = s_2 - s_1) as a column clamped at
+x_1 whose end load p_2 is aimed at r_2, a distance c = L_2 from x_2 on the
+column's axis (c > a: r_2 lies behind x_1).  With k^2 = p_2 and w the
+deflection, linearised: w'' + k^2 w = k^2 w_t (1 - (a - xi)/c), w(0) = w'(0)
+= 0, w(a) = w_t; a non-trivial solution needs
+
+    tan(k a) = -k (c - a),     pi/2 < k a < pi
+
+(c -> infinity: the dead-load cantilever, k a = pi/2; c = a: k a = pi).
+p_clamped = k^2 bounds the measured p_2,cr from above: the real base is not
+a clamp (the first segment bends and lets x_1 rotate).
+
+Continuation, post-buckling states and the paper's experiment
+------------------------------------------------------------
+:meth:`LengthSolver.path` along the aligned lengths (warm starts, inertia
+after every step) must report the loss of stability near dL_2,cr
+(``instabilities``) and jump to a buckled state (``jumps``).  Past the
+critical point :meth:`LengthSolver.branches` perturbs the last stable
+aligned state along +- its constrained buckling mode and finds the two
+stable post-buckling states, bent to either side; they are not mirror
+images (the first segment is curved: nothing makes the bifurcation
+symmetric).  The straight state at the same lengths is still an
+equilibrium, unstable under length control, and carries more tension.
+
+The paper's own experiment holds L_1 and shortens L_2 by a few mm.  That
+path leaves the aligned family at once: it is an imperfect column, which
+bows continuously to one side, with p_2 levelling off below the perfect
+column's p_2,cr; it stays stable under length control although K alone
+becomes indefinite.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+import time
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..core.deflation import Deflation
+from ..solvers.equilibrium import Equilibrium, EquilibriumSolver
+from ..core.errors import InputError
+from ..solvers.lengths import LengthEquilibrium, LengthSolver, constrained_mode
+
+PAPER = "Handral & Rangarajan (2019), Sec. 4.6, Fig. 7"
+# default shortenings of L_2 [mm]: the aligned family, and the paper's experiment (L_1 held)
+ALIGNED_SHORTENINGS_MM = (0.5, 1.0, 1.5, 2.0)
+EXPERIMENT_SHORTENINGS_MM = tuple(np.round(np.arange(0.25, 6.0001, 0.25), 10))
+
+
+class BucklingError(RuntimeError):
+    """The Fig. 7 scenario could not be computed (no critical configuration,
+    no crossing, a solve that did not converge); the message says where."""
+
+
+# --- geometry of the segment beyond x_1 -------------------------------------------------
+def segment_geometry(disc, u, s_index: int) -> tuple[float, float]:
+    """(alignment, signed max deviation) of the segment beyond node ``s_index``
+    (attachment 1): alignment = t x (r_2 - x_1) with t the unit chord direction
+    x_1 -> tip (0 when the line of the segment passes through r_2); deviation
+    = the largest distance of the segment from that chord (units of l,
+    signed: positive to the left of t)."""
+    theta = disc.split(u)[0]
+    x = disc.node_positions(theta)
+    x1, tip = x[s_index], x[-1]
+    t = (tip - x1) / np.linalg.norm(tip - x1)
+    r2 = disc.routes[1]
+    X = x[s_index:] - x1
+    dev = X[:, 0] * t[1] - X[:, 1] * t[0]
+    return float(np.cross(t, r2 - x1)), float(dev[np.argmax(np.abs(dev))])
+
+
+def segment_profile(disc, u, s_index: int) -> tuple[np.ndarray, np.ndarray]:
+    """(xi, w) along the segment beyond node ``s_index``: distance along the
+    chord x_1 -> tip and deviation from it, signed as in :func:`segment_geometry`
+    (units of l)."""
+    theta = disc.split(u)[0]
+    x = disc.node_positions(theta)
+    x1, tip = x[s_index], x[-1]
+    t = (tip - x1) / np.linalg.norm(tip - x1)
+    X = x[s_index:] - x1
+    return X @ t, X[:, 0] * t[1] - X[:, 1] * t[0]
+
+
+def _check_arm(disc) -> int:
+    if disc.n_tendons != 2:
+        raise InputError(f"the Fig. 7 scenario needs an arm with two tendons, got {disc.n_tendons}")
+    m1, m2 = disc.attach_nodes
+    if not m1 < m2:
+        raise InputError("the Fig. 7 scenario needs tendon 1 attached closer to the clamp than "
+                         "tendon 2 (s_1 < s_2)")
+    return m1
+
+
+def _length_mm(length_solver: LengthSolver) -> float:
+    if length_solver.length_mm is None:
+        raise InputError("the arm length is unknown: build the length solver with "
+                         "LengthSolver.from_arm()")
+    return float(length_solver.length_mm)
+
+
+# --- critical configuration --------------------------------------------------------------
+def critical_configuration(eq_solver: EquilibriumSolver, bracket=None, *, scan_step: float = 1.0,
+                           scan_max: float = 200.0) -> tuple[float, Equilibrium]:
+    """p_1* and the load-controlled equilibrium at (p_1*, 0): the segment
+    beyond x_1 straight and its line through r_2 (module docstring).
+
+    ``bracket`` (p_lo, p_hi): tensions p_1 around the root; default: the
+    first sign change of the alignment on a warm-started loading path
+    p_1 = scan_step, 2 scan_step, ... <= scan_max from the straight arm.
+    Every equilibrium of the root search is started from the one at p_lo."""
+    disc = eq_solver.disc
+    m1 = _check_arm(disc)
+
+    def state(p1, start):
+        eq = eq_solver.solve([p1, 0.0], start=start)
+        if not eq.converged:
+            raise BucklingError(f"load-controlled solve at p = ({p1:g}, 0) failed: {eq.message}")
+        return eq
+
+    def alignment(eq):
+        return segment_geometry(disc, eq.u, m1)[0]
+
+    if bracket is None:
+        prev = Equilibrium(disc, np.zeros(2), disc.straight(), True, "STRAIGHT", 0, 0)
+        c_prev, p1 = alignment(prev), 0.0
+        while True:
+            p1 += scan_step
+            if p1 > scan_max:
+                raise BucklingError(
+                    f"the line of the segment beyond x_1 never passes through r_2 for "
+                    f"p_1 <= {scan_max:g} (p_2 = 0): no critical configuration of Fig. 7")
+            eq = state(p1, prev)
+            c = alignment(eq)
+            if c_prev * c <= 0.0:
+                bracket, base = (p1 - scan_step, p1), prev
+                break
+            prev, c_prev = eq, c
+    else:
+        lo, hi = (float(v) for v in bracket)
+        base = state(lo, None)
+    lo, hi = bracket
+    f_lo, f_hi = alignment(state(lo, base)), alignment(state(hi, base))
+    if f_lo * f_hi > 0.0:
+        raise BucklingError(f"the alignment t x (r_2 - x_1) does not change sign for p_1 in "
+                            f"[{lo:g}, {hi:g}] (p_2 = 0)")
+    p1s = brentq(lambda p1: alignment(state(p1, base)), lo, hi, xtol=1e-13)
+    return p1s, state(p1s, base)
+
+
+# --- the perfect column --------------------------------------------------------------------
+def aligned_family(eq_solver: EquilibriumSolver, length_solver: LengthSolver,
+                   shortenings_mm=ALIGNED_SHORTENINGS_MM, *, critical=None,
+                   tol: float = 1e-13, max_iterations: int = 20) -> dict[float, LengthEquilibrium]:
+    """The aligned ("perfect column") family: {dL_2 [mm]: state}, starting
+    with 0.0, the critical configuration held at its own cable lengths L0.
+
+    For each shortening dL_2 (increasing, mm) L_2 = L0_2 - dL_2 and L_1 is
+    found by a secant iteration on the alignment of the segment beyond x_1
+    (|t x (r_2 - x_1)| < ``tol``), its first guess extrapolated from the
+    previous shortenings.  ``critical``: (p_1*, equilibrium) from
+    :func:`critical_configuration` (computed if not given)."""
+    _check_arm(length_solver.disc)
+    _length_mm(length_solver)
+    p1s, e0 = critical if critical is not None else critical_configuration(eq_solver)
+    state = length_solver.solve(e0.cable_lengths, e0)
+    if not state.converged:
+        raise BucklingError(f"the critical configuration held at its cable lengths: "
+                            f"{state.message}")
+    return extend_family(length_solver, {0.0: state}, shortenings_mm, tol=tol,
+                         max_iterations=max_iterations)
+
+
+def extend_family(length_solver: LengthSolver, aligned: dict, shortenings_mm, *,
+                  tol: float = 1e-13, max_iterations: int = 20) -> dict[float, LengthEquilibrium]:
+    """Continue an aligned family {dL_2 [mm]: state} (with the entry 0.0,
+    the critical configuration at its cable lengths L0) to further
+    shortenings, each warm-started from the last state; returns the same
+    dict, extended.  See :func:`aligned_family`."""
+    disc = length_solver.disc
+    m1 = _check_arm(disc)
+    l_mm = _length_mm(length_solver)
+    L0 = aligned[0.0].lengths_requested
+    keys = sorted(aligned)
+    state = aligned[keys[-1]]
+    history = [(d, aligned[d].lengths_requested[0]) for d in keys]
+    for dl in (float(d) for d in shortenings_mm):          # mm of L_2 shortening
+        if dl <= history[-1][0]:
+            raise InputError(f"aligned family: shortenings must increase from 0 mm, got {dl:g} "
+                             f"after {history[-1][0]:g}")
+        L2 = L0[1] - dl / l_mm
+        (a, La), (b, Lb) = history[-2:] if len(history) > 1 else (history[0], history[0])
+        L1 = Lb + (Lb - La) / (b - a) * (dl - b) if b > a else L0[0] + 2.2 * dl / l_mm
+        prev = None
+        for _ in range(max_iterations):                      # secant on the alignment
+            s = length_solver.solve([L1, L2], state)
+            if not s.converged:
+                raise BucklingError(f"aligned family at dL_2 = {dl:g} mm: {s.message}")
+            c = segment_geometry(disc, s.u, m1)[0]
+            if abs(c) < tol:
+                break
+            if prev is None:
+                prev, L1 = (L1, c), L1 + 1e-4 / l_mm
+            else:
+                (L1b, cb), prev = prev, (L1, c)
+                L1 = L1 - c * (L1 - L1b) / (c - cb)
+        else:
+            if abs(c) > 1e3 * tol:
+                raise BucklingError(f"aligned family at dL_2 = {dl:g} mm: the secant on L_1 "
+                                    f"did not align the segment (t x (r_2 - x_1) = {c:.3g})")
+        state = s
+        aligned[dl] = s
+        history.append((dl, L1))
+    return aligned
+
+
+def constrained_eigenvalue(length_solver: LengthSolver, state) -> float:
+    """Eigenvalue of K v = lambda h v on null(C_taut^T) nearest zero
+    (:func:`~elastica_petsc.solvers.lengths.constrained_mode`), non-dimensional."""
+    sys = length_solver.system
+    sys.deflation = Deflation(length_solver.disc.h)
+    return float(constrained_mode(sys, sys.augment(state.u, state.p, 1.0))[0])
+
+
+def clamped_column_estimate(a: float, c: float) -> tuple[float, float]:
+    """(k a, p_clamped = k^2) of the column of length ``a`` clamped at its
+    base with its end load aimed at a point ``c`` > a behind the end on its
+    axis: the root of tan(k a) = -k (c - a) in (pi/2, pi) (units of l)."""
+    if not c > a > 0:
+        raise ValueError(f"need c > a > 0, got a = {a:g}, c = {c:g}")
+    ka = brentq(lambda x: math.tan(x) + (c - a) / a * x, math.pi / 2 + 1e-12, math.pi - 1e-12,
+                xtol=1e-14)
+    return ka, (ka / a) ** 2
+
+
+# --- the whole figure ------------------------------------------------------------------
+@dataclass(frozen=True)
+class Fig7Result:
+    """The Fig. 7 scenario (module docstring).  Lengths in mm where named
+    ``*_mm``; segment deviations signed (positive to the left of the chord
+    x_1 -> tip); tensions non-dimensional, p = P l^2/B; eigenvalues lambda of
+    K v = lambda h v on null(C^T), non-dimensional like K."""
+
+    length_mm: float                  # arm length l
+    segment_length_mm: float          # a = s_2 - s_1
+    p1_star: float                    # p_1 of the critical configuration (p_2 = 0)
+    critical: Equilibrium             # load-controlled state at (p_1*, 0)
+    L0_mm: np.ndarray                 # its cable lengths (cable 2 just taut)
+    # the aligned family ("perfect column"), first entry dL_2 = 0 (critical state at L0)
+    aligned_shortenings_mm: np.ndarray
+    aligned: tuple                    # LengthEquilibrium per shortening
+    aligned_lambda: np.ndarray        # constrained eigenvalue nearest zero
+    # the crossing lambda = 0, linear interpolation in the bracketing interval
+    bracket: tuple                    # (index of the last stable, first unstable) aligned state
+    dL2_cr_mm: float
+    L_cr_mm: np.ndarray
+    p2_cr: float
+    ka_clamped: float                 # clamped-column estimate: k a and p = k^2
+    p_clamped: float
+    # continuation (LengthSolver.path) along the aligned lengths from the critical state
+    path: tuple                       # LengthEquilibrium per aligned point reached
+    path_deviation_mm: np.ndarray     # their segment deviations (buckled: not ~0)
+    event_L_mm: np.ndarray | None     # lengths where the path lost stability (instability)
+    event_dL2_mm: float | None
+    jump_L_mm: np.ndarray | None      # lengths at which it jumped to a buckled state
+    jumped: LengthEquilibrium | None  # the path's state at the point of the jump
+    # post-buckling at dL_2 = post_dL2_mm on the aligned lengths
+    post_dL2_mm: float
+    post_L_mm: np.ndarray
+    post_buckling: tuple              # stable buckled states, by increasing deviation
+    post_deviation_mm: np.ndarray
+    post_p2: np.ndarray
+    straight: LengthEquilibrium       # the straight (perfect) column there, unstable
+    straight_deviation_mm: float
+    # the paper's experiment: L_1 = L0_1 held, L_2 = L0_2 - dL_2 (imperfect column)
+    experiment_shortenings_mm: np.ndarray
+    experiment: tuple                 # LengthEquilibrium per point reached
+    experiment_deviation_mm: np.ndarray
+    experiment_p2: np.ndarray
+    seconds: float = math.nan         # wall time of fig7()
+
+    @property
+    def aligned_p2(self) -> np.ndarray:
+        return np.array([s.p[1] for s in self.aligned])
+
+    @property
+    def aligned_L_mm(self) -> np.ndarray:
+        return np.array([s.lengths_requested for s in self.aligned]) * self.length_mm
+
+    @property
+    def straight_p2(self) -> float:
+        return float(self.straight.p[1])
+
+    @property
+    def load_ratio(self) -> float:
+        """p_2,cr / p_clamped (< 1: the base x_1 is not a clamp)."""
+        return self.p2_cr / self.p_clamped
+
+    def summary(self, arm=None) -> dict:
+        """Plain data (JSON-friendly); tensions also in N when ``arm`` is given."""
+        def r(v, d=6):
+            return np.round(np.asarray(v, float), d).tolist()
+
+        def N(p):
+            return None if arm is None else r(arm.tensions_to_N(p))
+
+        return {
+            "reference": PAPER,
+            "p1_star": r(self.p1_star), "p1_star_N": N(self.p1_star),
+            "L0_mm": r(self.L0_mm),
+            "aligned": [{"dL2_mm": r(d), "lengths_mm": r(L), "tensions": r(s.p),
+                         "constrained_eigenvalue": r(lam),
+                         "unstable_modes_load": int(s.unstable_modes),
+                         "unstable_modes_length": int(s.length_unstable_modes)}
+                        for d, L, s, lam in zip(self.aligned_shortenings_mm, self.aligned_L_mm,
+                                                self.aligned, self.aligned_lambda)],
+            "critical_dL2_mm": r(self.dL2_cr_mm), "critical_lengths_mm": r(self.L_cr_mm),
+            "critical_p2": r(self.p2_cr), "critical_p2_N": N(self.p2_cr),
+            "clamped_column_ka": r(self.ka_clamped), "clamped_column_p2": r(self.p_clamped),
+            "clamped_column_p2_N": N(self.p_clamped), "load_ratio": r(self.load_ratio),
+            "continuation_instability_mm": None if self.event_L_mm is None else
+            r(self.event_L_mm),
+            "continuation_instability_dL2_mm": None if self.event_dL2_mm is None else
+            r(self.event_dL2_mm),
+            "continuation_jump_mm": None if self.jump_L_mm is None else r(self.jump_L_mm),
+            "post_buckling_dL2_mm": r(self.post_dL2_mm), "post_buckling_lengths_mm":
+            r(self.post_L_mm),
+            "post_buckling": [{"deviation_mm": r(d), "tensions": r(s.p),
+                               "tip_mm": r(s.tip * self.length_mm),
+                               "unstable_modes_load": int(s.unstable_modes),
+                               "unstable_modes_length": int(s.length_unstable_modes)}
+                              for d, s in zip(self.post_deviation_mm, self.post_buckling)],
+            "straight_column": {"deviation_mm": r(self.straight_deviation_mm),
+                                "tensions": r(self.straight.p),
+                                "unstable_modes_length": int(self.straight.length_unstable_modes)},
+            "experiment_L1_held": [{"dL2_mm": r(d), "deviation_mm": r(w), "p2": r(p),
+                                    "unstable_modes_load": int(s.unstable_modes),
+                                    "unstable_modes_length": int(s.length_unstable_modes)}
+                                   for d, w, p, s in zip(self.experiment_shortenings_mm,
+                                                         self.experiment_deviation_mm,
+                                                         self.experiment_p2, self.experiment)],
+            "seconds": r(self.seconds, 3),
+        }
+
+    def report(self) -> str:
+        """A few lines of text with the headline numbers."""
+        lines = [
+            f"Fig. 7 ({PAPER}): buckling of the straight segment under length control",
+            f"  critical configuration: p1* = {self.p1_star:.6f}, p2 = 0, L0 = "
+            f"({self.L0_mm[0]:.3f}, {self.L0_mm[1]:.3f}) mm",
+            "  aligned family (perfect column): dL2 [mm] / L1 [mm] / p2 / lambda_min = "
+            + "; ".join(f"{d:g}/{L[0]:.3f}/{s.p[1]:.3f}/{lam:.3g}" for d, L, s, lam in
+                        zip(self.aligned_shortenings_mm, self.aligned_L_mm, self.aligned,
+                            self.aligned_lambda)),
+            f"  critical: dL2 = {self.dL2_cr_mm:.4f} mm, L = ({self.L_cr_mm[0]:.3f}, "
+            f"{self.L_cr_mm[1]:.3f}) mm, p2 = {self.p2_cr:.4f}; clamped-column estimate "
+            f"p2 = {self.p_clamped:.4f} (k a = {self.ka_clamped:.4f}), ratio "
+            f"{self.load_ratio:.3f}",
+        ]
+        if self.event_dL2_mm is not None:
+            lines.append(f"  continuation: lost stability at dL2 = {self.event_dL2_mm:.4f} mm"
+                         + ("" if self.jump_L_mm is None else
+                            f", jumped at L = ({self.jump_L_mm[0]:.3f}, "
+                            f"{self.jump_L_mm[1]:.3f}) mm"))
+        elif len(self.path):
+            lines.append(f"  continuation: no instability reported up to dL2 = "
+                         f"{self.aligned_shortenings_mm[len(self.path)]:g} mm; final segment "
+                         f"deviation {self.path_deviation_mm[-1]:+.3f} mm")
+        lines.append(f"  post-buckling at dL2 = {self.post_dL2_mm:.3f} mm: "
+                     + ", ".join(f"deviation {w:+.3f} mm (p2 = {s.p[1]:.3f})"
+                                 for w, s in zip(self.post_deviation_mm, self.post_buckling))
+                     + f"; straight column p2 = {self.straight_p2:.3f} (unstable)")
+        if len(self.experiment):
+            lines.append(f"  paper's experiment (L1 held): at dL2 = "
+                         f"{self.experiment_shortenings_mm[len(self.experiment) - 1]:g} mm "
+                         f"deviation {self.experiment_deviation_mm[-1]:+.3f} mm, p2 = "
+                         f"{self.experiment_p2[-1]:.3f}")
+        return "\n".join(lines)
+
+
+def _interpolate(x, xs, values):
+    """Piecewise-linear interpolation of vector ``values`` (K, n) at ``x`` in ``xs``."""
+    xs = np.asarray(xs, float)
+    k = int(np.clip(np.searchsorted(xs, x) - 1, 0, len(xs) - 2))
+    w = (x - xs[k]) / (xs[k + 1] - xs[k])
+    return (1 - w) * np.asarray(values[k]) + w * np.asarray(values[k + 1])
+
+
+def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
+         shortenings_mm=ALIGNED_SHORTENINGS_MM, experiment_shortenings_mm=EXPERIMENT_SHORTENINGS_MM,
+         post_shortening_mm: float | None = None, max_shortening_mm: float = 20.0,
+         critical=None) -> Fig7Result:
+    """The Fig. 7 scenario of the paper (Sec. 4.6) on the arm of ``length_solver``
+    (``eq_solver`` on the same discretisation), see the module docstring.
+
+    shortenings_mm : dL_2 of the aligned family (positive, increasing);
+        extended by its last spacing, up to ``max_shortening_mm``, until the
+        constrained eigenvalue changes sign.  A point where Newton fails on
+        the straight column (at the crossing its Jacobian is singular) is
+        moved on by 0.3 or 0.6 of the spacing.
+    experiment_shortenings_mm : dL_2 of the paper's experiment (L_1 held).
+    post_shortening_mm : where the post-buckling states are computed (on the
+        aligned lengths); default 60 % of the way through the bracketing
+        interval of the crossing, but at least a quarter of the way from the
+        crossing to its end (paper's arm: 1.8 mm).
+    critical : (p_1*, equilibrium) if already known.
+    """
+    t0 = time.perf_counter()
+    disc = length_solver.disc
+    m1 = _check_arm(disc)
+    if eq_solver.disc.n_elements != disc.n_elements or \
+            tuple(eq_solver.disc.attach_nodes) != tuple(disc.attach_nodes):
+        raise InputError("fig7: the equilibrium and length solvers discretise different arms")
+    l_mm = _length_mm(length_solver)
+    critical = critical if critical is not None else critical_configuration(eq_solver)
+    p1s, e0 = critical
+    L0 = e0.cable_lengths.copy()
+
+    # aligned family, extended until the constrained eigenvalue crosses zero.  At the
+    # crossing itself the length-control Jacobian of the straight column is singular
+    # and Newton may fail: such a point is moved on by a fraction of the spacing.
+    state = length_solver.solve(L0, e0)
+    if not state.converged:
+        raise BucklingError(f"the critical configuration held at its cable lengths: "
+                            f"{state.message}")
+    aligned = {0.0: state}
+    lam = {0.0: constrained_eigenvalue(length_solver, state)}
+
+    def add(dl, spacing):
+        for shift in (0.0, 0.3, 0.6):
+            d = round(dl + shift * spacing, 10)
+            try:
+                extend_family(length_solver, aligned, [d])
+            except BucklingError:
+                if shift == 0.6:
+                    raise
+                continue
+            lam[d] = constrained_eigenvalue(length_solver, aligned[d])
+            return
+
+    def crossing():
+        keys = sorted(aligned)
+        if lam[keys[1]] <= 0:
+            raise BucklingError(
+                f"the straight column is already unstable under length control at the first "
+                f"shortening dL_2 = {keys[1]:g} mm: give smaller shortenings_mm")
+        for lo, hi in zip(keys[1:-1], keys[2:]):
+            if lam[lo] > 0 >= lam[hi]:
+                return lo, hi
+        return None
+
+    dls = [float(d) for d in shortenings_mm]
+    if not dls or dls[0] <= 0 or np.any(np.diff(dls) <= 0):
+        raise InputError("fig7: shortenings_mm must be positive and increasing")
+    for k, dl in enumerate(dls):
+        if dl > max(aligned):
+            add(dl, dls[k + 1] - dl if k + 1 < len(dls) else dl - max(aligned))
+    while crossing() is None:
+        keys = sorted(aligned)
+        step = keys[-1] - keys[-2]
+        if keys[-1] + step > max_shortening_mm:
+            raise BucklingError(
+                f"the straight column did not lose stability under length control up to "
+                f"dL_2 = {keys[-1]:g} mm (constrained eigenvalue {lam[keys[-1]]:.3g})")
+        add(keys[-1] + step, step)
+    lo, hi = crossing()
+    keys = sorted(aligned)
+    states = [aligned[d] for d in keys]
+
+    # interpolated critical point
+    dl_cr = lo + (hi - lo) * lam[lo] / (lam[lo] - lam[hi])
+    w = (dl_cr - lo) / (hi - lo)
+    L_cr = (1 - w) * aligned[lo].lengths_requested + w * aligned[hi].lengths_requested
+    p2_cr = float((1 - w) * aligned[lo].p[1] + w * aligned[hi].p[1])
+    s1, s2 = (np.asarray(disc.attach_nodes) * disc.h)
+    a = float(s2 - s1)
+    ka, p_clamped = clamped_column_estimate(a, float(L_cr[1]))
+
+    # continuation along the aligned lengths up to the first unstable one
+    upto = keys.index(hi)
+    path = length_solver.path([aligned[d].lengths_requested for d in keys[1:upto + 1]],
+                              aligned[0.0])
+    event = next((s.instabilities[0] for s in path if s.instabilities), None)
+    jumped = next((s for s in path if s.jumps), None)
+
+    # post-buckling states on the aligned lengths beyond the crossing
+    if post_shortening_mm is None:
+        post = max(lo + 0.6 * (hi - lo), dl_cr + 0.25 * (hi - dl_cr))
+    else:
+        post = float(post_shortening_mm)
+        if not dl_cr < post <= keys[-1]:
+            raise InputError(f"post_shortening_mm = {post:g} mm must lie beyond the critical "
+                             f"{dl_cr:.3f} mm and within the aligned family (<= {keys[-1]:g} mm)")
+    L_post = _interpolate(post, keys, [s.lengths_requested for s in states])
+    nxt = keys[int(np.searchsorted(keys, post))]             # first aligned point >= post
+    prv = keys[int(np.searchsorted(keys, post)) - 1]
+    last_stable = aligned[prv] if lam[prv] > 0 else aligned[lo]
+    straight = length_solver.solve(L_post, aligned[nxt])
+    if not straight.converged:
+        raise BucklingError(f"the straight column at dL_2 = {post:g} mm: {straight.message}")
+    buckled = length_solver.branches(last_stable.u, last_stable.p, L_post)
+    dev = [segment_geometry(disc, s.u, m1)[1] * l_mm for s in buckled]
+    order = np.argsort(dev)
+    buckled = tuple(buckled[k] for k in order)
+
+    # the paper's experiment: L_1 held, L_2 shortened
+    exp_dl = np.asarray([float(d) for d in experiment_shortenings_mm])
+    experiment = length_solver.path([L0 - np.array([0.0, d / l_mm]) for d in exp_dl], e0) \
+        if exp_dl.size else []
+    experiment = [s for s in experiment if s.converged]
+
+    return Fig7Result(
+        length_mm=l_mm, segment_length_mm=a * l_mm, p1_star=float(p1s), critical=e0,
+        L0_mm=L0 * l_mm,
+        aligned_shortenings_mm=np.array(keys), aligned=tuple(states),
+        aligned_lambda=np.array([lam[d] for d in keys]), bracket=(keys.index(lo), upto),
+        dL2_cr_mm=float(dl_cr), L_cr_mm=L_cr * l_mm, p2_cr=p2_cr,
+        ka_clamped=float(ka), p_clamped=float(p_clamped),
+        path=tuple(path),
+        path_deviation_mm=np.array([segment_geometry(disc, s.u, m1)[1] * l_mm for s in path]),
+        event_L_mm=None if event is None else np.asarray(event) * l_mm,
+        event_dL2_mm=None if event is None else float((L0[1] - event[1]) * l_mm),
+        jump_L_mm=None if jumped is None else np.asarray(jumped.jumps[0]) * l_mm,
+        jumped=jumped,
+        post_dL2_mm=float(post), post_L_mm=L_post * l_mm, post_buckling=buckled,
+        post_deviation_mm=np.array([dev[k] for k in order]),
+        post_p2=np.array([s.p[1] for s in buckled]),
+        straight=straight,
+        straight_deviation_mm=segment_geometry(disc, straight.u, m1)[1] * l_mm,
+        experiment_shortenings_mm=exp_dl[: len(experiment)], experiment=tuple(experiment),
+        experiment_deviation_mm=np.array([segment_geometry(disc, s.u, m1)[1] * l_mm
+                                          for s in experiment]),
+        experiment_p2=np.array([s.p[1] for s in experiment]),
+        seconds=time.perf_counter() - t0)
+
+
+# --- the figure ------------------------------------------------------------------------------
+def plot_fig7(arm, result: Fig7Result, png) -> None:
+    """Fig. 7 of the paper, computed.  Left: the critical configuration and
+    both post-buckling states, zoomed on the segment beyond x_1 (equal
+    aspect, mm), and below it each state's deviation from its chord
+    x_1 -> tip.  Right: p_2 and the constrained eigenvalue against the
+    shortening of L_2 for the aligned family (perfect column) and for the
+    paper's experiment (L_1 held), with the critical point, the
+    clamped-column estimate and the continuation's instability."""
+    from ..plots.common import draw_arm, draw_setting, figure, finish_geometry, save
+
+    r = result
+    l_mm = arm.length_mm
+    disc = r.critical.disc
+    m1 = disc.attach_nodes[0]
+    fig, axes = figure(nrows=2, ncols=2, figsize=(15, 11),
+                       gridspec_kw={"width_ratios": [1.1, 1.0], "height_ratios": [1.6, 1.0]})
+    (ax, ax_p), (ax_w, ax_l) = axes
+    post_colours = ("tab:red", "tab:cyan")
+    states = [(r.critical, f"critical: p = ({r.p1_star:.2f}, 0), cable 2 just taut", "k")]
+    for k, (s, w) in enumerate(zip(r.post_buckling, r.post_deviation_mm)):
+        states.append((s, f"post-buckling {k + 1}: deviation {w:+.2f} mm, p = ({s.p[0]:.2f}, "
+                          f"{s.p[1]:.2f})", post_colours[k % 2]))
+    straight_label = (f"straight column at the same lengths (unstable), p = "
+                      f"({r.straight.p[0]:.2f}, {r.straight.p[1]:.2f})")
+
+    # -- geometry (equal aspect, mm), the segment beyond x_1 in view, and a zoom on its middle
+    draw_setting(ax, arm)
+    for s, label, colour in states:
+        draw_arm(ax, arm, s, label=label, colour=colour)
+    x_s = r.straight.x * l_mm
+    ax.plot(x_s[m1:, 0], x_s[m1:, 1], ":", color="0.3", lw=1.4, zorder=3, label=straight_label)
+    x1 = r.critical.x[m1] * l_mm
+    ax.plot(*x1, "o", color="k", ms=6, mfc="white", zorder=6)
+    ax.annotate("x1", x1, xytext=(-18, -12), textcoords="offset points", fontsize=10)
+    pts = np.vstack([q.x[m1:] * l_mm for q, _, _ in states] + [arm.routes()[1:2] * l_mm])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    pad = 0.08 * np.max(hi - lo)
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    finish_geometry(ax, "Critical state and the two post-buckling states "
+                        f"(dL2 = {r.post_dL2_mm:.2f} mm on the aligned path)")
+    ax.title.set_fontsize(10)
+    ax.legend(loc="lower left", fontsize=7.5, framealpha=0.9)
+    # zoom: a square window (equal aspect) around the middle of the straight column
+    mid = 0.5 * (x_s[m1] + x_s[-1])
+    half = max(4.0 * float(np.max(np.abs(r.post_deviation_mm), initial=0.0)), 5.0)
+    ins = ax.inset_axes([0.60, 0.58, 0.38, 0.38])
+    for s, _, colour in states:
+        x = s.x * l_mm
+        ins.plot(x[:, 0], x[:, 1], "-", color=colour, lw=2.0)
+    ins.plot(x_s[:, 0], x_s[:, 1], ":", color="0.3", lw=1.6)
+    ins.set_xlim(mid[0] - half, mid[0] + half)
+    ins.set_ylim(mid[1] - half, mid[1] + half)
+    ins.set_aspect("equal")
+    ins.tick_params(labelsize=6)
+    ins.grid(True, lw=0.3, alpha=0.6)
+    ins.set_title(f"zoom, middle of the segment ({2 * half:.0f} mm square)", fontsize=8, pad=3)
+    ax.indicate_inset_zoom(ins, edgecolor="0.4")
+
+    # -- deviation from the chord, magnified
+    for s, label, colour in states + [(r.straight, "straight column (unstable)", "0.3")]:
+        xi, w = segment_profile(disc, s.u, m1)
+        ax_w.plot(xi * l_mm, w * l_mm, ":" if s is r.straight else "-", color=colour, lw=1.8,
+                  label=label.split(":")[0])
+    ax_w.axhline(0.0, color="0.6", lw=0.8)
+    ax_w.set_xlabel("distance along the chord x1 -> tip [mm]")
+    ax_w.set_ylabel("deviation from the chord [mm]")
+    ax_w.set_title("Deviation of the segment from its chord (not to scale)", fontsize=10)
+    ax_w.grid(True, lw=0.3, alpha=0.6)
+    ax_w.legend(fontsize=8)
+
+    # -- p_2 against the shortening of L_2
+    d_al, p_al = r.aligned_shortenings_mm, r.aligned_p2
+    k_hi = r.bracket[1]
+    ax_p.plot(d_al[:k_hi], p_al[:k_hi], "o-", color="tab:blue", ms=5,
+              label="aligned family (perfect column, L1 let out), stable")
+    ax_p.plot(d_al[k_hi - 1:], p_al[k_hi - 1:], "o--", color="tab:blue", ms=5, mfc="white",
+              label="aligned family, unstable under length control")
+    d_ex = np.concatenate(([0.0], r.experiment_shortenings_mm))
+    p_ex = np.concatenate(([r.aligned[0].p[1]], r.experiment_p2))
+    ax_p.plot(d_ex, p_ex, "s-", color="tab:green", ms=3.5,
+              label="paper's experiment: L1 held (imperfect column), stable")
+    load_unstable = np.array([False] + [s.unstable_modes > 0 for s in r.experiment])
+    if load_unstable.any():
+        ax_p.plot(d_ex[load_unstable], p_ex[load_unstable], "s", color="tab:green", ms=6,
+                  mfc="white", label="  ... stable only under length control (K indefinite)")
+    ax_p.axhline(r.p_clamped, color="tab:purple", ls=":", lw=1.4,
+                 label=f"clamped-column estimate tan(ka) = -k(c - a): p2 = {r.p_clamped:.2f}")
+    ax_p.plot(r.dL2_cr_mm, r.p2_cr, "*", color="k", ms=15, zorder=6,
+              label=f"critical: dL2 = {r.dL2_cr_mm:.3f} mm, p2 = {r.p2_cr:.2f}")
+    if r.event_dL2_mm is not None:
+        ax_p.axvline(r.event_dL2_mm, color="0.5", lw=1.0, ls="-.",
+                     label=f"continuation: instability reported at dL2 = "
+                           f"{r.event_dL2_mm:.3f} mm")
+    for k, s in enumerate(r.post_buckling):
+        ax_p.plot(r.post_dL2_mm, s.p[1], "D", color=post_colours[k % 2], ms=7, zorder=6,
+                  label=f"post-buckling {k + 1}" if k < 2 else None)
+    ax_p.plot(r.post_dL2_mm, r.straight_p2, "D", color="0.3", mfc="white", ms=7, zorder=6,
+              label="straight column there (unstable)")
+    ax_p.set_xlabel("shortening of L2, dL2 [mm]")
+    ax_p.set_ylabel("tension p2 = P2 l^2 / B")
+    sec = ax_p.secondary_yaxis("right", functions=(lambda p: p * arm.force_scale_N,
+                                                   lambda P: P / arm.force_scale_N))
+    sec.set_ylabel("P2 [N]")
+    ax_p.set_title("Tension of cable 2 as L2 is shortened", fontsize=10)
+    ax_p.grid(True, lw=0.3, alpha=0.6)
+    ax_p.legend(fontsize=7.5, loc="lower right")
+
+    # -- constrained eigenvalue
+    ax_l.plot(d_al, r.aligned_lambda, "o-", color="tab:blue", ms=5,
+              label="eigenvalue of K on null(C^T) nearest zero, aligned family")
+    ax_l.axhline(0.0, color="k", lw=0.8)
+    ax_l.plot(r.dL2_cr_mm, 0.0, "*", color="k", ms=15, zorder=6,
+              label=f"crossing: dL2 = {r.dL2_cr_mm:.3f} mm")
+    unstable = np.array([s.unstable_modes > 0 for s in r.aligned])
+    if unstable.any():
+        ax_l.plot(d_al[unstable], r.aligned_lambda[unstable], "o", ms=11, mfc="none",
+                  color="tab:orange", label="K alone indefinite (unstable under load control)")
+    ax_l.set_xlabel("shortening of L2, dL2 [mm]")
+    ax_l.set_ylabel("lambda  (K v = lambda h v)")
+    ax_l.set_title("Stability under length control of the perfect column", fontsize=10)
+    ax_l.grid(True, lw=0.3, alpha=0.6)
+    ax_l.legend(fontsize=8)
+    ax_l.set_xlim(-0.05 * d_al[-1], 1.05 * d_al[-1])
+    fig.suptitle(f"Buckling of the straight segment under length control ({PAPER}); "
+                 f"{disc.n_elements} elements", fontsize=11)
+    fig.tight_layout()
+    save(fig, png)
