@@ -29,7 +29,8 @@ above is passed to PETSc, e.g. -eq_snes_monitor, -eq_snes_rtol 1e-12
 (equilibrium Newton solver, prefix eq_), -ctl_tao_monitor (tip control,
 prefix ctl_), -stab_eps_view (eigen solver, prefix stab_).
 
-Exit status: 0 ok, 1 not converged, 2 bad input, 3 target unreachable."""
+Exit status: 0 ok, 1 not converged, 2 bad input, 3 target proven unreachable
+(control: |target| > l), 4 target not reached and not proven unreachable."""
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -5,7 +5,8 @@ import sys
 
 from . import common
 
-UNREACHABLE = 3
+UNREACHABLE = 3      # proven outside W_0 (reachable: false, see "evidence")
+UNDECIDED = 4        # not reached, not proven unreachable (reachable: null)
 
 
 def add_parser(sub) -> None:
@@ -15,8 +16,12 @@ def add_parser(sub) -> None:
                     "when the config gives a motor limit) with PETSc TAO BLMVM (default) or the "
                     "paper's gradient descent (Algorithm 1). Stops when the tip is within "
                     "--tol-mm of the target. Prints the tensions (non-dimensional and N), the "
-                    "cable lengths to impose, and the tip sensitivities. A target outside the "
-                    "workspace exits with status 3 and says how close the arm can get.")
+                    "cable lengths to impose, the tip sensitivities and the loading path that "
+                    "reaches the state from the straight arm (reproduce it with `solve --from`). "
+                    "When the local iteration stalls, a global search follows (homotopy in "
+                    "target space, restarts from other loading orders). Exit status 0: reached; "
+                    "3: proven unreachable (|target| > l); 4: not reached and not proven "
+                    "unreachable (the closest tip found is printed).")
     parser.add_argument("--target", type=float, nargs=2, required=True, metavar=("X", "Y"),
                         help="desired tip position in mm")
     parser.add_argument("--method", choices=("blmvm", "gd"), default="blmvm",
@@ -26,6 +31,8 @@ def add_parser(sub) -> None:
                         help="initial tensions, non-dimensional p = P l^2/B (default 0)")
     parser.add_argument("--tol-mm", type=float, default=1e-5, metavar="MM",
                         help="tip tolerance in mm (default 1e-5, the paper's eps = 1e-10 mm^2)")
+    parser.add_argument("--local", action="store_true",
+                        help="local solve only (no global search when it stalls)")
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
@@ -38,7 +45,11 @@ def control_summary(arm, result) -> dict:
     return {
         "converged": bool(result.converged),
         "reachable": result.reachable,
+        "evidence": result.evidence,
         "reason": result.reason,
+        "local_reason": result.local_reason or result.reason,
+        "strategy": result.strategy,
+        "loading": None if result.loading is None else result.loading.to_json(),
         "tao_reason": result.tao_reason,
         "message": result.message,
         "method": result.method,
@@ -62,13 +73,18 @@ def control_summary(arm, result) -> dict:
 
 
 def unreachable_message(s: dict) -> str:
+    """Not reached: proven unreachable (with its evidence) or undecided."""
     bounds = ", ".join(
         f"tendon {b['tendon']} sits on its {'lower bound P = 0 (it would have to push)' if b['bound'] == 'lower' else 'upper bound (motor force limit)'}"
         for b in s["on_bound"]) or "no tension is on a bound"
-    return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm is not reachable "
-            f"with admissible tensions: the closest tip is ({s['tip_mm'][0]:.3f}, "
-            f"{s['tip_mm'][1]:.3f}) mm, {s['tip_error_mm']:.3f} mm away; {bounds} "
-            f"({s['reason']})")
+    where = (f"the closest tip found is ({s['tip_mm'][0]:.3f}, {s['tip_mm'][1]:.3f}) mm, "
+             f"{s['tip_error_mm']:.3f} mm away")
+    if s["reachable"] is False:
+        return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm is not reachable: "
+                f"{s['evidence']}; {where}")
+    return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm not reached and not "
+            f"proven unreachable ({s['reason']}, local end {s['local_reason']}): {where}; "
+            f"{bounds}")
 
 
 def format_control(s: dict) -> str:
@@ -78,8 +94,7 @@ def format_control(s: dict) -> str:
                      f"({s['method']}, {s['iterations']} iterations, {s['evaluations']} "
                      f"equilibrium solves)")
     else:
-        lines.append("target NOT reached: " + (unreachable_message(s) if s["reachable"] is False
-                                                else f"{s['reason']}: {s['message']}"))
+        lines.append("target NOT reached: " + unreachable_message(s))
     lines.append(f"tip: ({s['tip_mm'][0]:.6f}, {s['tip_mm'][1]:.6f}) mm   target: "
                  f"({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm")
     lines.append(f"{'tendon':>6} {'p=Pl^2/B':>10} {'P [N]':>9} {'cable length [mm]':>18} "
@@ -89,13 +104,20 @@ def format_control(s: dict) -> str:
         lines.append(f"{i:>6} {p:>10.4f} {P:>9.4f} {L:>18.4f} {f'({d[0]:.2f}, {d[1]:.2f})':>22}")
     lines.append(f"stable: {'yes' if s['stable'] else 'NO'};  strain energy "
                  f"{s['strain_energy']:.3f} SE0;  l*kappa_max {s['kappa_max']:.3f}")
+    if s["loading"] is not None:
+        lines.append(f"loading from the straight arm: {s['loading']['description']}"
+                     + ("" if s["strategy"] == "local" else f" (found by {s['strategy']})")
+                     + "; `solve --from FILE` replays it from an --out file")
     return "\n".join(lines)
 
 
 def run(args) -> int:
+    import dataclasses
+
     import numpy as np
 
     from ..solvers.control import TipController
+    from ..solvers.reach import Reacher, simplest_loading
     from ..core.errors import InputError
 
     arm, disc = common.load_arm(args)
@@ -107,7 +129,10 @@ def run(args) -> int:
         raise InputError("--target must be two finite numbers in mm")
     with TipController(arm, n_elements=disc.n_elements, method=args.method,
                        tip_tol_mm=args.tol_mm) as controller:
-        result = controller.solve_mm(args.target, p0=guess)
+        result = Reacher(controller).reach(np.asarray(args.target) / arm.length_mm, p0=guess,
+                                           global_search=not args.local)
+        result = dataclasses.replace(result, loading=simplest_loading(
+            controller.solver, result.equilibrium, result.loading))
     summary = control_summary(arm, result)
     if args.json:
         common.print_json(summary)
@@ -123,8 +148,5 @@ def run(args) -> int:
         plot_descent(arm, result, args.plot)
     if result.converged:
         return 0
-    if result.reachable is False:
-        print(f"elastica-petsc: {unreachable_message(summary)}", file=sys.stderr)
-        return UNREACHABLE
-    print(f"elastica-petsc: tip control failed: {result.reason}: {result.message}", file=sys.stderr)
-    return 1
+    print(f"elastica-petsc: {unreachable_message(summary)}", file=sys.stderr)
+    return UNREACHABLE if result.reachable is False else UNDECIDED

@@ -90,6 +90,15 @@ def trace_summary(arm, result, schedule) -> dict:
                                   for i in range(result.cable_lengths_mm.shape[1])],
         "monotonic_fraction": [None if np.isnan(v) else round(float(v), 4) for v in mono],
         "work_fraction": round(float(result.work_fraction()), 4),
+        "not_reached_undecided": int(sum(1 for r in result.results
+                                         if not r.converged and r.reachable is None)),
+        "not_reached_proven_unreachable": int(sum(1 for r in result.results
+                                                  if r.reachable is False)),
+        "loading_first_point": (None if not result.results or result.results[0].loading is None
+                                else result.results[0].loading.to_json()),
+        "loading_note": "each point's loading path from the straight arm is in the HDF5 "
+                        "/loading tree (/path/loading_node); `solve --from FILE --point K` "
+                        "replays it",
         "max_rounding_error_mm": float(f"{np.max(np.abs(schedule.rounding_error_mm)):.3g}"),
         "mm_per_microstep": float(f"{schedule.mm_per_step:.6g}"),
     }

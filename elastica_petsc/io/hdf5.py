@@ -154,7 +154,9 @@ def write_control(group, arm: Arm, result) -> None:
                       "reachable": str(result.reachable), "reason": result.reason,
                       "tao_reason": result.tao_reason, "method": result.method,
                       "iterations": int(result.iterations),
-                      "evaluations": int(result.evaluations), "message": result.message})
+                      "evaluations": int(result.evaluations), "message": result.message,
+                      "evidence": result.evidence, "strategy": result.strategy})
+    write_loading(group, result.loading)
 
 
 def write_trace(group, arm: Arm, trace, schedule) -> None:
@@ -165,7 +167,8 @@ def write_trace(group, arm: Arm, trace, schedule) -> None:
     (K,2) mm, path/tensions (K,n) P l^2/B, path/tensions_N (K,n) N,
     path/cable_lengths (K,n) mm, path/theta (K,N+1) rad, path/curvature (K,N),
     path/tip_sensitivity (K,n,2) mm per unit p, path/iterations (K,),
-    path/converged (K,), path/tip_error (K,) mm; schedule/revolutions,
+    path/converged (K,), path/tip_error (K,) mm, path/loading_node (K,) (the
+    point's loading path in the tree /loading, :func:`write_loading_tree`); schedule/revolutions,
     schedule/steps, schedule/rounding_error (K,n).
     """
     l_mm = arm.length_mm
@@ -185,6 +188,9 @@ def write_trace(group, arm: Arm, trace, schedule) -> None:
         "mm per (P l^2/B)", "d x_t / d p_i (Eq. (13)): [point, tendon, component]")
     put(path, "iterations", trace.iterations, "1", "optimiser iterations per point")
     put(path, "converged", trace.converged, "1", "tip within tolerance of the target")
+    ends = write_loading_tree(group, [r.loading for r in results])
+    put(path, "loading_node", ends, "1",
+        "per point: last vertex of its loading path in /loading (-1: p = 0, -2: unknown)")
     sched = group.create_group("schedule")
     put(sched, "revolutions", schedule.revolutions, "rev", "spool revolutions from the first point")
     put(sched, "steps", schedule.steps, "microsteps", "motor microsteps from the first point")
@@ -192,3 +198,75 @@ def write_trace(group, arm: Arm, trace, schedule) -> None:
         "imposed minus requested cable length change (integer steps)")
     write_attrs(sched, {"spool_radius_mm": schedule.spool_radius_mm,
                         "steps_per_revolution": schedule.steps_per_revolution})
+
+
+# --- loading paths (how a state is reached from the straight arm) -----------------------
+def write_loading(group, loading) -> None:
+    """``loading/vertices`` (k, n) P l^2/B: the loading path of
+    :class:`~elastica_petsc.core.loading.Loading` from p = 0, each segment followed
+    by continuation; attributes ``kind`` (proportional, order, path, unknown),
+    ``order`` ("2,1" or "") and ``description``.  ``loading`` None: kind unknown."""
+    g = group.create_group("loading")
+    if loading is None:
+        write_attrs(g, {"kind": "unknown", "order": "", "description": "not recorded"})
+        return
+    info = loading.to_json()
+    put(g, "vertices", loading.vertices(), "P l^2/B",
+        "tension vertices after p = 0 (straight arm), each reached by continuation")
+    write_attrs(g, {"kind": info["kind"], "order": ",".join(map(str, info["order"] or ())),
+                    "description": info["description"]})
+
+
+def write_loading_tree(group, loadings) -> np.ndarray:
+    """Many loading paths sharing their history (a trace): ``loading/vertices``
+    (M, n) and ``loading/parent`` (M,) (index of the previous vertex, -1: p = 0);
+    returns each path's last vertex index (-1: the straight arm; -2: unknown)."""
+    index, vertices, parents, ends = {}, [], [], []
+    for loading in loadings:
+        if loading is None:
+            ends.append(-2)
+            continue
+        chain, node = [], loading
+        while node.parent is not None and id(node) not in index:
+            chain.append(node)
+            node = node.parent
+        for item in reversed(chain):
+            up = item.parent
+            parents.append(-1 if up.parent is None else index[id(up)])
+            index[id(item)] = len(vertices)
+            vertices.append(item.p)
+        ends.append(-1 if loading.parent is None else index[id(loading)])
+    n = next((len(v) for v in vertices), 0)
+    g = group.create_group("loading")
+    put(g, "vertices", np.array(vertices).reshape(-1, n) if vertices else np.zeros((0, 0)),
+        "P l^2/B", "tension vertices of the loading paths (a tree rooted at p = 0)")
+    put(g, "parent", np.array(parents, dtype=np.int64), "1",
+        "index of the previous vertex on the path (-1: p = 0, the straight arm)")
+    write_attrs(g, {"kind": "tree"})
+    return np.array(ends, dtype=np.int64)
+
+
+def read_loading(fh, node: int | None = None):
+    """The :class:`~elastica_petsc.core.loading.Loading` stored by
+    :func:`write_loading` (``node`` None) or path ``node`` of a
+    :func:`write_loading_tree`; None if not recorded."""
+    from ..core.loading import Loading
+
+    if "loading" not in fh:
+        return None
+    g = fh["loading"]
+    if node is None:
+        if "vertices" not in g:
+            return None
+        return Loading.from_vertices(g["vertices"][()])
+    if node == -2:
+        return None
+    vertices, parents = g["vertices"][()], g["parent"][()]
+    chain = []
+    while node >= 0:
+        chain.append(vertices[node])
+        node = int(parents[node])
+    n = vertices.shape[1] if vertices.ndim == 2 and vertices.shape[1] else None
+    if not chain:
+        return Loading.straight(n) if n else None
+    return Loading.from_vertices(np.array(chain[::-1]))

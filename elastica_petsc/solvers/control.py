@@ -77,6 +77,7 @@ retried within a solve.  Each costs a full continuation in
 """
 from __future__ import annotations
 
+import dataclasses
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
@@ -86,6 +87,7 @@ from petsc4py import PETSc
 from .equilibrium import COLLAPSE_LENGTH, Equilibrium, EquilibriumSolver, check_tensions
 from ..core.errors import InputError
 from ..core.fem import Discretisation
+from ..core.loading import Loading
 from ..core.model import Arm
 from .sensitivity import Sensitivity, SensitivityError, SensitivitySolver
 
@@ -133,6 +135,7 @@ class Evaluation:
     p: np.ndarray
     equilibrium: Equilibrium
     sensitivity: Sensitivity
+    loading: Loading | None = None      # how the equilibrium was reached (None: unknown)
 
 
 @dataclass(frozen=True)
@@ -141,9 +144,9 @@ class ControlResult:
     l (``length_mm``), tensions p = P l^2 / B (``force_scale_N`` = B / l^2)."""
 
     converged: bool                 # E < eps: the tip is on the target
-    reachable: bool | None          # True: reached; False: a stationary point / stall
-    #                                 with E > eps (closest tip found); None: undecided
-    #                                 (iteration limit or failure)
+    reachable: bool | None          # True: reached; False: proven outside W_0 (see
+    #                                 ``evidence``, set by :mod:`.reach` only); None:
+    #                                 not reached and not proven unreachable
     reason: str                     # TARGET_REACHED, STATIONARY, STALLED, MAX_ITERATIONS, ...
     tao_reason: str                 # TAO's converged reason, checked
     message: str
@@ -166,6 +169,10 @@ class ControlResult:
     on_bound: tuple[tuple[int, str], ...] = ()   # (tendon number 1.., "lower"/"upper")
     length_mm: float = 1.0
     force_scale_N: float = 1.0
+    loading: Loading | None = None  # loading path from the straight arm (None: unknown)
+    evidence: str = ""              # why reachable is False (or what the search tried)
+    strategy: str = "local"         # what reached the target: local, homotopy, seed, ...
+    local_reason: str = ""          # with SEARCH_EXHAUSTED: how the closest local solve ended
 
     @property
     def gradient(self) -> np.ndarray:
@@ -200,6 +207,8 @@ class _SolveState:
     target: np.ndarray
     anchor: Equilibrium | None
     max_failures: int
+    anchor_loading: Loading | None = None
+    max_it: int = 200
     last_good: Evaluation | None = None
     evaluations: int = 0
     failed: int = 0
@@ -354,12 +363,16 @@ class TipController:
         while len(self._cache) > 32:
             self._cache.popitem(last=False)
 
-    def evaluate(self, p, start: Equilibrium | None = None) -> Evaluation | None:
+    def evaluate(self, p, start: Equilibrium | None = None,
+                 start_loading: Loading | None = None) -> Evaluation | None:
         """Equilibrium and sensitivities at tensions ``p`` (cached by p).
 
         Continuation from ``start`` (default: the last good state of the
         current solve), then from the solve's starting equilibrium; None if
-        both fail."""
+        both fail.  Outside a solve and without ``start``: proportional
+        loading from the straight arm.  The evaluation records its loading
+        path (:class:`~elastica_petsc.core.loading.Loading`): the origin's
+        path continued to ``p`` (``start_loading`` for ``start``; None if unknown)."""
         p = check_tensions(p, self.n)
         cached = self._cache.get(p.tobytes())
         if cached is not None:
@@ -367,19 +380,9 @@ class TipController:
         st = self._state
         if st is not None and (p.tobytes() in st.failed_at or st.failed >= st.max_failures):
             return None                 # known to fail, or the failure budget is spent
-        starts = []                     # (equilibrium, its du/dp for the predictor)
-        if start is not None:
-            starts.append((start, None))
-        elif st is not None:
-            if st.last_good is not None:
-                good = st.last_good
-                starts.append((good.equilibrium, good.sensitivity.state_derivative))
-            if st.anchor is not None and all(st.anchor is not o for o, _ in starts):
-                starts.append((st.anchor, None))
-        if not starts:
-            starts.append((None, None))
+        starts = self._origins(start, start_loading)
         message = ""
-        for origin, tangent in starts:
+        for origin, tangent, loading in starts:
             eq = self.solver.solve(p, start=origin, tangent=tangent)
             if not eq.converged:
                 message = eq.message
@@ -394,13 +397,30 @@ class TipController:
             except SensitivityError as err:
                 message = str(err)
                 continue
-            ev = Evaluation(p.copy(), eq, sens)
+            ev = Evaluation(p.copy(), eq, sens, None if loading is None else loading.then(p))
             self._remember(ev)
             return ev
         if st is not None:
             st.failure = message
             st.failed_at.add(p.tobytes())
         return None
+
+    def _origins(self, start, start_loading) -> list:
+        """(equilibrium, du/dp for the predictor, its loading path) to continue from."""
+        st = self._state
+        starts = []
+        if start is not None:
+            starts.append((start, None, start_loading))
+        elif st is not None:
+            if st.last_good is not None:
+                good = st.last_good
+                starts.append((good.equilibrium, good.sensitivity.state_derivative,
+                               good.loading))
+            if st.anchor is not None and all(st.anchor is not o for o, _, _ in starts):
+                starts.append((st.anchor, None, st.anchor_loading))
+        if not starts:
+            starts.append((None, None, Loading.straight(self.n)))
+        return starts
 
     def _true_bounds(self) -> None:
         """TAO's bounds back to 0 <= p <= upper (the step box of the last
@@ -512,7 +532,7 @@ class TipController:
             return TARGET_REACHED, Reason.CONVERGED_USER
         if st.collapsing is not None:
             return CABLE_COLLAPSE, Reason.DIVERGED_USER
-        if its >= self.max_it:
+        if its >= st.max_it:
             return MAX_ITERATIONS, Reason.DIVERGED_MAXITS
         if st.evaluations >= self.max_evaluations:
             return MAX_EVALUATIONS, Reason.DIVERGED_MAXFCN
@@ -609,14 +629,24 @@ class TipController:
 
     # --- public API --------------------------------------------------------------
     def solve(self, target, p0=None, start: Equilibrium | None = None,
-              max_failures: int | None = None) -> ControlResult:
+              max_failures: int | None = None,
+              start_loading: Loading | None = None, max_it: int | None = None) -> ControlResult:
         """Tensions putting the tip at ``target`` (units of l), Algorithm 1.
+
+        One local run (a stationary point away from the target is reported
+        with ``reachable`` None: for the global search and its verdicts see
+        :func:`elastica_petsc.solvers.reach.reach`).
 
         p0 : initial tensions (default: ``start.p`` if ``start`` is given, else 0).
         start : an equilibrium to warm-start the equilibrium solves from (e.g.
             the previous point of a path); default the straight arm, loaded
             proportionally to p0.
         max_failures : failure budget of this solve (default: the controller's).
+        start_loading : the loading path that reached ``start`` (e.g. the
+            ``loading`` of the previous result), so that the result's
+            ``loading`` is known; without it a result started from ``start``
+            has ``loading`` None.
+        max_it : iteration limit of this solve (default: the controller's).
         """
         target = np.asarray(target, dtype=float).ravel()
         if target.shape != (2,) or not np.all(np.isfinite(target)):
@@ -630,16 +660,20 @@ class TipController:
         if start is not None and not start.converged:
             raise InputError("start must be a converged equilibrium")
         self._state = st = _SolveState(
-            target=target, anchor=start,
-            max_failures=self.max_failures if max_failures is None else int(max_failures))
+            target=target, anchor=start, anchor_loading=start_loading,
+            max_failures=self.max_failures if max_failures is None else int(max_failures),
+            max_it=self.max_it if max_it is None else min(int(max_it), self.max_it))
         # evaluations are valid within one solve (the branch depends on the start);
         # keep only the one of ``start`` (the previous path point: its sensitivities)
         keep = [ev for ev in self._cache.values() if start is not None and ev.equilibrium is start]
         self._cache.clear()
         if keep:
-            self._remember(keep[0])
+            ev0 = keep[0]
+            if start_loading is not None and ev0.loading is not start_loading:
+                ev0 = dataclasses.replace(ev0, loading=start_loading)
+            self._remember(ev0)
         elif start is not None and np.array_equal(np.asarray(start.p, float), p0):
-            self._remember(Evaluation(p0.copy(), start, self.sens.compute(start)))
+            self._remember(Evaluation(p0.copy(), start, self.sens.compute(start), start_loading))
         try:
             if self.tao is None:
                 ev, tao_reason, iterations = self._solve_gd(p0)
@@ -665,10 +699,11 @@ class TipController:
             self._state = None
 
     def solve_mm(self, target_mm, p0=None, start: Equilibrium | None = None,
-                 max_failures: int | None = None) -> ControlResult:
+                 max_failures: int | None = None,
+                 start_loading: Loading | None = None) -> ControlResult:
         """:meth:`solve` with the target in mm."""
         return self.solve(np.asarray(target_mm, float) / self.length_mm, p0=p0, start=start,
-                          max_failures=max_failures)
+                          max_failures=max_failures, start_loading=start_loading)
 
     def _result(self, st: _SolveState, ev: Evaluation, tao_reason: str,
                 iterations: int) -> ControlResult:
@@ -690,12 +725,7 @@ class TipController:
                 on_bound.append((i, "lower"))
             elif pi >= upper - tol and gi < 0:
                 on_bound.append((i, "upper"))
-        if converged:
-            reachable = True
-        elif reason in (STATIONARY, STALLED):
-            reachable = False
-        else:
-            reachable = None
+        reachable = True if converged else None   # a local end proves nothing
         mm = self.length_mm
         if converged:
             message = f"tip within {np.linalg.norm(r) * mm:.2e} mm of the target"
@@ -720,7 +750,7 @@ class TipController:
             cable_lengths=eq.cable_lengths.copy(),
             history_p=np.array([h[0] for h in hist]), history_tip=np.array([h[1] for h in hist]),
             history_E=np.array([h[2] for h in hist]), on_bound=tuple(on_bound),
-            length_mm=mm, force_scale_N=self.arm.force_scale_N)
+            length_mm=mm, force_scale_N=self.arm.force_scale_N, loading=ev.loading)
 
     def forward(self, p, start: Equilibrium | None = None) -> Equilibrium:
         """The equilibrium at tensions ``p`` (load stepping from ``start`` or the

@@ -224,8 +224,8 @@ def monotonic_fraction(lengths, tensions, tol_L: float = 1e-9, tol_P: float = 1e
 
 
 def trace(controller: TipController, targets_mm, *, p0=None, start=None,
-          keep_results: bool = False, stop_on_failure: bool = False,
-          on_point=None) -> TraceResult:
+          start_loading=None, keep_results: bool = False, stop_on_failure: bool = False,
+          on_point=None, global_search: bool = True) -> TraceResult:
     """Tip control at each target in turn (mm), warm-started from the previous
     point's tensions and equilibrium (Sec. 4.5 (v)).
 
@@ -233,18 +233,28 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
         unloaded straight arm).  A point that does not converge still
         provides the warm start for the next one only if its equilibrium is
         converged (it always is: the controller returns the last good state).
+    start_loading : the loading path of ``start`` (so every point's
+        ``loading`` is known; with ``start`` but without it, loadings are None).
     stop_on_failure : stop at the first point that is not reached.
     on_point : called with the number of points done after each point (progress).
+    global_search : a point the warm-started local solve does not reach is
+        passed to the global strategies of :mod:`elastica_petsc.solvers.reach`
+        (their cost is paid only by such points).
     """
+    from ..solvers.reach import Reacher
+
+    reacher = Reacher(controller)
     targets = np.asarray(targets_mm, dtype=float)
     if targets.ndim != 2 or targets.shape[1] != 2 or len(targets) == 0:
         raise PathError(f"targets must have shape (k, 2) in mm, got {targets.shape}")
     results = []
     t0 = time.perf_counter()
+    loading = start_loading
     for x_d in targets:
-        res = controller.solve_mm(x_d, p0=p0, start=start)
+        res = reacher.reach(x_d / controller.length_mm, p0=p0, start=start,
+                            start_loading=loading, global_search=global_search)
         results.append(res)
-        p0, start = res.p, res.equilibrium
+        p0, start, loading = res.p, res.equilibrium, res.loading
         if on_point is not None:
             on_point(len(results))
         if stop_on_failure and not res.converged:

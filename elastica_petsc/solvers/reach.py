@@ -1,0 +1,310 @@
+"""Global tip control: reach a target when the local iteration stalls, and say
+honestly when it cannot be decided.
+
+:meth:`TipController.solve` is a local method (Eqs. (10)-(12)): it can stop at
+a stationary point of E with the tip away from a target that other tensions,
+or the same tensions on another branch, do reach (measured before this module:
+7.3 % of targets made as tips of random admissible tensions on the paper's
+arm ended STATIONARY from the default start).  :func:`reach` runs the local
+solve and, only when it fails, continues with
+
+1. **homotopy in target space** from the state the local solve started from:
+   the target moves on the straight line from that tip to x_d in steps
+   (doubled after a success, halved after a failure), each sub-target
+   solved by the local method warm-started from the previous one, as path
+   tracing does (Sec. 4.5 (v)): the equilibrium stays on its branch;
+2. **neighbours**: equilibria given by the caller (e.g. reached grid
+   neighbours in a workspace map), each as a local start and a homotopy start;
+3. **seeds**: forward equilibria over a coarse set of tensions reached by
+   proportional loading and by every loading order (Fig. 8: other branches),
+   built once per :class:`Reacher`; the ``max_seeds`` seeds whose tips are
+   nearest x_d are tried as local and homotopy starts.
+
+Every path in tension space is followed by continuation with P >= 0 from the
+straight arm, so a reached target lies in W_0 (the tips of stable equilibria
+connected to the straight arm by quasi-static loading with all P_i >= 0) and
+the result's ``loading`` reproduces it.
+
+Verdicts (``ControlResult.reachable``):
+
+* True: reached (E < eps).
+* False: only with a proof about all of W_0, named in ``evidence``.  Proven
+  here: ``|x_d| > l`` (``BEYOND_REACH``): the arm is inextensible, so
+  |x_t| = |int_0^l t ds| <= l (Eq. (2)) for every state.
+* None (reason ``SEARCH_EXHAUSTED``): not reached and not proven
+  unreachable; the result is the closest tip found (a stationary point with
+  a tension on its lower bound is *local* evidence that the target needs
+  P_i < 0, see ``on_bound``).
+"""
+from __future__ import annotations
+
+import dataclasses
+import itertools
+
+import numpy as np
+
+from ..core.loading import Loading
+from .control import ControlResult, TipController
+from .equilibrium import COLLAPSE_LENGTH, Equilibrium
+
+BEYOND_REACH = "BEYOND_REACH"            # reason and evidence: |x_d| > l
+SEARCH_EXHAUSTED = "SEARCH_EXHAUSTED"    # reason: global strategies tried, undecided
+
+
+@dataclasses.dataclass(frozen=True)
+class Start:
+    """An equilibrium to start from, with the loading path that reached it."""
+
+    equilibrium: Equilibrium
+    loading: Loading | None
+    label: str = ""
+
+
+def beyond_reach(target: np.ndarray) -> str:
+    """The evidence string if ``target`` (units of l) is farther than l from
+    the clamp, else ''.  |x_t| <= l for any state of the inextensible arm (Eq. (2))."""
+    r = float(np.linalg.norm(target))
+    if r > 1.0 + 1e-12:
+        return (f"{BEYOND_REACH}: |x_d| = {r:.6g} l > l, and the inextensible arm's tip is "
+                "never farther than l from the clamp (|x_t| = |int_0^l t ds| <= l, Eq. (2))")
+    return ""
+
+
+class SeedLibrary:
+    """Forward equilibria on a grid of tension levels, reached by every loading
+    order (Fig. 8: the order selects the branch) and by proportional loading.
+
+    For each order (a permutation of the tendons) the first tendon is swept
+    through ``levels`` by continuation; from each of its states the next
+    tendon is swept likewise, and so on: every recorded state's loading path
+    raises the tendons one after another in that order.  Proportional rays
+    along simplex-grid directions are added.  Kept: converged, stable, no
+    cable shorter than 5 COLLAPSE_LENGTH.  Built on first use (a few hundred
+    warm continuation solves; about 1-2 s at 180 elements on an idle core)."""
+
+    def __init__(self, controller: TipController, levels=(2.0, 6.0, 14.0, 28.0, 50.0, 80.0),
+                 divisions: int = 4):
+        self.controller = controller
+        upper = np.inf if controller.upper is None else controller.upper
+        self.levels = tuple(v for v in levels if v <= upper)
+        self.divisions = divisions if controller.n <= 2 else 2
+        self._seeds: list[Start] | None = None
+
+    def seeds(self) -> list[Start]:
+        if self._seeds is None:
+            self._seeds = []
+            n = self.controller.n
+            root = Start(None, Loading.straight(n), "")
+            for order in itertools.permutations(range(n)):
+                self._sweep(root, order)
+            self._rays()
+        return self._seeds
+
+    def _keep(self, eq: Equilibrium, loading: Loading, label: str) -> bool:
+        ok = eq.converged and eq.stable and np.min(eq.cable_lengths) > 5 * COLLAPSE_LENGTH
+        if ok:
+            self._seeds.append(Start(eq, loading, label))
+        return ok
+
+    def _sweep(self, parent: Start, order: tuple) -> None:
+        """Raise tendon order[0] through the levels from ``parent``, recursing
+        into the remaining tendons from each state (continuation throughout)."""
+        if not order:
+            return
+        solver, i = self.controller.solver, order[0]
+        eq, loading = parent.equilibrium, parent.loading
+        for level in self.levels:
+            p = (np.zeros(self.controller.n) if eq is None else eq.p).copy()
+            p[i] = level
+            eq = solver.solve(p, start=eq)
+            loading = loading.then(p)
+            label = f"p={np.round(p, 3).tolist()} {loading.describe()}"
+            if not self._keep(eq, loading, label):
+                break
+            start = Start(eq, loading, label)
+            if len(order) > 1:
+                self._sweep(start, order[1:])
+
+    def _rays(self) -> None:
+        n, k = self.controller.n, self.divisions
+        solver = self.controller.solver
+        for combo in itertools.product(range(k + 1), repeat=n):
+            if sum(combo) != k or max(combo) == k:
+                continue                      # one-tendon rays are in the sweeps
+            direction = np.array(combo, float) / max(combo)
+            eq, loading = None, Loading.straight(n)
+            for level in self.levels:
+                eq = solver.solve(level * direction, start=eq)
+                loading = loading.then(level * direction)
+                if not self._keep(eq, loading, f"p={np.round(level * direction, 3).tolist()} "
+                                               "proportional from zero"):
+                    break
+
+    def nearest(self, target: np.ndarray, k: int) -> list[Start]:
+        seeds = self.seeds()
+        d = [float(np.linalg.norm(s.equilibrium.tip - target)) for s in seeds]
+        return [seeds[i] for i in np.argsort(d)[:k]]
+
+
+def replay(solver, loading: Loading, start: Equilibrium | None = None) -> Equilibrium | None:
+    """The equilibrium at the end of ``loading``, each segment followed by
+    continuation (:meth:`EquilibriumSolver.solve`); None if a segment fails."""
+    eq = start
+    for vertex in loading.vertices():
+        eq = solver.solve(vertex, start=eq)
+        if not eq.converged:
+            return None
+    if eq is None:
+        eq = solver.solve(np.zeros(loading.p.size))
+    return eq
+
+
+class Reacher:
+    """Local tip control plus the global strategies of the module doc.
+
+    controller : the :class:`TipController` doing the local solves.
+    homotopy_step : first and largest sub-target step, units of l.
+    min_step : give a homotopy up when its step falls below this (units of l).
+    max_seeds : seeds tried per target (nearest tips first).
+    max_substeps : sub-target solves per homotopy.
+    max_homotopies : homotopies per target (from the initial state, the
+        neighbours, then the nearest seeds).
+    local_its : iteration limit of the local solves of the global phase (a
+        reached target needs < 10 from a good start; a solve that stalls
+        would otherwise spend its full budget on penalised evaluations).
+    """
+
+    def __init__(self, controller: TipController, *, homotopy_step: float = 0.08,
+                 min_step: float = 2e-3, max_seeds: int = 6, max_substeps: int = 25,
+                 local_its: int = 30, max_homotopies: int = 4, seeds: SeedLibrary | None = None):
+        self.controller = controller
+        self.max_homotopies = max_homotopies
+        self.local_its = local_its
+        self.homotopy_step = homotopy_step
+        self.min_step = min_step
+        self.max_seeds = max_seeds
+        self.max_substeps = max_substeps
+        self.library = seeds if seeds is not None else SeedLibrary(controller)
+
+    # --- strategies --------------------------------------------------------------
+    def homotopy(self, target: np.ndarray, start: Start) -> ControlResult | None:
+        """Move the target from ``start``'s tip to ``target`` in warm-started
+        steps; the last converged sub-result (its target may fall short)."""
+        ctl = self.controller
+        tip0 = start.equilibrium.tip.copy()
+        d = target - tip0
+        dist = float(np.linalg.norm(d))
+        if dist == 0.0:
+            return None
+        t, h = 0.0, min(1.0, self.homotopy_step / dist)
+        eq, loading, last = start.equilibrium, start.loading, None
+        for _ in range(self.max_substeps):
+            t_new = 1.0 if t + h >= 1.0 - 1e-12 else t + h
+            res = ctl.solve(tip0 + t_new * d, start=eq, start_loading=loading, max_failures=2,
+                            max_it=self.local_its)
+            if res.converged:
+                t, eq, loading, last = t_new, res.equilibrium, res.loading, res
+                if t >= 1.0:
+                    break
+                h = min(2.0 * h, self.homotopy_step / dist)
+            else:
+                h *= 0.5
+                if h * dist < self.min_step:
+                    break
+        return last
+
+    def _local(self, target, start: Start, tried: list) -> ControlResult | None:
+        res = self.controller.solve(target, start=start.equilibrium, start_loading=start.loading,
+                                    max_failures=3, max_it=self.local_its)
+        tried.append(res)
+        return res if res.converged else None
+
+    def _homotopy(self, target, start: Start, tried: list) -> ControlResult | None:
+        last = self.homotopy(target, start)
+        if last is not None:
+            tried.append(last)
+            if last.converged and np.array_equal(last.target, target):
+                return last
+        return None
+
+    # --- public --------------------------------------------------------------------
+    def reach(self, target, p0=None, start: Equilibrium | None = None,
+              start_loading: Loading | None = None, neighbours=(),
+              global_search: bool = True) -> ControlResult:
+        """Tensions putting the tip on ``target`` (units of l): the local solve
+        (:meth:`TipController.solve`, same arguments), then if needed the
+        global strategies of the module doc: local solves from the
+        ``neighbours`` (extra :class:`Start` s, e.g. reached nearby states)
+        and from the nearest seeds, then homotopies from the initial state,
+        the neighbours and the seeds."""
+        ctl = self.controller
+        target = np.asarray(target, dtype=float).ravel()
+        first = ctl.solve(target, p0=p0, start=start, start_loading=start_loading)
+        if first.converged:
+            return first
+        evidence = beyond_reach(target)
+        if evidence:
+            return dataclasses.replace(first, reachable=False, reason=BEYOND_REACH,
+                                       evidence=evidence, message=evidence)
+        if not global_search:
+            return first
+        tried = [first]
+        origin = self._origin(first, start, start_loading)
+        seeds = self.library.nearest(target, self.max_seeds)
+        plan = ([("neighbour", s, self._local) for s in neighbours]
+                + [("seed", s, self._local) for s in seeds]
+                + [("homotopy", s, self._homotopy)
+                   for s in (origin + list(neighbours) + seeds)[:self.max_homotopies]])
+        for kind, s, run in plan:
+            res = run(target, s, tried)
+            if res is not None:
+                return dataclasses.replace(res, strategy=f"{kind} from {s.label}")
+        return self._closest(target, tried)
+
+    def _origin(self, first: ControlResult, start, start_loading) -> list:
+        """The state the local solve started from, for the homotopy."""
+        if start is not None:
+            return [Start(start, start_loading, "the given start")]
+        ev = self.controller.evaluate(first.history_p[0])
+        return [] if ev is None else [Start(ev.equilibrium, ev.loading, "the initial tensions")]
+
+    def _closest(self, target: np.ndarray, tried: list) -> ControlResult:
+        """The closest tip found, re-solved towards ``target`` from its state,
+        reported undecided (SEARCH_EXHAUSTED)."""
+        best = min(tried, key=lambda r: float(np.linalg.norm(r.tip - target)))
+        if not np.array_equal(best.target, target):
+            best = self.controller.solve(target, start=best.equilibrium,
+                                         start_loading=best.loading, max_failures=3)
+        if best.converged:
+            return dataclasses.replace(best, strategy="closest state")
+        mm = self.controller.length_mm
+        note = (f"{SEARCH_EXHAUSTED}: not reached by the local solve, a homotopy in target "
+                f"space, {len(tried)} solves from neighbours and seeds (other loading orders); "
+                f"not proven unreachable. Closest tip {best.tip_error * mm:.4g} mm away, local "
+                f"end {best.reason}")
+        return dataclasses.replace(best, reachable=None, reason=SEARCH_EXHAUSTED,
+                                   local_reason=best.reason,
+                                   message=note + "; " + best.message, evidence=note)
+
+
+
+
+def simplest_loading(solver, equilibrium: Equilibrium, loading: Loading | None,
+                     tol: float = 1e-8) -> Loading | None:
+    """A simpler loading path reaching the same state, if there is one:
+    proportional loading, else each loading order (Fig. 8), replayed from the
+    straight arm; accepted when every nodal angle agrees within ``tol`` rad.
+    Otherwise ``loading`` unchanged (the recorded path always reproduces it)."""
+    p = np.asarray(equilibrium.p, float)
+    n = p.size
+    candidates = [Loading.proportional(p)]
+    if n > 1:
+        candidates += [Loading.ordered(p, [i + 1 for i in perm])
+                       for perm in itertools.permutations(range(n))]
+    for candidate in candidates:
+        if loading is not None and len(candidate) >= len(loading):
+            break
+        eq = replay(solver, candidate)
+        if eq is not None and np.max(np.abs(eq.theta - equilibrium.theta)) < tol:
+            return candidate
+    return loading
