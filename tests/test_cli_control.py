@@ -37,12 +37,39 @@ def test_control_fig2_target_json_and_hdf5(tmp_path):
 
 
 def test_control_unreachable_exit_3_with_message():
+    """(0, 700) mm: |x_d| > l, proven unreachable (the inextensible arm's reach)."""
     run = cli("control", "--target", 0, 700, "--json")
     assert run.returncode == 3
     data = json.loads(run.stdout)                               # JSON still printed
     assert data["converged"] is False and data["reachable"] is False
-    assert "not reachable" in run.stderr and "lower bound" in run.stderr
+    assert data["reason"] == "BEYOND_REACH" and "|x_d|" in data["evidence"]
+    assert "not reachable" in run.stderr and "BEYOND_REACH" in run.stderr
     assert "Traceback" not in run.stderr
+
+
+def test_control_then_solve_from_file_lands_on_the_target(tmp_path):
+    """The branch travels with the result: control --out, then solve --from the file
+    replays the recorded loading (order 2,1 here, not proportional loading)."""
+    out = tmp_path / "c.h5"
+    run = cli("control", "--target", 450, 50, "--out", out, "--json")
+    assert run.returncode == 0, run.stderr
+    data = json.loads(run.stdout)
+    assert data["loading"]["kind"] in ("order", "proportional", "path")
+    run = cli("solve", "--from", out, "--json")
+    assert run.returncode == 0, run.stderr
+    again = json.loads(run.stdout)
+    assert np.linalg.norm(np.subtract(again["tip_mm"], [450.0, 50.0])) < 1e-3
+    assert again["tip_difference_mm"] < 1e-3
+    np.testing.assert_allclose(again["tensions"], data["tensions"], atol=1e-9)
+    with h5py.File(out, "r") as fh:
+        assert fh["loading/vertices"].attrs["units"] == "P l^2/B"
+        assert fh["control"].attrs["strategy"]
+    # user mistakes: one line, exit 2
+    for args, message in (([], "--from"), (["--from", tmp_path / "none.h5"], "no such file"),
+                          (["--from", out, "--point", 3], "--point"),
+                          (["--from", out, "--tensions", 1, 2], "drop --tensions")):
+        run = cli("solve", *args)
+        assert run.returncode == 2 and message in run.stderr and "Traceback" not in run.stderr
 
 
 def test_control_bad_input():
@@ -82,6 +109,14 @@ def test_trace_paper_triangle_schedule_and_hdf5(tmp_path):
         assert fh["path/theta"].shape == (K, 181)
         assert fh["path/tip_sensitivity"].shape == (K, 2, 2)
         np.testing.assert_allclose(fh["path/tip"][()], fh["path/target"][()], atol=1e-5)
+        K = len(fh["path/tip"]) - 1
+        tip_K = fh["path/tip"][K]
+    # the last point's loading path (the whole trace) replays to the same state
+    run = cli("solve", "--from", out, "--point", K, "--json")
+    assert run.returncode == 0, run.stderr
+    assert np.linalg.norm(np.subtract(json.loads(run.stdout)["tip_mm"], tip_K)) < 1e-3
+    run = cli("solve", "--from", out)
+    assert run.returncode == 2 and "--point" in run.stderr
 
 
 def test_trace_csv_path_and_errors(tmp_path):

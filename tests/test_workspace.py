@@ -290,6 +290,7 @@ def test_file_layout_attributes_and_units(targets_1):
             "WS": w0 & (s["lambda_min"] > 0),
             "WE": w0 & (s["strain_energy"] < limits["strain_energy_max"]),
             "WP": w0 & np.all(s["tensions"] < limits["max_tension"], axis=1),
+            "WC": w0 & np.all(s["cable_clear"], axis=1),
         }
         for name, mask in expected.items():
             assert np.array_equal(fh["masks"][name][()], mask), name

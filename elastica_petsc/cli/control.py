@@ -62,6 +62,7 @@ def control_summary(arm, result) -> dict:
         "tensions_N": state["tensions_N"],
         "cable_lengths_mm": state["cable_lengths_mm"],
         "attachments_mm": state["attachments_mm"],
+        "cable_clear": state["cable_clear"],
         "on_bound": [{"tendon": i, "bound": side} for i, side in result.on_bound],
         "tip_sensitivity": [rounded(v * arm.length_mm) for v in result.sensitivity.tip],
         "stable": state["stable"],
@@ -88,6 +89,8 @@ def unreachable_message(s: dict) -> str:
 
 
 def format_control(s: dict) -> str:
+    from ..io.summary import crossing_lines
+
     lines = []
     if s["converged"]:
         lines.append(f"target reached: tip within {s['tip_error_mm']:.3g} mm "
@@ -104,6 +107,7 @@ def format_control(s: dict) -> str:
         lines.append(f"{i:>6} {p:>10.4f} {P:>9.4f} {L:>18.4f} {f'({d[0]:.2f}, {d[1]:.2f})':>22}")
     lines.append(f"stable: {'yes' if s['stable'] else 'NO'};  strain energy "
                  f"{s['strain_energy']:.3f} SE0;  l*kappa_max {s['kappa_max']:.3f}")
+    lines.extend(crossing_lines(s["cable_clear"]))
     if s["loading"] is not None:
         lines.append(f"loading from the straight arm: {s['loading']['description']}"
                      + ("" if s["strategy"] == "local" else f" (found by {s['strategy']})")

@@ -69,6 +69,7 @@ def targets(args):
 def trace_summary(arm, result, schedule) -> dict:
     import numpy as np
 
+    from ..core.clearance import state_cable_clear
     from ..io.summary import rounded
 
     mono = result.monotonic_fraction()
@@ -90,6 +91,9 @@ def trace_summary(arm, result, schedule) -> dict:
                                   for i in range(result.cable_lengths_mm.shape[1])],
         "monotonic_fraction": [None if np.isnan(v) else round(float(v), 4) for v in mono],
         "work_fraction": round(float(result.work_fraction()), 4),
+        "cable_crossing_points": [int(sum(1 for r in result.results
+                                          if not state_cable_clear(r.equilibrium)[i]))
+                                  for i in range(result.tensions_N.shape[1])],
         "not_reached_undecided": int(sum(1 for r in result.results
                                          if not r.converged and r.reachable is None)),
         "not_reached_proven_unreachable": int(sum(1 for r in result.results
@@ -116,6 +120,13 @@ def format_trace(s: dict) -> str:
         lines.append(f"tendon {i}: tension {P[0]:.3f}..{P[1]:.3f} N, cable length "
                      f"{L[0]:.2f}..{L[1]:.2f} mm; length and tension move oppositely in {mono} "
                      "of the steps (Sec. 4.1)")
+    for i, count in enumerate(s["cable_crossing_points"], start=1):
+        if count:
+            lines.append(f"WARNING: tendon {i}'s cable crosses the arm at {count} of the "
+                         f"{s['points']} points (HDF5 /path/cable_clear)")
+    if s["not_reached_undecided"] or s["not_reached_proven_unreachable"]:
+        lines.append(f"not reached: {s['not_reached_proven_unreachable']} proven unreachable "
+                     f"(|target| > l), {s['not_reached_undecided']} undecided")
     lines.append(f"motor schedule: {s['mm_per_microstep']:.4g} mm per microstep, largest rounding "
                  f"error {s['max_rounding_error_mm']:.3g} mm")
     if s.get("max_tracing_speed_mm_s") is not None:

@@ -22,6 +22,7 @@ Layout of an equilibrium group (``write_equilibrium``)::
     tendons/cable_lengths  (n,)     mm      |r_i - x_i|
     tendons/tensions       (n,)     P l^2/B
     tendons/tensions_N     (n,)     N
+    tendons/cable_clear    (n,)     bool    cable segment does not cross the arm
     solver (attributes)    converged, reason, message, iterations, load_steps,
                            unstable_modes, stable
 """
@@ -38,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
+from ..core.clearance import state_cable_clear
 from ..core.config import arm_to_dict
 from ..solvers.equilibrium import Equilibrium
 from ..core.errors import InputError
@@ -130,6 +132,8 @@ def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
     put(tendons, "cable_lengths", eq.cable_lengths * l_mm, "mm", "cable lengths |r_i - x_i|")
     put(tendons, "tensions", eq.p, "P l^2/B", "non-dimensional tensions p_i")
     put(tendons, "tensions_N", arm.tensions_to_N(eq.p), "N", "tensions P_i")
+    put(tendons, "cable_clear", state_cable_clear(eq), "1",
+        "the straight cable [x_i, r_i] does not cross the arm (HDF5 boolean)")
     solver = group.create_group("solver")
     write_attrs(solver, {"converged": bool(eq.converged), "reason": eq.reason,
                          "message": eq.message, "iterations": int(eq.iterations),
@@ -188,6 +192,9 @@ def write_trace(group, arm: Arm, trace, schedule) -> None:
         "mm per (P l^2/B)", "d x_t / d p_i (Eq. (13)): [point, tendon, component]")
     put(path, "iterations", trace.iterations, "1", "optimiser iterations per point")
     put(path, "converged", trace.converged, "1", "tip within tolerance of the target")
+    put(path, "cable_clear", np.array([state_cable_clear(r.equilibrium) for r in results],
+                                      dtype=bool).reshape(len(results), -1), "1",
+        "per point and tendon: the straight cable does not cross the arm (HDF5 boolean)")
     ends = write_loading_tree(group, [r.loading for r in results])
     put(path, "loading_node", ends, "1",
         "per point: last vertex of its loading path in /loading (-1: p = 0, -2: unknown)")

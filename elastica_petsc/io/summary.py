@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.clearance import state_cable_clear
 from ..solvers.equilibrium import Equilibrium
 from ..core.model import Arm
 
@@ -35,12 +36,15 @@ def equilibrium_summary(arm: Arm, eq: Equilibrium) -> dict:
         "attachments_mm": [rounded(x * l_mm) for x in eq.attachments],
         "cable_lengths_mm": rounded(eq.cable_lengths * l_mm),
         "cable_directions": [rounded(d) for d in eq.directions],
+        "cable_clear": [bool(c) for c in state_cable_clear(eq)],
         "strain_energy": round(eq.strain_energy, 6),
         "strain_energy_J": round(eq.strain_energy * arm.energy_scale_J, 6),
         "kappa_max": round(eq.kappa_max, 6),
         "kappa_limit": round(arm.kappa_limit, 6),
         "units": {"tensions": "P l^2/B", "tensions_N": "N", "tip_mm": "mm",
-                  "strain_energy": "B/(2l)", "kappa_max": "l*kappa"},
+                  "strain_energy": "B/(2l)", "kappa_max": "l*kappa",
+                  "cable_clear": "per tendon: the straight cable [x_i, r_i] does not cross the "
+                                 "arm (core/clearance.py)"},
     }
 
 
@@ -68,4 +72,12 @@ def format_equilibrium(arm: Arm, summary: dict) -> str:
     lines.append(f"strain energy: {s['strain_energy']:.4f} SE0 = {s['strain_energy_J']:.4f} J")
     lines.append(f"max curvature: l*kappa = {s['kappa_max']:.4f} "
                  f"(strain limit {s['kappa_limit']:.4g}, Eq. (19))")
+    lines.extend(crossing_lines(s["cable_clear"]))
     return "\n".join(lines)
+
+
+def crossing_lines(cable_clear) -> list[str]:
+    """Warnings for cables whose straight segment crosses the arm."""
+    return [f"WARNING: tendon {i}'s cable crosses the arm (the straight segment from its "
+            "attachment to its routing point passes through the arm: not a physical state "
+            "for a real cable)" for i, clear in enumerate(cable_clear, start=1) if not clear]

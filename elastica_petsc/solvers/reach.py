@@ -239,13 +239,16 @@ class Reacher:
         the neighbours and the seeds."""
         ctl = self.controller
         target = np.asarray(target, dtype=float).ravel()
+        evidence = beyond_reach(target)
+        if evidence:                 # the closest tip from a short local solve
+            first = ctl.solve(target, p0=p0, start=start, start_loading=start_loading,
+                              max_failures=3, max_it=self.local_its)
+            return dataclasses.replace(first, reachable=False, reason=BEYOND_REACH,
+                                       local_reason=first.reason, evidence=evidence,
+                                       message=evidence)
         first = ctl.solve(target, p0=p0, start=start, start_loading=start_loading)
         if first.converged:
             return first
-        evidence = beyond_reach(target)
-        if evidence:
-            return dataclasses.replace(first, reachable=False, reason=BEYOND_REACH,
-                                       evidence=evidence, message=evidence)
         if not global_search:
             return first
         tried = [first]

@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 
+from ..core.clearance import state_cable_clear
 from ..solvers.equilibrium import Equilibrium, EquilibriumSolver
 from ..core.fem import Discretisation
 from ..core.model import Arm
@@ -41,6 +42,7 @@ class _Sampler:
         out["cable_lengths"][k] = eq.cable_lengths * l_mm
         out["kappa_max"][k] = eq.kappa_max
         out["strain_energy"][k] = eq.strain_energy
+        out["cable_clear"][k] = state_cable_clear(eq)
         t0 = time.perf_counter()
         try:
             result = self.stability.solve(eq.u, eq.p)

@@ -120,6 +120,8 @@ def fields(n_tendons: int) -> dict[str, tuple[tuple, str, str, str]]:
                    "(mode tensions)"),
         "seconds_control": ((), "f8", "s", "wall time of tip control / forward solve"),
         "seconds_eigen": ((), "f8", "s", "wall time of the eigenvalue solve"),
+        "cable_clear": (n, "?", "1", "reached state: the straight cable [x_i, r_i] does not "
+                        "cross the arm (core/clearance.py); False where not reached"),
     }
 
 
@@ -205,7 +207,7 @@ def empty_fields(schema: dict, count: int) -> dict[str, np.ndarray]:
     NaN for floats, 0 for integers, b"" for strings (not computed yet)."""
     out = {}
     for name, (shape, dtype, _, _) in schema.items():
-        fill = b"" if dtype.startswith("S") else (0 if dtype[0] == "i" else np.nan)
+        fill = b"" if dtype.startswith("S") else (0 if dtype[0] in "i?" else np.nan)
         out[name] = np.full((count,) + shape, fill, dtype=dtype)
     return out
 
@@ -230,7 +232,8 @@ class Results:
         return int(sum(len(self.grid.chunks[c]) for c in np.flatnonzero(self.chunk_done)))
 
     def masks(self, limits: dict) -> dict[str, np.ndarray]:
-        """Admissibility masks W_0, W_Y, W_S, W_E, W_P (Eqs. (18)-(22)) of the samples."""
+        """Admissibility masks W_0, W_Y, W_S, W_E, W_P (Eqs. (18)-(22)) of the samples,
+        and W_C: every cable clear of the arm."""
         d = self.data
         w0 = d["status"] == REACHED
         with np.errstate(invalid="ignore"):
@@ -239,7 +242,8 @@ class Results:
             we = w0 & (d["strain_energy"] < limits["strain_energy_max"])
             p_max = limits.get("max_tension")
             wp = w0 & (np.all(d["tensions"] < p_max, axis=1) if p_max is not None else True)
-        return {"W0": w0, "WY": wy, "WS": ws, "WE": we, "WP": wp}
+        wc = w0 & np.all(d["cable_clear"], axis=1)
+        return {"W0": w0, "WY": wy, "WS": ws, "WE": we, "WP": wp, "WC": wc}
 
 
 GRID_ATTRS = ("mode", "config_json", "elements", "grid_json")
@@ -274,7 +278,9 @@ def write_results(path: Path, results: Results, attrs: dict, limits: dict, timin
                         "WY": "W0 and l*kappa_max below the strain limit (Eq. (19))",
                         "WS": "W0 and stable: lambda_min > 0 (Eq. (20))",
                         "WE": "W0 and strain energy below SE_max (Eq. (21))",
-                        "WP": "W0 and all tensions below P_crit (Eq. (22))"}
+                        "WP": "W0 and all tensions below P_crit (Eq. (22))",
+                        "WC": "W0 and every cable clear of the arm (no cable segment crosses "
+                              "the arm, core/clearance.py)"}
         for name, mask in results.masks(limits).items():
             put(masks, name, mask, "1", descriptions[name])
         write_attrs(masks, {k: v for k, v in limits.items() if v is not None})
