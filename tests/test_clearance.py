@@ -82,3 +82,23 @@ def test_solve_reports_cable_clear_in_json_text_and_hdf5(tmp_path):
     run = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "solve", "--from",
                           str(out)], capture_output=True, text=True, timeout=120)
     assert run.returncode == 0 and "tendon 2's cable crosses the arm" in run.stdout
+
+
+def test_tip_control_cable_policies():
+    """The tip of state 3 (tendon 2 through the arm): 'prefer' keeps the reached
+    state (flagged) when no clear one is found, 'require' reports it as not
+    reached with its own reason."""
+    from elastica_petsc.solvers.control import TipController
+    from elastica_petsc.solvers.reach import CABLE_CROSSES_ARM, Reacher
+
+    arm = load_config()
+    with TipController(arm, n_elements=90) as ctl:
+        s3 = replay(ctl.solver, Loading.ordered([25.2, 10.8], (1, 2)))
+        reacher = Reacher(ctl)
+        prefer = reacher.reach(s3.tip, p0=[25.0, 10.0], cables="prefer")
+        require = reacher.reach(s3.tip, p0=[25.0, 10.0], cables="require")
+    assert prefer.converged and not np.all(cable_clear(
+        prefer.equilibrium.x, prefer.equilibrium.disc.attach_nodes,
+        prefer.equilibrium.disc.routes))
+    assert not require.converged and require.reason == CABLE_CROSSES_ARM
+    assert require.reachable is None and require.tip_error_mm < 1e-5

@@ -33,9 +33,43 @@ def add_parser(sub) -> None:
                         help="tip tolerance in mm (default 1e-5, the paper's eps = 1e-10 mm^2)")
     parser.add_argument("--local", action="store_true",
                         help="local solve only (no global search when it stalls)")
+    parser.add_argument("--cables", choices=("prefer", "require", "ignore"), default="prefer",
+                        help="cables through the arm: prefer (default) searches for a state "
+                             "with every cable clear of the arm when the first one found has "
+                             "a crossing, keeping the crossing state if none is found; require "
+                             "reports such a target as not reached (exit 4); ignore only flags")
+    add_share_options(parser)
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
+
+
+def add_share_options(parser) -> None:
+    """--share and --min-tension-N (redundant tendons)."""
+    parser.add_argument("--share", choices=("min-norm", "min-energy", "none"), default=None,
+                        help="how tension is shared among the tension sets that reach the "
+                             "target (n >= 3 tendons): min-norm |P|, min-energy (strain "
+                             "energy, Eq. (21)), none (default: whatever the optimiser finds). "
+                             "TAO ALMM from the reached state; experimental: 0.3-7 s per "
+                             "target at 60 elements")
+    parser.add_argument("--min-tension-N", type=float, default=0.0, metavar="N",
+                        help="pretension floor in newtons: every tension at least this "
+                             "(every cable taut; implies --share min-norm unless given)")
+
+
+def make_sharer(args, arm, controller):
+    """The TensionSharer the options ask for, or None."""
+    from ..solvers.share import TensionSharer
+
+    share = args.share
+    if share is None:
+        share = "min-norm" if args.min_tension_N > 0 else "none"
+    if share == "none":
+        if args.min_tension_N > 0:
+            from ..core.errors import InputError
+            raise InputError("--min-tension-N needs a sharing rule: drop --share none")
+        return None
+    return TensionSharer(controller, share, float(arm.tensions_from_N(args.min_tension_N)))
 
 
 def control_summary(arm, result) -> dict:
@@ -80,6 +114,10 @@ def unreachable_message(s: dict) -> str:
         for b in s["on_bound"]) or "no tension is on a bound"
     where = (f"the closest tip found is ({s['tip_mm'][0]:.3f}, {s['tip_mm'][1]:.3f}) mm, "
              f"{s['tip_error_mm']:.3f} mm away")
+    if s["reason"] == "CABLE_CROSSES_ARM":
+        return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm is reached only "
+                f"with a cable through the arm (cable_clear {s['cable_clear']}) and --cables "
+                "require was given; no state with clear cables was found")
     if s["reachable"] is False:
         return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm is not reachable: "
                 f"{s['evidence']}; {where}")
@@ -134,7 +172,11 @@ def run(args) -> int:
     with TipController(arm, n_elements=disc.n_elements, method=args.method,
                        tip_tol_mm=args.tol_mm) as controller:
         result = Reacher(controller).reach(np.asarray(args.target) / arm.length_mm, p0=guess,
-                                           global_search=not args.local)
+                                           global_search=not args.local,
+                                           cables=args.cables)
+        sharer = make_sharer(args, arm, controller)
+        if sharer is not None and result.converged:
+            result = sharer.solve(result)
         result = dataclasses.replace(result, loading=simplest_loading(
             controller.solver, result.equilibrium, result.loading))
     summary = control_summary(arm, result)

@@ -91,6 +91,8 @@ def trace_summary(arm, result, schedule) -> dict:
                                   for i in range(result.cable_lengths_mm.shape[1])],
         "monotonic_fraction": [None if np.isnan(v) else round(float(v), 4) for v in mono],
         "work_fraction": round(float(result.work_fraction()), 4),
+        "closes": bool(np.allclose(result.targets_mm[0], result.targets_mm[-1], atol=1e-9)),
+        "closure_cable_length_change_mm": float(f"{np.max(np.abs(result.cable_lengths_mm[-1] - result.cable_lengths_mm[0])):.3g}"),
         "cable_crossing_points": [int(sum(1 for r in result.results
                                           if not state_cable_clear(r.equilibrium)[i]))
                                   for i in range(result.tensions_N.shape[1])],
@@ -120,6 +122,9 @@ def format_trace(s: dict) -> str:
         lines.append(f"tendon {i}: tension {P[0]:.3f}..{P[1]:.3f} N, cable length "
                      f"{L[0]:.2f}..{L[1]:.2f} mm; length and tension move oppositely in {mono} "
                      "of the steps (Sec. 4.1)")
+    if s["closes"]:
+        lines.append(f"closed path: cable lengths at the end differ from the start by at most "
+                     f"{s['closure_cable_length_change_mm']:.3g} mm")
     for i, count in enumerate(s["cable_crossing_points"], start=1):
         if count:
             lines.append(f"WARNING: tendon {i}'s cable crosses the arm at {count} of the "

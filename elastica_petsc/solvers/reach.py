@@ -35,6 +35,14 @@ Verdicts (``ControlResult.reachable``):
   unreachable; the result is the closest tip found (a stationary point with
   a tension on its lower bound is *local* evidence that the target needs
   P_i < 0, see ``on_bound``).
+
+Cables through the arm (:mod:`elastica_petsc.core.clearance`): with
+``cables="prefer"`` a reached state whose cable crosses the arm starts a
+search (local solves and homotopies from the seeds whose cables are clear)
+for a state with clear cables, returned if found, else the crossing state
+(flagged); ``"require"`` returns not converged, reason CABLE_CROSSES_ARM,
+``reachable`` None; ``"ignore"`` (the default of :func:`Reacher.reach`)
+does not look.
 """
 from __future__ import annotations
 
@@ -43,12 +51,16 @@ import itertools
 
 import numpy as np
 
+from ..core.clearance import state_cable_clear
 from ..core.loading import Loading
 from .control import ControlResult, TipController
 from .equilibrium import COLLAPSE_LENGTH, Equilibrium
 
 BEYOND_REACH = "BEYOND_REACH"            # reason and evidence: |x_d| > l
 SEARCH_EXHAUSTED = "SEARCH_EXHAUSTED"    # reason: global strategies tried, undecided
+CABLE_CROSSES_ARM = "CABLE_CROSSES_ARM"  # reason (cables="require"): reached only with a
+#                                          cable through the arm
+CABLE_POLICIES = ("ignore", "prefer", "require")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -230,13 +242,16 @@ class Reacher:
     # --- public --------------------------------------------------------------------
     def reach(self, target, p0=None, start: Equilibrium | None = None,
               start_loading: Loading | None = None, neighbours=(),
-              global_search: bool = True) -> ControlResult:
+              global_search: bool = True, cables: str = "ignore") -> ControlResult:
         """Tensions putting the tip on ``target`` (units of l): the local solve
         (:meth:`TipController.solve`, same arguments), then if needed the
         global strategies of the module doc: local solves from the
         ``neighbours`` (extra :class:`Start` s, e.g. reached nearby states)
         and from the nearest seeds, then homotopies from the initial state,
-        the neighbours and the seeds."""
+        the neighbours and the seeds.  ``cables``: ignore, prefer or
+        require cables clear of the arm (module doc)."""
+        if cables not in CABLE_POLICIES:
+            raise ValueError(f"cables must be one of {CABLE_POLICIES}, got {cables!r}")
         ctl = self.controller
         target = np.asarray(target, dtype=float).ravel()
         evidence = beyond_reach(target)
@@ -248,7 +263,7 @@ class Reacher:
                                        message=evidence)
         first = ctl.solve(target, p0=p0, start=start, start_loading=start_loading)
         if first.converged:
-            return first
+            return self._clear(target, first, cables)
         if not global_search:
             return first
         tried = [first]
@@ -261,8 +276,30 @@ class Reacher:
         for kind, s, run in plan:
             res = run(target, s, tried)
             if res is not None:
-                return dataclasses.replace(res, strategy=f"{kind} from {s.label}")
+                res = dataclasses.replace(res, strategy=f"{kind} from {s.label}")
+                return self._clear(target, res, cables)
         return self._closest(target, tried)
+
+    def _clear(self, target, res: ControlResult, cables: str) -> ControlResult:
+        """Apply the cable policy to a reached state (module doc)."""
+        if cables == "ignore" or np.all(state_cable_clear(res.equilibrium)):
+            return res
+        tried = []
+        seeds = [s for s in self.library.nearest(target, 4 * self.max_seeds)
+                 if np.all(state_cable_clear(s.equilibrium))]
+        plan = ([(s, self._local) for s in seeds[:2 * self.max_seeds]]
+                + [(s, self._homotopy) for s in seeds[:self.max_homotopies]])
+        for s, run in plan:
+            found = run(target, s, tried)
+            if found is not None and np.all(state_cable_clear(found.equilibrium)):
+                return dataclasses.replace(found, strategy=f"clear cables: from {s.label}")
+        if cables == "prefer":
+            return res
+        crossing = [i + 1 for i, c in enumerate(state_cable_clear(res.equilibrium)) if not c]
+        note = (f"{CABLE_CROSSES_ARM}: the target is reached only with the cable of tendon(s) "
+                f"{crossing} through the arm; no state with clear cables found")
+        return dataclasses.replace(res, converged=False, reachable=None, reason=CABLE_CROSSES_ARM,
+                                   local_reason=res.reason, message=note, evidence=note)
 
     def _origin(self, first: ControlResult, start, start_loading) -> list:
         """The state the local solve started from, for the homotopy."""
