@@ -86,3 +86,15 @@ def test_read_refuses_what_it_cannot_read(tmp_path):
         ep.read(tmp_path / "x.h5")
     with pytest.raises(ep.InputError, match="no such file"):
         ep.read(tmp_path / "missing.h5")
+
+
+def test_readme_python_block_runs(tmp_path):
+    """The README's Python section is a script that runs as shown."""
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = readme.split("## Python", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    done = subprocess.run([sys.executable, "-c", block], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "motors.csv").exists()
