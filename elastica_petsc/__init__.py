@@ -9,7 +9,7 @@ A library first, in millimetres and newtons at its edge::
     ep.control(arm, [535.8, 222.6]).tensions_N                     # Fig. 2
 
 One call per study: :func:`solve`, :func:`control`, :func:`trace`,
-:func:`schedule`, :func:`stability`, :func:`lengths`, :func:`equilibria`,
+:func:`schedule`, :func:`stability`, :func:`frequencies`, :func:`lengths`, :func:`equilibria`,
 :func:`workspace`, :func:`read`.  The solver classes
 (:class:`EquilibriumSolver`, :class:`TipController`, :class:`LengthSolver`,
 :class:`StabilitySolver`) can be kept for loops; they work in the
@@ -27,7 +27,7 @@ _EXPORTS = {
     "Arm": ".core.model", "Tendon": ".core.model", "Motor": ".core.model",
     "Limits": ".core.model", "InputError": ".core.errors",
     "State": ".api", "solve": ".api", "control": ".api", "trace": ".api", "schedule": ".api",
-    "stability": ".api", "lengths": ".api", "equilibria": ".api", "workspace": ".api",
+    "stability": ".api", "frequencies": ".api", "lengths": ".api", "equilibria": ".api", "workspace": ".api",
     "read": ".api",
     "Equilibrium": ".solvers.equilibrium", "EquilibriumSolver": ".solvers.equilibrium",
     "TipController": ".solvers.control", "LengthSolver": ".solvers.lengths",

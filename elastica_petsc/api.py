@@ -185,6 +185,21 @@ def stability(state: State, *, modes: int = 4):
         return solver.solve(eq.u, eq.p)
 
 
+def frequencies(state: State, *, control: str = "load", modes: int = 3):
+    """The lowest natural frequencies about ``state`` (small vibrations,
+    K v = Omega M v with the arm's mass per length), with tensions held
+    (``control="load"``) or cable lengths held (``"length"``).  Returns a
+    ``Frequencies`` (``hz``, ``f1_hz``); needs ``mass_per_length_kg_m`` in the
+    arm's configuration."""
+    from .solvers.stability import StabilitySolver
+
+    if state.arm.mass_per_length_kg_m is None:
+        raise InputError("natural frequencies need [arm] mass_per_length_kg_m in the config")
+    eq = state.equilibrium
+    with StabilitySolver(eq.disc) as solver:
+        return solver.frequencies(eq.u, eq.p, state.arm, nev=modes, control=control)
+
+
 def lengths(arm: Arm, lengths_mm, *, all: bool = False, elements: int | None = None):
     """Length control (Sec. 4.6): the equilibrium, with its tensions, that
     prescribed cable lengths impose (slack cables carry no tension).  With
