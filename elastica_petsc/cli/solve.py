@@ -11,12 +11,24 @@ def add_parser(sub) -> None:
         "solve", help="equilibrium of the arm for given cable tensions (load control)",
         description="Solve the equilibrium (paper Eq. (9)) for given tensions with PETSc SNES, "
                     "stepping the load from the straight arm along the chosen loading order. "
-                    "Prints the tip, attachment points, cable lengths, energy and curvature.")
+                    "Where the path crosses a symmetric bifurcation (the straight arm buckling "
+                    "under a cable along its axis) it switches onto a stable buckled branch "
+                    "(--side). Prints the tip, attachment points, cable lengths, energy and "
+                    "curvature.")
     common.add_tension_options(parser)
     common.add_order_option(parser)
+    add_side_option(parser)
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
+
+
+def add_side_option(parser) -> None:
+    parser.add_argument("--side", choices=("left", "right"),
+                        help="at a symmetric bifurcation take the branch on which the tip moves "
+                             "to the left (counter-clockwise) or right of its tangent (default: "
+                             "the branch of lower potential energy; on equal energies the left "
+                             "one)")
 
 
 def run(args) -> int:
@@ -26,7 +38,7 @@ def run(args) -> int:
     arm, disc = common.load_arm(args)
     common.check_outputs(args)
     with EquilibriumSolver(disc) as solver:
-        eq = solver.solve(common.tensions(args, arm), order=common.order(args))
+        eq = solver.solve(common.tensions(args, arm), order=common.order(args), side=args.side)
     summary = equilibrium_summary(arm, eq)
     if args.json:
         common.print_json(summary)

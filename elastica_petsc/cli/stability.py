@@ -4,6 +4,7 @@ from __future__ import annotations
 import sys
 
 from . import common
+from .solve import add_side_option
 
 
 def add_parser(sub) -> None:
@@ -18,6 +19,7 @@ def add_parser(sub) -> None:
                     "suggested maximum tracing speed.")
     common.add_tension_options(parser)
     common.add_order_option(parser)
+    add_side_option(parser)
     parser.add_argument("--modes", type=int, default=4, metavar="K",
                         help="number of eigenvalues/modes to compute (default 4)")
     parser.add_argument("--amplitude-mm", type=float, default=1.0, metavar="MM",
@@ -41,7 +43,7 @@ def run(args) -> int:
     arm, disc = common.load_arm(args)
     common.check_outputs(args)
     with EquilibriumSolver(disc) as solver:
-        eq = solver.solve(common.tensions(args, arm), order=common.order(args))
+        eq = solver.solve(common.tensions(args, arm), order=common.order(args), side=args.side)
     if not eq.converged:
         print(f"elastica-petsc: solve failed: {eq.message}", file=sys.stderr)
         return 1
@@ -51,8 +53,9 @@ def run(args) -> int:
         if arm.mass_per_length_kg_m is not None:
             freqs = {control: stab.frequencies(eq.u, eq.p, arm, control=control)
                      for control in ("load", "length")}
+    eq_summary = equilibrium_summary(arm, eq)
     summary = {
-        "equilibrium": equilibrium_summary(arm, eq),
+        "equilibrium": eq_summary,
         "stable": bool(result.stable),
         "eigenvalues": rounded(result.eigenvalues, 8),
         "lambda_min": round(float(result.lambda_min), 8),
@@ -62,6 +65,7 @@ def run(args) -> int:
         "asymmetry": float(f"{result.asymmetry:.3g}"),
         "eps_reason": result.reason,
         "mass": result.mass,
+        "critical_loads_crossed": eq_summary["bifurcations"],
         "units": {"eigenvalues": "lambda l^2/B (K v = lambda M v, lumped mass)",
                   "lambda_min_raw": "lambda_min(K) / (B/l) at this mesh (paper Fig. 5b)"},
     }
@@ -83,6 +87,11 @@ def run(args) -> int:
         print(f"  paper's raw lambda_min(K)/(B/l) at N = {disc.n_elements}: {result.raw_min:.6g}")
         print(f"  negative eigenvalues: {result.negative} (inertia count: "
               f"{result.inertia_negative});  asymmetry ||K-K^T||/||K|| = {result.asymmetry:.2e}")
+        for b in summary["critical_loads_crossed"]:
+            print("  critical load crossed on the way (smallest eigenvalue of K through zero, a "
+                  "bifurcation): p_cr = (" + ", ".join(f"{v:.8g}" for v in b["critical_tensions"])
+                  + ") = (" + ", ".join(f"{v:.6g}" for v in b["critical_tensions_N"])
+                  + f") N; the path continued on the {b['side']} buckled branch")
         if freqs is not None:
             for control, f in freqs.items():
                 held = "tensions held" if control == "load" else "cable lengths held"

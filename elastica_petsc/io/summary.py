@@ -28,6 +28,9 @@ def equilibrium_summary(arm: Arm, eq: Equilibrium) -> dict:
         "stable": bool(eq.stable),
         "unstable_modes": int(eq.unstable_modes),
         "snaps_at_tensions": [rounded(p) for p in eq.snaps],
+        "bifurcations": [{"critical_tensions": rounded(b.p_critical, 8),
+                          "critical_tensions_N": rounded(arm.tensions_to_N(b.p_critical), 8),
+                          "side": b.side, "rule": b.rule} for b in eq.bifurcations],
         "elements": int(eq.disc.n_elements),
         "tensions": rounded(eq.p),
         "tensions_N": rounded(arm.tensions_to_N(eq.p)),
@@ -57,6 +60,11 @@ def format_equilibrium(arm: Arm, summary: dict) -> str:
         "yes" if s["stable"] else f"NO ({s['unstable_modes']} negative stiffness eigenvalue(s))"))
     for p in s["snaps_at_tensions"]:
         lines.append(f"note: the loading path snapped (limit point) at p = {p}")
+    for b in s["bifurcations"]:
+        lines.append("note: the loading path crossed a symmetric bifurcation (not a limit point) "
+                     "at critical tensions p = (" + ", ".join(f"{v:.6g}" for v in
+                                                            b["critical_tensions"])
+                     + f") and took the {b['side']} branch: {b['rule']}")
     lines.append(f"tip: ({s['tip_mm'][0]:.3f}, {s['tip_mm'][1]:.3f}) mm")
     lines.append(f"{'tendon':>6} {'s [mm]':>8} {'p=Pl^2/B':>10} {'P [N]':>9} "
                  f"{'attachment [mm]':>22} {'cable [mm]':>11}")
