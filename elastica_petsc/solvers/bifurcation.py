@@ -150,11 +150,22 @@ class AmplitudeContinuation:
             u, lam = u + step[:-1], lam + step[-1]
         return None
 
+    def _jumped(self, guess, out, angle_tol: float = 0.2, load_tol: float = 0.05) -> bool:
+        """A corrected state far from its predictor belongs to another branch."""
+        N = self.disc.n_elements
+        return (abs(out[1] - guess[1]) > load_tol
+                or float(np.max(np.abs(out[0][:N] - guess[0][:N]))) > angle_tol)
+
     def branch(self, u_c, lam_c: float, v, sign: float, *, da0: float = 0.02,
-               da_max: float = 0.1, max_steps: int = 400):
-        """States (u, lam) along the branch leaving u_c along ``sign`` v until
-        lam >= 1: returns the last two, or None if the branch turns back below
-        lam_c (subcritical) or cannot be followed."""
+               da_max: float = 0.05, max_steps: int = 400):
+        """Follow the branch leaving u_c along ``sign`` v until lam >= 1.
+
+        Returns (outcome, states): "reached" with the last two states (u, lam)
+        (lam of the last >= 1); "subcritical" if lam falls below ``lam_c``;
+        "collapse" if the branch pulls an attachment point through its routing
+        point (the corrector then meets the mirror solution with negative
+        tensions: same force, cable direction flipped); "lost" if it cannot be
+        followed with the smallest amplitude step or within ``max_steps``."""
         disc = self.disc
         theta_c = disc.split(u_c)[0]
         prev, cur = None, (np.asarray(u_c, float), lam_c)
@@ -169,15 +180,16 @@ class AmplitudeContinuation:
                 r = (a_new - a) / (a - a_prev)
                 guess = (cur[0] + r * (cur[0] - prev[0]), cur[1] + r * (cur[1] - prev[1]))
             out = self._newton(guess[0], guess[1], theta_c, v, a_new)
-            if out is None:
-                if da <= 1e-4:
-                    return None
+            flipped = out is not None and bool(np.any(self.pa + out[1] * self.dp < 0.0))
+            if out is None or flipped or self._jumped(guess, out):
+                if da <= 1e-4:                       # Newton left the branch at any step
+                    return ("collapse" if flipped else "lost"), (prev, cur)
                 da *= 0.5
                 continue
             a_prev, a, prev, cur = a, a_new, cur, out
-            if cur[1] < lam_c - 1e-6:                # the branch bends back: subcritical
-                return None
+            if cur[1] < lam_c - 1e-6:                # the branch bends back
+                return "subcritical", (prev, cur)
             if cur[1] >= 1.0:
-                return prev, cur
+                return "reached", (prev, cur)
             da = min(1.5 * da, da_max)
-        return None
+        return "lost", (prev, cur)

@@ -32,6 +32,13 @@ CABLE_COLLAPSE = "CABLE_COLLAPSE"
 # A stable branch ends at a bifurcation (not a limit point) and no stable
 # post-critical state was found (a subcritical bifurcation): solvers/bifurcation.py.
 BIFURCATION = "BIFURCATION"
+# How a bifurcating branch ended before the end load (AmplitudeContinuation.branch).
+BRANCH_ENDS = {
+    "subcritical": "bends back below the critical load (subcritical: the arm would snap)",
+    "collapse": "pulls the attachment point onto its routing point before the end load",
+    "lost": "could not be followed",
+    "unstable": "reaches the end load unstable",
+    "reached": "reaches the end load"}
 # Which branch to take at a symmetric bifurcation (solvers/bifurcation.py, tip_side).
 SIDES = ("left", "right")
 
@@ -348,16 +355,18 @@ class EquilibriumSolver:
         lam_c = lam + (lam_unstable - lam) * mu0 / (mu0 - mu1) if mu0 > 0 > mu1 else lam
         self._p_critical = pa + lam_c * (pb - pa)
         continuation = AmplitudeContinuation(disc, pa, pb, self.atol)
-        found, its = {}, 0
+        found, its, self._branch_ends = {}, 0, []
         for sign in (1.0, -1.0):
-            out = continuation.branch(u, lam, v, sign)
-            if out is None:
+            outcome, ((u0, l0), (u1, l1)) = continuation.branch(u, lam, v, sign)
+            self._branch_ends.append(outcome)
+            if outcome != "reached":
                 continue
-            (u0, l0), (u1, l1) = out
             u_end, n, _ = self.newton(u0 + (1.0 - l0) / (l1 - l0) * (u1 - u0), pb)
             its += n
             if self.converged() and self.inertia.negative_eigenvalues(u_end, pb) == 0:
                 found.setdefault(tip_side(disc, u, u_end), u_end)
+            else:
+                self._branch_ends[-1] = "unstable"
         side, rule = self._choose_side(found, pb)
         if side is None:
             return None
@@ -390,7 +399,9 @@ class EquilibriumSolver:
             side = f"on the {self._side} side" if self._side else "on either side"
             return (f"the stable branch ends at {where} at a bifurcation (the critical mode is "
                     "orthogonal to the load, not a limit point) and no stable post-critical "
-                    f"state was found {side} (a subcritical bifurcation: the arm would snap)")
+                    f"state was found {side}: " + "; ".join(
+                        f"{k} branch: {BRANCH_ENDS[e]}" for k, e in
+                        zip(("one", "other"), self._branch_ends)))
         if reason in ("BRANCH_JUMP", "UNSTABLE_STATE"):
             return (f"the stable equilibrium branch ends at {where} (limit point: the arm "
                     "snaps) and no stable state to snap to was found")
