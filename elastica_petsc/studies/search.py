@@ -119,6 +119,23 @@ class SearchResult:
 
 
 # --- several equilibria: starts, continuation, deflation -----------------------------------
+def loading_paths(eq_solver: EquilibriumSolver, p, *, order=None,
+                  start: Equilibrium | None = None) -> list[tuple[Equilibrium, str]]:
+    """The load-controlled states at ``p`` reached along one loading path
+    (:meth:`EquilibriumSolver.solve`), with a label suffix: one state, or two
+    when the path crossed a symmetric bifurcation (the default branch, then the
+    other side's, :mod:`elastica_petsc.solvers.bifurcation`)."""
+    eq = eq_solver.solve(p, order=order, start=start)
+    out = [(eq, "")]
+    if eq.converged and eq.bifurcations:
+        side = eq.bifurcations[0].side
+        other = "right" if side == "left" else "left"
+        out = [(eq, f", {side} branch at the bifurcation"),
+               (eq_solver.solve(p, order=order, start=start, side=other),
+                f", {other} branch at the bifurcation")]
+    return out
+
+
 def tension_starts(eq_solver: EquilibriumSolver, levels=(5.0, 10.0, 20.0), orders="all",
                    include_straight: bool = True) -> list[tuple[str, Equilibrium]]:
     """A spread of initial states: the straight arm and the load-controlled
@@ -150,10 +167,11 @@ def tension_starts(eq_solver: EquilibriumSolver, levels=(5.0, 10.0, 20.0), order
         for level in levels:                  # raise tendon k through the levels, warm
             target = np.array(state.p, float)
             target[k] = level
-            nxt = eq_solver.solve(target, start=state)
+            (nxt, how), *others = loading_paths(eq_solver, target, start=state)
             if not nxt.converged:
                 break
-            keep(nxt, "order " + ",".join(map(str, order)))
+            for eq, side in [(nxt, how)] + others:
+                keep(eq, "order " + ",".join(map(str, order)) + side)
             ordered(order, depth + 1, nxt)
             state = nxt
 
@@ -167,10 +185,11 @@ def tension_starts(eq_solver: EquilibriumSolver, levels=(5.0, 10.0, 20.0), order
             for ps in rays.values():
                 state = straight
                 for p in sorted(ps, key=np.max):
-                    nxt = eq_solver.solve(p, start=state)
+                    (nxt, how), *others = loading_paths(eq_solver, p, start=state)
                     if not nxt.converged:
                         break
-                    keep(nxt, "proportional")
+                    for eq, side in [(nxt, how)] + others:
+                        keep(eq, "proportional" + side)
                     state = nxt
         else:
             ordered(order, 0, straight)
@@ -300,19 +319,20 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, deflation_rounds
     try:
         for order in [None] + list(itertools.permutations(range(1, n + 1))):
             how = "proportional" if order is None else "order " + ",".join(map(str, order))
-            label = f"straight arm, {how}"
-            if found.offer(examined(eq_solver.solve(p, order=order), label), label,
-                           "loading path"):
-                deflation.add(found.found[-1][0].theta[1:])
+            for eq, side in loading_paths(eq_solver, p, order=order):
+                label = f"straight arm, {how}{side}"
+                if found.offer(examined(eq, label), label, "loading path"):
+                    deflation.add(found.found[-1][0].theta[1:])
         if starts is None:
             starts = tension_starts(eq_solver)
         for sweep in range(max(1, passes)):
             before = len(found.found)
             for label, start in starts:
                 if sweep == 0 and np.any(start.p != p):
-                    state = examined(eq_solver.solve(p, start=start), label)
-                    if found.offer(state, label, "loading path"):
-                        deflation.add(state.theta[1:])
+                    for eq, side in loading_paths(eq_solver, p, start=start):
+                        state = examined(eq, label + side)
+                        if found.offer(state, label + side, "loading path"):
+                            deflation.add(state.theta[1:])
                 for _ in range(deflation_rounds):
                     z, its, reason, ok = system.newton(system.augment(start.u, p), p)
                     state = None
