@@ -310,8 +310,9 @@ class AugmentedSystem:
                              shape=(self.size, self.size))
 
     # --- one solve ---------------------------------------------------------------------
-    def newton(self, z0, target) -> tuple[np.ndarray, int, str, bool]:
-        """One VI Newton solve from z0: (z, iterations, reason, converged)."""
+    def newton(self, z0, target, max_it: int | None = None) -> tuple[np.ndarray, int, str, bool]:
+        """One VI Newton solve from z0: (z, iterations, reason, converged);
+        ``max_it`` caps the Newton iterations of this solve only."""
         self.target = np.asarray(target, float)
         z0 = np.array(z0, float)
         if self.mode == "length":
@@ -325,10 +326,15 @@ class AugmentedSystem:
         self.xl.setValue(self.imu, floor)
         self.xl.assemble()
         self.x.setArray(z0)
+        default_max_it = self.snes.getTolerances()[3]
+        if max_it is not None:
+            self.snes.setTolerances(max_it=max_it)
         try:
             self.snes.solve(None, self.x)
         except PETSc.Error:                      # e.g. a zero pivot in the LU
             return z0, self.snes.getIterationNumber(), "PETSC_ERROR", False
+        finally:
+            self.snes.setTolerances(max_it=default_max_it)
         reason = self.snes.getConvergedReason()
         z = self.x.getArray().copy()
         return z, self.snes.getIterationNumber(), SNES_REASONS.get(reason, str(reason)), \
@@ -493,22 +499,24 @@ class LengthSolver:
             instabilities=tuple(instabilities), label=label)
 
     # --- one VI Newton solve ------------------------------------------------------------
-    def solve(self, lengths, start=None, *, deflate=None, label: str = "") -> LengthEquilibrium:
+    def solve(self, lengths, start=None, *, deflate=None, label: str = "",
+              max_it: int | None = None) -> LengthEquilibrium:
         """Equilibrium with cable lengths ``lengths`` (units of l) by one VI
         Newton solve from ``start`` (an Equilibrium, a pair (u, p), or None:
         the straight arm with p = 0).  ``deflate``: a :class:`Deflation`
-        holding states Newton must not converge to again."""
+        holding states Newton must not converge to again; ``max_it``: at most
+        this many Newton iterations (default: the SNES's, 50)."""
         L = check_lengths(lengths, self.disc.n_tendons)
         u0, p0 = self._start(start)
         if deflate is None:
             sys = self.system
             sys.deflation = Deflation(self.disc.h)
-            z, its, reason, ok = sys.newton(sys.augment(u0, p0), L)
+            z, its, reason, ok = sys.newton(sys.augment(u0, p0), L, max_it)
         else:
             sys = self.deflated_system
             sys.deflation = deflate
             try:
-                z, its, reason, ok = sys.newton(sys.augment(u0, p0), L)
+                z, its, reason, ok = sys.newton(sys.augment(u0, p0), L, max_it)
             finally:
                 sys.deflation = Deflation(self.disc.h)
         msg = "" if ok else (f"no length-controlled equilibrium reached from the start "
