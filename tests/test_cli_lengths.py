@@ -194,7 +194,13 @@ def test_fig8_lengths_finds_states_1_and_2(fig8_lengths, fig8_load, disc, ls):
 
     assert data["control"] == "length" and data["lengths_mm"] == [147.1, 472.5]
     states = data["equilibria"]
-    assert len(states) >= 2
+    assert len(states) >= 5                   # issue 12: five with p >= 0, three unstable
+    assert all(min(s["tensions"]) >= 0 for s in states)
+    assert [s["stable"] for s in states].count(True) == 2
+    cov = data["search"]["coverage"]
+    assert cov["by_method"]["deflated continuation"]["new_states"] >= 4
+    assert 0 < cov["last_new_state_at_attempt"] <= data["search"]["attempts"]
+    assert data["search"]["effort"]["steps"] == 12 and data["search"]["effort"]["effort"] == 1
     for s in states:
         for key in ("tensions", "tensions_N", "tip_mm", "cable_lengths_mm", "slack_mm",
                     "taut", "stable", "stable_under_load_control",
