@@ -390,6 +390,7 @@ def test_fig7_length_path_buckles_the_straight_segment(eqs, ls, fig7):
     assert abs((fig7["L0"][1] - L_event[1]) * L_MM - dl_cr) < 0.02
     assert np.max(np.abs(L_event - L_cr)) * L_MM < 0.05
     assert len(path[-1].jumps) == 1
+    assert path[-1].instability_kinds == ("bifurcation",)      # buckling, not a fold
     assert path[-1].length_unstable_modes == 0
     assert abs(_column(disc, path[-1].u, m1)[1]) * L_MM > 1.0           # buckled
 
@@ -502,5 +503,8 @@ def test_replay_reports_where_the_arm_buckles(ls, fig7):
     assert r.first_departure == 4
     assert [q.jumped for q in r.points] == [False] * 4 + [True]
     (k, L_mm), = r.jumps
+    (k_event, _, kind), = r.instabilities
+    assert k_event == 4 and kind == "bifurcation"
+    assert "a bifurcation (buckling" in r.summary()
     assert k == 4 and abs(fig7["L0"][1] * L_MM - L_mm[1] - 1.61) < 0.05
     assert r.points[-1].tip_error_mm > 1.0 and r.points[-1].stable

@@ -152,6 +152,8 @@ def run(args) -> int:
                              if trace["theta"] is not None else
                              f"tip within {args.tip_tol_mm:g} mm of the planned tip"),
         "jumps": [{"before_point": int(k), "lengths_mm": rounded(L)} for k, L in result.jumps],
+        "instabilities": [{"before_point": int(k), "lengths_mm": rounded(L), "kind": kind}
+                          for k, L, kind in result.instabilities],
         "unstable_points": [q.index for q in pts if q.state.converged and not q.stable],
         "points": [],
         "units": {"lengths_mm": "mm", "tip_mm": "mm", "tip_error_mm": "mm",

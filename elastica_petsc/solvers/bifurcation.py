@@ -69,21 +69,24 @@ class Bifurcation:
 
 
 def inverse_iteration(matrix: sp.spmatrix, n: int, h: float, iterations: int = 30,
-                      seed: int = 0) -> tuple[float, np.ndarray]:
+                      seed: int = 0) -> tuple[float, np.ndarray, np.ndarray]:
     """Eigenpair (lambda, v) of S v = lambda h v with |lambda| smallest, S the
     Schur complement of a bordered ``matrix`` onto its first ``n`` unknowns
     (each solve is one sparse LU solve of the bordered matrix, O(N)).
-    v is scaled to max |v| = 1."""
+    v is scaled to max |v| = 1; the third value is the whole last solution
+    (v and the border unknowns that go with it), scaled alike."""
     lu = spla.splu(sp.csc_matrix(matrix))
     v = np.random.default_rng(seed).standard_normal(n)
     lam = 0.0
     rhs = np.zeros(matrix.shape[0])
+    full = rhs
     for _ in range(iterations):
         rhs[:n] = h * v
-        w = lu.solve(rhs)[:n]
-        lam = float(np.dot(v, h * v) / np.dot(v, h * w))
-        v = w / np.max(np.abs(w))
-    return lam, v
+        full = lu.solve(rhs)
+        lam = float(np.dot(v, h * v) / np.dot(v, h * full[:n]))
+        full = full / np.max(np.abs(full[:n]))
+        v = full[:n]
+    return lam, v, full
 
 
 def jacobian(disc: Discretisation, u, p) -> sp.csr_matrix:
@@ -96,7 +99,7 @@ def jacobian(disc: Discretisation, u, p) -> sp.csr_matrix:
 def critical_mode(disc: Discretisation, u, p) -> tuple[float, np.ndarray]:
     """The eigenpair of K v = lambda h v nearest zero at the state (u, p)
     (the buckling mode near a loss of stability), v the N free nodal angles."""
-    return inverse_iteration(jacobian(disc, u, p), disc.n_elements, disc.h)
+    return inverse_iteration(jacobian(disc, u, p), disc.n_elements, disc.h)[:2]
 
 
 def orthogonality(disc: Discretisation, u, dp, v) -> float:

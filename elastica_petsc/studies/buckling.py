@@ -319,6 +319,7 @@ class Fig7Result:
     path: tuple                       # LengthEquilibrium per aligned point reached
     path_deviation_mm: np.ndarray     # their segment deviations (buckled: not ~0)
     event_L_mm: np.ndarray | None     # lengths where the path lost stability (instability)
+    event_kind: str | None            # "bifurcation" or "limit point" (lengths.instability_kind)
     event_dL2_mm: float | None
     jump_L_mm: np.ndarray | None      # lengths at which it jumped to a buckled state
     jumped: LengthEquilibrium | None  # the path's state at the point of the jump
@@ -378,6 +379,7 @@ class Fig7Result:
             "clamped_column_p2_N": N(self.p_clamped), "load_ratio": r(self.load_ratio),
             "continuation_instability_mm": None if self.event_L_mm is None else
             r(self.event_L_mm),
+            "continuation_instability_kind": self.event_kind,
             "continuation_instability_dL2_mm": None if self.event_dL2_mm is None else
             r(self.event_dL2_mm),
             "continuation_jump_mm": None if self.jump_L_mm is None else r(self.jump_L_mm),
@@ -417,8 +419,9 @@ class Fig7Result:
         ]
         if self.event_dL2_mm is not None:
             lines.append(f"  continuation: lost stability at dL2 = {self.event_dL2_mm:.4f} mm"
+                         f" ({self.event_kind})"
                          + ("" if self.jump_L_mm is None else
-                            f", jumped at L = ({self.jump_L_mm[0]:.3f}, "
+                            f", switched to a stable branch at L = ({self.jump_L_mm[0]:.3f}, "
                             f"{self.jump_L_mm[1]:.3f}) mm"))
         elif len(self.path):
             lines.append(f"  continuation: no instability reported up to dL2 = "
@@ -539,6 +542,7 @@ def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
     path = length_solver.path([aligned[d].lengths_requested for d in keys[1:upto + 1]],
                               aligned[0.0])
     event = next((s.instabilities[0] for s in path if s.instabilities), None)
+    event_kind = next((s.instability_kinds[0] for s in path if s.instability_kinds), None)
     jumped = next((s for s in path if s.jumps), None)
 
     # post-buckling states on the aligned lengths beyond the crossing
@@ -576,7 +580,7 @@ def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
         ka_clamped=float(ka), p_clamped=float(p_clamped),
         path=tuple(path),
         path_deviation_mm=np.array([segment_geometry(disc, s.u, m1)[1] * l_mm for s in path]),
-        event_L_mm=None if event is None else np.asarray(event) * l_mm,
+        event_L_mm=None if event is None else np.asarray(event) * l_mm, event_kind=event_kind,
         event_dL2_mm=None if event is None else float((L0[1] - event[1]) * l_mm),
         jump_L_mm=None if jumped is None else np.asarray(jumped.jumps[0]) * l_mm,
         jumped=jumped,
@@ -685,7 +689,7 @@ def plot_fig7(arm, result: Fig7Result, png) -> None:
               label=f"critical: dL2 = {r.dL2_cr_mm:.3f} mm, p2 = {r.p2_cr:.2f}")
     if r.event_dL2_mm is not None:
         ax_p.axvline(r.event_dL2_mm, color="0.5", lw=1.0, ls="-.",
-                     label=f"continuation: instability reported at dL2 = "
+                     label=f"continuation: {r.event_kind} reported at dL2 = "
                            f"{r.event_dL2_mm:.3f} mm")
     for k, s in enumerate(r.post_buckling):
         ax_p.plot(r.post_dL2_mm, s.p[1], "D", color=post_colours[k % 2], ms=7, zorder=6,

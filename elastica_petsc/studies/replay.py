@@ -72,12 +72,27 @@ class Replay:
         return [(q.index, np.asarray(L) * q.state.length_mm)
                 for q in self.points for L in q.state.jumps]
 
+    @property
+    def instabilities(self) -> list[tuple[int, np.ndarray, str]]:
+        """(point index, cable lengths in mm, kind) of every loss of stability on
+        the way: kind "bifurcation" (buckling: the path switched to a stable
+        branch beside it) or "limit point" (a fold: the arm snapped),
+        :func:`~elastica_petsc.solvers.lengths.instability_kind`."""
+        return [(q.index, np.asarray(L) * q.state.length_mm, kind)
+                for q in self.points
+                for L, kind in zip(q.state.instabilities, q.state.instability_kinds)]
+
     def summary(self) -> str:
         lines = [f"replayed {len(self.points)} of {self.n_planned} points under length control "
                  f"(first point by {self.start_method}); max tip error "
                  f"{self.max_tip_error_mm:.3g} mm; "
                  + ("stayed on the planned branch" if self.all_on_branch else
                     f"left the planned branch at point {self.first_departure}")]
+        for k, L, kind in self.instabilities:
+            what = ("a bifurcation (buckling; switched to a stable branch beside it)"
+                    if kind == "bifurcation" else "a limit point (the arm snaps)")
+            lines.append(f"  stability lost before point {k} at L = ("
+                         + ", ".join(f"{v:.3f}" for v in L) + f") mm: {what}")
         for k, L in self.jumps:
             lines.append(f"  jump (snap/buckling) before point {k} at L = ("
                          + ", ".join(f"{v:.3f}" for v in L) + ") mm")
