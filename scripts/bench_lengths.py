@@ -15,6 +15,10 @@
    continuation + multi-start) against the multi-start alone (steps=0, the
    search before issue 12), interleaved, median of ``--search-repeats`` runs
    each, process time (the machine is shared): ratio of times and states found.
+4. (issue 12) The cost of crossing a bifurcation: `solve` on the column of
+   tests/test_bifurcation.py (l = 1000 mm, B = 1 N m^2, cable through
+   (500, 0) mm, 400 elements) at p = 18.0 (below p_cr = 18.27: no crossing)
+   and at p = 18.6 (crossing, both branches followed), median of ``--repeats``.
 Prints markdown.
 """
 from __future__ import annotations
@@ -121,6 +125,25 @@ def search_cost(arm, n: int, repeats: int) -> None:
           f"{list(counts.values())[1]} / {list(counts.values())[0]} (states)\n")
 
 
+def bifurcation_cost(repeats: int) -> None:
+    from elastica_petsc.core.model import Arm, Tendon
+
+    arm = Arm(1000.0, 1.0, (Tendon(1000.0, (500.0, 0.0)),), elements=400)
+    with EquilibriumSolver(Discretisation.from_arm(arm)) as solver:
+        below, above = solver.solve([18.0]), solver.solve([18.6])
+        assert below.converged and not below.bifurcations and above.bifurcations
+        t_below = median_time(lambda: solver.solve([18.0]), repeats)
+        t_above = median_time(lambda: solver.solve([18.6]), repeats)
+    print("| `solve`, cable through (500, 0) mm, N = 400 | median time | tip [mm] |")
+    print("|---|---|---|")
+    print(f"| p = 18.0 (straight, stable) | {t_below * 1e3:.1f} ms | "
+          f"({below.tip[0] * 1e3:.3f}, {below.tip[1] * 1e3:.3f}) |")
+    print(f"| p = 18.6 (bifurcation at {above.bifurcations[0].p_critical[0]:.4f} crossed, "
+          f"{above.bifurcations[0].side} branch) | {t_above * 1e3:.1f} ms | "
+          f"({above.tip[0] * 1e3:.3f}, {above.tip[1] * 1e3:.3f}) |")
+    print(f"\nratio crossing / no crossing: {t_above / t_below:.1f}\n")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=7)
@@ -133,6 +156,7 @@ def main() -> None:
         single_solves(arm, args.elements, args.repeats)
         searches(arm, args.elements)
     search_cost(arm, args.elements, args.search_repeats)
+    bifurcation_cost(args.repeats)
 
 
 if __name__ == "__main__":

@@ -148,9 +148,9 @@ def search_summary(result, settings: dict) -> dict:
     method = (f"deflated continuation in the {what} from the straight arm along every "
               f"loading order ({settings['steps']} points per segment; Farrell et al. 2016), "
               f"then a multi-start search: {how} and up to {settings['deflation_rounds']} "
-              "deflated Newton solves (Farrell et al. 2015) from each of "
-              f"{len(result.starts)} load-controlled starts (tension levels "
-              + " ".join(f"{v:g}" for v in settings["levels"]) + ")")
+              "deflated Newton solves (Farrell et al. 2015) from each start (load-controlled "
+              "states at the tension levels " + " ".join(f"{v:g}" for v in settings["levels"])
+              + " in every loading order, and any branch the continuation lost)")
     if result.control == "load":
         method = ("loading paths from the straight arm (every order, both sides of each "
                   "bifurcation), " + method)
@@ -191,6 +191,10 @@ def format_states(arm, data: dict) -> str:
             + f"; the last new state came at attempt {cov['last_new_state_at_attempt']} of "
               f"{search['attempts']} (more effort: --effort)")
     other = "load" if data["control"] == "length" else "length"
+    numbers = [s["number"] for s in data["equilibria"]]
+    if numbers != list(range(1, n + 1)):
+        lines.append("state numbers: the paper's (Fig. 8) for the states it shows, the others "
+                     "after them")
     for s in data["equilibria"]:
         own = "yes" if s["stable"] else "NO"
         oth = s[f"stable_under_{other}_control"]
