@@ -34,7 +34,7 @@ def run(args) -> int:
     from ..solvers.equilibrium import EquilibriumSolver
     from ..core.errors import InputError
     from ..solvers.stability import StabilitySolver, max_tracing_speed_mm_s
-    from ..io.summary import equilibrium_summary, format_equilibrium, rounded
+    from ..io.summary import equilibrium_summary, rounded
 
     if args.modes < 1:
         raise InputError(f"--modes must be at least 1, got {args.modes}")
@@ -79,26 +79,7 @@ def run(args) -> int:
     if args.json:
         common.print_json(summary)
     else:
-        print(format_equilibrium(arm, summary["equilibrium"]))
-        print(f"\nstability (SLEPc, K v = lambda M v, lumped mass): "
-              f"{'STABLE' if result.stable else 'UNSTABLE'}")
-        print("  smallest eigenvalues lambda l^2/B: "
-              + ", ".join(f"{v:.6g}" for v in result.eigenvalues))
-        print(f"  paper's raw lambda_min(K)/(B/l) at N = {disc.n_elements}: {result.raw_min:.6g}")
-        print(f"  negative eigenvalues: {result.negative} (inertia count: "
-              f"{result.inertia_negative});  asymmetry ||K-K^T||/||K|| = {result.asymmetry:.2e}")
-        for b in summary["critical_loads_crossed"]:
-            print("  critical load crossed on the way (smallest eigenvalue of K through zero, a "
-                  "bifurcation): p_cr = (" + ", ".join(f"{v:.8g}" for v in b["critical_tensions"])
-                  + ") = (" + ", ".join(f"{v:.6g}" for v in b["critical_tensions_N"])
-                  + f") N; the path continued on the {b['side']} buckled branch")
-        if freqs is not None:
-            for control, f in freqs.items():
-                held = "tensions held" if control == "load" else "cable lengths held"
-                print(f"  natural frequencies ({held}): "
-                      + ", ".join(f"{v:.4g}" for v in f.hz) + " Hz")
-            print(f"  suggested max tracing speed: {summary['max_tracing_speed_mm_s']:.3g} mm/s "
-                  f"({summary['units']['max_tracing_speed_mm_s']})")
+        print(format_report(arm, summary, result, disc.n_elements, freqs))
     if args.out:
         from ..io.hdf5 import atomic_h5, provenance, put, write_attrs, write_equilibrium
         with atomic_h5(args.out, args.overwrite) as fh:
@@ -116,6 +97,35 @@ def run(args) -> int:
     if args.plot:
         plot_modes(arm, eq, result, args.plot)
     return 0
+
+
+def format_report(arm, summary: dict, result, n_elements: int, freqs) -> str:
+    """The text report: the equilibrium, its stiffness eigenvalues, the
+    critical loads crossed on the way (bifurcations) and the frequencies."""
+    from ..io.summary import format_equilibrium
+
+    lines = [format_equilibrium(arm, summary["equilibrium"]),
+             f"\nstability (SLEPc, K v = lambda M v, lumped mass): "
+             f"{'STABLE' if result.stable else 'UNSTABLE'}",
+             "  smallest eigenvalues lambda l^2/B: "
+             + ", ".join(f"{v:.6g}" for v in result.eigenvalues),
+             f"  paper's raw lambda_min(K)/(B/l) at N = {n_elements}: {result.raw_min:.6g}",
+             f"  negative eigenvalues: {result.negative} (inertia count: "
+             f"{result.inertia_negative});  asymmetry ||K-K^T||/||K|| = {result.asymmetry:.2e}"]
+    for b in summary["critical_loads_crossed"]:
+        lines.append("  critical load crossed on the way (smallest eigenvalue of K through zero, "
+                     "a bifurcation): p_cr = (" + ", ".join(f"{v:.8g}" for v in
+                                                          b["critical_tensions"])
+                     + ") = (" + ", ".join(f"{v:.6g}" for v in b["critical_tensions_N"])
+                     + f") N; the path continued on the {b['side']} buckled branch")
+    if freqs is not None:
+        for control, f in freqs.items():
+            held = "tensions held" if control == "load" else "cable lengths held"
+            lines.append(f"  natural frequencies ({held}): "
+                         + ", ".join(f"{v:.4g}" for v in f.hz) + " Hz")
+        lines.append(f"  suggested max tracing speed: {summary['max_tracing_speed_mm_s']:.3g} "
+                     f"mm/s ({summary['units']['max_tracing_speed_mm_s']})")
+    return "\n".join(lines)
 
 
 def plot_modes(arm, eq, result, path) -> None:

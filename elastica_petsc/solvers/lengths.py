@@ -614,15 +614,7 @@ class LengthSolver:
             if lost or not ok:
                 instabilities.append(L_t.copy())
                 kinds.append(instability_kind(sys, z, L_end - L_start))
-            base = z_new if ok else z
-            # post-critical states: perturb along +- the buckling mode at L_t, or a
-            # little further along the path if the critical point is too close
-            candidates = []
-            for t in sorted({lam + step, min(1.0, lam + 0.1 * full), min(1.0, lam + 0.5 * full)}):
-                found = self.branches(base[: sys.nu], base[sys.ip:sys.imu], where(t))
-                candidates = [(t, sys.augment(b.u, b.p, 1.0)) for b in found]
-                if candidates:
-                    break
+            candidates = self._post_critical(z_new if ok else z, where, lam, step, full)
             if ok and jumped and (not lost or not keep):
                 candidates.append((lam + step, z_new))
             if candidates:
@@ -642,6 +634,18 @@ class LengthSolver:
                                 instabilities=instabilities, kinds=kinds, label=label)
         return self._result(z, L_end, its_total, reason, True, steps=steps, jumps=jumps,
                             instabilities=instabilities, kinds=kinds, label=label)
+
+    def _post_critical(self, base, where, lam: float, step: float, full: float) -> list:
+        """Stable states past a critical point of a continuation: the state
+        ``base`` perturbed along +- its buckling mode (:meth:`branches`) at the
+        path parameter lam + step, or a little further along the path if the
+        critical point is too close; as (parameter, augmented state) pairs."""
+        sys = self.system
+        for t in sorted({lam + step, min(1.0, lam + 0.1 * full), min(1.0, lam + 0.5 * full)}):
+            found = self.branches(base[: sys.nu], base[sys.ip:sys.imu], where(t))
+            if found:
+                return [(t, sys.augment(b.u, b.p, 1.0)) for b in found]
+        return []
 
     def _tension_guess(self, u) -> np.ndarray:
         """Least-squares tensions for a shape: min_p |F(u, p)| (F is linear in p)."""
