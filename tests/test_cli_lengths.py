@@ -343,9 +343,17 @@ def test_replay_reports_the_fig7_buckling(tmp_path, arm, disc, eqs, ls):
     assert jump["before_point"] == 4
     assert abs(L0[1] * L_MM - jump["lengths_mm"][1] - 1.61) < 0.05
     assert data["points"][-1]["stable"] and data["points"][-1]["tip_error_mm"] > 1.0
+    (event,) = data["instabilities"]                  # issue 12: reported as a bifurcation
+    assert event["before_point"] == 4 and event["kind"] == "bifurcation"
     assert_png(png)
-    text = cli("replay", path)
+    out = tmp_path / "fig7_replay.h5"
+    text = cli("replay", path, "--out", out)
     assert text.returncode == 0 and "jump (snap/buckling) before point 4" in text.stdout
+    assert "a bifurcation (buckling; switched to a stable branch beside it)" in text.stdout
+    with h5py.File(out, "r") as fh:
+        assert [k.decode() for k in fh["instabilities/kind"][()]] == ["bifurcation"]
+        assert list(fh["instabilities/before_point"][()]) == [4]
+    assert_units_everywhere(out)
 
 
 # --- errors ------------------------------------------------------------------------------
@@ -367,6 +375,9 @@ def _not_hdf5(tmp_path):
     (["lengths", "--lengths", 147.1, 472.5, 3.0], "expected 2 cable lengths"),
     (["lengths", "--lengths", 147.1, -5], "must be a positive number"),
     (["lengths", "--lengths", 0, 472.5], "must be a positive number"),
+    (["lengths", "--lengths", 147.1, 472.5, "--all", "--effort", 0],
+     "--effort must be an integer >= 1"),
+    (["equilibria", "--tensions", 25.2, 10.8, "--effort", -2], "--effort must be an integer"),
     (["lengths", "--lengths", 147.1, 472.5, "--all", "--deflation-rounds", -1],
      "--deflation-rounds"),
     (["equilibria", "--tensions", 25.2, -1], "negative"),

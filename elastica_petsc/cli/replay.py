@@ -19,6 +19,8 @@ HDF5 layout (``--out``)::
     replay/jumped, replay/stable, replay/converged (k,) 1, replay/tensions (k, n),
     replay/tensions_N (k, n) N, replay/theta (k, N+1) rad
     jumps/before_point (j,) 1, jumps/lengths (j, n) mm
+    instabilities/before_point (i,) 1, instabilities/lengths (i, n) mm,
+    instabilities/kind (i,) strings: "bifurcation" or "limit point"
 """
 from __future__ import annotations
 
@@ -278,3 +280,11 @@ def write_replay(path, overwrite: bool, arm, trace: dict, result) -> None:
         put(j, "before_point", [k for k, _ in jumps], "1", "point reached after the jump")
         put(j, "lengths", np.array([L for _, L in jumps]).reshape(-1, n), "mm",
             "cable lengths at which the arm jumped")
+        g = fh.create_group("instabilities")
+        events = result.instabilities
+        put(g, "before_point", [k for k, _, _ in events], "1",
+            "point reached after the loss of stability")
+        put(g, "lengths", np.array([L for _, L, _ in events]).reshape(-1, n), "mm",
+            "cable lengths at which the followed branch lost stability")
+        put(g, "kind", np.array([kind.encode() for _, _, kind in events], dtype="S16"), "1",
+            "bifurcation (buckling, switched to a stable branch) or limit point (snap)")
