@@ -137,6 +137,7 @@ def fig8_lengths(tmp_path_factory):
     out, png = d / "states.h5", d / "states.png"
     run = cli("lengths", "--lengths", *L_FIG8_MM, "--all", "--json", "--out", out, "--plot", png)
     assert run.returncode == 0, run.stderr
+    assert run.stderr == ""                       # issue 12: no warnings, no overflows
     return json.loads(run.stdout), out, png
 
 

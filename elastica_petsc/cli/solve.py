@@ -1,6 +1,7 @@
 """``elastica-petsc solve``: the load-controlled equilibrium (Eq. (9)) for given tensions."""
 from __future__ import annotations
 
+import json
 import sys
 
 from . import common
@@ -49,6 +50,7 @@ def run(args) -> int:
         with atomic_h5(args.out, args.overwrite) as fh:
             write_attrs(fh, provenance(arm, "equilibrium"))
             fh.attrs["loading_order"] = args.order or "proportional"
+            fh.attrs["bifurcations_json"] = json.dumps(summary["bifurcations"])
             write_equilibrium(fh, arm, eq)
     if args.plot:
         from ..plots.common import plot_equilibria, tension_label
