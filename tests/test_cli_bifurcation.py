@@ -11,7 +11,6 @@ import json
 import subprocess
 import sys
 
-import h5py
 import numpy as np
 import pytest
 
@@ -55,12 +54,7 @@ def test_solve_switches_onto_a_stable_buckled_branch(config, side, sign):
     assert b["rule"] == ("requested" if side else
                          "both sides have the same energy: the left one by convention")
     if side is None:
-        out = config.parent / "solve.h5"
-        text = cli("solve", "--config", config, "--tensions", 18.6, "--out", out,
-                   "--overwrite").stdout
-        with h5py.File(out, "r") as fh:
-            (stored,) = json.loads(fh.attrs["bifurcations_json"])
-        assert stored["side"] == "left"
+        text = cli("solve", "--config", config, "--tensions", 18.6).stdout
         assert "symmetric bifurcation (not a limit point)" in text
         assert "took the left branch" in text
 

@@ -1,7 +1,6 @@
 """``elastica-petsc solve``: the load-controlled equilibrium (Eq. (9)) for given tensions."""
 from __future__ import annotations
 
-import json
 import sys
 
 from . import common
@@ -14,8 +13,8 @@ def add_parser(sub) -> None:
                     "stepping the load from the straight arm along the chosen loading order. "
                     "Where the path crosses a symmetric bifurcation (the straight arm buckling "
                     "under a cable along its axis) it switches onto a stable buckled branch "
-                    "(--side). Prints the tip, attachment points, cable lengths, energy and "
-                    "curvature.")
+                    "(--side). "
+                    "Prints the tip, attachment points, cable lengths, energy and curvature.")
     common.add_tension_options(parser)
     common.add_order_option(parser)
     add_side_option(parser)
@@ -32,26 +31,36 @@ def add_side_option(parser) -> None:
                              "one)")
 
 
+def solve_state(args, arm, disc):
+    """The state of ``solve`` and ``stability``: api.solve, or with --side the
+    library's one-shot solve (api.solve has no side yet)."""
+    from .. import api
+
+    if args.side is None:
+        return api.solve(arm, tensions=common.tensions(args, arm), order=common.order(args),
+                         elements=disc.n_elements)
+    from ..solvers.equilibrium import check_tensions, solve_equilibrium
+
+    order = common.order(args)
+    eq = solve_equilibrium(disc, check_tensions(common.tensions(args, arm), disc.n_tendons),
+                           order=order, side=args.side)
+    return api.State(arm, eq, args.order and f"order {args.order}" or "proportional")
+
+
 def run(args) -> int:
-    from ..solvers.equilibrium import EquilibriumSolver
     from ..io.summary import equilibrium_summary, format_equilibrium
 
     arm, disc = common.load_arm(args)
     common.check_outputs(args)
-    with EquilibriumSolver(disc) as solver:
-        eq = solver.solve(common.tensions(args, arm), order=common.order(args), side=args.side)
+    eq = solve_state(args, arm, disc).equilibrium
     summary = equilibrium_summary(arm, eq)
     if args.json:
         common.print_json(summary)
     else:
         print(format_equilibrium(arm, summary))
     if args.out:
-        from ..io.hdf5 import atomic_h5, provenance, write_attrs, write_equilibrium
-        with atomic_h5(args.out, args.overwrite) as fh:
-            write_attrs(fh, provenance(arm, "equilibrium"))
-            fh.attrs["loading_order"] = args.order or "proportional"
-            fh.attrs["bifurcations_json"] = json.dumps(summary["bifurcations"])
-            write_equilibrium(fh, arm, eq)
+        from ..io.save import save_state
+        save_state(args.out, arm, eq, overwrite=args.overwrite, loading=args.order or "proportional")
     if args.plot:
         from ..plots.common import plot_equilibria, tension_label
         order = f"order {args.order}" if args.order else "proportional loading"

@@ -418,3 +418,13 @@ class EquilibriumSolver:
 
     def __exit__(self, *exc) -> None:
         self.destroy()
+
+
+def solve_equilibrium(disc: Discretisation, p, *, order=None, side: str | None = None,
+                      start: Equilibrium | None = None) -> Equilibrium:
+    """One equilibrium (Eq. (9)) reached along a loading path, with a solver
+    made and destroyed for it: :meth:`EquilibriumSolver.solve` (``side``: the
+    branch to take at a symmetric bifurcation, "left" or "right";
+    non-dimensional tensions p = P l^2/B)."""
+    with EquilibriumSolver(disc) as solver:
+        return solver.solve(p, order=order, start=start, side=side)
