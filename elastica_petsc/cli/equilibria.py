@@ -32,8 +32,8 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..solvers.equilibrium import EquilibriumSolver, check_tensions
-    from ..studies.search import equilibria
+    from ..solvers.equilibrium import check_tensions
+    from ..studies.search import search_tensions
     from ..io.summary import rounded
     from .lengths import NOT_COMPLETE, check_search_options, finish, search_summary, \
         state_summary
@@ -42,9 +42,8 @@ def run(args) -> int:
     p = check_tensions(common.tensions(args, arm), disc.n_tendons)
     settings = check_search_options(args)
     common.check_outputs(args)
-    with EquilibriumSolver(disc) as eqs:
-        result = equilibria(eqs, p, effort=args.effort, levels=args.levels,
-                            deflation_rounds=args.deflation_rounds, length_mm=arm.length_mm)
+    result = search_tensions(arm, p, elements=disc.n_elements, effort=args.effort,
+                             levels=args.levels, deflation_rounds=args.deflation_rounds)
     states = [f.state for f in result.states]
     data = {"control": "load", "tensions": rounded(p), "tensions_N": rounded(arm.tensions_to_N(p)),
             "elements": disc.n_elements,

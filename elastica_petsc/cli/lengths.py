@@ -311,46 +311,40 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
 
 # --- the command -----------------------------------------------------------------------
 def run(args) -> int:
-    from ..solvers.lengths import LengthSolver
-    from ..studies.search import length_equilibria
+    from ..solvers.lengths import follow_lengths
+    from ..studies.search import search_lengths
     from ..io.summary import rounded
 
     arm, disc = common.load_arm(args)
     L_mm = check_lengths_mm(args.lengths, disc.n_tendons)
     settings = check_search_options(args)
     common.check_outputs(args)
-    l_mm = arm.length_mm
     data = {"control": "length", "lengths_mm": rounded(L_mm), "elements": disc.n_elements}
-    with LengthSolver(disc, length_mm=l_mm) as solver:
-        if args.all:
-            from ..solvers.equilibrium import EquilibriumSolver
-            with EquilibriumSolver(disc) as eqs:
-                result = length_equilibria(solver, L_mm / l_mm, eq_solver=eqs,
-                                           effort=args.effort, levels=args.levels,
-                                           deflation_rounds=args.deflation_rounds)
-            states = [f.state for f in result.states]
-            data["equilibria"] = [state_summary(arm, f.state, "length", f)
-                                  for f in result.states]
-            data["search"] = search_summary(result, settings)
-            data["note"] = NOT_COMPLETE
-        else:
-            state = solver.follow(L_mm / l_mm)
-            states = [state] if state.converged else []
-            data["equilibria"] = [state_summary(arm, s, "length") for s in states]
-            data["search"] = {
-                "method": "length continuation from the straight arm (stable path; snaps "
-                          "and buckling recorded)",
-                "starts": 1, "attempts": 1, "failed": 0 if state.converged else 1,
-                "refound": 0, "start_labels": ["straight arm"],
-                "found_from": [{"state": 1, "start": "straight arm",
-                                "method": "continuation", "attempts_reaching_it": 1}]
-                if state.converged else [],
-                "complete": False}
-            data["note"] = ("One equilibrium: the one reached from the straight arm by length "
-                            "continuation. Others may share these cable lengths: --all searches "
-                            "for them; the list is not proven complete.")
-            if not state.converged:
-                data["message"] = state.message
+    if args.all:
+        result = search_lengths(arm, L_mm, elements=disc.n_elements, effort=args.effort,
+                                levels=args.levels, deflation_rounds=args.deflation_rounds)
+        states = [f.state for f in result.states]
+        data["equilibria"] = [state_summary(arm, f.state, "length", f) for f in result.states]
+        data["search"] = search_summary(result, settings)
+        data["note"] = NOT_COMPLETE
+    else:
+        state = follow_lengths(arm, L_mm, elements=disc.n_elements)
+        states = [state] if state.converged else []
+        data["equilibria"] = [state_summary(arm, s, "length") for s in states]
+        data["search"] = {
+            "method": "length continuation from the straight arm (stable path; snaps "
+                      "and buckling recorded)",
+            "starts": 1, "attempts": 1, "failed": 0 if state.converged else 1,
+            "refound": 0, "start_labels": ["straight arm"],
+            "found_from": [{"state": 1, "start": "straight arm",
+                            "method": "continuation", "attempts_reaching_it": 1}]
+            if state.converged else [],
+            "complete": False}
+        data["note"] = ("One equilibrium: the one reached from the straight arm by length "
+                        "continuation. Others may share these cable lengths: --all searches "
+                        "for them; the list is not proven complete.")
+        if not state.converged:
+            data["message"] = state.message
     title = ("Equilibria found at L = (" + ", ".join(f"{v:g}" for v in L_mm)
              + ") mm (length control)")
     return finish(args, arm, data, states, "length_equilibria", title)

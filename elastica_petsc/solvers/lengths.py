@@ -718,3 +718,11 @@ class LengthSolver:
 
     def __exit__(self, *exc) -> None:
         self.destroy()
+
+
+def follow_lengths(arm, lengths_mm, *, elements: int | None = None) -> LengthEquilibrium:
+    """The equilibrium with cable lengths ``lengths_mm`` (mm) reached from the
+    straight arm by length continuation (:meth:`LengthSolver.follow`: a stable
+    path, snaps and buckling recorded), with a solver made for it."""
+    with LengthSolver.from_arm(arm, elements) as solver:
+        return solver.follow(solver.to_l(lengths_mm))

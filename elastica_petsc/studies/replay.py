@@ -179,3 +179,20 @@ def replay(solver: LengthSolver, lengths_mm, planned_tips_mm, planned_tensions=N
         if not state.converged:
             break
     return Replay(tuple(points), K, method)
+
+
+def replay_trace(trace: dict, *, first_by_lengths: bool = False, tip_tol_mm: float = 1e-3,
+                 shape_tol: float = 1e-3) -> Replay:
+    """:func:`replay` of a traced path as read by
+    :func:`elastica_petsc.io.replay.read_trace` (its arm, mesh, cable lengths
+    and tips in mm, planned tensions and shapes), with a solver made for it;
+    ``first_by_lengths``: reach the first point by length continuation instead
+    of the load-controlled state at the planned tensions."""
+    from ..core.fem import Discretisation
+
+    arm = trace["arm"]
+    disc = Discretisation.from_arm(arm, trace["elements"])
+    with LengthSolver(disc, length_mm=arm.length_mm) as solver:
+        return replay(solver, trace["cable_lengths"], trace["tip"],
+                      None if first_by_lengths else trace["tensions"], trace["theta"],
+                      tip_tol_mm=tip_tol_mm, shape_tol=shape_tol)

@@ -572,3 +572,33 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
     finally:
         solves.destroy()
     return found.result("load", p, used)
+
+
+# --- one call each, from an arm (for the command line and the Python API) -------------
+def search_lengths(arm, lengths_mm, *, elements: int | None = None, effort: int = 1,
+                   levels=None, deflation_rounds: int | None = None) -> SearchResult:
+    """Every equilibrium this search finds with the cable lengths ``lengths_mm``
+    (mm, one per tendon) under length control (Sec. 4.6, Eq. (23)):
+    :func:`length_equilibria` on ``arm`` (``elements``: mesh, default the
+    arm's).  States are non-dimensional (``*_mm`` properties in mm)."""
+    from ..core.fem import Discretisation
+
+    disc = Discretisation.from_arm(arm, elements)
+    L = check_lengths(np.asarray(lengths_mm, float) / arm.length_mm, disc.n_tendons)
+    with LengthSolver(disc, length_mm=arm.length_mm) as solver, \
+            EquilibriumSolver(disc) as eq_solver:
+        return length_equilibria(solver, L, eq_solver=eq_solver, effort=effort, levels=levels,
+                                 deflation_rounds=deflation_rounds)
+
+
+def search_tensions(arm, p, *, elements: int | None = None, effort: int = 1, levels=None,
+                    deflation_rounds: int | None = None) -> SearchResult:
+    """Every equilibrium this search finds at the tensions ``p`` (non-dimensional,
+    p = P l^2/B; ``arm.tensions_from_N`` converts newtons) under load control
+    (Eq. (9)): :func:`equilibria` on ``arm``."""
+    from ..core.fem import Discretisation
+
+    disc = Discretisation.from_arm(arm, elements)
+    with EquilibriumSolver(disc) as eq_solver:
+        return equilibria(eq_solver, p, effort=effort, levels=levels,
+                          deflation_rounds=deflation_rounds, length_mm=arm.length_mm)
