@@ -289,7 +289,8 @@ def plot(arm, data: dict, states, path, title: str) -> None:
                  + f") mm, {stab}")
         entries.append((state, label))
     circles = data["lengths_mm"] if data["control"] == "length" else None
-    plot_states(arm, entries, path, title=title, circles_mm=circles)
+    plot_states(arm, entries, path, title=title, circles_mm=circles,
+                numbers=[s["number"] for s in data["equilibria"]])
 
 
 def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
