@@ -287,7 +287,8 @@ def fig4_5(ctx: Context, out: Path) -> None:
 
 # --- Fig. 7: buckling under length control ----------------------------------------------
 def fig7(ctx: Context) -> None:
-    from .studies.buckling import fig7 as fig7_scenario, plot_fig7
+    from .plots.buckling import plot_fig7
+    from .studies.buckling import fig7 as fig7_scenario
     from .solvers.equilibrium import EquilibriumSolver
     from .core.fem import Discretisation
     from .solvers.lengths import LengthSolver

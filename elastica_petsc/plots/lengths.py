@@ -29,8 +29,10 @@ def draw_state(ax, arm: Arm, eq, label: str, colour: str, number: int | None = N
                     color=colour, fontsize=11, fontweight="bold", zorder=6)
 
 
-def plot_states(arm: Arm, entries, path: str | Path, title: str, circles_mm=None) -> None:
-    """Every equilibrium in ``entries`` [(state, label)], numbered at the tip.
+def plot_states(arm: Arm, entries, path: str | Path, title: str, circles_mm=None,
+                numbers=None) -> None:
+    """Every equilibrium in ``entries`` [(state, label)], numbered at the tip
+    (``numbers``, default 1, 2, ...: the states' own numbers).
     ``circles_mm``: prescribed cable lengths; the circles of radius L_i about
     r_i are drawn dashed (Fig. 8: x_i must lie on them when the cable is taut)."""
     fig, ax = figure(figsize=(8.5, 8.5))
@@ -42,8 +44,9 @@ def plot_states(arm: Arm, entries, path: str | Path, title: str, circles_mm=None
             ax.plot(r[0] + L * np.cos(a), r[1] + L * np.sin(a), "--", lw=0.9,
                     color=TENDON_COLOURS[i % len(TENDON_COLOURS)], zorder=1,
                     label=f"|x{i + 1} - r{i + 1}| = L{i + 1} = {L:.1f} mm")
-    for k, (eq, label) in enumerate(entries):
-        draw_state(ax, arm, eq, label, STATE_COLOURS[k % len(STATE_COLOURS)], number=k + 1)
+    numbers = range(1, len(entries) + 1) if numbers is None else numbers
+    for k, ((eq, label), number) in enumerate(zip(entries, numbers)):
+        draw_state(ax, arm, eq, label, STATE_COLOURS[k % len(STATE_COLOURS)], number=number)
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
