@@ -33,7 +33,18 @@ def add_parser(sub) -> None:
                         help="largest distance between consecutive targets in mm (default 1)")
     parser.add_argument("--guess", type=float, nargs="+", metavar="P",
                         help="initial tensions for the first point, non-dimensional")
-    parser.add_argument("--schedule", metavar="CSV", help="write the motor schedule CSV here")
+    parser.add_argument("--schedule", metavar="CSV",
+                        help="write the timed motor schedule CSV here: an approach move from "
+                             "the straight arm, then the path; columns row, phase, point, "
+                             "time_s, reached, targets, tips, and per tendon tension (N and p), "
+                             "cable length, revolutions, steps from row 0 (> 0 pays the cable "
+                             "out, < 0 reels it in), step increment, rounding error")
+    parser.add_argument("--speed-mm-s", type=float, metavar="V",
+                        help="tip speed of the schedule's time column in mm/s (default: the "
+                             "suggested safe tracing speed, see --amplitude-mm)")
+    parser.add_argument("--no-approach", action="store_true",
+                        help="start the schedule at the first target instead of tracing an "
+                             "approach from the straight arm (or from --guess)")
     parser.add_argument("--amplitude-mm", type=float, default=1.0, metavar="MM",
                         help="tolerated vibration amplitude for the suggested tracing speed "
                              "v_max = 2 pi f_1 * amplitude (default 1 mm; needs "
@@ -109,6 +120,12 @@ def format_trace(s: dict) -> str:
                      "of the steps (Sec. 4.1)")
     lines.append(f"motor schedule: {s['mm_per_microstep']:.4g} mm per microstep, largest rounding "
                  f"error {s['max_rounding_error_mm']:.3g} mm")
+    if s["approach_points"]:
+        lines.append(f"approach from the straight arm: {s['approach_points']} points, "
+                     f"{s['approach_reached']} reached")
+    if s["duration_s"] is not None:
+        lines.append(f"schedule: {s['schedule_rows']} rows, {s['duration_s']:.1f} s at "
+                     f"{s['speed_mm_s']:.3g} mm/s ({s['speed_source']})")
     if s.get("max_tracing_speed_mm_s") is not None:
         lines.append(f"lowest natural frequency along the path {s['f1_min_hz']:.3g} Hz (tensions "
                      f"held): suggested max tracing speed {s['max_tracing_speed_mm_s']:.3g} mm/s, "
@@ -117,48 +134,46 @@ def format_trace(s: dict) -> str:
     return "\n".join(lines)
 
 
-def tracing_speed(arm, disc, result, amplitude_mm: float, snapshots: int = 6) -> dict:
-    """Suggested maximum tracing speed (Sec. 4.5 (vi)): the lowest first
-    natural frequency f_1 over a few states along the path, tensions held
-    (the lower, conservative one), and v_max = 2 pi f_1 * amplitude — a jump
-    dv of the tip velocity excites a vibration of amplitude dv / (2 pi f_1)."""
-    import numpy as np
+def schedule_summary(planned) -> dict:
+    """The approach and the timing of the schedule (for the summary)."""
+    import math
 
-    from ..solvers.stability import StabilitySolver, max_tracing_speed_mm_s
-
-    if arm.mass_per_length_kg_m is None:
-        return {}
-    picks = np.unique(np.linspace(0, result.n_points - 1, snapshots).round().astype(int))
-    with StabilitySolver(disc, nev=1) as stab:
-        f1 = min(stab.frequencies(result.results[k].equilibrium.u, result.results[k].p,
-                                  arm, nev=1).f1_hz for k in picks)
-    steps = np.linalg.norm(np.diff(result.targets_mm, axis=0), axis=1)
-    return {"f1_min_hz": round(f1, 4),
-            "max_tracing_speed_mm_s": round(max_tracing_speed_mm_s(f1, amplitude_mm), 4),
-            "path_length_mm": round(float(steps.sum()), 3),
-            "amplitude_mm": amplitude_mm}
+    sched, before = planned.schedule, planned.approach
+    out = {"approach_points": 0 if before is None else int(before.n_points),
+           "approach_reached": None if before is None else int(before.converged.sum()),
+           "schedule_rows": int(sched.n_rows),
+           "speed_mm_s": planned.speed["speed_mm_s"],
+           "speed_source": planned.speed["speed_source"],
+           "duration_s": None if math.isnan(sched.duration_s) else round(sched.duration_s, 3)}
+    return out
 
 
 def run(args) -> int:
-    from ..solvers.control import TipController
-    from ..studies.trace import trace
+    from ..core.errors import InputError
     from ..core.progress import Progress
-    from ..core.schedule import schedule_from_trace
+    from ..solvers.control import TipController
+    from ..studies.schedule import trace_schedule
 
     arm, disc = common.load_arm(args)
     common.check_outputs(args)
     if args.schedule:
         from ..io.hdf5 import check_output_path
         check_output_path(args.schedule, args.overwrite)
+    if args.speed_mm_s is not None and not args.speed_mm_s > 0:
+        raise InputError(f"--speed-mm-s must be positive, got {args.speed_mm_s}")
     points = targets(args)
     guess = common.guess(args, disc)
-    bar = Progress(len(points), "trace")
-    with TipController(arm, n_elements=disc.n_elements) as controller:
-        result = trace(controller, points, p0=guess, keep_results=True, on_point=bar.update)
-    bar.close(result.n_points)
-    schedule = schedule_from_trace(result, arm)
+    with TipController(arm, n_elements=disc.n_elements) as controller, \
+            Progress(len(points), "trace") as bar:
+        planned = trace_schedule(controller, points, step_mm=args.step,
+                                 speed_mm_s=args.speed_mm_s, amplitude_mm=args.amplitude_mm,
+                                 approach=not args.no_approach, p0=guess,
+                                 on_point=lambda done, total: bar.update(done, total=total))
+    result, schedule = planned.path, planned.schedule
     summary = trace_summary(arm, result, schedule)
-    summary.update(tracing_speed(arm, disc, result, args.amplitude_mm))
+    summary.update({k: v for k, v in planned.speed.items() if k not in ("speed_mm_s",
+                                                                           "speed_source")})
+    summary.update(schedule_summary(planned))
     if args.json:
         common.print_json(summary)
     else:
