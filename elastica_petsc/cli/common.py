@@ -23,6 +23,9 @@ def add_output_options(parser: argparse.ArgumentParser, plot: bool = True) -> No
     parser.add_argument("--out", metavar="H5", help="write the results to this HDF5 file")
     parser.add_argument("--overwrite", action="store_true",
                         help="replace an existing --out/--plot file")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress bar or progress lines (for batch jobs); results and "
+                             "errors are still printed")
     if plot:
         parser.add_argument("--plot", metavar="PNG", help="draw a figure into this PNG file")
 

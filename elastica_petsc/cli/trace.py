@@ -42,6 +42,12 @@ def add_parser(sub) -> None:
     parser.add_argument("--speed-mm-s", type=float, metavar="V",
                         help="tip speed of the schedule's time column in mm/s (default: the "
                              "suggested safe tracing speed, see --amplitude-mm)")
+    parser.add_argument("--animate", metavar="GIF|MP4",
+                        help="write an animation of the arm, its cables and the tip trail along "
+                             "the path (.gif with Pillow; .mp4 needs ffmpeg)")
+    parser.add_argument("--vtk", metavar="DIR",
+                        help="write ParaView files into this folder: trace.pvd (the arm and "
+                             "cables at every point, timed as the schedule) and trace_path.vtu")
     parser.add_argument("--no-approach", action="store_true",
                         help="start the schedule at the first target instead of tracing an "
                              "approach from the straight arm (or from --guess)")
@@ -159,6 +165,12 @@ def run(args) -> int:
     if args.schedule:
         from ..io.hdf5 import check_output_path
         check_output_path(args.schedule, args.overwrite)
+    if args.animate:
+        from ..plots.animate import check_animation_path
+        check_animation_path(args.animate, args.overwrite)
+    if args.vtk:
+        from ..io.vtk import check_directory
+        check_directory(args.vtk, args.overwrite)
     if args.speed_mm_s is not None and not args.speed_mm_s > 0:
         raise InputError(f"--speed-mm-s must be positive, got {args.speed_mm_s}")
     points = targets(args)
@@ -191,6 +203,12 @@ def run(args) -> int:
     if args.plot:
         from ..plots.control import plot_trace_figures
         plot_trace_figures(arm, result, args.plot)
+    if args.vtk:
+        from ..io.vtk import write_trace as write_vtk
+        write_vtk(args.vtk, arm, result, times_s=schedule.time_s[schedule.path_rows()])
+    if args.animate:
+        from ..plots.animate import animate_trace
+        animate_trace(arm, result, args.animate)
     if not result.all_converged:
         print(f"elastica-petsc: {result.n_points - summary['reached']} of {result.n_points} "
               "points were not reached (see the HDF5/JSON per-point results)", file=sys.stderr)

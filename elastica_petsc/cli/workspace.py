@@ -37,6 +37,9 @@ def add_parser(sub) -> None:
     parser.add_argument("--overlay", nargs="+", metavar="H5",
                         help="traced paths (files from `trace --out`) drawn on the --plot maps")
     common.add_arm_options(parser)
+    parser.add_argument("--vtk", metavar="DIR",
+                        help="also write the map for ParaView as DIR/workspace.vtu (samples as "
+                             "points with every field, lattice cells as quads)")
     common.add_output_options(parser)
     parser.set_defaults(run=run)
 
@@ -107,6 +110,9 @@ def _run(args, comm) -> int:
     if args.plot:
         from ..plots.workspace import plot_workspace, read_overlays
         plot_workspace(out, args.plot, paths=read_overlays(args.overlay or ()))
+    if args.vtk:
+        from ..io.vtk import write_workspace_vtk
+        write_workspace_vtk(args.vtk, out)
     return 0
 
 
@@ -120,6 +126,9 @@ def _check_inputs(args):
         raise InputError("workspace needs --out FILE.h5 (results are written as they come)")
     if args.chunk < 1:
         raise InputError(f"--chunk must be at least 1, got {args.chunk}")
+    if args.vtk:
+        from ..io.vtk import check_directory
+        check_directory(args.vtk, args.overwrite)
     arm, disc = common.load_arm(args)
     if args.overlay:
         from ..plots.workspace import read_overlays
