@@ -94,7 +94,8 @@ class Progress:
                 self.stream.write("\n")
                 self.stream.flush()
         elif self.mode == "log":
-            self._log(force=self.done > self.already
+            final = int(100.0 * self.done / max(self.total, 1) // self.log_percent)
+            self._log(force=self.done > self.already and self._logged_step < final
                       and time.monotonic() - self.start >= self.log_seconds)
         self.mode = "off"
 
