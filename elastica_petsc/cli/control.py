@@ -22,8 +22,8 @@ def add_parser(sub) -> None:
     parser.add_argument("--method", choices=("blmvm", "gd"), default="blmvm",
                         help="blmvm: TAO bound-constrained quasi-Newton (default); gd: the "
                              "paper's gradient descent with adaptive step (Algorithm 1)")
-    parser.add_argument("--guess", type=float, nargs="+", metavar="P",
-                        help="initial tensions, non-dimensional p = P l^2/B (default 0)")
+    common.add_tension_option(parser, "--guess", nargs="+",
+                              help="initial tensions, one per tendon (default 0)")
     parser.add_argument("--tol-mm", type=float, default=1e-5, metavar="MM",
                         help="tip tolerance in mm (default 1e-5, the paper's eps = 1e-10 mm^2)")
     parser.add_argument("--animate", metavar="GIF|MP4",

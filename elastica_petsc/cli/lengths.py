@@ -33,11 +33,9 @@ NOT_COMPLETE = ("These are the equilibria that the listed starts and methods rea
 
 
 def add_search_options(parser) -> None:
-    parser.add_argument("--levels", type=float, nargs="+", default=[5.0, 10.0, 20.0],
-                        metavar="P",
-                        help="tension levels (non-dimensional) of the load-controlled start "
-                             "states of the search: every combination, every loading order "
-                             "(default 5 10 20)")
+    common.add_tension_option(parser, "--levels", nargs="+", default=[5.0, 10.0, 20.0],
+                              help="tension levels of the load-controlled start states of the "
+                                   "search: every combination, every loading order")
     parser.add_argument("--deflation-rounds", type=int, default=2, metavar="K",
                         help="deflated Newton solves per start and sweep (default 2)")
 

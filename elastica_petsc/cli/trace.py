@@ -31,8 +31,9 @@ def add_parser(sub) -> None:
                         help="end point of --shape line in mm")
     parser.add_argument("--step", type=float, default=1.0, metavar="MM",
                         help="largest distance between consecutive targets in mm (default 1)")
-    parser.add_argument("--guess", type=float, nargs="+", metavar="P",
-                        help="initial tensions for the first point, non-dimensional")
+    common.add_tension_option(parser, "--guess", nargs="+",
+                              help="initial tensions, one per tendon: the approach starts at "
+                                   "their load-controlled state (default: the straight arm)")
     parser.add_argument("--schedule", metavar="CSV",
                         help="write the timed motor schedule CSV here: an approach move from "
                              "the straight arm, then the path; columns row, phase, point, "

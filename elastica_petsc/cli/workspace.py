@@ -25,10 +25,10 @@ def add_parser(sub) -> None:
                         help="target grid spacing in mm (mode targets; default 20)")
     parser.add_argument("--box", type=float, nargs=4, metavar=("XMIN", "XMAX", "YMIN", "YMAX"),
                         help="target box in mm (default: the half-disc y >= 0 within reach l)")
-    parser.add_argument("--tension-spacing", type=float, default=2.0, metavar="P",
-                        help="tension grid spacing, non-dimensional (mode tensions; default 2)")
-    parser.add_argument("--tension-max", type=float, default=40.0, metavar="P",
-                        help="largest tension on the grid, non-dimensional (default 40)")
+    common.add_tension_option(parser, "--tension-spacing", default=2.0,
+                              help="tension grid spacing in mode tensions")
+    common.add_tension_option(parser, "--tension-max", default=40.0,
+                              help="largest tension on the grid in mode tensions")
     parser.add_argument("--chunk", type=int, default=24, metavar="K",
                         help="samples per work unit (warm-started in a row; default 24)")
     parser.add_argument("--resume", action="store_true",
