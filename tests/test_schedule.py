@@ -159,3 +159,37 @@ def test_approach_targets_and_untimed_schedule():
     assert np.isnan(sched.time_s).all() and math.isnan(sched.speed_mm_s)
     with pytest.raises(Exception, match="no time column"):
         sched.lengths_at(0.0)
+
+
+def test_trace_command_per_point_json_schedule_and_speed(tmp_path):
+    """`trace --json --per-point --schedule --speed-mm-s`: the JSON points, the
+    CSV's path rows and the HDF5 schedule agree; a line leaving the workspace
+    has its unreached points flagged (exit status 1)."""
+    import json
+    import subprocess
+    import sys
+
+    csv_path, h5 = tmp_path / "s.csv", tmp_path / "t.h5"
+    run = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "trace", "--shape", "line",
+                          "--center", "560", "150", "--end", "640", "150", "--step", "20",
+                          "--elements", str(ELEMENTS), "--speed-mm-s", "4", "--json",
+                          "--per-point", "--schedule", str(csv_path), "--out", str(h5),
+                          "--quiet"], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 1, run.stderr
+    assert "--per-point" in run.stderr and "Traceback" not in run.stderr
+    data = json.loads(run.stdout)
+    points = data["per_point"]
+    assert len(points) == data["points"] == 5
+    assert [p["point"] for p in points] == list(range(5))
+    assert data["speed_mm_s"] == 4.0 and data["speed_source"] == "given"
+    n, col = read_documented_csv(csv_path)
+    path = [k for k, ph in enumerate(col["phase"]) if ph == "path"]
+    assert [p["reached"] for p in points] == list(col["reached"][path])
+    assert 0 < sum(p["reached"] for p in points) < len(points)    # (640, 150) is beyond reach
+    np.testing.assert_allclose([p["time_s"] for p in points], col["time_s"][path], atol=1e-3)
+    np.testing.assert_allclose([p["tensions_N"] for p in points],
+                               np.column_stack([col[f"tension_{i}_N"][path] for i in (1, 2)]),
+                               rtol=1e-5, atol=1e-6)
+    with h5py.File(h5, "r") as fh:
+        np.testing.assert_array_equal(fh["schedule/reached"][()], col["reached"])
+        np.testing.assert_array_equal(fh["path/converged"][()], [p["reached"] for p in points])
