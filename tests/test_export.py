@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from elastica_petsc.core.config import load_config
-from elastica_petsc.io.vtk import lattice_quads, write_state, write_trace
+from elastica_petsc.io.vtk import lattice_quads, workspace_map, write_state, write_trace
 from elastica_petsc.solvers.control import TipController
 from elastica_petsc.studies.trace import densify, line, trace
 
@@ -105,6 +105,12 @@ def test_workspace_cli_vtk_and_grid_index(tmp_path):
         w0 = fh["masks/W0"][()]
         assert fh["masks/W0"].dtype == np.bool_
     assert kappa.shape == (3, 3)
+    x, y, same = workspace_map(out, "kappa_max")              # the library function
+    np.testing.assert_array_equal(same, kappa)
+    np.testing.assert_allclose(x, [300.0, 360.0, 420.0])
+    _, _, P2 = workspace_map(out, "tensions_N", component=1)
+    _, _, W0 = workspace_map(out, "W0")
+    assert np.nanmax(P2) > 0 and set(np.unique(W0[~np.isnan(W0)])) <= {0.0, 1.0}
     # the map cell of the target (360, 220) mm holds that sample's value
     s = int(np.flatnonzero(np.all(points == (360.0, 220.0), axis=1))[0])
     assert kappa[2, 1] == k_flat[s]

@@ -40,6 +40,10 @@ def test_trace_gif(traced, tmp_path):
     assert [f.caption.split(":")[0] for f in frames] == ["point 1/6", "point 3/6", "point 4/6",
                                                           "point 6/6"]
     np.testing.assert_allclose(frames[-1].tip_mm, result.tips_mm[-1])
+    # with an approach its frames come first, sampled over the whole schedule
+    both = trace_frames(arm, result, max_frames=100, approach=result)
+    assert len(both) == 2 * result.n_points
+    assert both[0].caption.startswith("approach 1/6") and both[6].caption.startswith("point 1/6")
 
 
 def test_control_gif_from_the_command_line(tmp_path):

@@ -40,3 +40,18 @@ def test_newton_and_p_forms_exclude_each_other_and_are_checked(capsys):
     args = parser.parse_args(["solve", "--tensions-N", "1", "2"])
     common.newton_forms(args, load_config())
     assert args.tensions_N == [1.0, 2.0] and args.tensions is None
+
+
+def test_unused_petsc_options_are_reported_one_line_each():
+    """A misspelt option (-eq_snes_monitr) is named, as -options_left would;
+    an option the solver read (-eq_snes_rtol) is not."""
+    import subprocess
+    import sys
+
+    run = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "solve", "--tensions",
+                          "5", "5", "--elements", "30", "-eq_snes_monitr", "-eq_snes_rtol",
+                          "1e-9"], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    warnings = [line for line in run.stderr.splitlines() if "warning" in line]
+    assert warnings == ["elastica-petsc: warning: PETSc option -eq_snes_monitr was not used by "
+                        "any solver (misspelt, or not for this command?)"]

@@ -237,7 +237,7 @@ def run(args) -> int:
         write_vtk(args.vtk, arm, result, times_s=schedule.time_s[schedule.path_rows()])
     if args.animate:
         from ..plots.animate import animate_trace
-        animate_trace(arm, result, args.animate)
+        animate_trace(arm, result, args.animate, approach=planned.approach)
     if not result.all_converged:
         print(f"elastica-petsc: {result.n_points - summary['reached']} of {result.n_points} "
               "points were not reached (per point: --json --per-point, or path/converged in "

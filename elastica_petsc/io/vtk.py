@@ -209,6 +209,39 @@ def workspace_point_data(samples: dict, masks: dict) -> dict:
     return out
 
 
+def workspace_map(h5path, field: str, component: int | None = None):
+    """A per-sample field of a workspace file as a 2-D array on its lattice:
+    returns (axis_0, axis_1, A) with A[j, i] the value at (axis_0[i],
+    axis_1[j]) (targets: x and y in mm; tensions: p_1 and p_2) and NaN where
+    no sample lies.  ``component`` picks a tendon (0-based) of a per-tendon
+    field such as ``tensions_N``.  Booleans (``masks/W0``...) come back as
+    0/1 floats with NaN outside the grid."""
+    import h5py
+
+    with h5py.File(h5path, "r") as fh:
+        if "grid/index" not in fh:
+            raise InputError(f"{h5path}: no grid/index (written by an older version); "
+                             "rerun the workspace")
+        index = fh["grid/index"][()]
+        axes = fh["grid/axis_0"][()], fh["grid/axis_1"][()]
+        group = "masks" if field in fh.get("masks", {}) else "samples"
+        if field not in fh[group]:
+            raise InputError(f"{h5path}: no field {field!r} (samples: "
+                             f"{', '.join(sorted(fh['samples']))}; masks: "
+                             f"{', '.join(sorted(fh.get('masks', {})))})")
+        values = fh[group][field][()]
+    if values.ndim == 2:
+        if component is None:
+            raise InputError(f"{field} has one value per tendon: give component=0..."
+                             f"{values.shape[1] - 1}")
+        values = values[:, component]
+    if index.shape[1] != 2:
+        raise InputError(f"{h5path}: a {index.shape[1]}-D grid has no 2-D map")
+    A = np.full((len(axes[1]), len(axes[0])), np.nan)
+    A[index[:, 1], index[:, 0]] = values.astype(float)
+    return axes[0], axes[1], A
+
+
 def write_workspace_vtk(directory, h5path, name: str = "workspace") -> Path:
     """``directory/<name>.vtu`` from a workspace HDF5 file (folder created if missing)."""
     directory = Path(directory)

@@ -65,14 +65,20 @@ def _pick(count: int, max_frames: int) -> np.ndarray:
     return np.unique(np.linspace(0, count - 1, min(count, max_frames)).round().astype(int))
 
 
-def trace_frames(arm: Arm, trace, max_frames: int = 150) -> list[Frame]:
-    """Frames of a traced path (``trace.results`` needed: trace with keep_results)."""
-    if not trace.results:
+def trace_frames(arm: Arm, trace, max_frames: int = 150, approach=None) -> list[Frame]:
+    """Frames of a traced path (``trace.results`` needed: trace with
+    keep_results), preceded by those of its ``approach`` (another trace) if given."""
+    parts = [(name, t) for name, t in (("approach", approach), ("point", trace)) if t is not None]
+    if any(not t.results for _, t in parts):
         raise InputError("animating a trace needs its per-point states (keep_results=True)")
-    return [_frame(arm, trace.results[k].equilibrium,
-                   f"point {k + 1}/{trace.n_points}: {_tensions(arm, trace.p[k])}"
-                   + ("" if trace.converged[k] else "  (NOT reached)"))
-            for k in _pick(trace.n_points, max_frames)]
+    rows = [(name, k, t) for name, t in parts for k in range(t.n_points)]
+    frames = []
+    for j in _pick(len(rows), max_frames):
+        name, k, t = rows[j]
+        frames.append(_frame(arm, t.results[k].equilibrium,
+                             f"{name} {k + 1}/{t.n_points}: {_tensions(arm, t.p[k])}"
+                             + ("" if t.converged[k] else "  (NOT reached)")))
+    return frames
 
 
 def control_frames(controller, result) -> list[Frame]:
@@ -141,11 +147,18 @@ def animate(arm: Arm, frames: list[Frame], path, *, targets_mm=None, title: str 
     return path
 
 
-def animate_trace(arm: Arm, trace, path, *, max_frames: int = 150, fps: float = 10.0) -> Path:
-    """The arm along a traced path (GIF/MP4 by suffix), at most ``max_frames`` frames."""
-    return animate(arm, trace_frames(arm, trace, max_frames), path, targets_mm=trace.targets_mm,
-                   title=f"Traced path: {trace.n_points} points "
-                         f"({int(np.sum(trace.converged))} reached)", fps=fps)
+def animate_trace(arm: Arm, trace, path, *, approach=None, max_frames: int = 150,
+                  fps: float = 10.0) -> Path:
+    """The arm along a traced path (GIF/MP4 by suffix), at most ``max_frames``
+    frames, after the ``approach`` from the straight arm when given (the
+    motors' whole schedule, :func:`elastica_petsc.studies.schedule.trace_schedule`)."""
+    targets = trace.targets_mm if approach is None else np.vstack((approach.targets_mm,
+                                                                   trace.targets_mm))
+    reached = int(np.sum(trace.converged))
+    return animate(arm, trace_frames(arm, trace, max_frames, approach), path, targets_mm=targets,
+                   title=f"Traced path: {trace.n_points} points ({reached} reached)"
+                         + ("" if approach is None else
+                            f", after a {approach.n_points}-point approach"), fps=fps)
 
 
 def animate_control(controller, result, path, *, fps: float = 2.0) -> Path:
