@@ -151,7 +151,7 @@ def format_trace(s: dict) -> str:
     lines.append(f"motor schedule: {s['mm_per_microstep']:.4g} mm per microstep, largest rounding "
                  f"error {s['max_rounding_error_mm']:.3g} mm")
     if s["approach_points"]:
-        lines.append(f"approach from the straight arm: {s['approach_points']} points, "
+        lines.append(f"approach from the {s['approach_start']}: {s['approach_points']} points, "
                      f"{s['approach_reached']} reached")
     if s["duration_s"] is not None:
         lines.append(f"schedule: {s['schedule_rows']} rows, {s['duration_s']:.1f} s at "
@@ -164,12 +164,14 @@ def format_trace(s: dict) -> str:
     return "\n".join(lines)
 
 
-def schedule_summary(planned) -> dict:
+def schedule_summary(planned, guessed: bool) -> dict:
     """The approach and the timing of the schedule (for the summary)."""
     import math
 
     sched, before = planned.schedule, planned.approach
-    out = {"approach_points": 0 if before is None else int(before.n_points),
+    out = {"approach_start": None if before is None else
+           ("load-controlled state at --guess" if guessed else "straight arm"),
+           "approach_points": 0 if before is None else int(before.n_points),
            "approach_reached": None if before is None else int(before.converged.sum()),
            "schedule_rows": int(sched.n_rows),
            "speed_mm_s": planned.speed["speed_mm_s"],
@@ -212,7 +214,7 @@ def run(args) -> int:
     summary = trace_summary(arm, result, schedule)
     summary.update({k: v for k, v in planned.speed.items() if k not in ("speed_mm_s",
                                                                            "speed_source")})
-    summary.update(schedule_summary(planned))
+    summary.update(schedule_summary(planned, guess is not None))
     if args.json:
         if args.per_point:
             summary["per_point"] = point_entries(result, schedule)
@@ -238,6 +240,11 @@ def run(args) -> int:
     if args.animate:
         from ..plots.animate import animate_trace
         animate_trace(arm, result, args.animate, approach=planned.approach)
+    before = planned.approach
+    if before is not None and not before.all_converged:
+        print(f"elastica-petsc: warning: {before.n_points - int(before.converged.sum())} of "
+              f"{before.n_points} approach points were not reached (rows with reached = false "
+              "in the schedule); try --no-approach or another --guess", file=sys.stderr)
     if not result.all_converged:
         print(f"elastica-petsc: {result.n_points - summary['reached']} of {result.n_points} "
               "points were not reached (per point: --json --per-point, or path/converged in "
