@@ -180,16 +180,13 @@ def schedule_summary(planned, guessed: bool) -> dict:
     return out
 
 
-def run(args) -> int:
+def check_options(args) -> None:
+    """Refuse, before any computing, options and output paths that cannot work."""
     from ..core.errors import InputError
-    from ..core.progress import Progress
-    from ..solvers.control import TipController
-    from ..studies.schedule import trace_schedule
+    from ..io.hdf5 import check_output_path
 
-    arm, disc = common.load_arm(args)
     common.check_outputs(args)
     if args.schedule:
-        from ..io.hdf5 import check_output_path
         check_output_path(args.schedule, args.overwrite)
     if args.animate:
         from ..plots.animate import check_animation_path
@@ -202,25 +199,11 @@ def run(args) -> int:
                          "--json")
     if args.speed_mm_s is not None and not args.speed_mm_s > 0:
         raise InputError(f"--speed-mm-s must be positive, got {args.speed_mm_s}")
-    points = targets(args)
-    guess = common.guess(args, disc)
-    with TipController(arm, n_elements=disc.n_elements) as controller, \
-            Progress(len(points), "trace") as bar:
-        planned = trace_schedule(controller, points, step_mm=args.step,
-                                 speed_mm_s=args.speed_mm_s, amplitude_mm=args.amplitude_mm,
-                                 approach=not args.no_approach, p0=guess,
-                                 on_point=lambda done, total: bar.update(done, total=total))
+
+
+def write_outputs(args, arm, disc, planned) -> None:
+    """--schedule, --out, --plot, --vtk and --animate files."""
     result, schedule = planned.path, planned.schedule
-    summary = trace_summary(arm, result, schedule)
-    summary.update({k: v for k, v in planned.speed.items() if k not in ("speed_mm_s",
-                                                                           "speed_source")})
-    summary.update(schedule_summary(planned, guess is not None))
-    if args.json:
-        if args.per_point:
-            summary["per_point"] = point_entries(result, schedule)
-        common.print_json(summary)
-    else:
-        print(format_trace(summary))
     if args.schedule:
         schedule.write_csv(args.schedule)
     if args.out:
@@ -240,6 +223,35 @@ def run(args) -> int:
     if args.animate:
         from ..plots.animate import animate_trace
         animate_trace(arm, result, args.animate, approach=planned.approach)
+
+
+def run(args) -> int:
+    from ..core.progress import Progress
+    from ..solvers.control import TipController
+    from ..studies.schedule import trace_schedule
+
+    arm, disc = common.load_arm(args)
+    check_options(args)
+    points = targets(args)
+    guess = common.guess(args, disc)
+    with TipController(arm, n_elements=disc.n_elements) as controller, \
+            Progress(len(points), "trace") as bar:
+        planned = trace_schedule(controller, points, step_mm=args.step,
+                                 speed_mm_s=args.speed_mm_s, amplitude_mm=args.amplitude_mm,
+                                 approach=not args.no_approach, p0=guess,
+                                 on_point=lambda done, total: bar.update(done, total=total))
+    result = planned.path
+    summary = trace_summary(arm, result, planned.schedule)
+    summary.update({k: v for k, v in planned.speed.items() if k not in ("speed_mm_s",
+                                                                           "speed_source")})
+    summary.update(schedule_summary(planned, guess is not None))
+    if args.json:
+        if args.per_point:
+            summary["per_point"] = point_entries(result, planned.schedule)
+        common.print_json(summary)
+    else:
+        print(format_trace(summary))
+    write_outputs(args, arm, disc, planned)
     before = planned.approach
     if before is not None and not before.all_converged:
         print(f"elastica-petsc: warning: {before.n_points - int(before.converged.sum())} of "
