@@ -64,6 +64,21 @@ def test_short_runs_and_quiet_print_nothing():
         progress.configure(quiet=False)
 
 
+def test_under_mpi_a_rank_terminal_is_not_enough(monkeypatch):
+    """OpenMPI gives each rank's stdout a pseudo-terminal even when mpiexec's
+    output goes to a file: the bar is drawn only if mpiexec's own is a terminal."""
+    monkeypatch.setattr(sys, "stdout", FakeTerminal())
+    monkeypatch.setattr(sys, "stderr", io.StringIO())
+    monkeypatch.setenv("OMPI_COMM_WORLD_RANK", "0")
+    monkeypatch.setattr(progress, "_launcher_on_terminal", lambda: False)
+    assert progress._terminal() is None
+    monkeypatch.setattr(progress, "_launcher_on_terminal", lambda: True)
+    assert progress._terminal() is sys.stdout
+    monkeypatch.delenv("OMPI_COMM_WORLD_RANK")
+    monkeypatch.setattr(progress, "_launcher_on_terminal", lambda: False)
+    assert progress._terminal() is sys.stdout              # no launcher: the stream decides
+
+
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="needs mpiexec")
 def test_mpi_workspace_shows_progress_in_a_terminal(tmp_path):
     """`mpiexec -n 2 ... workspace` on a pseudo-terminal: the bar appears within

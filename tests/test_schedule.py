@@ -21,7 +21,8 @@ from elastica_petsc.core.config import load_config
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.core.schedule import motor_schedule
 from elastica_petsc.solvers.control import TipController
-from elastica_petsc.solvers.lengths import LengthSolver, replay
+from elastica_petsc.solvers.lengths import LengthSolver
+from elastica_petsc.studies.replay import replay
 from elastica_petsc.studies.schedule import approach_targets, trace_schedule
 from elastica_petsc.studies.trace import densify, line
 

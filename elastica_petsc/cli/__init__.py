@@ -100,14 +100,10 @@ def main(argv: list[str] | None = None) -> int:
 def warn_unused(petsc_options: list[str]) -> None:
     """One line per PETSc option from the command line that no solver read
     (a misspelt -eq_snes_monitr), as PETSc's -options_left would (rank 0)."""
-    from petsc4py import PETSc
-
     from ..solvers.options import unused_options
 
     names = [t for t in petsc_options if t.startswith("-") and not _is_number(t)]
-    if not names or PETSc.COMM_WORLD.rank != 0:
-        return
-    for name in unused_options(names) or ():
+    for name in (unused_options(names, root_only=True) if names else None) or ():
         print(f"elastica-petsc: warning: PETSc option {name} was not used by any solver "
               "(misspelt, or not for this command?)", file=sys.stderr)
 

@@ -1,7 +1,7 @@
 """Progress of long runs: a live bar with time left on a terminal, sparse log lines otherwise.
 
-* If stderr or stdout is a terminal (under ``mpiexec`` often only rank 0's
-  stdout is), a one-line bar ``label [#####.....] done/total  elapsed  ~left``
+* If stderr or stdout is a terminal (under ``mpiexec``: if mpiexec's own
+  output is, see :func:`_launcher_on_terminal`), a one-line bar ``label [#####.....] done/total  elapsed  ~left``
   is drawn there and redrawn by a background thread every ``interval``
   seconds (default 1 s), so the elapsed time and the estimate keep moving
   even while the caller is inside a long chunk of work.
@@ -15,6 +15,7 @@
 """
 from __future__ import annotations
 
+import os
 import sys
 import threading
 import time
@@ -34,10 +35,28 @@ def close_all() -> None:
         bar.stop()
 
 
+MPI_RANK_VARIABLES = ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK")
+
+
+def _launcher_on_terminal() -> bool:
+    """Whether the process that started us (mpiexec) writes to a terminal.
+    OpenMPI gives every rank's stdout a pseudo-terminal of its own, whether
+    or not mpiexec's output goes to a terminal, so a rank's isatty() says
+    nothing; mpiexec's own stdout does (Linux /proc; False elsewhere)."""
+    try:
+        target = os.readlink(f"/proc/{os.getppid()}/fd/1")
+    except OSError:
+        return False
+    return target.startswith(("/dev/pts/", "/dev/tty", "/dev/console"))
+
+
 def _terminal():
+    """The stream to draw a bar on, or None: stderr or stdout if a terminal;
+    under an MPI launcher, stdout only if the launcher itself writes to one."""
+    under_mpi = any(v in os.environ for v in MPI_RANK_VARIABLES)
     for stream in (sys.stderr, sys.stdout):
         try:
-            if stream.isatty():
+            if stream.isatty() and not (under_mpi and not _launcher_on_terminal()):
                 return stream
         except (AttributeError, ValueError):
             continue

@@ -1,14 +1,35 @@
-"""PETSc options given on the command line that no solver read (like -options_left).
+"""PETSc options: defaults given in code, and command-line options nobody read.
 
-petsc4py 3.18 has no binding for ``PetscOptionsUsed``; it is called through
-ctypes on the PETSc library this process has loaded.  When that library
-cannot be found the check is skipped (returns None): it is a convenience,
-never a reason to fail.
+* :func:`set_from_options` — options given in code are pushed under a
+  solver's prefix only for its ``setFromOptions()``, only where the user has
+  not set them (the command line wins), and removed again so they never leak
+  into the next solver.
+* :func:`unused_options` — options in PETSc's database that no solver read
+  (like ``-options_left``).  petsc4py 3.18 has no binding for
+  ``PetscOptionsUsed``; it is called through ctypes on the PETSc library this
+  process has loaded.  When that library cannot be found the check is
+  skipped (returns None): it is a convenience, never a reason to fail.
 """
 from __future__ import annotations
 
 import ctypes
 import os
+
+from petsc4py import PETSc
+
+
+def set_from_options(obj, prefix: str, defaults: dict | None = None) -> None:
+    """``obj.setFromOptions()`` with ``defaults`` ({"snes_rtol": 1e-8, ...}, keys
+    without the prefix) in force for that call only."""
+    opts = PETSc.Options()
+    pushed = [prefix + key for key in (defaults or {}) if not opts.hasName(prefix + key)]
+    for name in pushed:
+        opts[name] = defaults[name[len(prefix):]]
+    try:
+        obj.setFromOptions()
+    finally:
+        for name in pushed:
+            opts.delValue(name)
 
 
 def _petsc_library():
@@ -35,11 +56,12 @@ def _petsc_library():
     return None
 
 
-def unused_options(names=None) -> list[str] | None:
+def unused_options(names=None, *, root_only: bool = False) -> list[str] | None:
     """Options in PETSc's database (default: all of them) that nothing has
-    read so far, as ``-name``; None if the check is not available."""
-    from petsc4py import PETSc
-
+    read so far, as ``-name``; None if the check is not available.
+    ``root_only``: [] on every rank of COMM_WORLD but 0 (one report per run)."""
+    if root_only and PETSc.COMM_WORLD.rank != 0:
+        return []
     lib = _petsc_library()
     if lib is None:
         return None
