@@ -3,9 +3,11 @@ point counts, cell counts and fields of states, traced paths and workspace maps.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -114,6 +116,19 @@ def test_workspace_cli_vtk_and_grid_index(tmp_path):
     # the map cell of the target (360, 220) mm holds that sample's value
     s = int(np.flatnonzero(np.all(points == (360.0, 220.0), axis=1))[0])
     assert kappa[2, 1] == k_flat[s]
+    # the README's snippet gives the same map
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = readme.split("**Loading a map.**", 1)[1].split("\n\n", 2)[1]
+    snippet = "\n".join(line[4:] for line in block.splitlines())
+    scope = {}
+    cwd = os.getcwd()
+    try:
+        os.chdir(tmp_path)
+        exec(compile(snippet, "README.md", "exec"), scope)
+    finally:
+        os.chdir(cwd)
+    np.testing.assert_array_equal(scope["kappa"], kappa)
+    np.testing.assert_allclose(scope["y"], [100.0, 160.0, 220.0])
     mesh = meshio.read(vtk / "workspace.vtu")
     assert len(mesh.points) == total
     assert [(c.type, len(c.data)) for c in mesh.cells] == [("vertex", 9), ("quad", 4)]
