@@ -71,6 +71,12 @@ def test_trace_read_back(traced, tmp_path):
         mesh = meshio.read(tmp_path / d.get("file"))
         assert len(mesh.points) == ELEMENTS + 1 + arm.n_tendons
         np.testing.assert_allclose(mesh.points[ELEMENTS, :2], r.tip_mm, rtol=1e-11)
+    # with an approach (here: the path itself stands in) its states come first
+    more = write_trace(tmp_path / "both", arm, result, times_s=times + 10.0, approach=result,
+                       approach_times_s=times)
+    sets = ET.parse(tmp_path / "both" / "trace.pvd").getroot().findall("./Collection/DataSet")
+    assert [float(d.get("timestep")) for d in sets] == list(times) + list(times + 10.0)
+    assert sets[0].get("file") == "trace_approach_0000.vtu" and len(more) == 2 * K + 2
     path = meshio.read(tmp_path / "trace_path.vtu")
     assert len(path.points) == K and [(c.type, len(c.data)) for c in path.cells] == [("line", K - 1)]
     np.testing.assert_allclose(path.points[:, :2], result.tips_mm, rtol=1e-11)

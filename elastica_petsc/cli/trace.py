@@ -48,7 +48,8 @@ def add_parser(sub) -> None:
                              "the path (.gif with Pillow; .mp4 needs ffmpeg)")
     parser.add_argument("--vtk", metavar="DIR",
                         help="write ParaView files into this folder: trace.pvd (the arm and "
-                             "cables at every point, timed as the schedule) and trace_path.vtu")
+                             "cables at every point of the approach and the path, timed as the "
+                             "schedule) and trace_path.vtu (the tips with per-point fields)")
     parser.add_argument("--per-point", action="store_true",
                         help="with --json: add 'per_point', one entry per path point (target, "
                              "tip, reached, tip error, tensions in p and N, cable lengths, "
@@ -219,7 +220,9 @@ def write_outputs(args, arm, disc, planned) -> None:
         plot_trace_figures(arm, result, args.plot)
     if args.vtk:
         from ..io.vtk import write_trace as write_vtk
-        write_vtk(args.vtk, arm, result, times_s=schedule.time_s[schedule.path_rows()])
+        rows = schedule.path_rows()
+        write_vtk(args.vtk, arm, result, times_s=schedule.time_s[rows],
+                  approach=planned.approach, approach_times_s=schedule.time_s[:rows[0]])
     if args.animate:
         from ..plots.animate import animate_trace
         animate_trace(arm, result, args.animate, approach=planned.approach)

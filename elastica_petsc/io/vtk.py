@@ -9,7 +9,8 @@ beside them; booleans as UInt8 0/1 (VTK has no boolean type).
   ``part`` = 0) and each cable as one line cell from its attachment node to
   its routing point (``part`` = i, ``tension_N``, ``tension_p``,
   ``cable_length_mm``).  Eqs. (2)-(4).
-* :func:`write_trace` — a traced path: one state file per point,
+* :func:`write_trace` — a traced path: one state file per point (and per
+  point of the approach from the straight arm, when given),
   ``<name>.pvd`` listing them with the schedule's time (s) or the point
   index, and ``<name>_path.vtu``: the tips joined by line cells, with per-point
   ``target_x_mm``, ``reached``, ``tip_error_mm``, ``tension_i_N``,
@@ -143,30 +144,43 @@ def write_state(path, arm, eq) -> Path:
     return write_vtu(path, *state_grid(arm, eq))
 
 
-def write_trace(directory, arm, trace, *, name: str = "trace", times_s=None) -> list[Path]:
+def write_trace(directory, arm, trace, *, name: str = "trace", times_s=None,
+                approach=None, approach_times_s=None) -> list[Path]:
     """A traced path (``trace.results`` needed) into ``directory``: one state
     per point, ``<name>.pvd`` (time: ``times_s`` per point, else the index)
-    and ``<name>_path.vtu``.  Returns the files written."""
+    and ``<name>_path.vtu``.  With ``approach`` (the trace from the straight
+    arm that precedes the path in a motor schedule, with its
+    ``approach_times_s``) its states come first in the .pvd
+    (``<name>_approach_*.vtu``).  Returns the files written."""
     directory = Path(directory)
     directory.mkdir(exist_ok=True)
-    if not trace.results:
-        raise InputError("exporting a trace needs its per-point states (keep_results=True)")
+    parts = [(f"{name}_approach", approach, approach_times_s), (name, trace, times_s)]
+    entries, files = [], []
+    for stem, part, times in parts:
+        if part is None:
+            continue
+        if not part.results:
+            raise InputError("exporting a trace needs its per-point states (keep_results=True)")
+        t = np.arange(part.n_points, dtype=float) if times is None else np.asarray(times, float)
+        digits = max(4, len(str(part.n_points - 1)))
+        written = [write_state(directory / f"{stem}_{k:0{digits}d}.vtu", arm, r.equilibrium)
+                   for k, r in enumerate(part.results)]
+        entries += [(tk, f.name) for tk, f in zip(t, written)]
+        files += written
+    files.append(write_pvd(directory / f"{name}.pvd", entries))
     K = trace.n_points
-    times = np.arange(K, dtype=float) if times_s is None else np.asarray(times_s, float)
-    digits = max(4, len(str(K - 1)))
-    files = [write_state(directory / f"{name}_{k:0{digits}d}.vtu", arm, r.equilibrium)
-             for k, r in enumerate(trace.results)]
-    pvd = write_pvd(directory / f"{name}.pvd", [(t, f.name) for t, f in zip(times, files)])
     data = {"target_x_mm": trace.targets_mm[:, 0], "target_y_mm": trace.targets_mm[:, 1],
             "reached": np.asarray(trace.converged, bool), "tip_error_mm": trace.tip_errors_mm,
-            "time_s": times, "point": np.arange(K)}
+            "time_s": np.arange(K, dtype=float) if times_s is None else np.asarray(times_s, float),
+            "point": np.arange(K)}
     for i in range(trace.p.shape[1]):
         data[f"tension_{i + 1}_N"] = trace.tensions_N[:, i]
         data[f"tension_{i + 1}_p"] = trace.p[:, i]
         data[f"cable_length_{i + 1}_mm"] = trace.cable_lengths_mm[:, i]
-    path = write_vtu(directory / f"{name}_path.vtu", trace.tips_mm,
-                     [(VTK_LINE, np.column_stack((np.arange(K - 1), np.arange(1, K))))], data)
-    return files + [pvd, path]
+    files.append(write_vtu(directory / f"{name}_path.vtu", trace.tips_mm,
+                           [(VTK_LINE, np.column_stack((np.arange(K - 1), np.arange(1, K))))],
+                           data))
+    return files
 
 
 # --- workspace maps -------------------------------------------------------------------------
