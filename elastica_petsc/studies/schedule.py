@@ -5,10 +5,13 @@ Sec. 4.5 (v)) an *approach* — a straight tip line from the unloaded straight
 arm (or the load-controlled state at given tensions) to the first target —
 and then the path itself, warm-started from the end of the approach, and
 turns both into one timed :class:`~elastica_petsc.core.schedule.MotorSchedule`
-(cable lengths -> spool revolutions and microsteps, Sec. 4.1).  Starting
-the motors from the straight arm and following the approach keeps the
-length-controlled arm on the branch that was planned under load control
-(Sec. 4.6: the same cable lengths can hold several equilibria, Fig. 8).
+(cable lengths -> spool revolutions and microsteps, Sec. 4.1).  The motors
+start where they can be zeroed, at the straight arm, and the approach gives
+the length-controlled arm a continuous way onto the planned branch (Sec.
+4.6: the same cable lengths can hold several equilibria, Fig. 8); whether it
+stays there is checked by replaying the schedule under length control
+(:func:`elastica_petsc.studies.replay.replay`, ``elastica-petsc replay``;
+tests/test_schedule.py does it for a path from the straight arm).
 
 The default tip speed is :func:`suggested_speed` (Sec. 4.5 (vi)).
 """
