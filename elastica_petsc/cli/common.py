@@ -22,7 +22,7 @@ def add_output_options(parser: argparse.ArgumentParser, plot: bool = True) -> No
                         help="print one JSON object on stdout instead of the text summary")
     parser.add_argument("--out", metavar="H5", help="write the results to this HDF5 file")
     parser.add_argument("--overwrite", action="store_true",
-                        help="replace an existing --out/--plot file")
+                        help="replace existing output files (--out, --plot and the like)")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress bar or progress lines (for batch jobs); results and "
                              "errors are still printed")
