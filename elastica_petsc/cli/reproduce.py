@@ -26,6 +26,9 @@ def add_parser(sub) -> None:
                         help="allow writing into a folder that already holds a REPORT.md")
     parser.add_argument("--config", metavar="TOML",
                         help="arm configuration (default: the paper's arm)")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress output (per-experiment lines and progress bars); the "
+                             "closing line and errors are still printed")
     parser.add_argument("--aluminium-config", metavar="TOML",
                         help="arm for the Sec. 4.3 thought experiment (default: shipped "
                              "configs/aluminium.toml)")
@@ -56,7 +59,8 @@ def run(args) -> int:
     alu = Path(args.aluminium_config) if args.aluminium_config else \
         Path(str(resources.files("elastica_petsc") / "configs" / "aluminium.toml"))
     ctx = Context(arm=arm, out=out, quick=args.quick, jobs=args.jobs, comm=comm)
-    log = (lambda message: print(message, file=sys.stderr, flush=True))
+    log = ((lambda message: None) if args.quiet else
+           (lambda message: print(message, file=sys.stderr, flush=True)))
     report = run_all(ctx, "elastica-petsc " + " ".join(sys.argv[1:]), alu, log=log)
     if report is not None:
         print(f"wrote {report} and {sum(len(v) for v in ctx.files.values())} result files "
