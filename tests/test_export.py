@@ -96,7 +96,7 @@ def test_workspace_cli_vtk_and_grid_index(tmp_path):
     as quads; the HDF5 grid/index gives the 2-D map with two lines of numpy."""
     out, vtk = tmp_path / "ws.h5", tmp_path / "vtk"
     run = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "workspace", "--spacing",
-                          "60", "--box", "300", "420", "100", "220", "--elements", str(ELEMENTS),
+                          "60", "--box", "420", "540", "180", "300", "--elements", str(ELEMENTS),
                           "--out", str(out), "--vtk", str(vtk), "--json", "--quiet"],
                          capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr
@@ -108,20 +108,27 @@ def test_workspace_cli_vtk_and_grid_index(tmp_path):
         kappa = np.full((iy.max() + 1, ix.max() + 1), np.nan)
         kappa[iy, ix] = fh["samples/kappa_max"][()]
         points, k_flat = fh["grid/points"][()], fh["samples/kappa_max"][()]
-        np.testing.assert_allclose(fh["grid/axis_0"][()], [300.0, 360.0, 420.0])
-        np.testing.assert_allclose(fh["grid/axis_1"][()], [100.0, 160.0, 220.0])
+        np.testing.assert_allclose(fh["grid/axis_0"][()], [420.0, 480.0, 540.0])
+        np.testing.assert_allclose(fh["grid/axis_1"][()], [180.0, 240.0, 300.0])
         w0 = fh["masks/W0"][()]
+        p, P = fh["samples/tensions"][()], fh["samples/tensions_N"][()]
+        # tensions in N wherever p is (also for targets outside W_0), strings for reasons
+        np.testing.assert_allclose(P, p * load_config().force_scale_N)
+        assert fh["samples/reason"].dtype.kind == "S"
+        status = fh["samples/status"][()]
         assert fh["masks/W0"].dtype == np.bool_
+    assert 0 < np.sum(status == 1) < 9                # some targets outside W_0 (box corner)
     assert kappa.shape == (3, 3)
     x, y, same = workspace_map(out, "kappa_max")              # the library function
     np.testing.assert_array_equal(same, kappa)
-    np.testing.assert_allclose(x, [300.0, 360.0, 420.0])
+    np.testing.assert_allclose(x, [420.0, 480.0, 540.0])
     _, _, P2 = workspace_map(out, "tensions_N", component=1)
     _, _, W0 = workspace_map(out, "W0")
     assert np.nanmax(P2) > 0 and set(np.unique(W0[~np.isnan(W0)])) <= {0.0, 1.0}
-    # the map cell of the target (360, 220) mm holds that sample's value
-    s = int(np.flatnonzero(np.all(points == (360.0, 220.0), axis=1))[0])
-    assert kappa[2, 1] == k_flat[s]
+    # map cell [j, i] lies at (axis_0[i], axis_1[j]): the target of its sample
+    np.testing.assert_allclose(np.column_stack((x[ix], y[iy])), points)
+    s = int(np.flatnonzero(np.all(points == (540.0, 180.0), axis=1))[0])
+    assert np.isfinite(k_flat[s]) and kappa[0, 2] == k_flat[s]
     # the README's snippet gives the same map
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
     block = readme.split("**Loading a map.**", 1)[1].split("\n\n", 2)[1]
@@ -134,7 +141,7 @@ def test_workspace_cli_vtk_and_grid_index(tmp_path):
     finally:
         os.chdir(cwd)
     np.testing.assert_array_equal(scope["kappa"], kappa)
-    np.testing.assert_allclose(scope["y"], [100.0, 160.0, 220.0])
+    np.testing.assert_allclose(scope["y"], [180.0, 240.0, 300.0])
     mesh = meshio.read(vtk / "workspace.vtu")
     assert len(mesh.points) == total
     assert [(c.type, len(c.data)) for c in mesh.cells] == [("vertex", 9), ("quad", 4)]
