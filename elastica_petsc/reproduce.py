@@ -157,9 +157,12 @@ def _trace(ctx: Context, name: str, points, figure: str):
     from .plots.control import plot_trace
     from .core.schedule import schedule_from_trace
 
+    from .core.progress import Progress
+
     targets = densify(points, ctx.trace_step_mm)
-    with TipController(ctx.arm) as controller:
-        result = trace(controller, targets, p0=np.full(2, 2.0), keep_results=True)
+    with TipController(ctx.arm) as controller, Progress(len(targets), f"trace {name}") as bar:
+        result = trace(controller, targets, p0=np.full(2, 2.0), keep_results=True,
+                       on_point=bar.update)
     schedule = schedule_from_trace(result, ctx.arm)
     with atomic_h5(ctx.path(f"{name}.h5", figure), overwrite=True) as fh:
         write_attrs(fh, provenance(ctx.arm, "trace"))
