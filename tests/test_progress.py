@@ -90,7 +90,11 @@ def test_mpi_workspace_shows_progress_in_a_terminal(tmp_path):
            "--spacing", "20", "--box", "250", "550", "50", "300", "--elements", "60",
            "--out", str(tmp_path / "ws.h5")]
     t0 = time.monotonic()
-    proc = subprocess.Popen(cmd, stdin=slave, stdout=slave, stderr=slave, close_fds=True)
+    # env given explicitly: os.environ, not the C environment of this process, into which
+    # Open MPI's singleton initialisation (any test that imported mpi4py) has written
+    # variables that make a child mpiexec exit 1 without a word
+    proc = subprocess.Popen(cmd, stdin=slave, stdout=slave, stderr=slave, close_fds=True,
+                            env=dict(os.environ))
     os.close(slave)
     events = []
     try:
