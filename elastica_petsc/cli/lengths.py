@@ -40,10 +40,10 @@ def add_search_options(parser) -> None:
                              "continuation points per path segment, K x 2 deflated solves per "
                              "start, and the start tension levels doubled K-1 more times "
                              "(default 1)")
-    parser.add_argument("--levels", type=float, nargs="+", metavar="P",
-                        help="tension levels (non-dimensional) of the load-controlled start "
-                             "states of the search: every combination, every loading order "
-                             "(default 5 10 20, extended by --effort)")
+    common.add_tension_option(parser, "--levels", nargs="+",
+                              help="tension levels of the load-controlled start states of the "
+                                   "search: every combination, every loading order "
+                                   "(default 5 10 20, extended by --effort)")
     parser.add_argument("--deflation-rounds", type=int, metavar="K",
                         help="deflated Newton solves per start and sweep (default 2 x effort)")
 

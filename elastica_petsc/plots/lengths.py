@@ -116,26 +116,44 @@ def plot_replay(arm: Arm, data: dict, path: str | Path, title: str) -> None:
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), fontsize=8, ncol=1,
               frameon=False)
 
+    _replay_errors(ax2, data)
+    fig.subplots_adjust(wspace=0.3)
+    fig.suptitle(title, fontsize=11)
+    save(fig, path)
+
+
+def _replay_errors(ax2, data: dict) -> None:
+    """Distance from the plan per point: the tip error in mm on the left log
+    axis, the shape error in rad on its own right log axis."""
     floor = 1e-15
     err = np.asarray(data["tip_error"], float)
     k = np.arange(len(err))
     few = len(err) <= MARKERS_UP_TO
-    ax2.semilogy(k, np.maximum(err, floor), "o-" if few else "-", color="tab:red", ms=4,
-                 label="|replayed tip - planned tip| [mm]")
+    handles = ax2.semilogy(k, np.maximum(err, floor), "o-" if few else "-", color="tab:red",
+                           ms=4, label="|replayed tip - planned tip| [mm] (left axis)")
+    tol_axis = ax2
     if data.get("shape_error") is not None:
+        right = ax2.twinx()
         se = np.asarray(data["shape_error"], float)
-        ax2.semilogy(k, np.maximum(se, floor), "s--" if few else "--", color="tab:green", ms=4,
-                     label="max |theta - planned theta| [rad]")
-    unit = "mm (tip)" if data["criterion"] == "tip" else "rad (shape)"
-    ax2.axhline(data["tol"], color="0.4", ls="--", lw=1.0,
-                label=f"on-branch threshold {data['tol']:g} {unit}")
+        handles += right.semilogy(k, np.maximum(se, floor), "s--" if few else "--",
+                                  color="tab:green", ms=4,
+                                  label="max |theta - planned theta| [rad] (right axis)")
+        right.set_ylabel("shape error [rad]", color="tab:green")
+        right.tick_params(axis="y", colors="tab:green")
+        if data["criterion"] == "shape":
+            tol_axis = right
+    unit = "mm (tip)" if data["criterion"] == "tip" else "rad (shape, right axis)"
+    handles.append(tol_axis.axhline(data["tol"], color="0.4", ls="--", lw=1.0,
+                                    label=f"on-branch threshold {data['tol']:g} {unit}"))
     for n, j in enumerate(np.flatnonzero(np.asarray(data["jumped"], bool))):
-        ax2.axvline(j, color="tab:purple", lw=1.2, label="jump" if n == 0 else None)
+        line = ax2.axvline(j, color="tab:purple", lw=1.2, label="jump")
+        if n == 0:
+            handles.append(line)
     ax2.set_xlabel("point of the traced path")
-    ax2.set_ylabel("distance from the plan")
+    ax2.set_ylabel("tip error [mm]", color="tab:red")
+    ax2.tick_params(axis="y", colors="tab:red")
     ax2.xaxis.get_major_locator().set_params(integer=True)
     ax2.set_title(f"Distance from the plan (below {floor:g} drawn at {floor:g})", fontsize=10)
     ax2.grid(True, which="both", lw=0.3, alpha=0.6)
-    ax2.legend(fontsize=8)
-    fig.suptitle(title, fontsize=11)
-    save(fig, path)
+    ax2.legend(handles=handles, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13),
+               frameon=False)
