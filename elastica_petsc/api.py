@@ -117,18 +117,25 @@ def _loading(order) -> str:
     return "proportional" if order is None else "order " + ",".join(map(str, order))
 
 
-def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None,
+def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None, side: str | None = None,
           elements: int | None = None) -> State:
     """The equilibrium reached by loading the straight arm to the given tensions
     (Eq. (9), PETSc SNES with load stepping).
 
     ``order=(2, 1)`` tensions tendon 2 fully before tendon 1; ``None`` loads all
-    tendons proportionally (the order selects the state, Fig. 8).
+    tendons proportionally (the order selects the state, Fig. 8).  At a
+    symmetric bifurcation crossed on the way, ``side="left"``/``"right"``
+    picks the buckled branch on which the tip moves counter-clockwise /
+    clockwise of its tangent; by default the branch of lower potential energy
+    (equal energies: left).  ``State.equilibrium.bifurcations`` lists them.
     """
+    from .solvers.equilibrium import solve_equilibrium
+
     p = _tensions(arm, tensions_N, tensions)
     order = check_order(order, arm.n_tendons)
-    with EquilibriumSolver(_mesh(arm, elements)) as solver:
-        eq = solver.solve(p, order=order)
+    if side not in (None, "left", "right"):
+        raise InputError(f"side must be 'left' or 'right', got {side!r}")
+    eq = solve_equilibrium(_mesh(arm, elements), p, order=order, side=side)
     return State(arm, eq, _loading(order))
 
 

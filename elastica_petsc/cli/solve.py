@@ -32,19 +32,11 @@ def add_side_option(parser) -> None:
 
 
 def solve_state(args, arm, disc):
-    """The state of ``solve`` and ``stability``: api.solve, or with --side the
-    library's one-shot solve (api.solve has no side yet)."""
+    """The state of ``solve`` and ``stability`` (api.solve with the options)."""
     from .. import api
 
-    if args.side is None:
-        return api.solve(arm, tensions=common.tensions(args, arm), order=common.order(args),
-                         elements=disc.n_elements)
-    from ..solvers.equilibrium import check_tensions, solve_equilibrium
-
-    order = common.order(args)
-    eq = solve_equilibrium(disc, check_tensions(common.tensions(args, arm), disc.n_tendons),
-                           order=order, side=args.side)
-    return api.State(arm, eq, args.order and f"order {args.order}" or "proportional")
+    return api.solve(arm, tensions=common.tensions(args, arm), order=common.order(args),
+                     side=args.side, elements=disc.n_elements)
 
 
 def run(args) -> int:

@@ -23,7 +23,9 @@ Layout of an equilibrium group (``write_equilibrium``)::
     tendons/tensions       (n,)     P l^2/B
     tendons/tensions_N     (n,)     N
     solver (attributes)    converged, reason, message, iterations, load_steps,
-                           unstable_modes, stable
+                           unstable_modes, stable; after a symmetric bifurcation
+                           bifurcation_sides, bifurcation_rules and the dataset
+                           solver/bifurcation_tensions (k, n) P l^2/B
 """
 from __future__ import annotations
 
@@ -135,6 +137,11 @@ def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
                          "message": eq.message, "iterations": int(eq.iterations),
                          "load_steps": int(eq.load_steps), "stable": bool(eq.stable),
                          "unstable_modes": int(eq.unstable_modes)})
+    if eq.bifurcations:
+        put(solver, "bifurcation_tensions", np.array([b.p_critical for b in eq.bifurcations]),
+            "P l^2/B", "critical tensions of the symmetric bifurcations crossed, in order")
+        write_attrs(solver, {"bifurcation_sides": [b.side for b in eq.bifurcations],
+                             "bifurcation_rules": [b.rule for b in eq.bifurcations]})
 
 
 def write_control(group, arm: Arm, result) -> None:
