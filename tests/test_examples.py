@@ -51,7 +51,9 @@ def test_trace_schedule(tmp_path):
     out = run(sys.executable, str(EXAMPLES / "trace_schedule.py"), "s.csv", cwd=tmp_path)
     assert "all reached: True" in out
     rows = (tmp_path / "s.csv").read_text().splitlines()
-    assert len(rows) == 1 + int(out.split()[0])             # header + one row per target
+    line = next(l for l in out.splitlines() if l.startswith("schedule:"))
+    assert len(rows) == 1 + int(line.split()[1])            # header + one row per target
+    assert int(line.split()[1]) > int(out.split()[0])         # the approach comes first
 
 
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="needs mpiexec")
