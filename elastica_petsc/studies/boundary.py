@@ -1,0 +1,421 @@
+"""Workspace boundaries by continuation (two tendons).
+
+W_0 (used alike by tip control, the sampled map and this module) is the set
+of tips of the stable equilibria connected to the straight arm by
+quasi-static loading with all P_i >= 0 (Eq. (18)): the image under the tip
+map of D, the connected component of the straight arm in the stable part of
+the equilibrium manifold M = {(u, p): F(u, p) = 0, p >= 0}.  D is bounded by
+
+* the faces P_i = 0 (and P_i = P_crit when the config sets a motor limit,
+  Eq. (22)),
+* cable collapse, L_i = 0 (the attachment point on its routing point, beyond
+  which the load direction of Eq. (3) is undefined; traced at L_i = eps =
+  COLLAPSE_LENGTH, 1.2 mm on the paper's arm),
+* the fold of M over tension space, where K is singular (lambda_min = 0,
+  Eq. (20)): the limit points beyond which the arm snaps.
+
+:func:`trace_region_boundary` walks once around D (a wall follower): it
+follows one of these curves by pseudo-arclength continuation
+(:class:`~elastica_petsc.solvers.continuation.CurveTracer`) with D on its
+left in tension space until another constraint becomes active (a bound is
+crossed or stability is lost), solves for that corner, and turns onto the
+new curve, until it is back at the straight arm.  The tip image of this
+closed loop is the W_0 polygon (mm, counter-clockwise or not as the map
+orients it; the area is its absolute shoelace area).  The image is the
+boundary of W_0 exactly when the tip map is one-to-one on D; fold curves of
+the tip map inside D (det S = 0, S = d x_t / d p, Eq. (13)) would add
+envelope pieces: where one meets the loop, det S changes sign along it, and
+those points are reported (``tip_folds``).  They are *not* traced inwards.
+
+The restricted workspace W_0 ∩ W_Y ∩ W_E ∩ W_P (Eqs. (19), (21), (22); W_S
+is W_0 itself under this definition, since D holds only stable states) is
+the image of the region D_r of D where also l*kappa_max <= 2 eps_Y l / h and
+SE <= SE_max: the same walk with those two level curves as extra
+constraints.  Where l*kappa_max switches between elements the constraint is
+only piecewise smooth; the corrector copes with it (the kink is a corner).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.errors import InputError
+from ..core.fem import Discretisation
+from ..core.model import Arm
+from ..solvers.continuation import (CableCollapse, Curve, CurveTracer, Fold, FoldSystem,
+                                    StateLevel, TensionBound)
+from ..solvers.equilibrium import COLLAPSE_LENGTH
+
+
+class BoundaryError(InputError):
+    """An arm whose boundary this method cannot trace (e.g. not two tendons)."""
+
+
+@dataclass
+class RegionBoundary:
+    """The closed loop around a region of M and its tip image.
+
+    curves: the pieces, in order; each :class:`Curve` holds the points.
+    closed: the walk came back to the straight arm.
+    """
+
+    name: str
+    curves: list
+    closed: bool
+    message: str = ""
+
+    def nodes(self) -> dict:
+        """Concatenated curve nodes: tip (mm-free, units of l), p, curve index."""
+        tips, ps, index, vel = [], [], [], []
+        for k, curve in enumerate(self.curves):
+            for pt in curve.points:
+                tips.append(pt.tip); ps.append(pt.w[-2:]); index.append(k)
+                vel.append(pt.tip_velocity)
+        return {"tip": np.array(tips), "p": np.array(ps), "curve": np.array(index),
+                "tip_velocity": np.array(vel)}
+
+
+@dataclass
+class BoundaryResult:
+    """W_0 and restricted boundaries of one arm (units: mm and mm^2)."""
+
+    arm: Arm
+    regions: dict                       # name -> RegionBoundary ("W0", "restricted")
+    polygons_mm: dict                   # name -> list of (k, 2) closed polygons
+    areas_mm2: dict
+    tip_folds_mm: np.ndarray            # where det S changes sign on the W0 loop
+    solves: int
+    seconds: float
+    messages: list = field(default_factory=list)
+
+    @property
+    def area_mm2(self) -> float:
+        return self.areas_mm2["W0"]
+
+
+def constraints_for(tracer: CurveTracer, arm: Arm, restricted: bool) -> list:
+    """Bounds of D (and D_r): faces, motor limit, collapse; fold handled apart."""
+    mf = tracer.mf
+    out = [TensionBound(mf, i, 0.0) for i in range(mf.n)]
+    if arm.max_tension is not None:
+        out += [TensionBound(mf, i, arm.max_tension, upper=True) for i in range(mf.n)]
+    out += [CableCollapse(mf, i, COLLAPSE_LENGTH) for i in range(mf.n)]
+    if restricted:
+        out += [StateLevel(mf, "kappa", arm.kappa_limit),
+                StateLevel(mf, "energy", arm.limits.strain_energy_max_SE0)]
+    return out
+
+
+class Walker:
+    """The wall follower around D of the module docstring."""
+
+    def __init__(self, tracer: CurveTracer, constraints: list, *, ds0: float = 0.3,
+                 ds_min: float = 1e-5, max_points: int = 400):
+        self.tr = tracer
+        self.constraints = constraints
+        self.fold_system = FoldSystem(tracer.mf)
+        self.fold = Fold(self.fold_system)
+        self.ds0, self.ds_min, self.max_points = ds0, ds_min, max_points
+
+    def destroy(self) -> None:
+        self.fold_system.destroy()
+
+    def _orient(self, constraint) -> np.ndarray:
+        """D^-1 times the gradient of side * c: tangents with t . grad > 0 move into
+        the admissible side of ``constraint``."""
+        return lambda w: constraint.side * constraint.gradient(w) / self.tr.mf.metric
+
+    def _start_point(self, w, active, into):
+        t, det_sign = self.tr.tangent(w, active, into(w))
+        return self.tr.point(w, t, det_sign, 0)
+
+    def _locate(self, a, b, active, hit) -> np.ndarray | None:
+        """Corner where ``hit`` becomes active between accepted points a and b."""
+        if hit is self.fold:
+            guess_v = self.fold_system.null_vector(b.w)
+            self.fold_system.set_vectors(guess_v)
+        ma, mb = hit.value(a.w), hit.value(b.w)
+        frac = ma / (ma - mb) if ma != mb else 0.5
+        frac = min(max(frac, 0.0), 1.0)
+        guess = a.w + frac * (b.w - a.w)
+        w, ok = self.tr.correct(guess, [active, hit])
+        if not ok:
+            return None
+        if hit is self.fold:
+            self.fold.update(w)
+            # the stable side (a is stable) is the admissible one
+            self.fold.side = 1.0 if self.fold.value(a.w) >= 0 else -1.0
+        return w
+
+    def _events(self, a, b, active):
+        """Constraints that became active between a and b (stability loss: fold)."""
+        hits = [c for c in self.constraints if c is not active and c.margin(b.w) < 0]
+        if b.unstable_modes > 0 and a.unstable_modes == 0 and active is not self.fold:
+            hits.append(self.fold)
+        return hits
+
+    def follow(self, start, active) -> tuple[Curve, object, np.ndarray | None]:
+        """Follow ``active`` from the point ``start`` until another constraint
+        becomes active: (curve, the new constraint, the corner state w)."""
+        curve = Curve(active.name, [start])
+        pt, ds = start, self.ds0
+        while len(curve.points) < self.max_points:
+            new, its = self.tr.step(pt, active, ds)
+            if new is None:
+                ds *= 0.5
+                if ds < self.ds_min:
+                    curve.end = f"step below {self.ds_min:g} ({self.tr.reason()})"
+                    return curve, None, None
+                continue
+            hits = self._events(pt, new, active)
+            if hits:
+                for hit in hits:
+                    w = self._locate(pt, new, active, hit)
+                    if w is not None:
+                        curve.end, curve.end_constraint = "corner", hit.name
+                        corner = self.tr.point(w, pt.t, pt.det_sign, 0)
+                        curve.points.append(corner)
+                        return curve, hit, w
+                ds *= 0.5
+                if ds < self.ds_min:
+                    curve.end = "could not locate the corner with " + hits[0].name
+                    return curve, None, None
+                continue
+            if new.det_sign != pt.det_sign and new.unstable_modes == pt.unstable_modes:
+                curve.points.append(new)
+                curve.end = "branch point (det of the extended Jacobian changed sign)"
+                return curve, None, None
+            if active is self.fold:
+                self.fold.update(new.w)
+            curve.points.append(new)
+            pt = new
+            ds = min(ds * 2.0 if its <= 3 else ds, self.tr.ds_max)
+        curve.end = f"more than {self.max_points} points"
+        return curve, None, None
+
+    def walk(self, name: str, w0: np.ndarray, first, previous, max_corners: int = 16):
+        """Once around the region from the corner w0 (constraints ``previous`` and
+        ``first`` active), leaving along ``first`` into ``previous``'s admissible side."""
+        curves, active, w, closed, message = [], first, w0, False, ""
+        into = self._orient(previous)
+        for _ in range(max_corners):
+            start = self._start_point(w, active, into)
+            curve, hit, w_next = self.follow(start, active)
+            curves.append(curve)
+            if hit is None:
+                message = f"{curve.constraint}: {curve.end}"
+                break
+            if hit is first and np.linalg.norm(w_next[-2:] - w0[-2:]) < 1e-6:
+                closed = True
+                break
+            into, active, w = self._orient(active), hit, w_next
+        else:
+            message = f"more than {max_corners} corners"
+        return RegionBoundary(name, curves, closed, message)
+
+
+def shoelace(poly: np.ndarray) -> float:
+    """Signed area of a closed polygon (positive: counter-clockwise)."""
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def hermite_densify(tip, velocity, per_segment: int = 8) -> np.ndarray:
+    """Cubic Hermite curve through the nodes with their tip velocities d x_t/ds
+    (per unit of the curve's arclength parameter), ``per_segment`` points each."""
+    out = [tip[:1]]
+    for a in range(len(tip) - 1):
+        b = a + 1
+        chord = np.linalg.norm(tip[b] - tip[a])
+        va, vb = velocity[a], velocity[b]
+        na, nb = np.linalg.norm(va), np.linalg.norm(vb)
+        if chord == 0 or na == 0 or nb == 0:
+            out.append(tip[b:b + 1])
+            continue
+        ma, mb = va / na * chord, vb / nb * chord      # tangents scaled to the chord
+        s = np.linspace(0, 1, per_segment + 1)[1:, None]
+        h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
+        h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+        out.append(h00 * tip[a] + h10 * ma + h01 * tip[b] + h11 * mb)
+    return np.vstack(out)
+
+
+def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8) -> np.ndarray:
+    """The tip image of the loop, densified per curve, in mm (closing point dropped)."""
+    pieces = []
+    for curve in region.curves:
+        tip = np.array([pt.tip for pt in curve.points])
+        vel = np.array([pt.tip_velocity for pt in curve.points])
+        # corners carry the previous curve's tangent: no Hermite into a corner
+        dense = hermite_densify(tip[:-1], vel[:-1], per_segment) if len(tip) > 2 else tip[:1]
+        pieces.append(np.vstack((dense, tip[-1:])))
+    poly = np.vstack(pieces) * length_mm
+    keep = np.concatenate(([True], np.linalg.norm(np.diff(poly, axis=0), axis=1) > 1e-9))
+    poly = poly[keep]
+    if np.linalg.norm(poly[0] - poly[-1]) < 1e-9:
+        poly = poly[:-1]
+    return poly
+
+
+def self_intersections(poly: np.ndarray) -> int:
+    """Number of crossings between non-adjacent edges of a closed polygon."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    n = len(a)
+    count = 0
+    for i in range(n):
+        j = np.arange(i + 2, n if i > 0 else n - 1)
+        if len(j) == 0:
+            continue
+        p, r = a[i], b[i] - a[i]
+        q, s = a[j], b[j] - a[j]
+        denom = r[0] * s[:, 1] - r[1] * s[:, 0]
+        qp = q - p
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (qp[:, 0] * s[:, 1] - qp[:, 1] * s[:, 0]) / denom
+            u = (qp[:, 0] * r[1] - qp[:, 1] * r[0]) / denom
+        count += int(np.sum((denom != 0) & (t > 0) & (t < 1) & (u > 0) & (u < 1)))
+    return count
+
+
+def tip_fold_points(tracer: CurveTracer, region: RegionBoundary) -> np.ndarray:
+    """Tips (units of l) where det S changes sign between nodes of the loop's
+    stable curves (not on the fold itself, where S is unbounded)."""
+    from ..solvers.sensitivity import SensitivitySolver
+    from ..solvers.equilibrium import Equilibrium
+
+    disc = tracer.mf.disc
+    out = []
+    with SensitivitySolver(disc, prefix="bsens_") as sens:
+        for curve in region.curves:
+            if curve.constraint == "fold":
+                continue
+            signs = []
+            for pt in curve.points:
+                u, p = tracer.mf.split(pt.w)
+                eq = Equilibrium(disc, p.copy(), u.copy(), True, "", 0, 0)
+                try:
+                    signs.append(np.sign(np.linalg.det(sens.compute(eq).tip_jacobian)))
+                except Exception:                               # singular tangent
+                    signs.append(0.0)
+            for a in range(len(signs) - 1):
+                if signs[a] * signs[a + 1] < 0:
+                    out.append(0.5 * (curve.points[a].tip + curve.points[a + 1].tip))
+    return np.array(out).reshape(-1, 2)
+
+
+def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: bool = True,
+                   tip_folds: bool = True) -> BoundaryResult:
+    """The boundary of W_0 (and of the restricted workspace) of a two-tendon arm.
+
+    Returns polygons in mm and areas in mm^2 (module docstring for the
+    definitions).  ``solves`` counts nonlinear solves of the continuation's
+    extended system (each: a few Newton iterations, like one warm-started
+    equilibrium solve).  Raises :class:`BoundaryError` for n != 2 tendons.
+    """
+    disc = Discretisation.from_arm(arm) if disc is None else disc
+    if disc.n_tendons != 2:
+        raise BoundaryError(
+            f"boundary traces curves in a 2-D tension space: it needs exactly 2 tendons, this "
+            f"arm has {disc.n_tendons} (with 3 or more the faces of the tension domain map to "
+            "2-D patches of tip positions; use `workspace` to sample)")
+    t0 = time.perf_counter()
+    regions, polygons, areas, messages = {}, {}, {}, []
+    folds = np.zeros((0, 2))
+    with CurveTracer(disc) as tracer:
+        w0 = np.concatenate((disc.straight(), np.zeros(2)))
+        for name, extra in (("W0", False), ("restricted", True)) if restricted else (("W0", False),):
+            cons = constraints_for(tracer, arm, extra)
+            walker = Walker(tracer, cons)
+            try:
+                region = walker.walk(name, w0, first=cons[1], previous=cons[0])
+            finally:
+                walker.destroy()
+            regions[name] = region
+            poly = loop_polygon(region, arm.length_mm)
+            polygons[name] = [poly]
+            areas[name] = abs(shoelace(poly))
+            if not region.closed:
+                messages.append(f"{name}: the walk around the region did not close: "
+                                f"{region.message}")
+            crossings = self_intersections(poly)
+            if crossings:
+                messages.append(f"{name}: the loop's image crosses itself {crossings} times "
+                                "(the tip map is not one-to-one on the region): the area is "
+                                "the winding-weighted area")
+            if name == "W0" and tip_folds:
+                folds = tip_fold_points(tracer, region) * arm.length_mm
+        solves = tracer.solves
+    return BoundaryResult(arm, regions, polygons, areas, folds, solves,
+                          time.perf_counter() - t0, messages)
+
+
+def winding_number(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Winding number of the closed polygon around each point (Sunday's rule)."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    x, y = points[:, 0][:, None], points[:, 1][:, None]
+    cross = (b[:, 0] - a[:, 0]) * (y - a[:, 1]) - (x - a[:, 0]) * (b[:, 1] - a[:, 1])
+    up = (a[:, 1] <= y) & (b[:, 1] > y) & (cross > 0)
+    down = (a[:, 1] > y) & (b[:, 1] <= y) & (cross < 0)
+    return np.sum(up, axis=1) - np.sum(down, axis=1)
+
+
+def _inside(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
+    return winding_number(poly, points) != 0
+
+
+def _distance_to_edges(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
+    a, b = poly, np.roll(poly, -1, axis=0)
+    ab = b - a
+    out = np.full(len(points), np.inf)
+    for k in range(len(a)):
+        denom = max(float(ab[k] @ ab[k]), 1e-300)
+        t = np.clip((points - a[k]) @ ab[k] / denom, 0.0, 1.0)
+        out = np.minimum(out, np.linalg.norm(points - (a[k] + t[:, None] * ab[k]), axis=1))
+    return out
+
+
+def clip_half_plane(poly: np.ndarray, y_min: float = 0.0) -> np.ndarray:
+    """The part of a closed polygon with y >= y_min (Sutherland-Hodgman, one edge)."""
+    out = []
+    for k in range(len(poly)):
+        a, b = poly[k], poly[(k + 1) % len(poly)]
+        ina, inb = a[1] >= y_min, b[1] >= y_min
+        if ina:
+            out.append(a)
+        if ina != inb:
+            t = (y_min - a[1]) / (b[1] - a[1])
+            out.append(a + t * (b - a))
+    return np.array(out).reshape(-1, 2)
+
+
+def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np.ndarray,
+                         spacing_mm: float) -> dict:
+    """Agreement of a W_0 polygon with a sampled target map (Fig. 4, y >= 0).
+
+    status: 1 reached, 2 needs a negative tension, 3 not converged
+    (:mod:`elastica_petsc.studies.workspace`).  Counts reached samples outside
+    the polygon by more than one spacing, needing-negative samples inside by
+    more than one spacing, and compares the polygon's area in y >= 0 with
+    the sample count estimate (row y = 0 counts half a cell) and its
+    sampling error, taken as half a cell per unit length of boundary.
+    """
+    inside = _inside(poly_mm, targets_mm)
+    far = _distance_to_edges(poly_mm, targets_mm) > spacing_mm
+    reached, negative = status == 1, status == 2
+    clipped = clip_half_plane(poly_mm)
+    weight = np.where(np.isclose(targets_mm[:, 1], 0.0), 0.5, 1.0)
+    estimate = float(np.sum(weight[reached])) * spacing_mm**2
+    perimeter = float(np.sum(np.linalg.norm(np.diff(np.vstack((clipped, clipped[:1])), axis=0),
+                                            axis=1)))
+    return {
+        "reached": int(reached.sum()),
+        "reached_outside": int(np.sum(reached & ~inside & far)),
+        "needs_negative": int(negative.sum()),
+        "needs_negative_inside": int(np.sum(negative & inside & far)),
+        "not_converged_inside": int(np.sum((status == 3) & inside)),
+        "area_y_ge_0_mm2": abs(shoelace(clipped)) if len(clipped) > 2 else 0.0,
+        "sample_area_mm2": estimate,
+        "sampling_error_mm2": 0.5 * spacing_mm * perimeter,
+    }
