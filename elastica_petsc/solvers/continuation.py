@@ -463,7 +463,8 @@ class CurveTracer:
         u, p = self.mf.split(w)
         return CurvePoint(w=w.copy(), t=t.copy(), tip=self.mf.tip(w),
                           tip_velocity=self.mf.tip_velocity(w, t),
-                          unstable_modes=self.inertia.negative_eigenvalues(u, p),
+                          # on a face p_i = 0 a round-off -1e-17 must not reach sqrt(p)
+                          unstable_modes=self.inertia.negative_eigenvalues(u, np.maximum(p, 0)),
                           det_sign=det_sign, iterations=iterations)
 
     def correct(self, w_guess: np.ndarray, constraints) -> tuple[np.ndarray, bool]:

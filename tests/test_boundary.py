@@ -1,0 +1,151 @@
+"""Workspace boundary by continuation (issue 13): the traced curves are
+equilibria, the P_1 = 0 edge matches forward solves, the fold corners are
+limit points, the fold test function's gradient passes a Taylor test, and
+a tip the sampled map calls outside is reached by a P >= 0 loading path."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from elastica_petsc.core.config import load_config
+from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.solvers.continuation import FoldSystem, Manifold
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.studies.boundary import (BoundaryError, compare_with_samples, shoelace,
+                                             trace_boundary, winding_number)
+
+ELEMENTS = 60          # the paper's arm on a coarser mesh (attachments on nodes): fast
+
+
+@pytest.fixture(scope="module")
+def paper():
+    arm = load_config()
+    disc = Discretisation.from_arm(arm, ELEMENTS)
+    return arm, disc, trace_boundary(arm, disc, restricted=False, tip_folds=False)
+
+
+def test_loop_closes_through_faces_collapse_and_fold(paper):
+    arm, disc, result = paper
+    region = result.regions["W0"]
+    assert region.closed, region.message
+    names = [c.constraint for c in region.curves]
+    assert names[0] == "P2=0" and names[-1] == "P1=0"
+    assert "fold" in names and "L1=0" in names
+    # every node is an equilibrium of Eq. (9) with P >= 0
+    mf = Manifold(disc)
+    for curve in region.curves:
+        for pt in curve.points:
+            assert np.max(np.abs(mf.residual(pt.w))) < 1e-8
+            assert np.all(pt.w[-2:] >= -1e-9)
+    assert result.solves <= 0.05 * 4202
+
+
+def test_p1_zero_edge_matches_forward_solves(paper):
+    """The last curve (P_1 = 0 back to the straight arm) against forward solves
+    at P_1 = 0 loaded from zero: tips agree to 1e-6 mm at the curve's nodes."""
+    arm, disc, result = paper
+    edge = result.regions["W0"].curves[-1]
+    assert edge.constraint == "P1=0"
+    with EquilibriumSolver(disc) as solver:
+        errors = []
+        for pt in edge.points[1:-1]:
+            p = pt.w[-2:]
+            assert abs(p[0]) < 1e-12
+            eq = solver.solve([0.0, p[1]])
+            assert eq.converged and eq.stable
+            errors.append(np.linalg.norm(eq.tip - pt.tip) * arm.length_mm)
+    assert len(errors) >= 5
+    assert max(errors) < 1e-6
+
+
+def test_fold_corners_are_limit_points(paper):
+    """Where the walk turns onto the fold, the tangent K is singular (Eq. (20)):
+    the smallest singular value of the bordered Jacobian is ~0 there, O(1) at
+    the straight arm."""
+    arm, disc, result = paper
+    mf = Manifold(disc)
+    folds = [c for c in result.regions["W0"].curves if c.constraint == "fold"]
+    assert folds
+    smallest = [np.linalg.svd(mf.jacobian(pt.w).toarray(), compute_uv=False)[-1]
+                for c in folds for pt in c.points[1:-1]]
+    w0 = np.concatenate((disc.straight(), [0.0, 0.0]))
+    reference = np.linalg.svd(mf.jacobian(w0).toarray(), compute_uv=False)[-1]
+    assert max(smallest) < 1e-7 * reference
+
+
+def test_fold_gradient_taylor(paper):
+    """d sigma/dw of the minimally extended system: the Taylor remainder is O(eps^2)."""
+    arm, disc, result = paper
+    fold = next(c for c in result.regions["W0"].curves if c.constraint == "fold")
+    w = fold.points[len(fold.points) // 2].w
+    mf = Manifold(disc)
+    system = FoldSystem(mf)
+    try:
+        system.set_vectors(system.null_vector(w))
+        s0, g, _ = system.sigma_gradient(w)
+        rng = np.random.default_rng(1)
+        d = rng.standard_normal(mf.m)
+        d[-2:] *= 10.0
+        remainders = []
+        for eps in (1e-3, 5e-4, 2.5e-4):
+            remainders.append(abs(system.sigma(w + eps * d) - s0 - eps * g @ d))
+    finally:
+        system.destroy()
+    rates = np.log2(np.array(remainders[:-1]) / np.array(remainders[1:]))
+    assert np.all(rates > 1.8), (remainders, rates)
+
+
+def test_left_lobe_tip_reached_with_nonnegative_tensions(paper):
+    """A tip inside the traced W_0 at x < 0, y > 0, where the sampled map's tip
+    control stops on the P_1 = 0 bound: a forward loading path with P >= 0
+    (P_1 to 120 first, then P_2 to 15) reaches a stable state there, with cable
+    1 only a few mm long (near its collapse)."""
+    arm, disc, result = paper
+    with EquilibriumSolver(disc) as solver:
+        eq = solver.solve([120.0, 0.0])
+        eq = solver.solve([120.0, 15.0], start=eq)
+    assert eq.converged and eq.stable
+    tip = eq.tip * arm.length_mm
+    assert tip[0] < -100 and tip[1] > 100
+    poly = result.polygons_mm["W0"][0]
+    assert winding_number(poly, tip[None])[0] != 0
+
+
+def test_geometry_helpers():
+    square = np.array([[0, 0], [2, 0], [2, 2], [0, 2]], float)
+    assert shoelace(square) == pytest.approx(4.0)
+    assert shoelace(square[::-1]) == pytest.approx(-4.0)
+    pts = np.array([[1, 1], [3, 1], [1, -1]], float)
+    assert list(winding_number(square, pts)) == [1, 0, 0]
+    status = np.array([1, 2, 2])
+    cmp = compare_with_samples(square - [0, 1], pts, status, spacing_mm=0.5)
+    assert cmp["reached_outside"] == 0 and cmp["needs_negative_inside"] == 0
+    assert cmp["area_y_ge_0_mm2"] == pytest.approx(2.0)
+
+
+def test_three_tendons_refused():
+    from tests.conftest import make_arm
+    arm = make_arm([(200, (50, -100)), (400, (30, 60)), (600, (20, 50))], elements=30)
+    with pytest.raises(BoundaryError, match="exactly 2 tendons"):
+        trace_boundary(arm)
+
+
+def test_cli_json_and_bad_overlay(tmp_path):
+    run = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "boundary", "--elements",
+                          str(ELEMENTS), "--no-restricted", "--json"],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    data = json.loads(run.stdout)
+    for key in ("area_mm2", "restricted_area_mm2", "solves", "polygons"):
+        assert key in data
+    poly = np.array(data["polygons"]["W0"][0])
+    assert poly.shape[1] == 2 and abs(shoelace(poly)) == pytest.approx(data["area_mm2"])
+    bad = tmp_path / "x.h5"
+    bad.write_text("not hdf5")
+    run = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "boundary", "--overlay",
+                          str(bad)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2 and run.stderr.count("\n") == 1, run.stderr
