@@ -106,9 +106,11 @@ def _format(s: dict) -> str:
         lines.append(
             f"  vs sampled map: {a['reached_outside']} of {a['reached']} reached samples "
             f"outside by more than one spacing; {a['needs_negative_inside']} of "
-            f"{a['needs_negative']} needing a negative tension inside by more than one spacing; "
-            f"area in y >= 0 {a['area_y_ge_0_mm2']:.0f} mm^2 vs sample estimate "
-            f"{a['sample_area_mm2']:.0f} +- {a['sampling_error_mm2']:.0f} mm^2")
+            f"{a['needs_negative']} needing a negative tension inside by more than one spacing")
+        if "area_y_ge_0_mm2" in a:
+            lines.append(f"  area in y >= 0: {a['area_y_ge_0_mm2']:.0f} mm^2; sample count "
+                         f"estimate {a['sample_area_mm2']:.0f} "
+                         f"+- {a['sampling_error_mm2']:.0f} mm^2")
     if "file" in s:
         lines.append(f"  -> {s['file']}")
     return "\n".join(lines)

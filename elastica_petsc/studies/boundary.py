@@ -325,7 +325,8 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
     folds = np.zeros((0, 2))
     with CurveTracer(disc) as tracer:
         w0 = np.concatenate((disc.straight(), np.zeros(2)))
-        for name, extra in (("W0", False), ("restricted", True)) if restricted else (("W0", False),):
+        wanted = (("W0", False), ("restricted", True)) if restricted else (("W0", False),)
+        for name, extra in wanted:
             cons = constraints_for(tracer, arm, extra)
             walker = Walker(tracer, cons)
             try:
@@ -397,24 +398,32 @@ def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np
     status: 1 reached, 2 needs a negative tension, 3 not converged
     (:mod:`elastica_petsc.studies.workspace`).  Counts reached samples outside
     the polygon by more than one spacing, needing-negative samples inside by
-    more than one spacing, and compares the polygon's area in y >= 0 with
+    more than one spacing, and, for the map of Fig. 4 (the half-disc y >= 0
+    within reach), compares the polygon's area in y >= 0 with
     the sample count estimate (row y = 0 counts half a cell) and its
     sampling error, taken as half a cell per unit length of boundary.
     """
     inside = _inside(poly_mm, targets_mm)
     far = _distance_to_edges(poly_mm, targets_mm) > spacing_mm
     reached, negative = status == 1, status == 2
-    clipped = clip_half_plane(poly_mm)
-    weight = np.where(np.isclose(targets_mm[:, 1], 0.0), 0.5, 1.0)
-    estimate = float(np.sum(weight[reached])) * spacing_mm**2
-    perimeter = float(np.sum(np.linalg.norm(np.diff(np.vstack((clipped, clipped[:1])), axis=0),
-                                            axis=1)))
-    return {
+    out = {
         "reached": int(reached.sum()),
         "reached_outside": int(np.sum(reached & ~inside & far)),
         "needs_negative": int(negative.sum()),
         "needs_negative_inside": int(np.sum(negative & inside & far)),
         "not_converged_inside": int(np.sum((status == 3) & inside)),
+    }
+    reach = np.max(np.abs(targets_mm))
+    half_disc = (np.min(targets_mm[:, 1]) == 0.0
+                 and np.ptp(targets_mm[:, 0]) >= 2 * (reach - spacing_mm))
+    if not half_disc:                    # e.g. a --box map: no area comparison
+        return out
+    clipped = clip_half_plane(poly_mm)
+    weight = np.where(np.isclose(targets_mm[:, 1], 0.0), 0.5, 1.0)
+    estimate = float(np.sum(weight[reached])) * spacing_mm**2
+    perimeter = float(np.sum(np.linalg.norm(np.diff(np.vstack((clipped, clipped[:1])), axis=0),
+                                            axis=1)))
+    return out | {
         "area_y_ge_0_mm2": abs(shoelace(clipped)) if len(clipped) > 2 else 0.0,
         "sample_area_mm2": estimate,
         "sampling_error_mm2": 0.5 * spacing_mm * perimeter,
