@@ -12,10 +12,6 @@ from __future__ import annotations
 
 import datetime
 import json
-import os
-import shutil
-import subprocess
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,6 +51,7 @@ class Context:
     files: dict = field(default_factory=dict)      # figure -> [file names]
     traces: dict = field(default_factory=dict)     # name -> TraceResult
     seconds: dict = field(default_factory=dict)
+    command: str = "elastica-petsc reproduce"
 
     @property
     def trace_step_mm(self) -> float:
@@ -85,7 +82,8 @@ def fig8(ctx: Context) -> None:
     from .solvers.equilibrium import EquilibriumSolver
     from .core.fem import Discretisation
     from .io.hdf5 import atomic_h5, provenance, write_attrs, write_equilibrium
-    from .solvers.lengths import LengthSolver, length_equilibria
+    from .solvers.lengths import LengthSolver
+    from .studies.search import length_equilibria
     from .plots.common import plot_equilibria
 
     arm, l_mm = ctx.arm, ctx.arm.length_mm
@@ -214,27 +212,27 @@ def fig3(ctx: Context) -> None:
 
 # --- Figs. 4-5: workspace -------------------------------------------------------------------
 def workspace(ctx: Context) -> Path:
-    """Sample the workspace (all ranks take part under mpiexec)."""
+    """Sample the workspace (all ranks take part under mpiexec; with ``jobs`` > 1
+    outside mpiexec, a job of that many ranks is spawned: :mod:`.studies.workspace_job`)."""
+    from .core.errors import InputError
+    from .core.fem import Discretisation
+    from .studies.workspace import run_map
+
     out = ctx.out / "fig4_workspace.h5"
-    args = ["workspace", "--spacing", f"{ctx.spacing_mm:g}", "--out", str(out), "--overwrite"]
+    kwargs = dict(spacing_mm=ctx.spacing_mm, out=str(out), overwrite=True,
+                  provenance={"command_line": ctx.command})
     if ctx.comm.size == 1 and ctx.jobs > 1:
-        mpiexec = shutil.which("mpiexec")
-        if mpiexec is None:
-            from .core.errors import InputError
-            raise InputError("--jobs > 1 needs mpiexec on the PATH (package openmpi-bin)")
-        env = dict(os.environ)
-        if os.geteuid() == 0:
-            env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-        env["OMPI_MCA_rmaps_base_oversubscribe"] = "1"
-        subprocess.run([mpiexec, "-n", str(ctx.jobs), sys.executable, "-m", "elastica_petsc.cli",
-                        *args, "--json"], check=True, env=env, stdout=subprocess.DEVNULL)
+        from .studies.workspace_job import spawn
+        status = spawn(ctx.arm, ctx.arm.elements, ctx.jobs, **kwargs)
+        if status == 130:
+            raise KeyboardInterrupt
+        if status != 0:
+            raise InputError(f"the workspace job on {ctx.jobs} ranks ended with status {status}")
     else:
-        from .cli import build_parser
-        parsed = build_parser().parse_args(args + ["--json"])
-        import contextlib
-        import io
-        with contextlib.redirect_stdout(io.StringIO()):
-            parsed.run(parsed)
+        result = run_map(ctx.arm, Discretisation.from_arm(ctx.arm), comm=ctx.comm,
+                         progress=False, **kwargs)
+        if not result.complete:
+            raise KeyboardInterrupt
     return out
 
 
@@ -356,6 +354,7 @@ def run(ctx: Context, command: str, aluminium_config: Path, log=print) -> Path |
     """All experiments.  The workspace comes first: under mpiexec every rank
     takes part in it, then rank 0 alone does the rest (the other ranks are
     done, not spinning in a collective).  Returns the report path on rank 0."""
+    ctx.command = command
     def timed(name, action):
         t0 = time.perf_counter()
         value = action()

@@ -425,7 +425,6 @@ def test_resume_with_another_spacing_is_refused(ranks, targets_1, tmp_path):
     ([], ["--out"]),
     (["--out", "{new}", "--box", "0", "-10", "0", "100"], ["--box", "xmin < xmax"]),
     (["--out", "{new}", "--box", "0", "100", "50", "50"], ["--box"]),
-    (["--out", "{new}", "--resume"], ["--resume", "does not exist"]),
     (["--out", "{new}", "--spacing", "-5"], ["--spacing"]),
 ])
 def test_bad_input_exits_2_with_one_line(args, words, targets_1, tmp_path):
@@ -481,3 +480,32 @@ def test_fig4_legend_names_routing_points_and_reasons(targets_1):
     assert "not converged (3: CABLE_COLLAPSE 2, MAX_ITERATIONS 1)" in labels
     assert "routing points r_1, r_2" in labels
     np.testing.assert_allclose(np.column_stack(routes.get_data()), [[46.3, -97.1], [26.1, 51.1]])
+
+
+# --- g. the library entry point (issue 10) ------------------------------------------------------
+def test_run_map_returns_the_arrays_without_a_file(targets_1, tmp_path, monkeypatch):
+    """``run_map`` in this process, no ``out``: the same samples and masks as the
+    command line's file, in mm and N, status and reasons as strings; nothing written."""
+    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.fem import Discretisation
+    from elastica_petsc.studies.workspace import run_map
+
+    monkeypatch.chdir(tmp_path)
+    arm = load_config(ROOT / "configs" / "paper.toml")
+    ws = run_map(arm, Discretisation.from_arm(arm, ELEMENTS), box_mm=(-120, 480, 60, 420),
+                 spacing_mm=60, chunk=4, progress=False)
+    assert list(tmp_path.iterdir()) == [] and ws.file is None
+    assert ws.complete and ws.samples_done == ws.samples_total == 77 and ws.ranks == 1
+    reference = samples(targets_1)
+    for name in ("tip", "tensions", "tensions_N", "lambda_min", "status"):
+        assert np.array_equal(ws.samples[name], reference[name], equal_nan=True), name
+    with h5py.File(targets_1, "r") as fh:
+        for name in ("W0", "WY", "WS", "WE", "WP"):
+            assert ws.masks[name].dtype == bool
+            assert np.array_equal(ws.masks[name], fh["masks"][name][()]), name
+    assert set(ws.status) == {"REACHED", "NEEDS_NEGATIVE"}
+    assert np.array_equal(ws.status == "REACHED", ws.masks["W0"])
+    assert ws.reason[ws.masks["W0"]][0] == "TARGET_REACHED"
+    w0 = ws.masks["W0"]
+    np.testing.assert_allclose(ws.tensions_N[w0], ws.tensions[w0] * arm.force_scale_N)
+    assert not ws.tip_mm.flags.writeable

@@ -341,6 +341,13 @@ class _Stop:
         return self.requested
 
 
+class _NoProgress:
+    def update(self, done: int) -> None:
+        pass
+
+    close = update
+
+
 class ChunkCounter:
     """Shared counter for dynamic scheduling: an atomic fetch-and-add on rank 0.
 
@@ -382,8 +389,8 @@ class ChunkCounter:
         self.win.Free()
 
 
-def run(grid: Grid, sampler, out: Path, attrs: dict, limits: dict, *, comm, resume: bool,
-        checkpoint_seconds: float | None = None,
+def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, comm, resume: bool,
+        checkpoint_seconds: float | None = None, progress=None,
         progress_label: str = "workspace") -> Results | None:
     """Sample the whole grid over the ranks of ``comm``.
 
@@ -402,7 +409,8 @@ def run(grid: Grid, sampler, out: Path, attrs: dict, limits: dict, *, comm, resu
     results = chunk_done = error = None
     if comm.rank == 0:
         try:
-            results = (read_results(out, grid, n_tendons, attrs) if resume and out.exists()
+            results = (read_results(out, grid, n_tendons, attrs)
+                       if resume and out is not None and out.exists()
                        else Results(grid, n_tendons))
             chunk_done = results.chunk_done
         except InputError as err:
@@ -416,11 +424,14 @@ def run(grid: Grid, sampler, out: Path, attrs: dict, limits: dict, *, comm, resu
     t_start = time.perf_counter()
     with _Stop() as stop:
         if comm.rank == 0:
-            bar = Progress(grid.size, progress_label, already=results.samples_done)
+            bar = (Progress(grid.size, progress_label, already=results.samples_done)
+                   if progress is None else progress if progress else _NoProgress())
             last_write = time.perf_counter()
             finished = 1                                    # rank 0 itself, once done
 
             def checkpoint():
+                if out is None:
+                    return
                 t0 = time.perf_counter()
                 timing["seconds_wall"] = t0 - t_start
                 write_results(out, results, attrs, limits, timing)
@@ -485,3 +496,214 @@ def run(grid: Grid, sampler, out: Path, attrs: dict, limits: dict, *, comm, resu
         if comm.bcast(clean, root=0):
             counter.free()
     return results
+
+
+# --- the library entry point ------------------------------------------------------------------
+STATUS_KEYS = {NOT_DONE: "NOT_COMPUTED", REACHED: "REACHED", NEEDS_NEGATIVE: "NEEDS_NEGATIVE",
+               NOT_CONVERGED: "NOT_CONVERGED"}
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array = np.array(array)
+    array.flags.writeable = False
+    return array
+
+
+@dataclass(frozen=True)
+class WorkspaceMap:
+    """A sampled workspace (Eq. (18), Fig. 4) and its restrictions (Eqs. (19)-(22), Fig. 5).
+
+    W_0 (the workspace) is the set of tips of stable equilibria connected to
+    the straight arm by quasi-static loading with all P_i >= 0; here: the
+    targets reached by tip control with non-negative tensions (``masks["W0"]``).
+    Arrays are per sample, in grid order, read-only.  Units: ``points`` are
+    targets in mm (mode ``targets``) or tensions p = P l^2/B (mode
+    ``tensions``); ``samples`` holds every field of :func:`fields` under its
+    name (target/tip/cable_lengths in mm, tensions in P l^2/B, tensions_N in
+    N, kappa_max as l*kappa, lambda_min in B/l^2, strain_energy in B/(2l)).
+    Samples not computed (an interrupted run) have status ``NOT_COMPUTED``.
+    """
+
+    mode: str
+    points: np.ndarray
+    chunk_done: np.ndarray
+    samples: dict
+    masks: dict
+    limits: dict
+    grid: dict
+    ranks: int
+    file: Path | None = None
+
+    @classmethod
+    def from_results(cls, results: "Results", limits: dict, ranks: int, file=None):
+        samples = {name: _frozen(values) for name, values in results.data.items()}
+        masks = {name: _frozen(mask) for name, mask in results.masks(limits).items()}
+        return cls(results.grid.mode, _frozen(results.grid.points),
+                   _frozen(results.chunk_done), samples, masks, dict(limits),
+                   dict(results.grid.meta), ranks, None if file is None else Path(file))
+
+    @property
+    def complete(self) -> bool:
+        return bool(self.chunk_done.all())
+
+    @property
+    def samples_total(self) -> int:
+        return len(self.points)
+
+    @property
+    def done(self) -> np.ndarray:
+        """Per sample: computed and stored."""
+        return self.samples["status"] != NOT_DONE
+
+    @property
+    def samples_done(self) -> int:
+        return int(self.done.sum())
+
+    @property
+    def status(self) -> np.ndarray:
+        """Per sample: REACHED, NEEDS_NEGATIVE (outside W_0), NOT_CONVERGED or NOT_COMPUTED."""
+        return np.array([STATUS_KEYS[int(k)] for k in self.samples["status"]])
+
+    @property
+    def reason(self) -> np.ndarray:
+        """Per sample: why its solve stopped (TARGET_REACHED, CABLE_COLLAPSE, ...; '' if not done)."""
+        return np.array([r.decode() for r in self.samples["reason"]])
+
+    @property
+    def target_mm(self) -> np.ndarray:
+        return self.samples["target"]
+
+    @property
+    def tip_mm(self) -> np.ndarray:
+        return self.samples["tip"]
+
+    @property
+    def tensions(self) -> np.ndarray:
+        """Non-dimensional tensions p_i = P_i l^2/B."""
+        return self.samples["tensions"]
+
+    @property
+    def tensions_N(self) -> np.ndarray:
+        return self.samples["tensions_N"]
+
+    @property
+    def cable_lengths_mm(self) -> np.ndarray:
+        return self.samples["cable_lengths"]
+
+    def summary(self) -> dict:
+        """Counts in words (what the command line prints), JSON-ready."""
+        status = self.samples["status"]
+        w0 = self.masks["W0"].any()
+        return {
+            "file": None if self.file is None else str(self.file),
+            "complete": self.complete,
+            "samples_total": self.samples_total,
+            "samples_done": self.samples_done,
+            "status_counts": {STATUS_NAMES[k]: int(np.sum(status == k)) for k in STATUS_NAMES
+                              if k != NOT_DONE},
+            "masks": {name: int(m.sum()) for name, m in self.masks.items()},
+            "lambda_min_raw_min": float(np.nanmin(self.samples["lambda_min_raw"])) if w0 else None,
+            "kappa_max_max": float(np.nanmax(self.samples["kappa_max"])) if w0 else None,
+        }
+
+
+def limits_of(arm) -> dict:
+    """The admissibility limits of Eqs. (19), (21), (22) in non-dimensional form."""
+    return {"kappa_limit": arm.kappa_limit,
+            "strain_energy_max": arm.limits.strain_energy_max_SE0,
+            "max_tension": arm.max_tension}
+
+
+def make_grid(arm, disc, mode: str, spacing_mm: float, box_mm, tension_spacing: float,
+              tension_max: float, chunk: int) -> Grid:
+    """The sample grid of :func:`run_map`; :class:`InputError` for a bad request."""
+    if mode not in ("targets", "tensions"):
+        raise InputError(f"mode {mode!r}: expected 'targets' or 'tensions'")
+    if not isinstance(chunk, (int, np.integer)) or chunk < 1:
+        raise InputError(f"--chunk must be at least 1, got {chunk}")
+    if mode == "targets":
+        if disc.n_tendons < 2:
+            raise InputError("mode targets needs at least 2 tendons (a 2-D workspace); "
+                             "use --mode tensions")
+        return target_grid(arm.length_mm, spacing_mm, None if box_mm is None else tuple(box_mm),
+                           chunk)
+    return tension_grid(disc.n_tendons, tension_spacing, tension_max, chunk)
+
+
+def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_mm=None,
+            tension_spacing: float = 2.0, tension_max: float = 40.0, chunk: int = 24,
+            comm=None, out=None, resume: bool = False, overwrite: bool = False,
+            progress=None, checkpoint_seconds: float | None = None,
+            provenance: dict | None = None) -> WorkspaceMap:
+    """Sample the workspace W_0 of ``arm`` (Eq. (18), Fig. 4) and its restrictions
+    W_Y, W_S, W_E, W_P (Eqs. (19)-(22), Fig. 5) on ``disc``.
+
+    Mode ``targets``: tip control (Eqs. (10)-(12)) to every target of a square
+    lattice of ``spacing_mm`` mm over the half-disc y >= 0 within reach l, or
+    over ``box_mm`` = (xmin, xmax, ymin, ymax) in mm.  Mode ``tensions``:
+    forward solves (Eq. (9)) on the lattice 0 <= p_i <= ``tension_max`` of
+    step ``tension_spacing`` (non-dimensional p = P l^2/B).  W_0 means: tips
+    of stable equilibria connected to the straight arm by quasi-static loading
+    with all P_i >= 0.
+
+    Collective over ``comm`` (default ``MPI.COMM_WORLD``; one rank runs
+    serially).  With ``out`` (an ``.h5`` path) the results are checkpointed
+    there every ``checkpoint_seconds`` (default
+    ``$ELASTICA_PETSC_CHECKPOINT_SECONDS`` or 2 s) and at the end; ``resume``
+    continues the chunks not yet done in ``out`` (and starts the run if
+    ``out`` does not exist); an existing ``out`` needs ``overwrite`` otherwise.
+    ``progress``: None (a bar on a terminal), False (none), or an object with
+    ``update(done)`` and ``close(done)``.  ``provenance``: root attributes
+    added to the file (e.g. ``command_line``).
+
+    Returns the :class:`WorkspaceMap` on every rank; ``complete`` is False after
+    an interruption (SIGINT/SIGTERM).  Bad input raises
+    :class:`CollectiveInputError` on every rank before any computation.
+    """
+    from mpi4py import MPI
+
+    from .sampling import TargetSampler, TensionSampler
+
+    comm = MPI.COMM_WORLD if comm is None else comm
+    try:
+        grid = make_grid(arm, disc, mode, spacing_mm, box_mm, tension_spacing, tension_max, chunk)
+        if checkpoint_seconds is None:
+            checkpoint_seconds = checkpoint_interval()
+        path = None if out is None else _check_out(out, resume, overwrite)
+        error = None
+    except InputError as err:
+        error = str(err)
+    agree(comm, error)
+    attrs = _attrs(arm, disc, grid, provenance)
+    limits = limits_of(arm)
+    sampler = (TargetSampler if mode == "targets" else TensionSampler)(arm, disc)
+    try:
+        results = run(grid, sampler, path, attrs, limits, comm=comm, resume=resume,
+                      checkpoint_seconds=checkpoint_seconds, progress=progress,
+                      progress_label=f"workspace ({mode}, {comm.size} rank(s))")
+    finally:
+        sampler.destroy()
+    ws = WorkspaceMap.from_results(results, limits, comm.size, path) if comm.rank == 0 else None
+    return comm.bcast(ws, root=0)
+
+
+def _check_out(out, resume: bool, overwrite: bool) -> Path:
+    from ..io.hdf5 import check_output_path
+
+    path = Path(out)
+    if resume and path.exists():
+        check_output_path(path, overwrite=True)
+        return path
+    return check_output_path(path, overwrite)
+
+
+def _attrs(arm, disc, grid: Grid, extra: dict | None) -> dict:
+    """Root attributes of a workspace file: provenance and what defines its grid."""
+    from ..core.config import arm_to_dict
+    from ..io.hdf5 import provenance
+
+    attrs = provenance(arm, "workspace")
+    attrs.update(mode=grid.mode, elements=disc.n_elements, n_tendons=disc.n_tendons,
+                 config_json=json.dumps(arm_to_dict(arm)), grid_json=json.dumps(grid.meta))
+    attrs.update(extra or {})
+    return attrs
