@@ -151,3 +151,93 @@ def test_cli_json_and_bad_overlay(tmp_path):
     run = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "boundary", "--overlay",
                           str(bad)], capture_output=True, text=True, timeout=120)
     assert run.returncode == 2 and run.stderr.count("\n") == 1, run.stderr
+
+
+# --- design derivatives (routing points) -----------------------------------------
+def _moved(arm, tendon: int, delta_mm):
+    import dataclasses
+
+    from elastica_petsc.core.model import Tendon
+    tendons = list(arm.tendons)
+    t = tendons[tendon]
+    tendons[tendon] = Tendon(t.attach_mm, (t.route_mm[0] + delta_mm[0], t.route_mm[1] + delta_mm[1]))
+    return dataclasses.replace(arm, tendons=tuple(tendons))
+
+
+def _taylor_rates(f, f0, df, steps=(2.0, 1.0, 0.5)):
+    remainders = [np.linalg.norm(f(h) - f0 - h * df) for h in steps]
+    return np.log2(np.array(remainders[:-1]) / np.array(remainders[1:])), remainders
+
+
+def test_tip_route_derivative_at_fixed_tensions_taylor(paper):
+    """d x_t/d r_i at fixed p (one more right-hand side of the bordered tangent):
+    Taylor remainder of order 2 against equilibria re-solved with moved routes."""
+    from elastica_petsc.solvers.continuation import CurveTracer, TensionBound
+
+    arm, disc, _ = paper
+    p = np.array([12.0, 5.0])                              # both tendons loaded
+    with EquilibriumSolver(disc) as solver:
+        w = np.concatenate((solver.solve(p).u, p))
+    direction = np.array([0.6, -0.8])                      # mm, a unit direction
+    with CurveTracer(disc) as tracer:
+        rows = [TensionBound(tracer.mf, 0, p[0]), TensionBound(tracer.mf, 1, p[1])]
+        for tendon in (0, 1):
+            dw = tracer.route_velocity(w, rows, tendon)            # per unit of l
+            dtip = tracer.mf.tip_velocity(w, dw @ direction)       # l per l = mm per mm
+            assert np.linalg.norm(dtip) > 0.1
+
+            def tip(h):
+                moved = _moved(arm, tendon, h * direction)
+                d2 = Discretisation.from_arm(moved, ELEMENTS)
+                with EquilibriumSolver(d2) as solver:
+                    u, _, _ = solver.newton(w[:-2], w[-2:])
+                    assert solver.converged()
+                return d2.node_positions(d2.split(u)[0])[-1] * arm.length_mm
+
+            rates, rem = _taylor_rates(tip, tip(0.0), dtip)
+            assert np.all(rates > 1.8), (tendon, rem, rates)
+
+
+def test_fold_point_route_derivative_taylor_and_invariance(paper):
+    """A point of the fold curve at fixed p_2 moves with the routing point as
+    predicted (order-2 Taylor remainder), and the normal component of its
+    tip motion does not depend on how the point is held on the curve (the
+    envelope property the area derivative relies on)."""
+    from elastica_petsc.solvers.continuation import (CurveTracer, Fold, FoldSystem,
+                                                     TensionBound)
+
+    arm, disc, result = paper
+    fold_curve = next(c for c in result.regions["W0"].curves if c.constraint == "fold")
+    pt = fold_curve.points[len(fold_curve.points) // 2]
+    w = pt.w
+    direction = np.array([0.0, 1.0])
+    with CurveTracer(disc) as tracer:
+        system = FoldSystem(tracer.mf)
+        fold = Fold(system)
+        fold.update(w)
+        hold_p2 = TensionBound(tracer.mf, 1, w[-1])
+        dw = tracer.route_velocity(w, [fold, hold_p2], 0)
+        dtip = tracer.mf.tip_velocity(w, dw @ direction)
+        tangent_tip = tracer.mf.tip_velocity(w, pt.t)
+        normal = np.array([-tangent_tip[1], tangent_tip[0]]) / np.linalg.norm(tangent_tip)
+        normals = [normal @ dtip]
+        for row in (TensionBound(tracer.mf, 0, w[-2]), tracer.mf.metric * pt.t):
+            alt = tracer.route_velocity(w, [fold, row], 0)
+            normals.append(normal @ tracer.mf.tip_velocity(w, alt @ direction))
+        system.destroy()
+    assert np.ptp(normals) < 1e-6 * max(1.0, abs(normals[0])), normals
+
+    def tip(h):
+        moved = _moved(arm, 0, h * direction)
+        d2 = Discretisation.from_arm(moved, ELEMENTS)
+        with CurveTracer(d2) as tr2:
+            sys2 = FoldSystem(tr2.mf)
+            f2 = Fold(sys2)
+            f2.update(w)
+            w2, ok = tr2.correct(w, [f2, TensionBound(tr2.mf, 1, w[-1])])
+            sys2.destroy()
+            assert ok
+            return tr2.mf.tip(w2) * arm.length_mm
+
+    rates, rem = _taylor_rates(tip, tip(0.0), dtip)
+    assert np.all(rates > 1.8), (rem, rates)

@@ -156,6 +156,17 @@ class Manifold:
         """dF/dp, (size, n): the tensions' columns (Eq. (14)); F is linear in p."""
         return self.disc.load_derivative(self.split(w)[0]).T
 
+    def route_derivative(self, w: np.ndarray, i: int) -> np.ndarray:
+        """dF/dr_i, (size, 2), at fixed u and p: F_theta depends on r_i only through
+        d_i = (r_i - y_i)/|r_i - y_i| (Eqs. (3)-(4), (9)), so dF/dr_i = -dF/dy_i on the
+        angle rows (the border columns of tendon i of the Jacobian) and 0 on the
+        attachment rows (y - X(theta) does not involve r_i)."""
+        N = self.disc.n_elements
+        cols = N + 2 * i + np.arange(2)
+        out = np.zeros((self.size, 2))
+        out[:N] = -self.jacobian(w)[:N][:, cols].toarray()
+        return out
+
     def tip(self, w: np.ndarray) -> np.ndarray:
         theta = self.disc.split(self.split(w)[0])[0]
         return self.disc.node_positions(theta)[-1]
@@ -189,6 +200,10 @@ class Constraint:
     def margin(self, w: np.ndarray) -> float:
         """side * c: >= 0 on the admissible side."""
         return self.side * self.value(w)
+
+    def route_gradient(self, w: np.ndarray, i: int) -> np.ndarray:
+        """dc/dr_i at fixed w, (2,): zero unless c involves the routing points."""
+        return np.zeros(2)
 
 
 class TensionBound(Constraint):
@@ -229,6 +244,13 @@ class CableCollapse(Constraint):
         g = np.zeros(self.mf.m)
         g[self._offset():self._offset() + 2] = -chord / np.linalg.norm(chord)
         return g
+
+    def route_gradient(self, w, i):
+        if i != self.i:
+            return np.zeros(2)
+        y = w[self._offset():self._offset() + 2]
+        chord = self.mf.disc.routes[self.i] - y
+        return chord / np.linalg.norm(chord)                      # d|r_i - y_i|/dr_i
 
 
 class StateLevel(Constraint):
@@ -351,7 +373,21 @@ class Fold(Constraint):
 
     def update(self, w) -> None:
         """New bordering vectors at an accepted point (kept fixed within a solve)."""
+        if self.sys.b is None:
+            self.sys.set_vectors(self.sys.null_vector(w))
         self.sys.set_vectors(self.sys.sigma_gradient(w)[2])
+
+    def route_gradient(self, w, i):
+        """d sigma/dr_i = -psi^T (d^2 F/du dr_i) v: the central difference in the
+        direction v of psi^T dF/dr_i (as for d sigma/dw)."""
+        system, mf = self.sys, self.sys.mf
+        v, _ = system._solve(w, False)
+        psi, _ = system._solve(w, True)
+        eps = 1e-6 / max(np.linalg.norm(v), 1e-300)
+        u, p = mf.split(w)
+        shifted = [np.concatenate((u + sign * eps * v, p)) for sign in (1.0, -1.0)]
+        a, b = (psi @ mf.route_derivative(ws, i) for ws in shifted)
+        return -(a - b) / (2 * eps)
 
 
 @dataclass
@@ -375,6 +411,8 @@ class Curve:
     points: list = field(default_factory=list)
     end: str = ""
     end_constraint: str | None = None
+    active: object = field(default=None, repr=False)        # the Constraint followed
+    hit: object = field(default=None, repr=False)           # the one met at the end corner
 
 
 class CurveTracer:
@@ -471,6 +509,36 @@ class CurveTracer:
         """Solve F = 0 with two scalar constraints (a corner of two curves)."""
         w, ok, _ = self._solve(w_guess, [self._row(c) for c in constraints])
         return w, ok
+
+    def route_velocity(self, w: np.ndarray, rows, i: int) -> np.ndarray:
+        """dw/dr_i, (m, 2), of a point of M held by two scalar equations ``rows``
+        (constraints, or a constraint and a fixed linear row given as a vector
+        g with g . dw = 0): differentiate [F; c_a; c_b](w, r) = 0,
+
+            [dF/dw; dc_a/dw; dc_b/dw] dw/dr_i = -[dF/dr_i; dc_a/dr_i; dc_b/dr_i].
+
+        At a corner both rows are constraints; inside a curve the second row
+        fixes how the point slides along the curve (the normal component of
+        the tip's motion does not depend on it)."""
+        grads, rhs = [], [self.mf.route_derivative(w, i)]
+        for row in rows:
+            if isinstance(row, np.ndarray):
+                grads.append(row)
+                rhs.append(np.zeros((1, 2)))
+            else:
+                grads.append(row.gradient(w))
+                rhs.append(row.route_gradient(w, i)[None, :])
+        self._fill(w, np.array(grads))
+        self.ksp.setOperators(self.A.mat)
+        b = -np.vstack(rhs)
+        out = np.empty((self.mf.m, 2))
+        rv, sol = self.x.duplicate(), self.x.duplicate()
+        for k in range(2):
+            rv.setArray(b[:, k])
+            self.ksp.solve(rv, sol)
+            out[:, k] = sol.getArray(readonly=True)
+        rv.destroy(); sol.destroy()
+        return out
 
     def step(self, pt: CurvePoint, constraint: Constraint, ds: float):
         """One predictor-corrector step of length ds: (point | None, iterations)."""

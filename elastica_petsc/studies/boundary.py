@@ -89,6 +89,7 @@ class BoundaryResult:
     solves: int
     seconds: float
     messages: list = field(default_factory=list)
+    area_gradients: dict = field(default_factory=dict)   # name -> d area/d routes [mm^2/mm]
 
     @property
     def area_mm2(self) -> float:
@@ -159,7 +160,7 @@ class Walker:
     def follow(self, start, active) -> tuple[Curve, object, np.ndarray | None]:
         """Follow ``active`` from the point ``start`` until another constraint
         becomes active: (curve, the new constraint, the corner state w)."""
-        curve = Curve(active.name, [start])
+        curve = Curve(active.name, [start], active=active)
         pt, ds = start, self.ds0
         while len(curve.points) < self.max_points:
             new, its = self.tr.step(pt, active, ds)
@@ -174,7 +175,7 @@ class Walker:
                 for hit in hits:
                     w = self._locate(pt, new, active, hit)
                     if w is not None:
-                        curve.end, curve.end_constraint = "corner", hit.name
+                        curve.end, curve.end_constraint, curve.hit = "corner", hit.name, hit
                         corner = self.tr.point(w, pt.t, pt.det_sign, 0)
                         curve.points.append(corner)
                         return curve, hit, w
@@ -214,6 +215,40 @@ class Walker:
         else:
             message = f"more than {max_corners} corners"
         return RegionBoundary(name, curves, closed, message)
+
+
+    def route_velocities(self, region: RegionBoundary, start_rows, tendon: int) -> np.ndarray:
+        """d x_t/d r_i (units of l per unit of l) at every node of the loop, in the
+        order of :meth:`RegionBoundary.nodes`, shape (nodes, 2 tip, 2 route).
+
+        Corners (the ends of each curve, and the start, where ``start_rows``
+        are active) move with both of their constraints; a node inside a curve
+        slides orthogonally (metric D) to the curve's tangent.  Only the normal
+        component of the tip motion matters for the area (:func:`area_gradient`)."""
+        mf, out = self.tr.mf, []
+        for k, curve in enumerate(region.curves):
+            for j, pt in enumerate(curve.points):
+                if j == 0:
+                    rows = start_rows if k == 0 else [region.curves[k - 1].active, curve.active]
+                elif j == len(curve.points) - 1 and curve.hit is not None:
+                    rows = [curve.active, curve.hit]
+                else:
+                    rows = [curve.active, mf.metric * pt.t]
+                for row in rows:
+                    if row is self.fold:
+                        self.fold.update(pt.w)
+                dw = self.tr.route_velocity(pt.w, rows, tendon)
+                out.append(np.column_stack([mf.tip_velocity(pt.w, dw[:, c]) for c in range(2)]))
+        return np.array(out)
+
+
+def shoelace_gradient(nodes: np.ndarray, velocity: np.ndarray) -> np.ndarray:
+    """d(signed shoelace area)/dq of the closed node polygon whose vertices move
+    with ``velocity`` (nodes, 2, q): 1/2 sum dx_k (y_k+1 - y_k-1) + dy_k (x_k-1 - x_k+1),
+    the discrete form of the boundary integral of the normal velocity."""
+    nxt, prv = np.roll(nodes, -1, axis=0), np.roll(nodes, 1, axis=0)
+    return 0.5 * (np.einsum("k,kq->q", nxt[:, 1] - prv[:, 1], velocity[:, 0])
+                  + np.einsum("k,kq->q", prv[:, 0] - nxt[:, 0], velocity[:, 1]))
 
 
 def shoelace(poly: np.ndarray) -> float:
@@ -305,14 +340,30 @@ def tip_fold_points(tracer: CurveTracer, region: RegionBoundary) -> np.ndarray:
     return np.array(out).reshape(-1, 2)
 
 
+def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, tendons,
+                   length_mm: float) -> np.ndarray:
+    """d|A|/d(r_i x, r_i y) for each tendon i in ``tendons`` [mm^2 per mm]."""
+    nodes = region.nodes()["tip"]
+    sign = np.sign(shoelace(nodes))
+    grads = [shoelace_gradient(nodes, walker.route_velocities(region, start_rows, i))
+             for i in tendons]
+    return sign * np.concatenate(grads) * length_mm
+
+
 def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: bool = True,
-                   tip_folds: bool = True) -> BoundaryResult:
+                   tip_folds: bool = True, route_gradients=()) -> BoundaryResult:
     """The boundary of W_0 (and of the restricted workspace) of a two-tendon arm.
 
     Returns polygons in mm and areas in mm^2 (module docstring for the
     definitions).  ``solves`` counts nonlinear solves of the continuation's
     extended system (each: a few Newton iterations, like one warm-started
     equilibrium solve).  Raises :class:`BoundaryError` for n != 2 tendons.
+
+    ``route_gradients``: tendon indices (0-based) whose routing points'
+    derivatives of each area are wanted: ``area_gradients[name]`` holds
+    d area / d(r_x, r_y) per tendon, in mm^2 per mm, from the boundary
+    integral of the normal velocity of the loop's nodes (exact for the node
+    polygon; the area itself is that of the Hermite-densified polygon).
     """
     disc = Discretisation.from_arm(arm) if disc is None else disc
     if disc.n_tendons != 2:
@@ -321,7 +372,7 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
             f"arm has {disc.n_tendons} (with 3 or more the faces of the tension domain map to "
             "2-D patches of tip positions; use `workspace` to sample)")
     t0 = time.perf_counter()
-    regions, polygons, areas, messages = {}, {}, {}, []
+    regions, polygons, areas, messages, gradients = {}, {}, {}, [], {}
     folds = np.zeros((0, 2))
     with CurveTracer(disc) as tracer:
         w0 = np.concatenate((disc.straight(), np.zeros(2)))
@@ -331,6 +382,9 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
             walker = Walker(tracer, cons)
             try:
                 region = walker.walk(name, w0, first=cons[1], previous=cons[0])
+                if route_gradients and region.closed:
+                    gradients[name] = _area_gradient(walker, region, cons[1::-1],
+                                                     route_gradients, arm.length_mm)
             finally:
                 walker.destroy()
             regions[name] = region
@@ -349,7 +403,7 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
                 folds = tip_fold_points(tracer, region) * arm.length_mm
         solves = tracer.solves
     return BoundaryResult(arm, regions, polygons, areas, folds, solves,
-                          time.perf_counter() - t0, messages)
+                          time.perf_counter() - t0, messages, gradients)
 
 
 def winding_number(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
