@@ -42,3 +42,4 @@ def plot_boundary(data: dict, path, *, arm_length_mm: float, routes_mm: np.ndarr
     ax.set_title("Workspace boundary by continuation")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     save(fig, path)
+

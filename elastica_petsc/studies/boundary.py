@@ -20,12 +20,24 @@ follows one of these curves by pseudo-arclength continuation
 left in tension space until another constraint becomes active (a bound is
 crossed or stability is lost), solves for that corner, and turns onto the
 new curve, until it is back at the straight arm.  The tip image of this
-closed loop is the W_0 polygon (mm, counter-clockwise or not as the map
-orients it; the area is its absolute shoelace area).  The image is the
-boundary of W_0 exactly when the tip map is one-to-one on D; fold curves of
-the tip map inside D (det S = 0, S = d x_t / d p, Eq. (13)) would add
-envelope pieces: where one meets the loop, det S changes sign along it, and
-those points are reported (``tip_folds``).  They are *not* traced inwards.
+closed loop is the W_0 polygon (mm, oriented as the tip map orients it);
+the region is the set the loop winds around (nonzero winding number) and
+its area is computed by scan lines (:func:`union_area`).  This is W_0
+exactly when the tip map has no fold inside D: a fold curve of the tip map
+(det S = 0, S = d x_t / d p, Eq. (13)) adds envelope pieces to the boundary,
+and tips covered twice with opposite orientation have winding number 0.
+Where such a curve meets the loop, det S changes sign along it; those points
+are reported (``tip_folds``) with a warning.  Fold curves of the tip map are
+*not* traced.  On the paper's arm they meet the loop only in y < 0 (five
+points); the half-plane y >= 0 of Fig. 4 agrees with the sampled map.
+
+Limits found (issue 13): at a corner where a cable collapses (the tip on
+r_2) several equilibria with P_1 = 0 can share the corner, and which one the
+walk continues from can depend on the step sizes and the mesh; with a
+routing point moved (r_1 = (-53.7, -21.6), r_2 = (81.8, 10.0) mm) the walk
+took different loops at 60 and 180 elements, and at 180 elements 877
+samples that tip control reached lie outside the polygon (tip-map folds
+inside D).  Treat a polygon with a fold warning as a lower bound.
 
 The restricted workspace W_0 ∩ W_Y ∩ W_E ∩ W_P (Eqs. (19), (21), (22); W_S
 is W_0 itself under this definition, since D holds only stable states) is
@@ -242,13 +254,59 @@ class Walker:
         return np.array(out)
 
 
-def shoelace_gradient(nodes: np.ndarray, velocity: np.ndarray) -> np.ndarray:
-    """d(signed shoelace area)/dq of the closed node polygon whose vertices move
-    with ``velocity`` (nodes, 2, q): 1/2 sum dx_k (y_k+1 - y_k-1) + dy_k (x_k-1 - x_k+1),
-    the discrete form of the boundary integral of the normal velocity."""
-    nxt, prv = np.roll(nodes, -1, axis=0), np.roll(nodes, 1, axis=0)
-    return 0.5 * (np.einsum("k,kq->q", nxt[:, 1] - prv[:, 1], velocity[:, 0])
-                  + np.einsum("k,kq->q", prv[:, 0] - nxt[:, 0], velocity[:, 1]))
+def union_area(poly: np.ndarray, step: float | None = None) -> float:
+    """Area of the set where the closed polygon's winding number is nonzero
+    (the region W_0 when the loop crosses itself; the shoelace area would
+    count a doubly wound part twice).  Scan lines at the midpoints of strips
+    of height ``step`` (default 1/2000 of the height): on each, the crossings
+    are sorted and the winding number accumulated."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    y0, y1 = float(np.min(poly[:, 1])), float(np.max(poly[:, 1]))
+    step = (y1 - y0) / 2000 if step is None else step
+    ys = np.arange(y0 + step / 2, y1, step)
+    lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
+    total = 0.0
+    for y in ys:
+        k = np.flatnonzero((lo <= y) & (hi > y))
+        if len(k) < 2:
+            continue
+        t = (y - a[k, 1]) / (b[k, 1] - a[k, 1])
+        x = a[k, 0] + t * (b[k, 0] - a[k, 0])
+        direction = np.where(b[k, 1] > a[k, 1], 1, -1)
+        order = np.argsort(x)
+        winding = np.cumsum(direction[order])[:-1]
+        total += float(np.sum(np.diff(x[order])[winding != 0]))
+    return total * step
+
+
+def union_area_gradient(nodes: np.ndarray, velocity: np.ndarray,
+                        subdivide: int = 8) -> np.ndarray:
+    """d(union area)/dq: the boundary integral of the outward normal velocity over
+    the edges of the node polygon that separate winding number 0 from nonzero
+    (edges inside the region, between windings 1 and 2, do not count).
+    ``velocity``: (nodes, 2, q), the motion of each node per unit of q.  Each
+    edge is cut into ``subdivide`` pieces (velocity linear along it) and each
+    piece classified on its own, so an edge crossed by another counts in part."""
+    s = np.arange(subdivide) / subdivide
+    nxt, vnxt = np.roll(nodes, -1, axis=0), np.roll(velocity, -1, axis=0)
+    poly = (nodes[:, None] + s[None, :, None] * (nxt - nodes)[:, None]).reshape(-1, 2)
+    vel = (velocity[:, None] + s[None, :, None, None] * (vnxt - velocity)[:, None])
+    vel = vel.reshape(-1, *velocity.shape[1:])
+    a, b = poly, np.roll(poly, -1, axis=0)
+    va, vb = vel, np.roll(vel, -1, axis=0)
+    edge = b - a
+    length = np.linalg.norm(edge, axis=1)
+    ok = length > 0
+    normal = np.zeros_like(edge)
+    normal[ok] = np.column_stack((edge[ok, 1], -edge[ok, 0])) / length[ok, None]   # right side
+    mid = 0.5 * (a + b)
+    offset = 1e-6 * max(float(np.ptp(nodes[:, 0])), float(np.ptp(nodes[:, 1])))
+    right = winding_number(poly, mid + offset * normal) != 0
+    left = winding_number(poly, mid - offset * normal) != 0
+    outward = np.where(right & ~left, -1.0, np.where(left & ~right, 1.0, 0.0)) * ok
+    vmid = 0.5 * (va + vb)                                               # (edges, 2, q)
+    vn = np.einsum("kc,kcq->kq", normal, vmid)                           # along the right normal
+    return np.einsum("k,k,kq->q", outward, length, vn)
 
 
 def shoelace(poly: np.ndarray) -> float:
@@ -277,21 +335,35 @@ def hermite_densify(tip, velocity, per_segment: int = 8) -> np.ndarray:
     return np.vstack(out)
 
 
-def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8) -> np.ndarray:
-    """The tip image of the loop, densified per curve, in mm (closing point dropped)."""
-    pieces = []
+def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
+                 node_values: np.ndarray | None = None):
+    """The tip image of the loop, densified per curve by :func:`hermite_densify`,
+    in mm (closing point dropped).  With ``node_values`` (one row per node, in
+    the order of :meth:`RegionBoundary.nodes`) also returns them interpolated
+    linearly (in the Hermite parameter) at the dense points."""
+    pieces, values, start = [], [], 0
     for curve in region.curves:
         tip = np.array([pt.tip for pt in curve.points])
         vel = np.array([pt.tip_velocity for pt in curve.points])
         # corners carry the previous curve's tangent: no Hermite into a corner
         dense = hermite_densify(tip[:-1], vel[:-1], per_segment) if len(tip) > 2 else tip[:1]
         pieces.append(np.vstack((dense, tip[-1:])))
+        if node_values is not None:
+            nv = node_values[start:start + len(tip)]
+            s = np.linspace(0, 1, per_segment + 1)[1:]
+            rows = [nv[:1]]
+            for k in range(len(tip) - 2):
+                rows.append(nv[k][None] + np.multiply.outer(s, nv[k + 1] - nv[k]))
+            rows.append(nv[-1:])
+            values.append(np.concatenate(rows))
+        start += len(tip)
     poly = np.vstack(pieces) * length_mm
     keep = np.concatenate(([True], np.linalg.norm(np.diff(poly, axis=0), axis=1) > 1e-9))
-    poly = poly[keep]
-    if np.linalg.norm(poly[0] - poly[-1]) < 1e-9:
-        poly = poly[:-1]
-    return poly
+    if np.linalg.norm(poly[keep][0] - poly[keep][-1]) < 1e-9:
+        keep[np.flatnonzero(keep)[-1]] = False
+    if node_values is None:
+        return poly[keep]
+    return poly[keep], np.concatenate(values)[keep]
 
 
 def self_intersections(poly: np.ndarray) -> int:
@@ -343,11 +415,12 @@ def tip_fold_points(tracer: CurveTracer, region: RegionBoundary) -> np.ndarray:
 def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, tendons,
                    length_mm: float) -> np.ndarray:
     """d|A|/d(r_i x, r_i y) for each tendon i in ``tendons`` [mm^2 per mm]."""
-    nodes = region.nodes()["tip"]
-    sign = np.sign(shoelace(nodes))
-    grads = [shoelace_gradient(nodes, walker.route_velocities(region, start_rows, i))
-             for i in tendons]
-    return sign * np.concatenate(grads) * length_mm
+    grads = []
+    for i in tendons:
+        velocity = walker.route_velocities(region, start_rows, i)     # (nodes, 2, 2), l per l
+        poly, dense_velocity = loop_polygon(region, length_mm, node_values=velocity)
+        grads.append(union_area_gradient(poly, dense_velocity))          # mm^2 per mm
+    return np.concatenate(grads)
 
 
 def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: bool = True,
@@ -390,17 +463,23 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
             regions[name] = region
             poly = loop_polygon(region, arm.length_mm)
             polygons[name] = [poly]
-            areas[name] = abs(shoelace(poly))
+            areas[name] = union_area(poly)
             if not region.closed:
                 messages.append(f"{name}: the walk around the region did not close: "
                                 f"{region.message}")
             crossings = self_intersections(poly)
             if crossings:
                 messages.append(f"{name}: the loop's image crosses itself {crossings} times "
-                                "(the tip map is not one-to-one on the region): the area is "
-                                "the winding-weighted area")
+                                "(the tip map is not one-to-one on the region); the area is "
+                                "that of the set it winds around")
             if name == "W0" and tip_folds:
                 folds = tip_fold_points(tracer, region) * arm.length_mm
+                if len(folds):
+                    messages.append(
+                        f"W0: det(d x_t/d p) changes sign at {len(folds)} points of the loop: "
+                        "fold curves of the tip map run inside the tension region there and are "
+                        "not traced, so near them the polygon may miss parts of W_0 (tips "
+                        "covered twice with opposite orientation have winding number 0)")
         solves = tracer.solves
     return BoundaryResult(arm, regions, polygons, areas, folds, solves,
                           time.perf_counter() - t0, messages, gradients)
@@ -478,7 +557,7 @@ def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np
     perimeter = float(np.sum(np.linalg.norm(np.diff(np.vstack((clipped, clipped[:1])), axis=0),
                                             axis=1)))
     return out | {
-        "area_y_ge_0_mm2": abs(shoelace(clipped)) if len(clipped) > 2 else 0.0,
+        "area_y_ge_0_mm2": union_area(clipped) if len(clipped) > 2 else 0.0,
         "sample_area_mm2": estimate,
         "sampling_error_mm2": 0.5 * spacing_mm * perimeter,
     }
