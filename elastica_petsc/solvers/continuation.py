@@ -304,11 +304,13 @@ class FoldSystem:
         use_pivoting_lu(self.ksp)
         self.ksp.setFromOptions()
         self.b = self.c = None
+        self._cache = {}
 
     def set_vectors(self, v: np.ndarray) -> None:
         """Bordering vectors from an approximate null vector of J."""
         v = v / np.linalg.norm(v)
         self.b, self.c = v.copy(), v.copy()
+        self._cache = {}
 
     def null_vector(self, w: np.ndarray, guess: np.ndarray | None = None, its: int = 3):
         """Approximate null vector of J(w) by inverse iteration (J near singular)."""
@@ -322,16 +324,23 @@ class FoldSystem:
         return v
 
     def _solve(self, w, transpose: bool) -> tuple[np.ndarray, float]:
-        u, p = self.mf.split(w)
-        self.mat.fill(self.mf.disc.jacobian_values(u, p), self.b[:, None],
-                      np.append(self.c, 0.0)[None, :])
-        self.ksp.setOperators(self.mat.mat)
-        rhs = np.zeros(self.mf.size + 1)
-        rhs[-1] = 1.0
-        self.rhs.setArray(rhs)
-        (self.ksp.solveTranspose if transpose else self.ksp.solve)(self.rhs, self.sol)
-        x = self.sol.getArray(readonly=True).copy()
-        return x[:-1], float(x[-1])
+        """Solution of the bordered system (or its transpose) at w; the matrix is
+        filled (and factored) once per w and bordering, results are cached."""
+        key = w.tobytes()
+        if self._cache.get("w") != key:
+            u, p = self.mf.split(w)
+            self.mat.fill(self.mf.disc.jacobian_values(u, p), self.b[:, None],
+                          np.append(self.c, 0.0)[None, :])
+            self.ksp.setOperators(self.mat.mat)
+            self._cache = {"w": key}
+        if transpose not in self._cache:
+            rhs = np.zeros(self.mf.size + 1)
+            rhs[-1] = 1.0
+            self.rhs.setArray(rhs)
+            (self.ksp.solveTranspose if transpose else self.ksp.solve)(self.rhs, self.sol)
+            x = self.sol.getArray(readonly=True).copy()
+            self._cache[transpose] = (x[:-1], float(x[-1]))
+        return self._cache[transpose]
 
     def sigma(self, w) -> float:
         return self._solve(w, False)[1]
