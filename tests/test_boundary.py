@@ -126,6 +126,15 @@ def test_geometry_helpers():
     cmp = compare_with_samples(square - [0, 1], pts, status, spacing_mm=0.5)
     assert cmp["reached_outside"] == 0 and cmp["needs_negative_inside"] == 0
     assert "area_y_ge_0_mm2" not in cmp                 # not a half-disc map
+    from elastica_petsc.studies.boundary import compare_restricted
+    true, false = np.array([True, True, False]), np.array([False, False, False])
+    masks = {"W0": true, "WY": np.array([True, False, False]), "WS": true, "WE": true,
+             "WP": true}
+    r = compare_restricted(square, pts, masks, spacing_mm=0.5)
+    assert r == {"admissible": 1, "admissible_outside": 0, "reached_inadmissible": 1,
+                 "reached_inadmissible_inside": 0}
+    masks["WY"] = true                                   # (3, 1) admissible but outside
+    assert compare_restricted(square, pts, masks, 0.5)["admissible_outside"] == 1
     assert abs(shoelace(clip_half_plane(square - [0, 1]))) == pytest.approx(2.0)
 
 

@@ -26,7 +26,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..studies.boundary import compare_with_samples, trace_boundary
+    from ..studies.boundary import compare_restricted, compare_with_samples, trace_boundary
 
     common.check_outputs(args)
     arm, disc = common.load_arm(args)
@@ -36,6 +36,10 @@ def run(args) -> int:
     if samples is not None:
         summary["agreement"] = compare_with_samples(
             result.polygons_mm["W0"][0], samples["target"], samples["status"], samples["spacing"])
+        if "restricted" in result.polygons_mm:
+            summary["agreement_restricted"] = compare_restricted(
+                result.polygons_mm["restricted"][0], samples["target"], samples["masks"],
+                samples["spacing"])
     if args.out:
         from ..io.boundary import write_boundary
         write_boundary(args.out, result, args.overwrite)
@@ -111,6 +115,13 @@ def _format(s: dict) -> str:
             lines.append(f"  area in y >= 0: {a['area_y_ge_0_mm2']:.0f} mm^2; sample count "
                          f"estimate {a['sample_area_mm2']:.0f} "
                          f"+- {a['sampling_error_mm2']:.0f} mm^2")
+    if "agreement_restricted" in s:
+        r = s["agreement_restricted"]
+        lines.append(
+            f"  restricted vs sampled masks: {r['admissible_outside']} of {r['admissible']} "
+            f"admissible samples outside by more than one spacing; "
+            f"{r['reached_inadmissible_inside']} of {r['reached_inadmissible']} reached but "
+            "inadmissible inside by more than one spacing")
     if "file" in s:
         lines.append(f"  -> {s['file']}")
     return "\n".join(lines)

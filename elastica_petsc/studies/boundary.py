@@ -524,6 +524,21 @@ def clip_half_plane(poly: np.ndarray, y_min: float = 0.0) -> np.ndarray:
     return np.array(out).reshape(-1, 2)
 
 
+def compare_restricted(poly_mm: np.ndarray, targets_mm: np.ndarray, masks: dict,
+                       spacing_mm: float) -> dict:
+    """Agreement of the restricted polygon with a sampled map's masks (Eqs. (18)-(22)):
+    samples in W0 ∩ WY ∩ WS ∩ WE ∩ WP outside it by more than one spacing, and
+    reached samples failing a restriction inside it by more than one spacing."""
+    admissible = masks["W0"] & masks["WY"] & masks["WS"] & masks["WE"] & masks["WP"]
+    failing = masks["W0"] & ~admissible
+    inside = _inside(poly_mm, targets_mm)
+    far = _distance_to_edges(poly_mm, targets_mm) > spacing_mm
+    return {"admissible": int(admissible.sum()),
+            "admissible_outside": int(np.sum(admissible & ~inside & far)),
+            "reached_inadmissible": int(failing.sum()),
+            "reached_inadmissible_inside": int(np.sum(failing & inside & far))}
+
+
 def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np.ndarray,
                          spacing_mm: float) -> dict:
     """Agreement of a W_0 polygon with a sampled target map (Fig. 4, y >= 0).
