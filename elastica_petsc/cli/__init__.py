@@ -20,7 +20,7 @@ import sys
 
 from ..core.errors import InputError
 
-COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "lengths",
+COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "design", "lengths",
             "equilibria", "replay", "reproduce")
 
 EPILOG = """\
