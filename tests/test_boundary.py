@@ -170,7 +170,8 @@ def _moved(arm, tendon: int, delta_mm):
     from elastica_petsc.core.model import Tendon
     tendons = list(arm.tendons)
     t = tendons[tendon]
-    tendons[tendon] = Tendon(t.attach_mm, (t.route_mm[0] + delta_mm[0], t.route_mm[1] + delta_mm[1]))
+    route = (t.route_mm[0] + delta_mm[0], t.route_mm[1] + delta_mm[1])
+    tendons[tendon] = Tendon(t.attach_mm, route)
     return dataclasses.replace(arm, tendons=tuple(tendons))
 
 
