@@ -1,6 +1,8 @@
 """``elastica-petsc design``: routing points that make a path traceable."""
 from __future__ import annotations
 
+import numpy as np
+
 from . import common
 
 
@@ -68,8 +70,11 @@ def run(args) -> int:
 
 def _summary(result, elements: int, count: int) -> dict:
     before, after = result.misfit_before, result.misfit_after
+    best = min(result.history, key=lambda h: h["f_mm2"])
     return {
         "objective": "path", "elements": elements, "targets": count,
+        "margin_path_reached": best["reached"], "margin_path_misfit_mm2": best["f_mm2"],
+        "smallest_tension_after_N": float(np.min(after.p) * result.arm_after.force_scale_N),
         "reached_before": int(before.reached.sum()), "reached_after": int(after.reached.sum()),
         "max_error_before_mm": float(before.errors_mm.max()),
         "max_error_after_mm": float(after.errors_mm.max()),
@@ -85,7 +90,10 @@ def _lines(s: dict) -> list[str]:
              f"{s['reached_before']} -> {s['reached_after']} "
              f"(largest miss {s['max_error_before_mm']:.2f} -> {s['max_error_after_mm']:.2g} mm)",
              f"  {s['iterations']} iterations, {s['evaluations']} path traces, "
-             f"{s['seconds']:.1f} s; TAO: {s['tao_reason']}"]
+             f"{s['seconds']:.1f} s; TAO: {s['tao_reason']}",
+             f"  path scaled by the margin: {s['margin_path_reached']} of {s['targets']} "
+             f"reached (misfit {s['margin_path_misfit_mm2']:.3g} mm^2); smallest tension "
+             f"on the path: {s['smallest_tension_after_N']:.3f} N"]
     for k, (a, b) in enumerate(zip(s["routes_before_mm"], s["routes_after_mm"]), start=1):
         lines.append(f"  r_{k}: ({a[0]:.2f}, {a[1]:.2f}) -> ({b[0]:.2f}, {b[1]:.2f}) mm")
     return lines
