@@ -79,16 +79,33 @@ def main(argv: list[str] | None = None) -> int:
     import petsc4py
     petsc4py.init([parser.prog] + petsc_options)
     from petsc4py import PETSc  # noqa: F401  (initialises PETSc with those options)
+    from ..core import progress
     # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+    progress.configure(quiet=getattr(args, "quiet", False))
     try:
-        return args.run(args)
+        status = args.run(args)
     except InputError as err:
+        progress.close_all()
         print(f"elastica-petsc: error: {err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        progress.close_all()
         print("elastica-petsc: interrupted", file=sys.stderr)
         return 130
+    warn_unused(petsc_options)
+    return status
+
+
+def warn_unused(petsc_options: list[str]) -> None:
+    """One line per PETSc option from the command line that no solver read
+    (a misspelt -eq_snes_monitr), as PETSc's -options_left would (rank 0)."""
+    from ..solvers.options import unused_options
+
+    names = [t for t in petsc_options if t.startswith("-") and not _is_number(t)]
+    for name in (unused_options(names, root_only=True) if names else None) or ():
+        print(f"elastica-petsc: warning: PETSc option {name} was not used by any solver "
+              "(misspelt, or not for this command?)", file=sys.stderr)
 
 
 if __name__ == "__main__":
