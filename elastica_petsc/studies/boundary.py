@@ -28,8 +28,10 @@ exactly when the tip map has no fold inside D: a fold curve of the tip map
 and tips covered twice with opposite orientation have winding number 0.
 Where such a curve meets the loop, det S changes sign along it; those points
 are reported (``tip_folds``) with a warning.  Fold curves of the tip map are
-*not* traced.  On the paper's arm they meet the loop only in y < 0 (five
-points); the half-plane y >= 0 of Fig. 4 agrees with the sampled map.
+*not* traced.  On the paper's arm they meet the loop at five points: three
+in y < 0 and two within 1 mm of the routing point r_2 (on the L2 = 0 curves,
+whose tip image is that point); the half-plane y >= 0 of Fig. 4 agrees with
+the sampled map.
 
 Limits found (issue 13): at a corner where a cable collapses (the tip on
 r_2) several equilibria with P_1 = 0 can share the corner, and which one the
