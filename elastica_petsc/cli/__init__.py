@@ -20,8 +20,8 @@ import sys
 
 from ..core.errors import InputError
 
-COMMANDS = ("solve", "control", "trace", "stability", "workspace", "lengths", "equilibria", "replay",
-            "reproduce")
+COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "design", "lengths",
+            "equilibria", "replay", "reproduce")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed
