@@ -10,7 +10,7 @@ A library first, in millimetres and newtons at its edge::
 
 One call per study: :func:`solve`, :func:`control`, :func:`trace`,
 :func:`schedule`, :func:`stability`, :func:`frequencies`, :func:`lengths`, :func:`equilibria`,
-:func:`workspace`, :func:`read`.  The solver classes
+:func:`workspace`, :func:`boundary`, :func:`design`, :func:`read`.  The solver classes
 (:class:`EquilibriumSolver`, :class:`TipController`, :class:`LengthSolver`,
 :class:`StabilitySolver`) can be kept for loops; they work in the
 non-dimensional units of docs/model.md §3.
@@ -27,7 +27,8 @@ _EXPORTS = {
     "Arm": ".core.model", "Tendon": ".core.model", "Motor": ".core.model",
     "Limits": ".core.model", "InputError": ".core.errors",
     "State": ".api", "solve": ".api", "control": ".api", "trace": ".api", "schedule": ".api",
-    "stability": ".api", "frequencies": ".api", "lengths": ".api", "equilibria": ".api", "workspace": ".api",
+    "stability": ".api", "frequencies": ".api", "lengths": ".api", "equilibria": ".api",
+    "workspace": ".api", "boundary": ".api", "design": ".api",
     "read": ".api",
     "Equilibrium": ".solvers.equilibrium", "EquilibriumSolver": ".solvers.equilibrium",
     "TipController": ".solvers.control", "LengthSolver": ".solvers.lengths",

@@ -266,6 +266,31 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
                    comm=comm, out=out, overwrite=overwrite)
 
 
+def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None):
+    """The boundary of the workspace W_0 of a two-tendon arm (and of the
+    restricted workspace, Eqs. (18)-(22)) traced by pseudo-arclength
+    continuation in tension space instead of sampling.  Returns a
+    ``BoundaryResult``: ``polygons_mm`` and ``areas_mm2`` per set
+    (``"W0"``, ``"restricted"``), ``solves``, ``messages`` (where the method
+    stops, e.g. fold curves of the tip map it does not trace)."""
+    from .studies.boundary import trace_boundary
+
+    return trace_boundary(arm, _mesh(arm, elements), restricted=restricted)
+
+
+def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
+           reach_mm: float = 100.0, margin: float = 1.1, elements: int | None = None):
+    """Routing points that make every point of a path reachable with P >= 0
+    (TAO BLMVM on the exact gradient; ``vary``: ``"tendonK.route"`` names).
+    Returns a ``DesignResult``: ``arm_after`` is the designed arm,
+    ``misfit_before``/``misfit_after`` the path's reachability, ``history``."""
+    from .studies.design import design_for_path, parse_vary
+
+    tendons = parse_vary(list(vary), arm.n_tendons)
+    return design_for_path(arm, tendons, _points(points_mm), elements=elements,
+                           reach_mm=reach_mm, margin=margin)
+
+
 def read(path: str | Path):
     """Load a file written by the tool back into its result: a :class:`State`
     for ``solve``/``control``/``stability`` files (the final state), a

@@ -11,12 +11,11 @@ import sys
 import numpy as np
 
 import elastica_petsc as ep
-from elastica_petsc.studies.design import design_for_path
 from elastica_petsc.studies.trace import circle
 
 arm = ep.Arm.paper()
 task = circle((420.0, 260.0), 80.0, n=37)
-design = design_for_path(arm, [0, 1], task, elements=60)
+design = ep.design(arm, task, vary=["tendon1.route", "tendon2.route"], elements=60)
 before, after = design.misfit_before, design.misfit_after
 print(f"paper's arm: {before.reached.sum()} of {len(task)} targets reached, "
       f"largest miss {before.errors_mm.max():.2f} mm")

@@ -130,3 +130,15 @@ def test_bifurcation_side_and_its_record(tmp_path):
     np.testing.assert_allclose(back.tip_mm, right.tip_mm, atol=1e-9)
     (b,) = back.equilibrium.bifurcations
     assert b.side == "right" and b.p_critical[0] == pytest.approx(18.27, abs=0.05)
+
+
+def test_boundary_in_one_call():
+    """ep.boundary: the W_0 polygon of the paper's arm contains the tips of forward
+    solves at admissible tensions (coarse mesh: a quick check of the wiring)."""
+    from elastica_petsc.studies.boundary import winding_number
+
+    arm = ep.Arm.paper()
+    b = ep.boundary(arm, restricted=False, elements=60)
+    assert b.areas_mm2["W0"] > 0 and b.solves > 0
+    tip = ep.solve(arm, tensions=[10.0, 5.0], elements=60).tip_mm
+    assert any(winding_number(poly, tip[None, :])[0] != 0 for poly in b.polygons_mm["W0"])
