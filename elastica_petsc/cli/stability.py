@@ -39,6 +39,10 @@ def run(args) -> int:
     if not args.amplitude_mm > 0:
         raise InputError(f"--amplitude-mm must be positive, got {args.amplitude_mm}")
     arm, disc = common.load_arm(args)
+    if args.modes > disc.n_elements:
+        raise InputError(f"--modes must be at most {disc.n_elements} (the stiffness of "
+                         f"{disc.n_elements} elements has {disc.n_elements} eigenvalues), "
+                         f"got {args.modes}")
     common.check_outputs(args)
     with EquilibriumSolver(disc) as solver:
         eq = solver.solve(common.tensions(args, arm), order=common.order(args))
