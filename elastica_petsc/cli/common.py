@@ -76,6 +76,20 @@ def order(args) -> tuple[int, ...] | None:
                          "e.g. 2,1") from None
 
 
+def check_cable_lengths(arm: Arm, lengths_mm) -> None:
+    """Refuse a cable length no state of the arm can have taut: the attachment x_i
+    lies within s_i of the clamp (inextensible arm), so |r_i - x_i| <= |r_i| + s_i.
+    A longer cable is slack in every state (and the continuation towards it would
+    take a number of steps that grows with the length)."""
+    import math
+
+    for i, (tendon, L) in enumerate(zip(arm.tendons, lengths_mm), 1):
+        longest = math.hypot(*tendon.route_mm) + tendon.attach_mm
+        if L > longest:
+            raise InputError(f"--lengths: cable {i} cannot be {L:g} mm long and taut: its "
+                             f"longest possible span is |r_{i}| + s_{i} = {longest:.1f} mm")
+
+
 def check_outputs(args) -> None:
     """Fail early, before any computing, on output paths that would be refused."""
     from ..io.hdf5 import check_output_path

@@ -272,6 +272,7 @@ def run(args) -> int:
 
     arm, disc = common.load_arm(args)
     L_mm = check_lengths_mm(args.lengths, disc.n_tendons)
+    common.check_cable_lengths(arm, L_mm)
     check_search_options(args)
     common.check_outputs(args)
     l_mm = arm.length_mm

@@ -51,6 +51,10 @@ def run(args) -> int:
         if comm.rank == 0:
             raise
         return 2
+    except KeyboardInterrupt:                      # outside the stop protocol (set-up)
+        if comm.size == 1:
+            raise
+        _exit_without_finalize(130, "interrupted")
     except Exception as err:                       # never leave the other ranks waiting
         if comm.size == 1:
             raise
@@ -83,14 +87,26 @@ def _run(args, comm) -> int:
     else:
         print(format_summary(summary))
     if not summary["complete"]:
-        print(f"elastica-petsc: interrupted: {summary['samples_done']} of "
-              f"{summary['samples_total']} samples saved in {args.out}; continue with --resume",
-              file=sys.stderr)
+        message = (f"interrupted: {summary['samples_done']} of {summary['samples_total']} "
+                   f"samples saved in {args.out}; continue with --resume")
+        if result.stranded:
+            _exit_without_finalize(130, message)
+        print(f"elastica-petsc: {message}", file=sys.stderr)
         return 130
     if args.plot:
         from ..plots.workspace import plot_workspace, read_overlays
         plot_workspace(args.out, args.plot, paths=read_overlays(args.overlay or ()))
     return 0
+
+
+def _exit_without_finalize(status: int, message: str) -> None:
+    """End this rank now: another rank is busy and will never join MPI's
+    finalisation; the launcher ends the others once this one is gone."""
+    import os
+
+    print(f"elastica-petsc: {message}", file=sys.stderr, flush=True)
+    sys.stdout.flush()
+    os._exit(status)
 
 
 def _check_inputs(args):

@@ -71,6 +71,21 @@ def atomic_h5(path: str | Path, overwrite: bool = False):
             tmp.unlink()
 
 
+# PETSc options that change no number (monitors, viewers, logging): not part of a result
+NEUTRAL_OPTIONS = ("monitor", "view", "log", "info", "options_left", "help", "malloc",
+                   "signal_handler", "error_output")
+
+
+def petsc_options() -> str:
+    """The PETSc options in force that can change results, ``name=value`` sorted
+    and space-separated ('' if none)."""
+    from petsc4py import PETSc
+
+    items = PETSc.Options().getAll().items()
+    return " ".join(f"{k}={v}" for k, v in sorted(items)
+                    if not any(word in k for word in NEUTRAL_OPTIONS))
+
+
 def provenance(arm: Arm, kind: str) -> dict:
     """Root attributes: what, from which config, by which software, how, when."""
     from petsc4py import PETSc
@@ -82,6 +97,7 @@ def provenance(arm: Arm, kind: str) -> dict:
         "petsc_version": "%d.%d.%d" % PETSc.Sys.getVersion(),
         "python_version": platform.python_version(),
         "command_line": " ".join(sys.argv),
+        "petsc_options": petsc_options(),
         "created_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "length_unit": "mm",
         "tension_unit": "P l^2/B (non-dimensional); *_N datasets in newtons",

@@ -218,6 +218,7 @@ class Results:
         self.schema = fields(n_tendons)
         self.data = empty_fields(self.schema, grid.size)
         self.chunk_done = np.zeros(len(grid.chunks), bool)
+        self.stranded = False            # other ranks still busy after a stop (see run)
 
     def store(self, chunk: int, values: dict) -> None:
         index = self.grid.chunks[chunk]
@@ -242,7 +243,9 @@ class Results:
         return {"W0": w0, "WY": wy, "WS": ws, "WE": we, "WP": wp}
 
 
-GRID_ATTRS = ("mode", "config_json", "elements", "grid_json")
+# what must be equal for a resume: everything that changes a sample's result
+GRID_ATTRS = ("mode", "config_json", "elements", "grid_json", "petsc_options",
+              "elastica_petsc_version")
 
 
 def write_results(path: Path, results: Results, attrs: dict, limits: dict, timing: dict) -> None:
@@ -315,15 +318,28 @@ def _difference(key: str, stored, now) -> str:
             pass
     if key == "config_json":
         return "another arm configuration (--config/--elements)"
+    if key == "petsc_options":
+        return f"other PETSc options: {stored or '(none)'} (now {now or '(none)'})"
     return f"another {key}: {stored!r} (now {now!r})"
 
 
 class _Stop:
-    """SIGINT/SIGTERM set a flag; work stops at the next sample boundary."""
+    """The stop request of a run: SIGINT/SIGTERM on this rank, or any rank's
+    (seen through the shared chunk counter, which a stopping rank exhausts).
 
-    def __init__(self):
-        self.requested = False
+    Calling it returns True once a stop was requested; work stops at the next
+    sample boundary.  The signal handler only sets a flag (no MPI call in a
+    handler); the first call that sees it exhausts the counter, so the other
+    ranks take no new chunk and leave their current one at its next sample.
+    """
+
+    POLL = 0.01                       # s between looks at the shared counter
+
+    def __init__(self, counter: "ChunkCounter"):
+        self.counter = counter
+        self.signalled = False
         self._old = {}
+        self._next_poll = 0.0
 
     def __enter__(self):
         for sig in (signal.SIGINT, signal.SIGTERM):
@@ -331,14 +347,23 @@ class _Stop:
         return self
 
     def _handle(self, signum, frame):
-        self.requested = True
+        self.signalled = True
 
     def __exit__(self, *exc):
         for sig, handler in self._old.items():
             signal.signal(sig, handler)
 
     def __call__(self) -> bool:
-        return self.requested
+        if self.signalled:
+            self.counter.exhaust()
+            return True
+        if self.counter.exhausted:
+            return True
+        now = time.monotonic()
+        if now >= self._next_poll:
+            self._next_poll = now + self.POLL
+            self.counter.peek()
+        return self.counter.exhausted
 
 
 class _NoProgress:
@@ -351,8 +376,9 @@ class _NoProgress:
 class ChunkCounter:
     """Shared counter for dynamic scheduling: an atomic fetch-and-add on rank 0.
 
-    ``exhaust()`` (rank 0, on a stop) pushes it past any chunk index, so the
-    other ranks take no new chunk even if they were not signalled themselves."""
+    ``exhaust()`` (any rank, on a stop) pushes it past any chunk index, so no
+    rank takes a new chunk; ``peek()`` lets a busy rank see that.  Every
+    operation is one-sided (passive target): no rank waits for another."""
 
     EXHAUSTED = 2 ** 60
 
@@ -366,19 +392,23 @@ class ChunkCounter:
             self.win.Unlock(0)
         comm.Barrier()
         self._one, self._got = np.ones(1, "i8"), np.zeros(1, "i8")
+        self._zero = np.zeros(1, "i8")
         self.exhausted = False
 
-    def _add(self, value) -> int:
+    def _add(self, value, op=None) -> int:
         self.win.Lock(0, self.MPI.LOCK_SHARED)
-        self.win.Fetch_and_op(value, self._got, 0, 0, self.MPI.SUM)
+        self.win.Fetch_and_op(value, self._got, 0, 0, op or self.MPI.SUM)
         self.win.Unlock(0)
-        return int(self._got[0])
-
-    def next(self) -> int:
-        k = self._add(self._one)
+        k = int(self._got[0])
         if k >= self.EXHAUSTED:
             self.exhausted = True
         return k
+
+    def next(self) -> int:
+        return self._add(self._one)
+
+    def peek(self) -> int:
+        return self._add(self._zero, self.MPI.NO_OP)
 
     def exhaust(self) -> None:
         if not self.exhausted:
@@ -389,112 +419,158 @@ class ChunkCounter:
         self.win.Free()
 
 
-def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, comm, resume: bool,
-        checkpoint_seconds: float | None = None, progress=None,
-        progress_label: str = "workspace") -> Results | None:
-    """Sample the whole grid over the ranks of ``comm``.
+class _Collector:
+    """Rank 0's side: stores chunks (its own and those other ranks send), writes
+    checkpoints, and knows how many ranks have finished."""
 
-    ``sampler.solve_chunk(points, stop) -> dict of per-sample arrays`` (or
-    None when ``stop()`` became true mid-chunk) is called on every rank.
-    Returns the results on rank 0 (None elsewhere); ``results.chunk_done.all()``
-    is False after an interruption.  ``checkpoint_seconds``: default
-    :func:`checkpoint_interval`.  A file that cannot be resumed raises
-    :class:`CollectiveInputError` on every rank.
-    """
-    from ..core.progress import Progress
+    def __init__(self, comm, results: Results, out, attrs, limits, checkpoint_seconds, bar):
+        self.comm, self.results, self.out = comm, results, out
+        self.attrs, self.limits, self.bar = attrs, limits, bar
+        self.checkpoint_seconds = checkpoint_seconds
+        self.finished = 1                                  # rank 0 itself, once done
+        self.timing = {"ranks": comm.size, "seconds_io": 0.0}
+        self.t_start = self.last_write = time.perf_counter()
 
-    if checkpoint_seconds is None:
-        checkpoint_seconds = checkpoint_interval()
-    n_tendons = attrs["n_tendons"]
+    def checkpoint(self) -> None:
+        if self.out is None:
+            return
+        t0 = time.perf_counter()
+        self.timing["seconds_wall"] = t0 - self.t_start
+        write_results(self.out, self.results, self.attrs, self.limits, self.timing)
+        self.last_write = time.perf_counter()
+        self.timing["seconds_io"] += self.last_write - t0
+
+    def store(self, chunk: int, values: dict) -> None:
+        self.results.store(chunk, values)
+        self.drain()
+        if time.perf_counter() - self.last_write > self.checkpoint_seconds:
+            self.checkpoint()
+
+    def drain(self) -> None:
+        """Store every chunk other ranks have sent so far (no waiting)."""
+        from mpi4py import MPI
+
+        status = MPI.Status()
+        while self.comm.iprobe(source=MPI.ANY_SOURCE, tag=MPI.ANY_TAG, status=status):
+            message = self.comm.recv(source=status.Get_source(), tag=status.Get_tag())
+            if status.Get_tag() == TAG_FINISHED:
+                self.finished += 1
+            else:
+                self.results.store(*message)
+        self.bar.update(self.results.samples_done)
+
+    def wait_for_ranks(self, stop) -> bool:
+        """Receive until every rank has finished; after a stop at most ``STOP_GRACE``
+        seconds (a stopped rank ends within one sample).  True if all finished."""
+        deadline = None
+        while True:
+            self.drain()
+            if self.finished >= self.comm.size:
+                return True
+            if stop():
+                deadline = deadline or time.monotonic() + STOP_GRACE
+                if time.monotonic() > deadline:
+                    return False
+            time.sleep(0.002)
+
+
+def _work(grid: Grid, sampler, todo: np.ndarray, counter: ChunkCounter, stop, deliver) -> None:
+    """Take chunks from the shared counter until none is left or a stop; hand each
+    finished chunk to ``deliver(chunk, values)``."""
+    while not stop():
+        k = counter.next()
+        if k >= len(todo):
+            return
+        chunk = int(todo[k])
+        values = sampler.solve_chunk(grid.points[grid.chunks[chunk]], stop)
+        if values is None:
+            return
+        deliver(chunk, values)
+
+
+def _continue_provenance(out: Path, attrs: dict) -> None:
+    """A resumed file keeps its first command line and creation time and lists
+    the command lines of every resume (``resumed_command_lines``, JSON)."""
+    import h5py
+
+    with h5py.File(out, "r") as fh:
+        first = {key: fh.attrs[key] for key in ("command_line", "created_utc") if key in fh.attrs}
+        resumed = json.loads(fh.attrs.get("resumed_command_lines", "[]"))
+    resumed.append(attrs.get("command_line", ""))
+    attrs.update(first, resumed_command_lines=json.dumps(resumed))
+
+
+def _load(grid: Grid, out, attrs: dict, resume: bool, comm) -> Results | None:
+    """Rank 0 reads the file to resume (or starts afresh); every rank learns which
+    chunks are done.  A file that cannot be resumed raises on every rank."""
     results = chunk_done = error = None
     if comm.rank == 0:
         try:
-            results = (read_results(out, grid, n_tendons, attrs)
+            results = (read_results(out, grid, attrs["n_tendons"], attrs)
                        if resume and out is not None and out.exists()
-                       else Results(grid, n_tendons))
+                       else Results(grid, attrs["n_tendons"]))
             chunk_done = results.chunk_done
+            if out is not None and resume and out.exists():
+                _continue_provenance(out, attrs)
         except InputError as err:
             error = str(err)
     error, chunk_done = comm.bcast((error, chunk_done), root=0)
     if error is not None:
         raise CollectiveInputError(error)
-    todo = np.flatnonzero(~chunk_done)
+    return results, np.flatnonzero(~chunk_done)
+
+
+def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, comm, resume: bool,
+        checkpoint_seconds: float | None = None, progress=None,
+        progress_label: str = "workspace") -> Results | None:
+    """Sample the whole grid over the ranks of ``comm`` (stop protocol below).
+
+    ``sampler.solve_chunk(points, stop) -> dict of per-sample arrays`` (or
+    None when ``stop()`` became true mid-chunk) is called on every rank.
+    Returns the results on rank 0 (None elsewhere); ``results.chunk_done.all()``
+    is False after an interruption, and ``results.stranded`` is True when other
+    ranks did not finish within ``STOP_GRACE`` of a stop (the caller must then
+    end the process without MPI finalisation, e.g. ``os._exit``).
+
+    Stop protocol: a stopped rank exhausts the shared counter (one-sided), so
+    every rank leaves its chunk at the next sample; rank 0 writes a checkpoint
+    at once (a launcher kills the ranks ~2 s after forwarding a signal), then
+    receives until every rank has finished, then writes the last one.  No
+    collective is entered unless every rank is known to reach it.
+    """
+    from ..core.progress import Progress
+
+    if checkpoint_seconds is None:
+        checkpoint_seconds = checkpoint_interval()
+    results, todo = _load(grid, out, attrs, resume, comm)
     counter = ChunkCounter(comm)
-    timing = {"ranks": comm.size, "seconds_io": 0.0}
-    t_start = time.perf_counter()
-    with _Stop() as stop:
+    with _Stop(counter) as stop:
         if comm.rank == 0:
             bar = (Progress(grid.size, progress_label, already=results.samples_done)
                    if progress is None else progress if progress else _NoProgress())
-            last_write = time.perf_counter()
-            finished = 1                                    # rank 0 itself, once done
-
-            def checkpoint():
-                if out is None:
-                    return
-                t0 = time.perf_counter()
-                timing["seconds_wall"] = t0 - t_start
-                write_results(out, results, attrs, limits, timing)
-                timing["seconds_io"] += time.perf_counter() - t0
-
-            def drain(block: bool) -> None:
-                """Store the chunks other ranks sent; with ``block``, until every rank
-                has finished (after a stop: at most STOP_GRACE seconds more)."""
-                nonlocal finished
-                from mpi4py import MPI
-                status = MPI.Status()
-                deadline = None
-                while True:
-                    if comm.iprobe(source=MPI.ANY_SOURCE, tag=MPI.ANY_TAG, status=status):
-                        message = comm.recv(source=status.Get_source(), tag=status.Get_tag())
-                        if status.Get_tag() == TAG_FINISHED:
-                            finished += 1
-                        else:
-                            results.store(*message)
-                        continue
-                    if not block or finished >= comm.size:
-                        break
-                    if stop():
-                        counter.exhaust()                   # others take no new chunk
-                        deadline = deadline or time.perf_counter() + STOP_GRACE
-                        if time.perf_counter() > deadline:
-                            break
-                    time.sleep(0.002)
-                bar.update(results.samples_done)
-
-        sends = []                                          # results on their way to rank 0
-        while not stop():
-            k = counter.next()
-            if k >= len(todo):
-                break
-            chunk = int(todo[k])
-            values = sampler.solve_chunk(grid.points[grid.chunks[chunk]], stop)
-            if values is None:
-                break
-            if comm.rank == 0:
-                results.store(chunk, values)
-                drain(block=False)
-                if time.perf_counter() - last_write > checkpoint_seconds:
-                    checkpoint()
-                    last_write = time.perf_counter()
-            else:
-                # non-blocking: a chunk's results exceed the eager limit of shared-memory
-                # MPI, and a blocking send would wait until rank 0 ends its own chunk
-                # (measured: 23% of a worker's time)
-                sends.append(comm.isend((chunk, values), dest=0, tag=TAG_RESULT))
-        if comm.rank == 0:
-            drain(block=True)
-            checkpoint()
+            rank0 = _Collector(comm, results, out, attrs, limits, checkpoint_seconds, bar)
+            _work(grid, sampler, todo, counter, stop, rank0.store)
+            if stop():
+                rank0.drain()
+                rank0.checkpoint()                         # before a launcher can kill us
+            all_done = rank0.wait_for_ranks(stop)
+            rank0.checkpoint()
             bar.close(results.samples_done)
+            results.stranded = not all_done
+            if not all_done:
+                return results                             # no collective: a peer is busy
         else:
+            sends = []                                     # results on their way to rank 0
+            # non-blocking: a chunk's results exceed the eager limit of shared-memory MPI,
+            # and a blocking send would wait until rank 0 ends its own chunk (measured:
+            # 23% of a worker's time); rank 0 receives until this rank says FINISHED
+            _work(grid, sampler, todo, counter, stop,
+                  lambda chunk, values: sends.append(
+                      comm.isend((chunk, values), dest=0, tag=TAG_RESULT)))
             from mpi4py import MPI
             MPI.Request.waitall(sends)
             comm.send(None, dest=0, tag=TAG_FINISHED)
-        # Win.Free is collective: rank 0 decides (after a stop or a timed-out wait a rank
-        # may never get there; the window then goes with MPI_Finalize)
-        clean = comm.rank == 0 and not stop() and not counter.exhausted and finished == comm.size
-        if comm.bcast(clean, root=0):
-            counter.free()
+    counter.free()                      # collective: every rank finished (rank 0 saw it)
     return results
 
 
@@ -533,6 +609,7 @@ class WorkspaceMap:
     grid: dict
     ranks: int
     file: Path | None = None
+    stranded: bool = False
 
     @classmethod
     def from_results(cls, results: "Results", limits: dict, ranks: int, file=None):
@@ -540,7 +617,8 @@ class WorkspaceMap:
         masks = {name: _frozen(mask) for name, mask in results.masks(limits).items()}
         return cls(results.grid.mode, _frozen(results.grid.points),
                    _frozen(results.chunk_done), samples, masks, dict(limits),
-                   dict(results.grid.meta), ranks, None if file is None else Path(file))
+                   dict(results.grid.meta), ranks, None if file is None else Path(file),
+                   results.stranded)
 
     @property
     def complete(self) -> bool:
@@ -657,7 +735,11 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
     added to the file (e.g. ``command_line``).
 
     Returns the :class:`WorkspaceMap` on every rank; ``complete`` is False after
-    an interruption (SIGINT/SIGTERM).  Bad input raises
+    an interruption (SIGINT/SIGTERM on any rank stops all of them within one
+    sample; the file then holds every finished chunk).  Only if other ranks do
+    not finish within ``STOP_GRACE`` seconds of a stop does rank 0 return alone
+    with ``stranded`` True: the process must then end without MPI finalisation
+    (``os._exit``), which makes the launcher end the others.  Bad input raises
     :class:`CollectiveInputError` on every rank before any computation.
     """
     from mpi4py import MPI
@@ -684,6 +766,8 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
     finally:
         sampler.destroy()
     ws = WorkspaceMap.from_results(results, limits, comm.size, path) if comm.rank == 0 else None
+    if ws is not None and ws.stranded:
+        return ws                                    # no collective: a peer is still busy
     return comm.bcast(ws, root=0)
 
 
