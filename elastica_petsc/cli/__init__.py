@@ -7,9 +7,12 @@ start with a single dash (``-eq_snes_monitor``, ``-ctl_tao_monitor``,
 ``-stab_eps_view``) are handed to PETSc: ``petsc4py.init`` happens here,
 once, before any solver module is imported.
 
-Exit status: 0 success; 1 a solve that did not converge; 2 bad input (one
-line on stderr, no traceback); 3 a target outside the workspace; 130
-interrupted.
+Exit status: 0 success; 1 a solve that did not converge; 2 bad input or an
+output that cannot be written (one line on stderr, no traceback); 3 a target
+outside the workspace; 130 interrupted (SIGINT or SIGTERM).  Under mpiexec an
+input error found by every rank is printed once, by rank 0; Open MPI's own
+banner about a non-zero exit status is mpiexec's to print (``mpiexec --quiet``
+or ``OMPI_MCA_orte_execute_quiet=1`` silences it).
 """
 from __future__ import annotations
 
@@ -29,7 +32,8 @@ above is passed to PETSc, e.g. -eq_snes_monitor, -eq_snes_rtol 1e-12
 (equilibrium Newton solver, prefix eq_), -ctl_tao_monitor (tip control,
 prefix ctl_), -stab_eps_view (eigen solver, prefix stab_).
 
-Exit status: 0 ok, 1 not converged, 2 bad input, 3 target unreachable."""
+Exit status: 0 ok, 1 not converged, 2 bad input (or an output that cannot be
+written), 3 target unreachable, 130 interrupted."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -78,17 +82,60 @@ def main(argv: list[str] | None = None) -> int:
     petsc_options = split_petsc_options(parser, rest)
     import petsc4py
     petsc4py.init([parser.prog] + petsc_options)
-    from petsc4py import PETSc  # noqa: F401  (initialises PETSc with those options)
+    from petsc4py import PETSc  # initialises PETSc with those options
+    # PETSc errors become one line here (main), not PETSc's error stack on stderr
+    PETSc.Sys.pushErrorHandler("ignore")
     # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+    # SIGTERM (a batch system, kill) ends a command like Ctrl-C: "interrupted", 130
+    signal.signal(signal.SIGTERM, _interrupt)
     try:
         return args.run(args)
     except InputError as err:
-        print(f"elastica-petsc: error: {err}", file=sys.stderr)
+        if _first_to_say(err):
+            print(f"elastica-petsc: error: {err}", file=sys.stderr)
+        return 2
+    except OSError as err:                      # an output that could not be written
+        where = f" {err.filename}" if err.filename else ""
+        print(f"elastica-petsc: error: cannot write{where}: {err.strerror or err}",
+              file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("elastica-petsc: interrupted", file=sys.stderr)
         return 130
+    except PETSc.Error as err:
+        return _petsc_error(err, petsc_options)
+
+
+PETSC_ERRORS = {55: "out of memory", 56: "not supported", 60: "nonconforming sizes",
+                62: "invalid argument", 63: "argument out of range", 73: "object in wrong state",
+                76: "error in an external library"}
+
+
+def _petsc_error(err, petsc_options: list[str]) -> int:
+    """One line for a PETSc error: with PETSc options given, most likely one of
+    them (a value PETSc cannot read): bad input, status 2; otherwise status 1."""
+    what = PETSC_ERRORS.get(err.ierr, f"error code {err.ierr}")
+    if petsc_options:
+        print(f"elastica-petsc: error: PETSc: {what}; check the PETSc options "
+              f"{' '.join(petsc_options)}", file=sys.stderr)
+        return 2
+    print(f"elastica-petsc: error: PETSc: {what}", file=sys.stderr)
+    return 1
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def _first_to_say(err: InputError) -> bool:
+    """An error every rank raised alike is printed by rank 0 only."""
+    from ..studies.workspace import CollectiveInputError
+
+    if not isinstance(err, CollectiveInputError):
+        return True
+    from mpi4py import MPI
+    return MPI.COMM_WORLD.rank == 0
 
 
 if __name__ == "__main__":

@@ -93,8 +93,6 @@ def format_control(s: dict) -> str:
 
 
 def run(args) -> int:
-    import numpy as np
-
     from ..solvers.control import TipController
     from ..core.errors import InputError
 
@@ -103,8 +101,7 @@ def run(args) -> int:
     if not args.tol_mm > 0:
         raise InputError(f"--tol-mm must be positive, got {args.tol_mm}")
     guess = common.guess(args, disc)
-    if not np.all(np.isfinite(args.target)):
-        raise InputError("--target must be two finite numbers in mm")
+    common.check_target_mm(arm, args.target)
     with TipController(arm, n_elements=disc.n_elements, method=args.method,
                        tip_tol_mm=args.tol_mm) as controller:
         result = controller.solve_mm(args.target, p0=guess)

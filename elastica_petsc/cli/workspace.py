@@ -48,9 +48,7 @@ def run(args) -> int:
     try:
         return _run(args, comm)
     except CollectiveInputError:                   # raised on every rank alike: one line, exit 2
-        if comm.rank == 0:
-            raise
-        return 2
+        raise
     except KeyboardInterrupt:                      # outside the stop protocol (set-up)
         if comm.size == 1:
             raise
@@ -119,10 +117,17 @@ def _check_inputs(args):
     if args.overlay:
         from ..plots.workspace import read_overlays
         read_overlays(args.overlay)                 # refuse a bad file before computing
-    if args.plot:
-        from ..io.hdf5 import check_output_path
-        check_output_path(args.plot, args.overwrite)
+    common.check_outputs(args, _derived_plots(args), resume=args.resume)
     return arm, disc
+
+
+def _derived_plots(args) -> dict:
+    """The second figure ``plot_workspace`` draws beside --plot (Fig. 5)."""
+    if not args.plot:
+        return {}
+    from pathlib import Path
+    plot = Path(args.plot)
+    return {"--plot (Fig. 5)": plot.with_name(plot.stem + "_restrictions.png")}
 
 
 def format_summary(s: dict) -> str:

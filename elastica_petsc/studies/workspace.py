@@ -149,12 +149,28 @@ def _rows_to_chunks(rows: list[np.ndarray], chunk: int) -> tuple[np.ndarray, ...
     return tuple(out)
 
 
+MAX_SAMPLES = 2_000_000        # ~0.4 GB of results on rank 0; the paper's map has 4201
+
+
+def _check_size(count: float, what: str) -> None:
+    if not count <= MAX_SAMPLES:
+        raise InputError(f"{what} would give {count:.3g} samples; at most {MAX_SAMPLES:,} "
+                         "(use a larger spacing)")
+
+
 def target_grid(length_mm: float, spacing_mm: float, box=None, chunk: int = 24) -> Grid:
     """Targets on a square lattice of ``spacing_mm``: by default the half-plane
     y >= 0 within the arm's reach |x| <= l (paper Fig. 4), else ``box`` =
     (xmin, xmax, ymin, ymax) in mm.  Rows of constant y, cut into chunks."""
-    if not spacing_mm > 0:
-        raise InputError(f"--spacing must be positive, got {spacing_mm}")
+    if not (spacing_mm > 0 and np.isfinite(spacing_mm)):
+        raise InputError(f"--spacing must be a positive number of mm, got {spacing_mm}")
+    if box is not None and not np.all(np.isfinite(np.asarray(box, float))):
+        raise InputError(f"--box {tuple(box)}: expected four finite numbers of mm")
+    if box is None:
+        _check_size(2 * (length_mm / spacing_mm + 1) ** 2, f"--spacing {spacing_mm:g}")
+    else:
+        _check_size((abs(box[1] - box[0]) / spacing_mm + 1) * (abs(box[3] - box[2]) / spacing_mm
+                                                                + 1), f"--spacing {spacing_mm:g}")
     if box is None:
         reach = length_mm
         xs = np.arange(-np.floor(reach / spacing_mm), np.floor(reach / spacing_mm) + 1) * spacing_mm
@@ -185,8 +201,9 @@ def target_grid(length_mm: float, spacing_mm: float, box=None, chunk: int = 24) 
 def tension_grid(n_tendons: int, spacing: float, p_max: float, chunk: int = 24) -> Grid:
     """Tensions on a lattice 0 <= p_i <= p_max (non-dimensional), serpentine
     along the last tendon's axis."""
-    if not spacing > 0 or not p_max > 0:
-        raise InputError("--tension-spacing and --tension-max must be positive")
+    if not (spacing > 0 and p_max > 0 and np.isfinite(spacing) and np.isfinite(p_max)):
+        raise InputError("--tension-spacing and --tension-max must be positive numbers")
+    _check_size((p_max / spacing + 1) ** n_tendons, f"--tension-spacing {spacing:g}")
     axis = np.arange(0, np.floor(p_max / spacing + 1e-9) + 1) * spacing
     mesh = np.stack(np.meshgrid(*([axis] * n_tendons), indexing="ij"), -1).reshape(-1, n_tendons)
     rows, points = [], []
@@ -219,6 +236,7 @@ class Results:
         self.data = empty_fields(self.schema, grid.size)
         self.chunk_done = np.zeros(len(grid.chunks), bool)
         self.stranded = False            # other ranks still busy after a stop (see run)
+        self.write_error = None          # why a checkpoint could not be written (see run)
 
     def store(self, chunk: int, values: dict) -> None:
         index = self.grid.chunks[chunk]
@@ -303,6 +321,9 @@ def read_results(path: Path, grid: Grid, n_tendons: int, attrs: dict) -> Results
                 results.data[name][...] = fh["samples"][name][()]
     except OSError as err:
         raise InputError(f"{path}: cannot resume from this file: {err}") from None
+    except (KeyError, ValueError, TypeError) as err:
+        raise InputError(f"{path}: cannot resume: not a complete workspace file "
+                         f"(missing or malformed {err})") from None
     return results
 
 
@@ -335,8 +356,8 @@ class _Stop:
 
     POLL = 0.01                       # s between looks at the shared counter
 
-    def __init__(self, counter: "ChunkCounter"):
-        self.counter = counter
+    def __init__(self):
+        self.counter = None           # attached by run() once the counter exists
         self.signalled = False
         self._old = {}
         self._next_poll = 0.0
@@ -354,6 +375,8 @@ class _Stop:
             signal.signal(sig, handler)
 
     def __call__(self) -> bool:
+        if self.counter is None:
+            return self.signalled
         if self.signalled:
             self.counter.exhaust()
             return True
@@ -423,8 +446,9 @@ class _Collector:
     """Rank 0's side: stores chunks (its own and those other ranks send), writes
     checkpoints, and knows how many ranks have finished."""
 
-    def __init__(self, comm, results: Results, out, attrs, limits, checkpoint_seconds, bar):
-        self.comm, self.results, self.out = comm, results, out
+    def __init__(self, comm, counter, results: Results, out, attrs, limits, checkpoint_seconds,
+                 bar):
+        self.comm, self.counter, self.results, self.out = comm, counter, results, out
         self.attrs, self.limits, self.bar = attrs, limits, bar
         self.checkpoint_seconds = checkpoint_seconds
         self.finished = 1                                  # rank 0 itself, once done
@@ -432,11 +456,17 @@ class _Collector:
         self.t_start = self.last_write = time.perf_counter()
 
     def checkpoint(self) -> None:
-        if self.out is None:
+        """Write the file; a failed write (full disk) stops the run like a signal:
+        the file keeps its previous checkpoint, the error is reported at the end."""
+        if self.out is None or self.results.write_error is not None:
             return
         t0 = time.perf_counter()
         self.timing["seconds_wall"] = t0 - self.t_start
-        write_results(self.out, self.results, self.attrs, self.limits, self.timing)
+        try:
+            write_results(self.out, self.results, self.attrs, self.limits, self.timing)
+        except InputError as err:
+            self.results.write_error = str(err)
+            self.counter.exhaust()
         self.last_write = time.perf_counter()
         self.timing["seconds_io"] += self.last_write - t0
 
@@ -522,7 +552,7 @@ def _load(grid: Grid, out, attrs: dict, resume: bool, comm) -> Results | None:
 
 def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, comm, resume: bool,
         checkpoint_seconds: float | None = None, progress=None,
-        progress_label: str = "workspace") -> Results | None:
+        progress_label: str = "workspace", stop: "_Stop | None" = None) -> Results | None:
     """Sample the whole grid over the ranks of ``comm`` (stop protocol below).
 
     ``sampler.solve_chunk(points, stop) -> dict of per-sample arrays`` (or
@@ -536,40 +566,47 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
     every rank leaves its chunk at the next sample; rank 0 writes a checkpoint
     at once (a launcher kills the ranks ~2 s after forwarding a signal), then
     receives until every rank has finished, then writes the last one.  No
-    collective is entered unless every rank is known to reach it.
+    collective is entered unless every rank is known to reach it.  ``stop``: a
+    :class:`_Stop` already catching signals (:func:`run_map` installs it before
+    its set-up, so a signal there stops the run at its first sample).
     """
+    if stop is None:
+        with _Stop() as stop:
+            return run(grid, sampler, out, attrs, limits, comm=comm, resume=resume,
+                       checkpoint_seconds=checkpoint_seconds, progress=progress,
+                       progress_label=progress_label, stop=stop)
     from ..core.progress import Progress
 
     if checkpoint_seconds is None:
         checkpoint_seconds = checkpoint_interval()
     results, todo = _load(grid, out, attrs, resume, comm)
-    counter = ChunkCounter(comm)
-    with _Stop(counter) as stop:
-        if comm.rank == 0:
-            bar = (Progress(grid.size, progress_label, already=results.samples_done)
-                   if progress is None else progress if progress else _NoProgress())
-            rank0 = _Collector(comm, results, out, attrs, limits, checkpoint_seconds, bar)
-            _work(grid, sampler, todo, counter, stop, rank0.store)
-            if stop():
-                rank0.drain()
-                rank0.checkpoint()                         # before a launcher can kill us
-            all_done = rank0.wait_for_ranks(stop)
-            rank0.checkpoint()
-            bar.close(results.samples_done)
-            results.stranded = not all_done
-            if not all_done:
-                return results                             # no collective: a peer is busy
-        else:
-            sends = []                                     # results on their way to rank 0
-            # non-blocking: a chunk's results exceed the eager limit of shared-memory MPI,
-            # and a blocking send would wait until rank 0 ends its own chunk (measured:
-            # 23% of a worker's time); rank 0 receives until this rank says FINISHED
-            _work(grid, sampler, todo, counter, stop,
-                  lambda chunk, values: sends.append(
-                      comm.isend((chunk, values), dest=0, tag=TAG_RESULT)))
-            from mpi4py import MPI
-            MPI.Request.waitall(sends)
-            comm.send(None, dest=0, tag=TAG_FINISHED)
+    counter = stop.counter = ChunkCounter(comm)
+    if comm.rank == 0:
+        bar = (Progress(grid.size, progress_label, already=results.samples_done)
+               if progress is None else progress if progress else _NoProgress())
+        rank0 = _Collector(comm, counter, results, out, attrs, limits, checkpoint_seconds,
+                           bar)
+        _work(grid, sampler, todo, counter, stop, rank0.store)
+        if stop():
+            rank0.drain()
+            rank0.checkpoint()                         # before a launcher can kill us
+        all_done = rank0.wait_for_ranks(stop)
+        rank0.checkpoint()
+        bar.close(results.samples_done)
+        results.stranded = not all_done
+        if not all_done:
+            return results                             # no collective: a peer is busy
+    else:
+        sends = []                                     # results on their way to rank 0
+        # non-blocking: a chunk's results exceed the eager limit of shared-memory MPI,
+        # and a blocking send would wait until rank 0 ends its own chunk (measured:
+        # 23% of a worker's time); rank 0 receives until this rank says FINISHED
+        _work(grid, sampler, todo, counter, stop,
+              lambda chunk, values: sends.append(
+                  comm.isend((chunk, values), dest=0, tag=TAG_RESULT)))
+        from mpi4py import MPI
+        MPI.Request.waitall(sends)
+        comm.send(None, dest=0, tag=TAG_FINISHED)
     counter.free()                      # collective: every rank finished (rank 0 saw it)
     return results
 
@@ -744,31 +781,53 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
     """
     from mpi4py import MPI
 
+    comm = MPI.COMM_WORLD if comm is None else comm
+    lock = None
+    with _Stop() as stop:             # from here a signal stops the run at its first sample
+        try:
+            try:
+                grid = make_grid(arm, disc, mode, spacing_mm, box_mm, tension_spacing,
+                                 tension_max, chunk)
+                if checkpoint_seconds is None:
+                    checkpoint_seconds = checkpoint_interval()
+                path = None if out is None else _check_out(out, resume, overwrite)
+                if path is not None and comm.rank == 0:
+                    from ..io.hdf5 import OutputLock
+                    lock = OutputLock(path)            # one run per output file
+                error = None
+            except InputError as err:
+                error = str(err)
+            agree(comm, error)
+            results = _sample(arm, disc, grid, path, comm, resume, checkpoint_seconds,
+                              progress, provenance, stop)
+        finally:
+            if lock is not None:
+                lock.release()
+    limits = limits_of(arm)
+    ws = None
+    if comm.rank == 0:
+        ws = WorkspaceMap.from_results(results, limits, comm.size, path)
+        if ws.stranded:
+            return ws                                # no collective: a peer is still busy
+    ws, error = comm.bcast((ws, None if comm.rank else results.write_error), root=0)
+    if error is not None:                            # a checkpoint failed (full disk, ...)
+        raise CollectiveInputError(error)
+    return ws
+
+
+def _sample(arm, disc, grid: Grid, path, comm, resume: bool, checkpoint_seconds: float,
+            progress, provenance: dict | None, stop: _Stop) -> "Results":
+    """The sampler of ``grid.mode`` over the ranks (:func:`run`)."""
     from .sampling import TargetSampler, TensionSampler
 
-    comm = MPI.COMM_WORLD if comm is None else comm
-    try:
-        grid = make_grid(arm, disc, mode, spacing_mm, box_mm, tension_spacing, tension_max, chunk)
-        if checkpoint_seconds is None:
-            checkpoint_seconds = checkpoint_interval()
-        path = None if out is None else _check_out(out, resume, overwrite)
-        error = None
-    except InputError as err:
-        error = str(err)
-    agree(comm, error)
     attrs = _attrs(arm, disc, grid, provenance)
-    limits = limits_of(arm)
-    sampler = (TargetSampler if mode == "targets" else TensionSampler)(arm, disc)
+    sampler = (TargetSampler if grid.mode == "targets" else TensionSampler)(arm, disc)
     try:
-        results = run(grid, sampler, path, attrs, limits, comm=comm, resume=resume,
-                      checkpoint_seconds=checkpoint_seconds, progress=progress,
-                      progress_label=f"workspace ({mode}, {comm.size} rank(s))")
+        return run(grid, sampler, path, attrs, limits_of(arm), comm=comm, resume=resume,
+                   checkpoint_seconds=checkpoint_seconds, progress=progress,
+                   progress_label=f"workspace ({grid.mode}, {comm.size} rank(s))", stop=stop)
     finally:
         sampler.destroy()
-    ws = WorkspaceMap.from_results(results, limits, comm.size, path) if comm.rank == 0 else None
-    if ws is not None and ws.stranded:
-        return ws                                    # no collective: a peer is still busy
-    return comm.bcast(ws, root=0)
 
 
 def _check_out(out, resume: bool, overwrite: bool) -> Path:
