@@ -35,7 +35,7 @@ ROOT = Path(__file__).resolve().parents[1]
 MPIEXEC = shutil.which("mpiexec")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1", ELASTICA_PETSC_CHECKPOINT_SECONDS="1e6")
-GRID = ["--box", "-120", "480", "60", "420", "--spacing", "12", "--elements", "60",
+GRID = ["--box", "-120", "480", "60", "420", "--spacing", "15", "--elements", "30",
         "--chunk", "4"]
 HANG_SECONDS = 30.0
 VICTIMS = ("mpiexec", "group", "rank0", "rank1", "both")
@@ -195,7 +195,7 @@ def reference_map(folder: Path) -> Path:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=20)
-    parser.add_argument("--load", type=int, default=1, help="busy-loop processes beside it")
+    parser.add_argument("--load", type=int, default=0, help="busy-loop processes beside it")
     args = parser.parse_args()
     burners = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
                for _ in range(args.load)]

@@ -1,16 +1,19 @@
 """Issue 15: no wrong verdict, no hang, no lost work.
 
-A table of bad inputs run as a user does (a subprocess each), every one answered
-by one line ``elastica-petsc: error: ...``, exit status 2, no traceback, within
-2 s of wall time of its own work (the interpreter's and PETSc's start-up, about
-1 s on this machine, is measured once and allowed on top); plus the numbered
-items of the issue that need more than one command.  The fault-injection study
+A table of bad inputs, each answered by one line ``elastica-petsc: error: ...``,
+exit status 2, no traceback, within 1 s of work after start-up (the commands run
+in this process; the interpreter's, MPI's and PETSc's start-up, 0.8 s on an idle
+2-core machine and more under load, is a subprocess's and the same for every
+command, so 2 s of wall time in all); plus the numbered items of the issue that
+need more than one command.  The fault-injection study
 (signals to mpiexec, its process group and each rank, 20+ trials) is
 ``scripts/fault_study.py``; here a few of its cases run once each.
 """
 from __future__ import annotations
 
+import json
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -20,6 +23,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+MPIEXEC = shutil.which("mpiexec")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1")
 
@@ -95,6 +99,9 @@ def bad_inputs(tmp: Path) -> list[tuple[list, list[str]]]:
     import h5py
     with h5py.File(partial, "w") as fh:
         fh.attrs["kind"] = "workspace"
+    previous = tmp / "previous"
+    previous.mkdir()
+    (previous / "fig8.png").write_bytes(b"a user's figure")
     ws = ["workspace", "--elements", 30]
     solve = ["solve", "--tensions", 1, 1]
     return [
@@ -128,6 +135,7 @@ def bad_inputs(tmp: Path) -> list[tuple[list, list[str]]]:
         (ws + ["--out", tmp / "w.h5", "--plot", tmp / "w.h5"], ["--plot", "unknown"]),
         (ws + ["--out", partial, "--resume"], ["cannot resume"]),
         (["reproduce", "--out", ""], ["--out", "empty"]),
+        (["reproduce", "--quick", "--out", previous], ["fig8.png", "--overwrite"]),
     ]
 
 
@@ -146,10 +154,9 @@ def run_main(args, capsys) -> tuple[int, str, float]:
     return status, capsys.readouterr().err, seconds
 
 
-def test_bad_inputs_one_line_exit_2_fast(tmp_path, monkeypatch, capsys, startup_seconds):
+def test_bad_inputs_one_line_exit_2_fast(tmp_path, monkeypatch, capsys):
     """Every bad input of issue 15 (5) and every unwritable output location (4): one
-    line, exit 2, and under 2 s of wall time with the interpreter's start-up (measured
-    once in a subprocess) added."""
+    line, exit 2, and less than 1 s of work before the answer."""
     monkeypatch.chdir(tmp_path)
     failures = []
     for args, words in bad_inputs(tmp_path):
@@ -157,12 +164,14 @@ def test_bad_inputs_one_line_exit_2_fast(tmp_path, monkeypatch, capsys, startup_
         run = subprocess.CompletedProcess(args, status, "", stderr)
         try:
             assert_one_line(run, *words)
-            assert startup_seconds + seconds < 2.0, f"{startup_seconds:.2f} + {seconds:.2f} s"
+            assert seconds < 1.0, f"{seconds:.2f} s of work"
         except AssertionError as err:
             failures.append(f"{' '.join(map(str, args))}: {err}")
     assert not failures, "\n".join(failures)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
-        ["folder.toml", "binary.toml", "far.toml", "exists.h5", "exists.png", "partial.h5"])
+        ["folder.toml", "binary.toml", "far.toml", "exists.h5", "exists.png", "partial.h5",
+         "previous"])
+    assert [p.name for p in (tmp_path / "previous").iterdir()] == ["fig8.png"]
 
 
 def test_bad_petsc_option_one_line_exit_2(startup_seconds):
@@ -170,4 +179,98 @@ def test_bad_petsc_option_one_line_exit_2(startup_seconds):
     replaced by one line (a subprocess: PETSc takes options once per process)."""
     run, seconds = cli("solve", "--tensions", 1, 1, "-eq_snes_rtol", "abc")
     assert_one_line(run, "PETSc", "argument out of range", "-eq_snes_rtol abc")
-    assert seconds < startup_seconds + 2.0
+    assert seconds - startup_seconds < 1.0
+
+
+# --- 3. lost work: locks, resume records, orphans ----------------------------------------------
+TINY = ["workspace", "--mode", "tensions", "--tension-spacing", 10, "--tension-max", 20,
+        "--elements", 30, "--chunk", 2]
+
+
+def test_second_run_on_a_locked_file_is_refused(tmp_path):
+    """A run owns its --out (an flock beside it): another run on it is refused."""
+    from elastica_petsc.io.hdf5 import OutputLock
+
+    out = tmp_path / "ws.h5"
+    with OutputLock(out):
+        run, _ = cli(*TINY, "--out", out)
+        assert_one_line(run, "being written by another run", f"pid {os.getpid()}")
+    assert not out.exists()
+    ok, _ = cli(*TINY, "--out", out)                         # released: the run goes ahead
+    assert ok.returncode == 0, ok.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ws.h5"]   # lock file removed
+
+
+def test_resume_starts_checks_petsc_options_and_keeps_the_command_line(tmp_path):
+    import h5py
+
+    out = tmp_path / "ws.h5"
+    orphan = tmp_path / ".ws.h5.tmp-999999999"                # a writer that died
+    orphan.write_bytes(b"half a file")
+    first, _ = cli(*TINY, "--out", out, "--resume")           # no file yet: starts the run
+    assert first.returncode == 0, first.stderr
+    assert not orphan.exists()
+    with h5py.File(out, "r") as fh:
+        assert fh.attrs["complete"] and fh.attrs["petsc_options"] == ""
+        command = fh.attrs["command_line"]
+    other, _ = cli(*TINY, "--out", out, "--resume", "-eq_snes_max_it", 1)
+    assert_one_line(other, "cannot resume", "other PETSc options", "eq_snes_max_it=1")
+    neutral, _ = cli(*TINY, "--out", out, "--resume", "-eq_snes_monitor")   # changes nothing
+    assert neutral.returncode == 0, neutral.stderr
+    with h5py.File(out, "r") as fh:
+        assert fh.attrs["command_line"] == command
+        resumed = json.loads(fh.attrs["resumed_command_lines"])
+    assert len(resumed) == 1 and "-eq_snes_monitor" in resumed[0]
+
+
+def full_disk(tmp_path) -> Path:
+    """A 64 KiB tmpfs with 58 KB taken (root only; skipped where mounting is refused)."""
+    mount = tmp_path / "full"
+    mount.mkdir()
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mount)],
+                          capture_output=True)
+    if done.returncode != 0:
+        pytest.skip("cannot mount a small tmpfs here")
+    (mount / "filler").write_bytes(bytes(58000))
+    return mount
+
+
+@pytest.mark.parametrize("args", [["solve", "--tensions", 1, 1], TINY], ids=["solve", "ws"])
+def test_full_disk_ends_in_one_line(args, tmp_path):
+    mount = full_disk(tmp_path)
+    try:
+        run, _ = cli(*args, "--out", mount / "x.h5")
+        assert_one_line(run, "cannot write", "No space left on device")
+        assert sorted(p.name for p in mount.iterdir()) == ["filler"]
+    finally:
+        subprocess.run(["umount", str(mount)])
+
+
+# --- 6. interruptions and MPI input errors ------------------------------------------------------
+def test_trace_on_sigterm_says_interrupted_and_exits_130(tmp_path):
+    import signal
+
+    proc = subprocess.Popen([sys.executable, "-m", "elastica_petsc.cli", "trace", "--shape",
+                             "paper-triangle", "--step", "0.02"], cwd=tmp_path, env=ENV,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    t0 = time.monotonic()             # until PETSc is loaded: the command line runs
+    while b"libpetsc" not in Path(f"/proc/{proc.pid}/maps").read_bytes():
+        assert proc.poll() is None and time.monotonic() - t0 < 60
+        time.sleep(0.01)
+    time.sleep(0.2)
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert stderr.strip().splitlines()[-1] == "elastica-petsc: interrupted"
+
+
+@pytest.mark.skipif(MPIEXEC is None, reason="mpiexec not found")
+def test_input_error_under_mpiexec_is_one_line(tmp_path):
+    """Found by every rank, said once (by rank 0); mpiexec's banner silenced as the
+    README says (OMPI_MCA_orte_execute_quiet=1)."""
+    run = subprocess.run([MPIEXEC, "-n", "2", sys.executable, "-m", "elastica_petsc.cli",
+                          *map(str, TINY), "--out", tmp_path / "ws.h5", "--spacing", "inf",
+                          "--mode", "targets"],
+                         capture_output=True, text=True, timeout=120, cwd=tmp_path,
+                         env=dict(ENV, OMPI_MCA_orte_execute_quiet="1"))
+    assert_one_line(run, "--spacing")

@@ -76,6 +76,16 @@ def _is_number(token: str) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # SIGTERM (a batch system, kill) ends a command like Ctrl-C: "interrupted", 130
+    signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:                   # during start-up
+        print("elastica-petsc: interrupted", file=sys.stderr)
+        return 130
+
+
+def _main(argv: list[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
     args, rest = parser.parse_known_args(argv)
@@ -87,8 +97,7 @@ def main(argv: list[str] | None = None) -> int:
     PETSc.Sys.pushErrorHandler("ignore")
     # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
-    # SIGTERM (a batch system, kill) ends a command like Ctrl-C: "interrupted", 130
-    signal.signal(signal.SIGTERM, _interrupt)
+    signal.signal(signal.SIGTERM, _interrupt)   # again: PETSc's initialisation may take it
     try:
         return args.run(args)
     except InputError as err:

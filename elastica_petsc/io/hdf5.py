@@ -119,17 +119,25 @@ def remove_orphans(path: Path) -> None:
 
 @contextlib.contextmanager
 def atomic_h5(path: str | Path, overwrite: bool = False):
-    """An h5py.File open for writing at a temporary name, renamed to ``path`` on
-    success and removed on failure; a failed write (full disk) raises
-    :class:`OutputError` and leaves any earlier file at ``path`` as it was."""
+    """An h5py.File to fill, built in memory and written to a temporary name,
+    synced and renamed to ``path``.  HDF5 itself never writes to the disk, so a
+    full disk is one ``OSError`` of a plain write, raised as
+    :class:`OutputError`, and any earlier file at ``path`` stays as it was."""
+    import io
+
     import h5py
 
     path = check_output_path(path, overwrite)
     remove_orphans(path)
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as fh:
+        yield fh
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
-        with h5py.File(tmp, "w") as fh:
-            yield fh
+        with open(tmp, "wb") as raw:
+            raw.write(buffer.getbuffer())
+            raw.flush()
+            os.fsync(raw.fileno())
         os.replace(tmp, path)
     except OSError as err:
         raise OutputError(f"cannot write {path}: {err.strerror or err}") from None
