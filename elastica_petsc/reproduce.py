@@ -82,7 +82,8 @@ def fig8(ctx: Context) -> None:
     from .solvers.equilibrium import EquilibriumSolver
     from .core.fem import Discretisation
     from .io.hdf5 import atomic_h5, provenance, write_attrs, write_equilibrium
-    from .solvers.lengths import LengthSolver, length_equilibria
+    from .solvers.lengths import LengthSolver
+    from .studies.search import length_equilibria
     from .plots.common import plot_equilibria
 
     arm, l_mm = ctx.arm, ctx.arm.length_mm

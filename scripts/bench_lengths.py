@@ -24,8 +24,8 @@ import numpy as np
 from elastica_petsc.core.config import load_config
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.fem import Discretisation
-from elastica_petsc.solvers.lengths import (LengthSolver, equilibria, length_equilibria,
-                                    tension_starts)
+from elastica_petsc.solvers.lengths import LengthSolver
+from elastica_petsc.studies.search import equilibria, length_equilibria, tension_starts
 from timing import median_time
 
 L_MM = np.array([147.1, 472.5])

@@ -162,11 +162,14 @@ def test_fig8_equilibria_load_control(fig8_load):
         np.testing.assert_allclose(s["tensions_N"], [14.0, 6.0], atol=1e-6)
         assert s["stable"] == s["stable_under_load_control"]
         assert s["slack_mm"] == [0.0, 0.0] and s["taut"] == [True, True]
-    for expected in ([147.1, 472.5], L_STATE3_MM):
+    for number, expected in ((1, [147.1, 472.5]), (3, L_STATE3_MM)):
         err = [np.max(np.abs(np.array(s["cable_lengths_mm"]) - expected)) for s in states]
         k = int(np.argmin(err))
         assert err[k] <= 0.5, (expected, [s["cable_lengths_mm"] for s in states])
         assert states[k]["stable"] is True
+        assert states[k]["number"] == number          # the paper's numbering (Fig. 8)
+    assert sorted(s["number"] for s in states) == [s["number"] for s in states]
+    assert 2 not in [s["number"] for s in states]     # state 2 has other tensions
     assert data["search"]["starts"] >= 10 and data["search"]["attempts"] >= len(states)
     assert "not proven complete" in data["note"]
     assert_units_everywhere(out)
@@ -202,7 +205,7 @@ def test_fig8_lengths_finds_states_1_and_2(fig8_lengths, fig8_load, disc, ls):
     search = data["search"]
     assert search["starts"] == len(search["start_labels"]) >= 10
     assert search["attempts"] >= search["starts"]
-    assert [f["state"] for f in search["found_from"]] == list(range(1, len(states) + 1))
+    assert [f["state"] for f in search["found_from"]] == [s["number"] for s in states]
     assert all(f["start"] in search["start_labels"] for f in search["found_from"])
     assert search["complete"] is False and "not proven complete" in data["note"]
 
@@ -210,11 +213,13 @@ def test_fig8_lengths_finds_states_1_and_2(fig8_lengths, fig8_load, disc, ls):
     with h5py.File(out, "r") as fh:
         assert fh.attrs["kind"] == "length_equilibria"
         assert fh.attrs["n_equilibria"] == len(states)
-        groups = [fh[f"equilibria/state_{k}"] for k in range(1, len(states) + 1)]
-        for p_paper in (P_FIG8, P_STATE2):
+        assert list(fh.attrs["state_numbers"]) == [s["number"] for s in states]
+        groups = [fh[f"equilibria/state_{s['number']}"] for s in states]
+        for number, p_paper in ((1, P_FIG8), (2, P_STATE2)):
             k = int(np.argmin([np.max(np.abs(np.array(s["tensions"]) - p_paper))
                                for s in states]))
             found = states[k]
+            assert found["number"] == number          # the paper's numbering (Fig. 8)
             assert found["stable"] is True and found["taut"] == [True, True]
             u, p = state_from_h5(disc, groups[k])
             np.testing.assert_allclose(p, found["tensions"], atol=1e-6)

@@ -23,9 +23,10 @@ from elastica_petsc.core.deflation import Deflation
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.core.fem import Discretisation
-from elastica_petsc.solvers.lengths import (LengthInertia, LengthSolver, _AugmentedSystem,
-                                    constrained_mode, equilibria, length_equilibria, replay,
-                                    tension_starts)
+from elastica_petsc.solvers.lengths import (AugmentedSystem, LengthInertia, LengthSolver,
+                                            constrained_mode)
+from elastica_petsc.studies.replay import replay
+from elastica_petsc.studies.search import equilibria, length_equilibria, tension_starts
 from elastica_petsc.core.model import Arm, Tendon
 
 L_MM = 600.0
@@ -104,7 +105,7 @@ def test_augmented_jacobian_is_consistent(arm, mode):
     differences of the residual, with two deflated roots (the rank-one term
     F grad M^T is carried by the mu row and column)."""
     disc = Discretisation.from_arm(arm, 30)
-    system = _AugmentedSystem(disc, mode, f"test_{mode}_")
+    system = AugmentedSystem(disc, mode, f"test_{mode}_")
     try:
         rng = np.random.default_rng(2)
         s = np.linspace(0, 1, 31)

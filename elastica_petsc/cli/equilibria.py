@@ -1,7 +1,7 @@
 """``elastica-petsc equilibria``: several equilibria for fixed tensions (load control,
 paper Fig. 8: states 1 and 3 share p = (25.2, 10.8)).
 
-The multi-start search of :func:`lengths.equilibria`: loading paths from the
+The multi-start search of :func:`elastica_petsc.studies.search.equilibria`: loading paths from the
 straight arm (proportional and every order), loading paths from a spread of
 load-controlled starts, then deflated Newton solves.  Output layout as for
 ``elastica-petsc lengths`` (see :mod:`.lengths`); ``stable`` is the stability
@@ -32,7 +32,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..solvers.equilibrium import EquilibriumSolver, check_tensions
-    from ..solvers.lengths import equilibria, tension_starts
+    from ..studies.search import equilibria, tension_starts
     from ..io.summary import rounded
     from .lengths import NOT_COMPLETE, check_search_options, finish, search_summary, \
         state_summary

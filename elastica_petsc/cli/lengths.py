@@ -3,7 +3,7 @@ paper Sec. 4.6, Fig. 8; docs/model.md §4.7).
 
 Without ``--all``: the equilibrium reached from the straight arm by continuation
 in the cable lengths (a stable path; snaps and buckling are recorded).  With
-``--all``: the multi-start deflated search of :func:`lengths.length_equilibria`.
+``--all``: the multi-start deflated search of :func:`elastica_petsc.studies.search.length_equilibria`.
 
 The helpers below (state summaries, text report, HDF5 layout) are shared with
 ``elastica-petsc equilibria`` (load control), which prints the same layout.
@@ -13,12 +13,13 @@ HDF5 layout (``--out``), besides the provenance attributes of every file::
     target/lengths_mm        (n,)  mm        prescribed cable lengths   (lengths)
     target/tensions          (n,)  P l^2/B   prescribed tensions        (equilibria)
     target/tensions_N        (n,)  N
-    equilibria/state_K/...   one group per state: the layout of io.hdf5.write_equilibrium
+    equilibria/state_K/...   one group per state K (the paper's numbers for Fig. 8's
+                             states, see studies.search.state_numbers): the layout of io.hdf5.write_equilibrium
                              plus tendons/lengths_requested (mm), tendons/slack (mm),
                              tendons/taut (1); solver attributes also hold
                              length_unstable_modes, stable_under_length_control,
                              found_start, found_method, hits
-    root attributes          control, n_equilibria, search_* (method, starts,
+    root attributes          control, n_equilibria, state_numbers, search_* (method, starts,
                              attempts, failed, refound, start_labels_json), note
 """
 from __future__ import annotations
@@ -118,6 +119,7 @@ def state_summary(arm, state, control: str, found=None) -> dict:
         "instabilities_at_lengths_mm": [rounded(np.asarray(L) * l_mm)
                                         for L in state.instabilities],
     })
+    s["number"] = int(found.number) if found is not None and found.number else 1
     if found is not None:
         s["found_from"] = {"start": found.start, "method": found.method,
                            "attempts_reaching_it": int(found.hits)}
@@ -134,9 +136,9 @@ def search_summary(result) -> dict:
             "starts": len(result.starts), "attempts": int(result.attempts),
             "failed": int(result.failures), "refound": int(result.duplicates),
             "start_labels": list(result.starts),
-            "found_from": [{"state": k, "start": f.start, "method": f.method,
+            "found_from": [{"state": f.number, "start": f.start, "method": f.method,
                             "attempts_reaching_it": int(f.hits)}
-                           for k, f in enumerate(result.states, 1)],
+                           for f in result.states],
             "complete": False}
 
 
@@ -154,7 +156,7 @@ def format_states(arm, data: dict) -> str:
              f"search: {search['method']}; {search['starts']} start(s), {search['attempts']} "
              f"attempt(s), {search['failed']} failed, {search['refound']} re-found a known state"]
     other = "load" if data["control"] == "length" else "length"
-    for k, s in enumerate(data["equilibria"], 1):
+    for s in data["equilibria"]:
         own = "yes" if s["stable"] else "NO"
         oth = s[f"stable_under_{other}_control"]
         oth = "yes" if oth else ("not computed" if oth is None else "NO")
@@ -164,7 +166,7 @@ def format_states(arm, data: dict) -> str:
             origin = f"; first found from '{f['start']}' by {f['method']}, " \
                      f"reached {f['attempts_reaching_it']}x"
         lines.append("")
-        lines.append(f"state {k}{origin}")
+        lines.append(f"state {s['number']}{origin}")
         lines.append(f"  stable under {data['control']} control: {own}; "
                      f"under {other} control: {oth}  (negative stiffness eigenvalues load/length: "
                      f"{s['unstable_modes']}/{s['unstable_modes_length_control']})")
@@ -207,7 +209,8 @@ def write_states(path, overwrite: bool, arm, data: dict, states, kind: str) -> N
                          "search_attempts": search["attempts"], "search_failed": search["failed"],
                          "search_refound": search["refound"],
                          "search_start_labels_json": json.dumps(search["start_labels"]),
-                         "search_complete": False, "note": data["note"]})
+                         "search_complete": False, "note": data["note"],
+                         "state_numbers": [int(s["number"]) for s in data["equilibria"]]})
         target = fh.create_group("target")
         if data["control"] == "length":
             put(target, "lengths_mm", data["lengths_mm"], "mm", "prescribed cable lengths L_i")
@@ -215,8 +218,8 @@ def write_states(path, overwrite: bool, arm, data: dict, states, kind: str) -> N
             put(target, "tensions", data["tensions"], "P l^2/B", "prescribed tensions p_i")
             put(target, "tensions_N", data["tensions_N"], "N", "prescribed tensions P_i")
         group = fh.create_group("equilibria")
-        for k, (state, summary) in enumerate(zip(states, data["equilibria"]), 1):
-            g = group.create_group(f"state_{k}")
+        for state, summary in zip(states, data["equilibria"]):
+            g = group.create_group(f"state_{summary['number']}")
             write_equilibrium(g, arm, state)
             put(g["tendons"], "lengths_requested", state.lengths_requested * l_mm, "mm",
                 "prescribed cable lengths L_i (load control: the state's own chords)")
@@ -238,9 +241,9 @@ def plot(arm, data: dict, states, path, title: str) -> None:
     from ..plots.lengths import plot_states
 
     entries = []
-    for k, (state, s) in enumerate(zip(states, data["equilibria"]), 1):
+    for state, s in zip(states, data["equilibria"]):
         stab = "stable" if s["stable"] else "UNSTABLE"
-        label = (f"state {k}: p = (" + ", ".join(f"{v:.1f}" for v in s["tensions"])
+        label = (f"state {s['number']}: p = (" + ", ".join(f"{v:.1f}" for v in s["tensions"])
                  + "), L = (" + ", ".join(f"{v:.1f}" for v in s["cable_lengths_mm"])
                  + f") mm, {stab}")
         entries.append((state, label))
@@ -267,7 +270,8 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
 
 # --- the command -----------------------------------------------------------------------
 def run(args) -> int:
-    from ..solvers.lengths import LengthSolver, length_equilibria, tension_starts
+    from ..solvers.lengths import LengthSolver
+    from ..studies.search import length_equilibria, tension_starts
     from ..io.summary import rounded
 
     arm, disc = common.load_arm(args)

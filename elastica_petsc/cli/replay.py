@@ -9,7 +9,7 @@ Reads the HDF5 file written by ``elastica-petsc trace --out``: root attributes
 The first point is reached from the straight arm (through the load-controlled
 state at the first planned tensions when they are given), every further one
 by continuation in the cable lengths from the previous one
-(:func:`lengths.replay`).
+(:func:`elastica_petsc.studies.replay.replay`).
 
 HDF5 layout (``--out``)::
 
@@ -119,7 +119,8 @@ def run(args) -> int:
 
     from ..core.errors import InputError
     from ..core.fem import Discretisation
-    from ..solvers.lengths import LengthSolver, replay
+    from ..solvers.lengths import LengthSolver
+    from ..studies.replay import replay
     from ..io.summary import rounded
 
     for name in ("tip_tol_mm", "shape_tol"):

@@ -20,24 +20,22 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..solvers.equilibrium import EquilibriumSolver
+    from .. import api
     from ..io.summary import equilibrium_summary, format_equilibrium
 
     arm, disc = common.load_arm(args)
     common.check_outputs(args)
-    with EquilibriumSolver(disc) as solver:
-        eq = solver.solve(common.tensions(args, arm), order=common.order(args))
+    state = api.solve(arm, tensions=common.tensions(args, arm), order=common.order(args),
+                      elements=disc.n_elements)
+    eq = state.equilibrium
     summary = equilibrium_summary(arm, eq)
     if args.json:
         common.print_json(summary)
     else:
         print(format_equilibrium(arm, summary))
     if args.out:
-        from ..io.hdf5 import atomic_h5, provenance, write_attrs, write_equilibrium
-        with atomic_h5(args.out, args.overwrite) as fh:
-            write_attrs(fh, provenance(arm, "equilibrium"))
-            fh.attrs["loading_order"] = args.order or "proportional"
-            write_equilibrium(fh, arm, eq)
+        from ..io.save import save_state
+        save_state(args.out, arm, eq, overwrite=args.overwrite, loading=args.order or "proportional")
     if args.plot:
         from ..plots.common import plot_equilibria, tension_label
         order = f"order {args.order}" if args.order else "proportional loading"

@@ -63,6 +63,18 @@ class Arm:
     def __post_init__(self) -> None:
         validate(self)
 
+    @classmethod
+    def paper(cls) -> "Arm":
+        """The arm of the paper's Fig. 1 (``configs/paper.toml``)."""
+        from .config import load_config
+        return load_config(None)
+
+    @classmethod
+    def from_toml(cls, path) -> "Arm":
+        """An arm from a TOML configuration file (layout: ``configs/paper.toml``)."""
+        from .config import load_config
+        return load_config(path)
+
     # --- unit conversions (docs/model.md §3) -------------------------------------
     @property
     def force_scale_N(self) -> float:
@@ -86,6 +98,14 @@ class Arm:
     def routes(self) -> np.ndarray:
         """Routing points r_i / l, shape (n, 2)."""
         return np.array([t.route_mm for t in self.tendons], dtype=float) / self.length_mm
+
+    def to_mm(self, values) -> np.ndarray:
+        """Lengths in units of l to millimetres."""
+        return np.asarray(values, dtype=float) * self.length_mm
+
+    def from_mm(self, values_mm) -> np.ndarray:
+        """Millimetres to lengths in units of l."""
+        return np.asarray(values_mm, dtype=float) / self.length_mm
 
     def tensions_to_N(self, p) -> np.ndarray:
         return np.asarray(p, dtype=float) * self.force_scale_N

@@ -69,3 +69,55 @@ def format_equilibrium(arm: Arm, summary: dict) -> str:
     lines.append(f"max curvature: l*kappa = {s['kappa_max']:.4f} "
                  f"(strain limit {s['kappa_limit']:.4g}, Eq. (19))")
     return "\n".join(lines)
+
+
+def stability_summary(arm: Arm, eq: Equilibrium, result, freqs: dict | None,
+                      amplitude_mm: float) -> dict:
+    """The stability of ``eq`` (SLEPc, Sec. 4.3 (ii)) in the user's units; with
+    natural frequencies (``freqs``: control -> Frequencies) the suggested
+    maximum tracing speed v = 2 pi f_1 * ``amplitude_mm``."""
+    from ..solvers.stability import max_tracing_speed_mm_s
+
+    summary = {
+        "equilibrium": equilibrium_summary(arm, eq),
+        "stable": bool(result.stable),
+        "eigenvalues": rounded(result.eigenvalues, 8),
+        "lambda_min": round(float(result.lambda_min), 8),
+        "lambda_min_raw": float(f"{result.raw_min:.8g}"),
+        "negative_eigenvalues": int(result.negative),
+        "inertia_negative_eigenvalues": int(result.inertia_negative),
+        "asymmetry": float(f"{result.asymmetry:.3g}"),
+        "eps_reason": result.reason,
+        "mass": result.mass,
+        "units": {"eigenvalues": "lambda l^2/B (K v = lambda M v, lumped mass)",
+                  "lambda_min_raw": "lambda_min(K) / (B/l) at this mesh (paper Fig. 5b)"},
+    }
+    if freqs is not None:
+        summary["frequencies_hz"] = {c: rounded(f.hz, 6) for c, f in freqs.items()}
+        summary["max_tracing_speed_mm_s"] = round(
+            max_tracing_speed_mm_s(freqs["load"].f1_hz, amplitude_mm), 4)
+        summary["units"]["max_tracing_speed_mm_s"] = (
+            f"2 pi f_1 (tensions held) x {amplitude_mm:g} mm tolerated vibration")
+    return summary
+
+
+def format_stability(arm: Arm, summary: dict) -> str:
+    """The text that ``elastica-petsc stability`` prints."""
+    lines = [format_equilibrium(arm, summary["equilibrium"]),
+             f"\nstability (SLEPc, K v = lambda M v, lumped mass): "
+             f"{'STABLE' if summary['stable'] else 'UNSTABLE'}",
+             "  smallest eigenvalues lambda l^2/B: "
+             + ", ".join(f"{v:.6g}" for v in summary["eigenvalues"]),
+             f"  paper's raw lambda_min(K)/(B/l) at N = {summary['equilibrium']['elements']}: "
+             f"{summary['lambda_min_raw']:.6g}",
+             f"  negative eigenvalues: {summary['negative_eigenvalues']} (inertia count: "
+             f"{summary['inertia_negative_eigenvalues']});  asymmetry ||K-K^T||/||K|| = "
+             f"{summary['asymmetry']:.2e}"]
+    for control, hz in summary.get("frequencies_hz", {}).items():
+        held = "tensions held" if control == "load" else "cable lengths held"
+        lines.append(f"  natural frequencies ({held}): " + ", ".join(f"{v:.4g}" for v in hz)
+                     + " Hz")
+    if "max_tracing_speed_mm_s" in summary:
+        lines.append(f"  suggested max tracing speed: {summary['max_tracing_speed_mm_s']:.3g} "
+                     f"mm/s ({summary['units']['max_tracing_speed_mm_s']})")
+    return "\n".join(lines)

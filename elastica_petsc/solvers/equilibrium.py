@@ -25,6 +25,8 @@ SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not
 
 # A cable shorter than this (in units of l) has collapsed onto its routing point.
 COLLAPSE_LENGTH = 2e-3
+# The reason reported then (the same name as tip control's, solvers/control.py).
+CABLE_COLLAPSE = "CABLE_COLLAPSE"
 
 
 @dataclass(frozen=True)
@@ -291,7 +293,7 @@ class EquilibriumSolver:
                     u, lam, steps, self._modes = u_new, lam + step, steps + 1, modes
                     if np.min(self.disc.cables(self.disc.split(u)[1])[0]) < COLLAPSE_LENGTH:
                         # a cable collapsed onto its routing point: no load beyond
-                        return u, pa + lam * (pb - pa), iterations, steps, "CABLE_COLLAPSED", False
+                        return u, pa + lam * (pb - pa), iterations, steps, CABLE_COLLAPSE, False
                     if its <= 4:
                         dlam = min(2.0 * dlam, full)
                     continue

@@ -399,7 +399,7 @@ class StabilitySolver:
         disc = self.disc
         theta, y = disc.split(np.asarray(u, float))
         _, d = disc.cables(y)
-        band = disc._band(theta, d, np.asarray(p, float))
+        band = disc.band(theta, d, np.asarray(p, float))
         w = self.m if weights is None else weights
         s = 1.0 / np.sqrt(w)
         lower = np.abs(band[1:, 0]) * s[1:] * s[:-1]      # |T[r, r-1]|, r >= 1

@@ -1,0 +1,100 @@
+"""The public Python API (issue 10): mm and newtons at the edge, one call per study."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import elastica_petsc as ep
+
+SCRIPT = """\
+import elastica_petsc as ep
+arm = ep.Arm.paper()
+s = ep.solve(arm, tensions_N=[14.0, 6.0], order=(2, 1))
+c = ep.control(arm, [535.8, 222.6])
+w = ep.workspace(arm, spacing_mm=100)
+print(*s.cable_lengths_mm, *c.tensions_N, len(w.status), int(w.masks["W0"].sum()))
+"""
+
+
+def test_fifteen_line_script_reproduces_fig8_and_fig2(tmp_path):
+    """The issue's script: Fig. 8 state 1, Fig. 2 and a map without writing a file."""
+    assert len(SCRIPT.splitlines()) <= 15
+    done = subprocess.run([sys.executable, "-c", SCRIPT], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    values = [float(v) for v in done.stdout.split()]
+    assert values[0:2] == pytest.approx([147.2, 472.5], abs=0.5)     # Fig. 8 state 1, mm
+    assert values[2:4] == pytest.approx([1.206, 4.201], abs=0.01)    # Fig. 2 tensions, N
+    assert values[4] > 0 and 0 < values[5] < values[4]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_import_does_not_start_petsc():
+    code = "import sys, elastica_petsc; print('petsc4py.PETSc' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+def test_all_names_resolve():
+    for name in ep.__all__:
+        assert getattr(ep, name) is not None
+    with pytest.raises(AttributeError):
+        ep.no_such_name
+
+
+def test_state_units_match_the_nondimensional_state():
+    arm = ep.Arm.paper()
+    s = ep.solve(arm, tensions=[25.2, 10.8], order=(1, 2))           # Fig. 8 state 3
+    eq = s.equilibrium
+    assert s.loading == "order 1,2"
+    assert s.x_mm.shape == (arm.elements + 1, 2)
+    np.testing.assert_allclose(s.tip_mm, eq.tip * arm.length_mm)
+    np.testing.assert_allclose(s.tensions_N, eq.p * arm.force_scale_N)
+    assert s.cable_lengths_mm == pytest.approx([96.3, 454.3], abs=0.2)   # paper (96.2, 454.3)
+
+
+def test_bad_input_is_an_input_error():
+    arm = ep.Arm.paper()
+    with pytest.raises(ep.InputError, match="exactly one"):
+        ep.solve(arm, tensions_N=[1, 1], tensions=[1, 1])
+    with pytest.raises(ep.InputError, match="negative"):
+        ep.solve(arm, tensions_N=[-1, 1])
+    with pytest.raises(ep.InputError, match="permutation"):
+        ep.solve(arm, tensions_N=[1, 1], order=(1, 1))
+    with pytest.raises(ep.InputError, match="target_mm"):
+        ep.control(arm, [1.0, float("nan")])
+
+
+def test_read_returns_the_state_the_cli_wrote(tmp_path):
+    out = tmp_path / "s.h5"
+    subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "solve", "--tensions", "25.2",
+                    "10.8", "--order", "1,2", "--out", str(out)], check=True, capture_output=True)
+    s = ep.read(out)
+    direct = ep.solve(ep.Arm.paper(), tensions=[25.2, 10.8], order=(1, 2))
+    assert isinstance(s, ep.State) and s.loading == "order 1,2"
+    np.testing.assert_allclose(s.x_mm, direct.x_mm, atol=1e-9)
+    np.testing.assert_allclose(s.cable_lengths_mm, direct.cable_lengths_mm, atol=1e-9)
+    assert s.stable and s.converged
+
+
+def test_read_refuses_what_it_cannot_read(tmp_path):
+    (tmp_path / "x.h5").write_text("not hdf5")
+    with pytest.raises(ep.InputError, match="not an HDF5 file"):
+        ep.read(tmp_path / "x.h5")
+    with pytest.raises(ep.InputError, match="no such file"):
+        ep.read(tmp_path / "missing.h5")
+
+
+def test_readme_python_block_runs(tmp_path):
+    """The README's Python section is a script that runs as shown."""
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = readme.split("## Python", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    done = subprocess.run([sys.executable, "-c", block], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "motors.csv").exists()
