@@ -511,3 +511,20 @@ def test_run_map_returns_the_arrays_without_a_file(targets_1, tmp_path, monkeypa
     w0 = ws.masks["W0"]
     np.testing.assert_allclose(ws.tensions_N[w0], ws.tensions[w0] * arm.force_scale_N)
     assert not ws.tip_mm.flags.writeable
+
+
+def test_read_map_gives_back_the_file(targets_1):
+    """``read_map`` (behind ``ep.read``) rebuilds the map the command line wrote."""
+    from elastica_petsc.studies.workspace import read_map
+
+    ws = read_map(targets_1)
+    assert ws.complete and ws.samples_total == 77 and ws.mode == "targets"
+    reference = samples(targets_1)
+    for name in ("tip", "tensions", "status", "reason", "lambda_min"):
+        x = ws.samples[name]
+        assert (np.array_equal(x, reference[name], equal_nan=True) if x.dtype.kind == "f"
+                else np.array_equal(x, reference[name])), name
+    with h5py.File(targets_1, "r") as fh:
+        for name, mask in ws.masks.items():
+            assert np.array_equal(mask, fh["masks"][name][()]), name
+    assert ws.summary()["masks"]["W0"] == int(ws.masks["W0"].sum()) > 0

@@ -722,6 +722,33 @@ class WorkspaceMap:
         }
 
 
+def read_map(path) -> WorkspaceMap:
+    """A workspace file written by :func:`run_map` (or ``workspace --out``), complete
+    or partial, back into a :class:`WorkspaceMap`."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as fh:
+            order, bounds = fh["grid/chunk_order"][()], fh["grid/chunk_bounds"][()]
+            chunks = tuple(order[bounds[c]:bounds[c + 1]] for c in range(len(bounds) - 1))
+            mode = fh.attrs["mode"]
+            mode = mode.decode() if isinstance(mode, bytes) else str(mode)
+            grid = Grid(mode, fh["grid/points"][()], chunks,
+                        json.loads(fh.attrs.get("grid_json", "{}")))
+            results = Results(grid, int(fh.attrs["n_tendons"]))
+            results.chunk_done[:] = fh["grid/chunk_done"][()]
+            for name in results.schema:
+                results.data[name][...] = fh["samples"][name][()]
+            limits = {key: fh["masks"].attrs.get(key) for key in
+                      ("kappa_limit", "strain_energy_max", "max_tension")}
+            ranks = int(fh["timing"].attrs.get("ranks", 1))
+    except OSError as err:
+        raise InputError(f"{path}: cannot read it as HDF5: {err}") from None
+    except (KeyError, ValueError) as err:
+        raise InputError(f"{path}: not a workspace file (missing or malformed {err})") from None
+    return WorkspaceMap.from_results(results, limits, ranks, path)
+
+
 def limits_of(arm) -> dict:
     """The admissibility limits of Eqs. (19), (21), (22) in non-dimensional form."""
     return {"kappa_limit": arm.kappa_limit,
