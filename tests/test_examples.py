@@ -1,6 +1,7 @@
 """Every script in examples/ runs as a user would run it, and prints the pinned numbers."""
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -13,7 +14,11 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
 def run(*cmd: str, cwd: Path) -> str:
-    done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=300)
+    # env given explicitly: once this process has initialised MPI (any in-process PETSc
+    # test before this one), Open MPI has changed its C-level environment, and an
+    # mpiexec that inherits it exits 1 without a word
+    done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ))
     assert done.returncode == 0, done.stderr
     return done.stdout
 

@@ -16,13 +16,24 @@ Output: ranks send finished chunks to rank 0 (non-blocking sends, so a
 rank never waits for rank 0 to finish its own chunk), which holds the
 results and writes the whole file aside and renames it into place (a
 checkpoint) every few seconds and at the end.  A chunk is marked done only
-when all its samples are stored, so the file on disk is always valid: Ctrl-C
-or SIGTERM triggers a last checkpoint (on rank 0 alone, it also exhausts the
-chunk counter, so the other ranks stop after their current chunk; rank 0
-waits for them at most ``STOP_GRACE`` seconds); a killed rank loses at most
-the chunks finished since the previous checkpoint (the MPI launcher ends the
-job: Open MPI's mpiexec does; with srun use ``--kill-on-bad-exit=1``).
-``resume`` recomputes only chunks not done.
+when all its samples are stored, so the file on disk is always valid.
+
+Stop protocol (SIGINT/SIGTERM to any rank, to mpiexec or to its process
+group; :func:`run`): the stopped rank exhausts the shared chunk counter
+(one-sided, no rank waits), every rank sees it at its next sample and leaves
+its chunk; rank 0 writes a checkpoint at once (Open MPI's mpiexec kills the
+ranks about 2 s after forwarding a signal), receives until every rank has
+said it finished, and writes the last one.  No collective is entered unless
+every rank is known to reach it, so no rank is left in MPI_Waitall or in
+PETSc's finalisation.  A rank still busy ``STOP_GRACE`` seconds after a stop
+(one sample too slow) makes rank 0 return ``stranded``; the command line
+then exits without MPI finalisation and mpiexec ends the rest.  A rank
+killed outright loses at most the chunks finished since the previous
+checkpoint (the MPI launcher ends the job: Open MPI's mpiexec does; with
+srun use ``--kill-on-bad-exit=1``).  While a run owns its output file it
+holds a lock beside it (:class:`~elastica_petsc.io.hdf5.OutputLock`).
+``resume`` recomputes only chunks not done, and refuses a file made with
+another grid, arm, element count, version or result-changing PETSc options.
 Gathering to one writer instead of parallel HDF5 (mpio) was chosen because
 the data are tiny (a few hundred bytes per sample) and an atomic rename is
 the only way to keep the file valid when a process dies mid-write; the
@@ -55,7 +66,7 @@ from ..core.errors import InputError
 
 TAG_RESULT, TAG_FINISHED = 11, 12
 CHECKPOINT_ENV = "ELASTICA_PETSC_CHECKPOINT_SECONDS"
-STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the chunks other ranks finish
+STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the other ranks' last samples
 
 # status codes of a sample
 NOT_DONE, REACHED, NEEDS_NEGATIVE, NOT_CONVERGED = 0, 1, 2, 3
