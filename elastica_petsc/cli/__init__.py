@@ -90,11 +90,9 @@ def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     args, rest = parser.parse_known_args(argv)
     petsc_options = split_petsc_options(parser, rest)
-    import petsc4py
-    petsc4py.init([parser.prog] + petsc_options)
-    from petsc4py import PETSc  # initialises PETSc with those options
+    from ..solvers import runtime
     # PETSc errors become one line here (main), not PETSc's error stack on stderr
-    PETSc.Sys.pushErrorHandler("ignore")
+    runtime.init(parser.prog, petsc_options)
     # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     signal.signal(signal.SIGTERM, _interrupt)   # again: PETSc's initialisation may take it
@@ -112,19 +110,16 @@ def _main(argv: list[str] | None) -> int:
     except KeyboardInterrupt:
         print("elastica-petsc: interrupted", file=sys.stderr)
         return 130
-    except PETSc.Error as err:
-        return _petsc_error(err, petsc_options)
+    except Exception as err:
+        what = runtime.error_text(err)
+        if what is None:
+            raise
+        return _petsc_error(what, petsc_options)
 
 
-PETSC_ERRORS = {55: "out of memory", 56: "not supported", 60: "nonconforming sizes",
-                62: "invalid argument", 63: "argument out of range", 73: "object in wrong state",
-                76: "error in an external library"}
-
-
-def _petsc_error(err, petsc_options: list[str]) -> int:
+def _petsc_error(what: str, petsc_options: list[str]) -> int:
     """One line for a PETSc error: with PETSc options given, most likely one of
     them (a value PETSc cannot read): bad input, status 2; otherwise status 1."""
-    what = PETSC_ERRORS.get(err.ierr, f"error code {err.ierr}")
     if petsc_options:
         print(f"elastica-petsc: error: PETSc: {what}; check the PETSc options "
               f"{' '.join(petsc_options)}", file=sys.stderr)
