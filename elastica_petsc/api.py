@@ -117,18 +117,25 @@ def _loading(order) -> str:
     return "proportional" if order is None else "order " + ",".join(map(str, order))
 
 
-def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None,
+def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None, side: str | None = None,
           elements: int | None = None) -> State:
     """The equilibrium reached by loading the straight arm to the given tensions
     (Eq. (9), PETSc SNES with load stepping).
 
     ``order=(2, 1)`` tensions tendon 2 fully before tendon 1; ``None`` loads all
-    tendons proportionally (the order selects the state, Fig. 8).
+    tendons proportionally (the order selects the state, Fig. 8).  At a
+    symmetric bifurcation crossed on the way, ``side="left"``/``"right"``
+    picks the buckled branch on which the tip moves counter-clockwise /
+    clockwise of its tangent; by default the branch of lower potential energy
+    (equal energies: left).  ``State.equilibrium.bifurcations`` lists them.
     """
+    from .solvers.equilibrium import solve_equilibrium
+
     p = _tensions(arm, tensions_N, tensions)
     order = check_order(order, arm.n_tendons)
-    with EquilibriumSolver(_mesh(arm, elements)) as solver:
-        eq = solver.solve(p, order=order)
+    if side not in (None, "left", "right"):
+        raise InputError(f"side must be 'left' or 'right', got {side!r}")
+    eq = solve_equilibrium(_mesh(arm, elements), p, order=order, side=side)
     return State(arm, eq, _loading(order))
 
 
@@ -148,30 +155,47 @@ def control(arm: Arm, target_mm, *, guess_N=None, method: str = "blmvm",
         return ctl.solve_mm(target, p0=p0)
 
 
+def _points(points_mm) -> np.ndarray:
+    points = np.asarray(points_mm, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 2 or len(points) < 1:
+        raise InputError("points_mm must be an array of shape (K, 2) in mm")
+    return points
+
+
 def trace(arm: Arm, points_mm, *, step_mm: float | None = None, elements: int | None = None):
     """Tip control along a path, each target warm-started from the previous
     solution (Sec. 4.5, Fig. 3).  ``step_mm`` inserts points so that no two
     consecutive targets are further apart.  Returns a ``TraceResult``
     (``tips_mm``, ``tensions_N``, ``cable_lengths_mm`` per point) and its
-    motor schedule through :func:`schedule`."""
+    for a timed motor schedule with an approach move see :func:`schedule`."""
     from .solvers.control import TipController
     from .studies import trace as paths
 
-    points = np.asarray(points_mm, dtype=float)
-    if points.ndim != 2 or points.shape[1] != 2 or len(points) < 1:
-        raise InputError("points_mm must be an array of shape (K, 2) in mm")
+    points = _points(points_mm)
     if step_mm is not None:
         points = paths.densify(points, step_mm)
     with TipController(arm, n_elements=elements) as ctl:
         return paths.trace(ctl, points)
 
 
-def schedule(arm: Arm, traced):
-    """Spool revolutions and motor microsteps for a traced path (Sec. 4.5); a
-    ``MotorSchedule`` with ``write_csv(path)``."""
-    from .core.schedule import schedule_from_trace
+def schedule(arm: Arm, points_mm, *, step_mm: float = 1.0, speed_mm_s: float | None = None,
+             approach: bool = True, guess_N=None, elements: int | None = None):
+    """A timed motor schedule for a path (Sec. 4.5): an approach move from the
+    straight arm (or the state at ``guess_N``) to the first point, then the
+    path traced at ``step_mm`` spacing, cable lengths turned into spool
+    revolutions and microsteps, timed at ``speed_mm_s`` (default: the safe
+    tracing speed from the lowest natural frequency, Sec. 4.5 (vi)).  Returns
+    a ``TracedSchedule``: ``.schedule`` (``write_csv(path)``, ``lengths_at(t)``),
+    ``.path`` and ``.approach`` (``TraceResult``), ``.speed``."""
+    from .solvers.control import TipController
+    from .studies import trace as paths
+    from .studies.schedule import trace_schedule
 
-    return schedule_from_trace(traced, arm)
+    p0 = None if guess_N is None else check_tensions(arm.tensions_from_N(guess_N), arm.n_tendons)
+    points = paths.densify(_points(points_mm), step_mm)
+    with TipController(arm, n_elements=elements) as ctl:
+        return trace_schedule(ctl, points, step_mm=step_mm, speed_mm_s=speed_mm_s,
+                              approach=approach, p0=p0)
 
 
 def stability(state: State, *, modes: int = 4):

@@ -84,7 +84,7 @@ def fig8(ctx: Context) -> None:
     from .io.hdf5 import atomic_h5, provenance, write_attrs, write_equilibrium
     from .solvers.lengths import LengthSolver
     from .studies.search import length_equilibria
-    from .plots.common import plot_equilibria
+    from .plots.lengths import plot_states
 
     arm, l_mm = ctx.arm, ctx.arm.length_mm
     disc = Discretisation.from_arm(arm)
@@ -114,12 +114,13 @@ def fig8(ctx: Context) -> None:
         write_attrs(fh, provenance(arm, "fig8"))
         for name, eq in (("state1", state1), ("state2", found2), ("state3", state3)):
             write_equilibrium(fh.create_group(name), arm, eq)
-    plot_equilibria(arm, [(state1, "state 1: p = (25.2, 10.8), L = " + _fmt(L1)),
-                          (found2, "state 2: p = " + _fmt(found2.p) + ", L = "
-                           + _fmt(found2.cable_lengths * l_mm)),
-                          (state3, "state 3: p = (25.2, 10.8), L = " + _fmt(L3))],
-                    ctx.path("fig8.png", "Fig. 8"),
-                    title="Fig. 8: states 1, 2 share cable lengths; states 1, 3 share tensions")
+    plot_states(arm, [(state1, "state 1: p = (25.2, 10.8), L = " + _fmt(L1)),
+                      (found2, "state 2: p = " + _fmt(found2.p) + ", L = "
+                       + _fmt(found2.cable_lengths * l_mm)),
+                      (state3, "state 3: p = (25.2, 10.8), L = " + _fmt(L3))],
+                ctx.path("fig8.png", "Fig. 8"), circles_mm=FIG8_LENGTHS_MM,
+                title="Fig. 8: states 1, 2 share cable lengths (attachments on the dashed "
+                      "circles); states 1, 3 share tensions")
 
 
 # --- Fig. 2: descent iterations ----------------------------------------------------------
@@ -156,9 +157,12 @@ def _trace(ctx: Context, name: str, points, figure: str):
     from .plots.control import plot_trace
     from .core.schedule import schedule_from_trace
 
+    from .core.progress import Progress
+
     targets = densify(points, ctx.trace_step_mm)
-    with TipController(ctx.arm) as controller:
-        result = trace(controller, targets, p0=np.full(2, 2.0), keep_results=True)
+    with TipController(ctx.arm) as controller, Progress(len(targets), f"trace {name}") as bar:
+        result = trace(controller, targets, p0=np.full(2, 2.0), keep_results=True,
+                       on_point=bar.update)
     schedule = schedule_from_trace(result, ctx.arm)
     with atomic_h5(ctx.path(f"{name}.h5", figure), overwrite=True) as fh:
         write_attrs(fh, provenance(ctx.arm, "trace"))
@@ -287,7 +291,8 @@ def fig4_5(ctx: Context, out: Path) -> None:
 
 # --- Fig. 7: buckling under length control ----------------------------------------------
 def fig7(ctx: Context) -> None:
-    from .studies.buckling import fig7 as fig7_scenario, plot_fig7
+    from .plots.buckling import plot_fig7
+    from .studies.buckling import fig7 as fig7_scenario
     from .solvers.equilibrium import EquilibriumSolver
     from .core.fem import Discretisation
     from .solvers.lengths import LengthSolver

@@ -98,3 +98,35 @@ def test_readme_python_block_runs(tmp_path):
                           text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "motors.csv").exists()
+
+
+def test_read_round_trips_an_arm_without_optional_keys(tmp_path):
+    """A config without mass or motor limit (None in the arm) survives config_json."""
+    from elastica_petsc.core.config import arm_from_dict, arm_to_dict
+
+    cfg = tmp_path / "one.toml"
+    cfg.write_text("[arm]\nlength_mm = 1000.0\nbending_stiffness_Nm2 = 1.0\nelements = 40\n"
+                   "[[tendon]]\nattach_mm = 1000.0\nroute_mm = [-5000.0, 0.0]\n")
+    arm = ep.Arm.from_toml(cfg)
+    assert arm.mass_per_length_kg_m is None and arm.motor.max_tension_N is None
+    assert arm_from_dict(arm_to_dict(arm)) == arm
+
+
+def test_bifurcation_side_and_its_record(tmp_path):
+    """Cable through (l/2, 0) past p_cr = 18.27: both buckled sides by side=, and the
+    bifurcation crossed travels through the file (solve --out, ep.read)."""
+    cfg = tmp_path / "mid.toml"
+    cfg.write_text("[arm]\nlength_mm = 1000.0\nbending_stiffness_Nm2 = 1.0\nelements = 60\n"
+                   "[[tendon]]\nattach_mm = 1000.0\nroute_mm = [500.0, 0.0]\n")
+    arm = ep.Arm.from_toml(cfg)
+    left, right = (ep.solve(arm, tensions=[18.6], side=s) for s in ("left", "right"))
+    assert left.stable and right.stable
+    assert left.tip_mm[1] > 50 and right.tip_mm[1] == pytest.approx(-left.tip_mm[1], abs=1e-6)
+    out = tmp_path / "s.h5"
+    subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "solve", "--config", str(cfg),
+                    "--tensions", "18.6", "--side", "right", "--out", str(out)], check=True,
+                   capture_output=True)
+    back = ep.read(out)
+    np.testing.assert_allclose(back.tip_mm, right.tip_mm, atol=1e-9)
+    (b,) = back.equilibrium.bifurcations
+    assert b.side == "right" and b.p_critical[0] == pytest.approx(18.27, abs=0.05)

@@ -23,8 +23,8 @@ import sys
 
 from ..core.errors import InputError
 
-COMMANDS = ("solve", "control", "trace", "stability", "workspace", "lengths", "equilibria", "replay",
-            "reproduce")
+COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "design", "lengths",
+            "equilibria", "replay", "reproduce")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed
@@ -85,6 +85,17 @@ def main(argv: list[str] | None = None) -> int:
         return 130
 
 
+def warn_unused(petsc_options: list[str]) -> None:
+    """One line per PETSc option from the command line that no solver read
+    (a misspelt -eq_snes_monitr), as PETSc's -options_left would (rank 0)."""
+    from ..solvers.options import unused_options
+
+    names = [t for t in petsc_options if t.startswith("-") and not _is_number(t)]
+    for name in (unused_options(names, root_only=True) if names else None) or ():
+        print(f"elastica-petsc: warning: PETSc option {name} was not used by any solver "
+              "(misspelt, or not for this command?)", file=sys.stderr)
+
+
 def _main(argv: list[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
@@ -93,28 +104,36 @@ def _main(argv: list[str] | None) -> int:
     from ..solvers import runtime
     # PETSc errors become one line here (main), not PETSc's error stack on stderr
     runtime.init(parser.prog, petsc_options)
+    from ..core import progress
     # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     signal.signal(signal.SIGTERM, _interrupt)   # again: PETSc's initialisation may take it
+    progress.configure(quiet=getattr(args, "quiet", False))
     try:
-        return args.run(args)
+        status = args.run(args)
     except InputError as err:
+        progress.close_all()
         if _first_to_say(err):
             print(f"elastica-petsc: error: {err}", file=sys.stderr)
         return 2
     except OSError as err:                      # an output that could not be written
+        progress.close_all()
         where = f" {err.filename}" if err.filename else ""
         print(f"elastica-petsc: error: cannot write{where}: {err.strerror or err}",
               file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        progress.close_all()
         print("elastica-petsc: interrupted", file=sys.stderr)
         return 130
     except Exception as err:
         what = runtime.error_text(err)
         if what is None:
             raise
+        progress.close_all()
         return _petsc_error(what, petsc_options)
+    warn_unused(petsc_options)
+    return status
 
 
 def _petsc_error(what: str, petsc_options: list[str]) -> int:

@@ -22,7 +22,10 @@ def add_output_options(parser: argparse.ArgumentParser, plot: bool = True) -> No
                         help="print one JSON object on stdout instead of the text summary")
     parser.add_argument("--out", metavar="H5", help="write the results to this HDF5 file")
     parser.add_argument("--overwrite", action="store_true",
-                        help="replace an existing --out/--plot file")
+                        help="replace existing output files (--out, --plot and the like)")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress bar or progress lines (for batch jobs); results and "
+                             "errors are still printed")
     if plot:
         parser.add_argument("--plot", metavar="PNG", help="draw a figure into this PNG file")
 
@@ -33,6 +36,35 @@ def add_tension_options(parser: argparse.ArgumentParser, required: bool = True) 
                        help="cable tensions, non-dimensional p_i = P_i l^2 / B, one per tendon")
     group.add_argument("--tensions-N", type=float, nargs="+", metavar="P",
                        help="cable tensions in newtons, one per tendon")
+
+
+def add_tension_option(parser: argparse.ArgumentParser, flag: str, *, help: str,
+                       nargs=None, default=None, metavar: str = "P") -> None:
+    """``flag`` in p = P l^2/B and its newton form ``flag-N``, mutually
+    exclusive; :func:`load_arm` turns a given ``flag-N`` into ``flag``'s p."""
+    group = parser.add_mutually_exclusive_group()
+    shown = "" if default is None else "; default " + " ".join(
+        f"{v:g}" for v in (default if isinstance(default, list) else [default]))
+    group.add_argument(flag, type=float, nargs=nargs, default=default, metavar=metavar,
+                       help=f"{help} (non-dimensional p = P l^2/B{shown})")
+    group.add_argument(f"{flag}-N", type=float, nargs=nargs, metavar="N",
+                       help=f"the same in newtons (instead of {flag})")
+
+
+def newton_forms(args, arm: Arm) -> None:
+    """Replace every given ``--X-N`` value (newtons) by ``--X`` in p = P l^2/B."""
+    import math
+
+    for key in list(vars(args)):
+        value = getattr(args, key)
+        if not key.endswith("_N") or key == "tensions_N" or value is None:
+            continue
+        flag = "--" + key[:-2].replace("_", "-") + "-N"
+        values = value if isinstance(value, list) else [value]
+        if not all(math.isfinite(v) and v >= 0 for v in values):
+            raise InputError(f"{flag}: tensions must be finite and >= 0 N, got {value}")
+        p = [float(v) for v in arm.tensions_from_N(values)]
+        setattr(args, key[:-2], p if isinstance(value, list) else p[0])
 
 
 def add_order_option(parser: argparse.ArgumentParser) -> None:
@@ -46,6 +78,7 @@ def load_arm(args) -> tuple[Arm, "Discretisation"]:
     from ..core.fem import Discretisation
 
     arm = load_config(args.config)
+    newton_forms(args, arm)
     if args.elements is not None and args.elements < 2:
         raise InputError(f"--elements must be at least 2, got {args.elements}")
     return arm, Discretisation.from_arm(arm, args.elements)
@@ -59,7 +92,8 @@ def tensions(args, arm: Arm):
 
 
 def guess(args, disc):
-    """Validated initial tensions from ``--guess`` (non-dimensional), or None."""
+    """Validated initial tensions from ``--guess`` (non-dimensional p) or
+    ``--guess-N`` (newtons, converted by :func:`load_arm`), or None."""
     if args.guess is None:
         return None
     from ..solvers.equilibrium import check_tensions

@@ -22,10 +22,16 @@ def add_parser(sub) -> None:
     parser.add_argument("--method", choices=("blmvm", "gd"), default="blmvm",
                         help="blmvm: TAO bound-constrained quasi-Newton (default); gd: the "
                              "paper's gradient descent with adaptive step (Algorithm 1)")
-    parser.add_argument("--guess", type=float, nargs="+", metavar="P",
-                        help="initial tensions, non-dimensional p = P l^2/B (default 0)")
+    common.add_tension_option(parser, "--guess", nargs="+",
+                              help="initial tensions, one per tendon (default 0)")
     parser.add_argument("--tol-mm", type=float, default=1e-5, metavar="MM",
                         help="tip tolerance in mm (default 1e-5, the paper's eps = 1e-10 mm^2)")
+    parser.add_argument("--animate", metavar="GIF|MP4",
+                        help="write an animation of the arm through the optimiser's iterations "
+                             "(Fig. 2 as a movie; .gif with Pillow, .mp4 needs ffmpeg)")
+    parser.add_argument("--vtk", metavar="DIR",
+                        help="write the final state (arm and cables) for ParaView as "
+                             "DIR/control.vtu")
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
@@ -102,9 +108,18 @@ def run(args) -> int:
         raise InputError(f"--tol-mm must be positive, got {args.tol_mm}")
     guess = common.guess(args, disc)
     common.check_target_mm(arm, args.target)
+    if args.animate:
+        from ..plots.animate import check_animation_path
+        check_animation_path(args.animate, args.overwrite)
+    if args.vtk:
+        from ..io.vtk import check_directory
+        check_directory(args.vtk, args.overwrite)
     with TipController(arm, n_elements=disc.n_elements, method=args.method,
                        tip_tol_mm=args.tol_mm) as controller:
         result = controller.solve_mm(args.target, p0=guess)
+        if args.animate:
+            from ..plots.animate import animate_control
+            animate_control(controller, result, args.animate)
     summary = control_summary(arm, result)
     if args.json:
         common.print_json(summary)
@@ -118,6 +133,12 @@ def run(args) -> int:
     if args.plot:
         from ..plots.control import plot_descent
         plot_descent(arm, result, args.plot)
+    if args.vtk:
+        from pathlib import Path
+
+        from ..io.vtk import write_state
+        Path(args.vtk).mkdir(exist_ok=True)
+        write_state(Path(args.vtk) / "control.vtu", arm, result.equilibrium)
     if result.converged:
         return 0
     if result.reachable is False:

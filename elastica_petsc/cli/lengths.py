@@ -20,7 +20,8 @@ HDF5 layout (``--out``), besides the provenance attributes of every file::
                              length_unstable_modes, stable_under_length_control,
                              found_start, found_method, hits
     root attributes          control, n_equilibria, state_numbers, search_* (method, starts,
-                             attempts, failed, refound, start_labels_json), note
+                             attempts, failed, refound, start_labels_json, coverage_json,
+                             effort_json), note
 """
 from __future__ import annotations
 
@@ -34,13 +35,17 @@ NOT_COMPLETE = ("These are the equilibria that the listed starts and methods rea
 
 
 def add_search_options(parser) -> None:
-    parser.add_argument("--levels", type=float, nargs="+", default=[5.0, 10.0, 20.0],
-                        metavar="P",
-                        help="tension levels (non-dimensional) of the load-controlled start "
-                             "states of the search: every combination, every loading order "
-                             "(default 5 10 20)")
-    parser.add_argument("--deflation-rounds", type=int, default=2, metavar="K",
-                        help="deflated Newton solves per start and sweep (default 2)")
+    parser.add_argument("--effort", type=int, default=1, metavar="K",
+                        help="spend about K times the default work: K x 12 deflated "
+                             "continuation points per path segment, K x 2 deflated solves per "
+                             "start, and the start tension levels doubled K-1 more times "
+                             "(default 1)")
+    common.add_tension_option(parser, "--levels", nargs="+",
+                              help="tension levels of the load-controlled start states of the "
+                                   "search: every combination, every loading order "
+                                   "(default 5 10 20, extended by --effort)")
+    parser.add_argument("--deflation-rounds", type=int, metavar="K",
+                        help="deflated Newton solves per start and sweep (default 2 x effort)")
 
 
 def add_parser(sub) -> None:
@@ -83,13 +88,21 @@ def check_lengths_mm(values, n_tendons: int):
     return L
 
 
-def check_search_options(args) -> None:
+def check_search_options(args) -> dict:
+    """Validated search settings (studies.search.effort_settings) from the options."""
     from ..core.errors import InputError
+    from ..studies.search import effort_settings
 
-    if args.deflation_rounds < 0:
+    if args.effort < 1:
+        raise InputError(f"--effort must be an integer >= 1, got {args.effort}")
+    if args.deflation_rounds is not None and args.deflation_rounds < 0:
         raise InputError(f"--deflation-rounds must be >= 0, got {args.deflation_rounds}")
-    if not all(math.isfinite(v) and v > 0 for v in args.levels):
+    if args.levels is not None and not all(math.isfinite(v) and v > 0 for v in args.levels):
         raise InputError("--levels: tension levels must be positive numbers")
+    settings = effort_settings(args.effort, args.levels)
+    if args.deflation_rounds is not None:
+        settings["deflation_rounds"] = args.deflation_rounds
+    return dict(settings, effort=args.effort)
 
 
 # --- plain data ------------------------------------------------------------------------
@@ -128,11 +141,26 @@ def state_summary(arm, state, control: str, found=None) -> dict:
     return s
 
 
-def search_summary(result) -> dict:
-    """How a SearchResult was obtained."""
+def search_summary(result, settings: dict) -> dict:
+    """How a SearchResult was obtained, and its coverage."""
+    what = "cable lengths" if result.control == "length" else "tensions"
     how = "length continuation" if result.control == "length" else "loading paths"
-    return {"method": f"multi-start search: {how} from each start, then deflated Newton "
-                      "solves (Farrell et al. 2015)",
+    method = (f"deflated continuation in the {what} from the straight arm along every "
+              f"loading order ({settings['steps']} points per segment; Farrell et al. 2016), "
+              f"then a multi-start search: {how} and up to {settings['deflation_rounds']} "
+              "deflated Newton solves (Farrell et al. 2015) from each start (load-controlled "
+              "states at the tension levels " + " ".join(f"{v:g}" for v in settings["levels"])
+              + " in every loading order, and any branch the continuation lost)")
+    if result.control == "load":
+        method = ("loading paths from the straight arm (every order, both sides of each "
+                  "bifurcation), " + method)
+    if settings["effort"] > 1:
+        method += (f"; effort {settings['effort']}: the searches of every lower effort first, "
+                   "then this one (the numbers above are its own)")
+    return {"method": method, "effort": settings,
+            "coverage": {"by_method": {m: {"attempts": a, "new_states": k}
+                                       for m, (a, k) in result.methods().items()},
+                         "last_new_state_at_attempt": result.last_new_attempt},
             "starts": len(result.starts), "attempts": int(result.attempts),
             "failed": int(result.failures), "refound": int(result.duplicates),
             "start_labels": list(result.starts),
@@ -155,7 +183,18 @@ def format_states(arm, data: dict) -> str:
     lines = [f"{n} equilibri{'um' if n == 1 else 'a'} at {target}",
              f"search: {search['method']}; {search['starts']} start(s), {search['attempts']} "
              f"attempt(s), {search['failed']} failed, {search['refound']} re-found a known state"]
+    if "coverage" in search:
+        cov = search["coverage"]
+        lines.append("coverage: " + "; ".join(
+            f"{m}: {v['attempts']} attempt(s), {v['new_states']} new"
+            for m, v in cov["by_method"].items())
+            + f"; the last new state came at attempt {cov['last_new_state_at_attempt']} of "
+              f"{search['attempts']} (more effort: --effort)")
     other = "load" if data["control"] == "length" else "length"
+    numbers = [s["number"] for s in data["equilibria"]]
+    if numbers != list(range(1, n + 1)):
+        lines.append("state numbers: the paper's (Fig. 8) for the states it shows, the others "
+                     "after them")
     for s in data["equilibria"]:
         own = "yes" if s["stable"] else "NO"
         oth = s[f"stable_under_{other}_control"]
@@ -209,6 +248,8 @@ def write_states(path, overwrite: bool, arm, data: dict, states, kind: str) -> N
                          "search_attempts": search["attempts"], "search_failed": search["failed"],
                          "search_refound": search["refound"],
                          "search_start_labels_json": json.dumps(search["start_labels"]),
+                         "search_coverage_json": json.dumps(search.get("coverage", {})),
+                         "search_effort_json": json.dumps(search.get("effort", {})),
                          "search_complete": False, "note": data["note"],
                          "state_numbers": [int(s["number"]) for s in data["equilibria"]]})
         target = fh.create_group("target")
@@ -248,7 +289,8 @@ def plot(arm, data: dict, states, path, title: str) -> None:
                  + f") mm, {stab}")
         entries.append((state, label))
     circles = data["lengths_mm"] if data["control"] == "length" else None
-    plot_states(arm, entries, path, title=title, circles_mm=circles)
+    plot_states(arm, entries, path, title=title, circles_mm=circles,
+                numbers=[s["number"] for s in data["equilibria"]])
 
 
 def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
@@ -270,47 +312,41 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
 
 # --- the command -----------------------------------------------------------------------
 def run(args) -> int:
-    from ..solvers.lengths import LengthSolver
-    from ..studies.search import length_equilibria, tension_starts
+    from ..solvers.lengths import follow_lengths
+    from ..studies.search import search_lengths
     from ..io.summary import rounded
 
     arm, disc = common.load_arm(args)
     L_mm = check_lengths_mm(args.lengths, disc.n_tendons)
     common.check_cable_lengths(arm, L_mm)
-    check_search_options(args)
+    settings = check_search_options(args)
     common.check_outputs(args)
-    l_mm = arm.length_mm
     data = {"control": "length", "lengths_mm": rounded(L_mm), "elements": disc.n_elements}
-    with LengthSolver(disc, length_mm=l_mm) as solver:
-        if args.all:
-            from ..solvers.equilibrium import EquilibriumSolver
-            with EquilibriumSolver(disc) as eqs:
-                starts = tension_starts(eqs, levels=args.levels)
-            result = length_equilibria(solver, L_mm / l_mm, starts,
-                                       deflation_rounds=args.deflation_rounds)
-            states = [f.state for f in result.states]
-            data["equilibria"] = [state_summary(arm, f.state, "length", f)
-                                  for f in result.states]
-            data["search"] = search_summary(result)
-            data["note"] = NOT_COMPLETE
-        else:
-            state = solver.follow(L_mm / l_mm)
-            states = [state] if state.converged else []
-            data["equilibria"] = [state_summary(arm, s, "length") for s in states]
-            data["search"] = {
-                "method": "length continuation from the straight arm (stable path; snaps "
-                          "and buckling recorded)",
-                "starts": 1, "attempts": 1, "failed": 0 if state.converged else 1,
-                "refound": 0, "start_labels": ["straight arm"],
-                "found_from": [{"state": 1, "start": "straight arm",
-                                "method": "continuation", "attempts_reaching_it": 1}]
-                if state.converged else [],
-                "complete": False}
-            data["note"] = ("One equilibrium: the one reached from the straight arm by length "
-                            "continuation. Others may share these cable lengths: --all searches "
-                            "for them; the list is not proven complete.")
-            if not state.converged:
-                data["message"] = state.message
+    if args.all:
+        result = search_lengths(arm, L_mm, elements=disc.n_elements, effort=args.effort,
+                                levels=args.levels, deflation_rounds=args.deflation_rounds)
+        states = [f.state for f in result.states]
+        data["equilibria"] = [state_summary(arm, f.state, "length", f) for f in result.states]
+        data["search"] = search_summary(result, settings)
+        data["note"] = NOT_COMPLETE
+    else:
+        state = follow_lengths(arm, L_mm, elements=disc.n_elements)
+        states = [state] if state.converged else []
+        data["equilibria"] = [state_summary(arm, s, "length") for s in states]
+        data["search"] = {
+            "method": "length continuation from the straight arm (stable path; snaps "
+                      "and buckling recorded)",
+            "starts": 1, "attempts": 1, "failed": 0 if state.converged else 1,
+            "refound": 0, "start_labels": ["straight arm"],
+            "found_from": [{"state": 1, "start": "straight arm",
+                            "method": "continuation", "attempts_reaching_it": 1}]
+            if state.converged else [],
+            "complete": False}
+        data["note"] = ("One equilibrium: the one reached from the straight arm by length "
+                        "continuation. Others may share these cable lengths: --all searches "
+                        "for them; the list is not proven complete.")
+        if not state.converged:
+            data["message"] = state.message
     title = ("Equilibria found at L = (" + ", ".join(f"{v:g}" for v in L_mm)
              + ") mm (length control)")
     return finish(args, arm, data, states, "length_equilibria", title)

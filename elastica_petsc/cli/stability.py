@@ -4,6 +4,7 @@ from __future__ import annotations
 import sys
 
 from . import common
+from .solve import add_side_option, solve_state
 
 
 def add_parser(sub) -> None:
@@ -18,6 +19,7 @@ def add_parser(sub) -> None:
                     "suggested maximum tracing speed.")
     common.add_tension_options(parser)
     common.add_order_option(parser)
+    add_side_option(parser)
     parser.add_argument("--modes", type=int, default=4, metavar="K",
                         help="number of eigenvalues/modes to compute (default 4)")
     parser.add_argument("--amplitude-mm", type=float, default=1.0, metavar="MM",
@@ -43,8 +45,7 @@ def run(args) -> int:
                          f"{disc.n_elements} elements has {disc.n_elements} eigenvalues), "
                          f"got {args.modes}")
     common.check_outputs(args)
-    state = api.solve(arm, tensions=common.tensions(args, arm), order=common.order(args),
-                      elements=disc.n_elements)
+    state = solve_state(args, arm, disc)
     if not state.converged:
         print(f"elastica-petsc: solve failed: {state.message}", file=sys.stderr)
         return 1

@@ -23,10 +23,10 @@ def add_parser(sub) -> None:
                         help="target grid spacing in mm (mode targets; default 20)")
     parser.add_argument("--box", type=float, nargs=4, metavar=("XMIN", "XMAX", "YMIN", "YMAX"),
                         help="target box in mm (default: the half-disc y >= 0 within reach l)")
-    parser.add_argument("--tension-spacing", type=float, default=2.0, metavar="P",
-                        help="tension grid spacing, non-dimensional (mode tensions; default 2)")
-    parser.add_argument("--tension-max", type=float, default=40.0, metavar="P",
-                        help="largest tension on the grid, non-dimensional (default 40)")
+    common.add_tension_option(parser, "--tension-spacing", default=2.0,
+                              help="tension grid spacing in mode tensions")
+    common.add_tension_option(parser, "--tension-max", default=40.0,
+                              help="largest tension on the grid in mode tensions")
     parser.add_argument("--chunk", type=int, default=24, metavar="K",
                         help="samples per work unit (warm-started in a row; default 24)")
     parser.add_argument("--resume", action="store_true",
@@ -35,6 +35,9 @@ def add_parser(sub) -> None:
     parser.add_argument("--overlay", nargs="+", metavar="H5",
                         help="traced paths (files from `trace --out`) drawn on the --plot maps")
     common.add_arm_options(parser)
+    parser.add_argument("--vtk", metavar="DIR",
+                        help="also write the map for ParaView as DIR/workspace.vtu (samples as "
+                             "points with every field, lattice cells as quads)")
     common.add_output_options(parser)
     parser.set_defaults(run=run)
 
@@ -94,6 +97,9 @@ def _run(args, comm) -> int:
     if args.plot:
         from ..plots.workspace import plot_workspace, read_overlays
         plot_workspace(args.out, args.plot, paths=read_overlays(args.overlay or ()))
+    if args.vtk:
+        from ..io.vtk import write_workspace_vtk
+        write_workspace_vtk(args.vtk, args.out)
     return 0
 
 
@@ -113,6 +119,9 @@ def _check_inputs(args):
 
     if not args.out:
         raise InputError("workspace needs --out FILE.h5 (results are written as they come)")
+    if args.vtk:
+        from ..io.vtk import check_directory
+        check_directory(args.vtk, args.overwrite)
     arm, disc = common.load_arm(args)
     if args.overlay:
         from ..plots.workspace import read_overlays

@@ -129,5 +129,8 @@ def arm_to_dict(arm: Arm) -> dict:
     data = asdict(arm)
     data["tendon"] = [dict(attach_mm=t["attach_mm"], route_mm=list(t["route_mm"]))
                       for t in data.pop("tendons")]
-    return {"arm": {k: data[k] for k in SCHEMA["arm"]}, "tendon": data["tendon"],
-            "motor": data["motor"], "limits": data["limits"]}
+    def given(section: dict) -> dict:      # an unset optional key is left out, as in TOML
+        return {k: v for k, v in section.items() if v is not None}
+
+    return {"arm": given({k: data[k] for k in SCHEMA["arm"]}), "tendon": data["tendon"],
+            "motor": given(data["motor"]), "limits": given(data["limits"])}

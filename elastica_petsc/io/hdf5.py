@@ -23,7 +23,9 @@ Layout of an equilibrium group (``write_equilibrium``)::
     tendons/tensions       (n,)     P l^2/B
     tendons/tensions_N     (n,)     N
     solver (attributes)    converged, reason, message, iterations, load_steps,
-                           unstable_modes, stable
+                           unstable_modes, stable; after a symmetric bifurcation
+                           bifurcation_sides, bifurcation_rules and the dataset
+                           solver/bifurcation_tensions (k, n) P l^2/B
 """
 from __future__ import annotations
 
@@ -263,6 +265,11 @@ def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
                          "message": eq.message, "iterations": int(eq.iterations),
                          "load_steps": int(eq.load_steps), "stable": bool(eq.stable),
                          "unstable_modes": int(eq.unstable_modes)})
+    if eq.bifurcations:
+        put(solver, "bifurcation_tensions", np.array([b.p_critical for b in eq.bifurcations]),
+            "P l^2/B", "critical tensions of the symmetric bifurcations crossed, in order")
+        write_attrs(solver, {"bifurcation_sides": [b.side for b in eq.bifurcations],
+                             "bifurcation_rules": [b.rule for b in eq.bifurcations]})
 
 
 def write_control(group, arm: Arm, result) -> None:
@@ -293,8 +300,8 @@ def write_trace(group, arm: Arm, trace, schedule) -> None:
     (K,2) mm, path/tensions (K,n) P l^2/B, path/tensions_N (K,n) N,
     path/cable_lengths (K,n) mm, path/theta (K,N+1) rad, path/curvature (K,N),
     path/tip_sensitivity (K,n,2) mm per unit p, path/iterations (K,),
-    path/converged (K,), path/tip_error (K,) mm; schedule/revolutions,
-    schedule/steps, schedule/rounding_error (K,n).
+    path/converged (K,), path/tip_error (K,) mm; schedule/ the timed motor
+    schedule (:func:`write_schedule`: R >= K rows, the approach first).
     """
     l_mm = arm.length_mm
     results = trace.results
@@ -313,10 +320,28 @@ def write_trace(group, arm: Arm, trace, schedule) -> None:
         "mm per (P l^2/B)", "d x_t / d p_i (Eq. (13)): [point, tendon, component]")
     put(path, "iterations", trace.iterations, "1", "optimiser iterations per point")
     put(path, "converged", trace.converged, "1", "tip within tolerance of the target")
-    sched = group.create_group("schedule")
-    put(sched, "revolutions", schedule.revolutions, "rev", "spool revolutions from the first point")
-    put(sched, "steps", schedule.steps, "microsteps", "motor microsteps from the first point")
+    write_schedule(group.create_group("schedule"), schedule)
+
+
+def write_schedule(sched, schedule) -> None:
+    """The timed motor schedule (:mod:`elastica_petsc.core.schedule`), the
+    same rows and columns as its CSV: R rows (approach, then path), n tendons."""
+    put(sched, "phase", schedule.phase.astype("S"), "1", "approach or path")
+    put(sched, "point", schedule.point, "1", "index within the phase (path: index of path/)")
+    put(sched, "time", schedule.time_s, "s", "time of the row at the tip speed (NaN: no speed)")
+    put(sched, "reached", schedule.reached.astype(bool), "1", "tip within tolerance of the target")
+    put(sched, "target", schedule.targets_mm, "mm", "target tip position")
+    put(sched, "tip", schedule.tips_mm, "mm", "tip position of the planned state")
+    put(sched, "tensions", schedule.p, "P l^2/B", "non-dimensional tensions p_i")
+    put(sched, "tensions_N", schedule.tensions_N, "N", "tensions P_i")
+    put(sched, "cable_lengths", schedule.lengths_mm, "mm", "cable lengths L_i")
+    put(sched, "revolutions", schedule.revolutions, "rev", "spool revolutions from row 0")
+    put(sched, "steps", schedule.steps, "microsteps",
+        "motor microsteps from row 0 (> 0: cable paid out, < 0: reeled in)")
+    put(sched, "step_increments", schedule.step_increments, "microsteps",
+        "microsteps from the previous row")
     put(sched, "rounding_error", schedule.rounding_error_mm, "mm",
         "imposed minus requested cable length change (integer steps)")
     write_attrs(sched, {"spool_radius_mm": schedule.spool_radius_mm,
-                        "steps_per_revolution": schedule.steps_per_revolution})
+                        "steps_per_revolution": schedule.steps_per_revolution,
+                        "speed_mm_s": schedule.speed_mm_s})

@@ -48,7 +48,19 @@ def equilibrium_from_group(group, arm: Arm) -> Equilibrium:
                        u=disc.consistent_state(theta), converged=bool(solver["converged"]),
                        reason=str(solver["reason"]), iterations=int(solver["iterations"]),
                        load_steps=int(solver["load_steps"]), message=str(solver["message"]),
-                       unstable_modes=int(solver["unstable_modes"]))
+                       unstable_modes=int(solver["unstable_modes"]),
+                       bifurcations=bifurcations_of(group["solver"]))
+
+
+def bifurcations_of(solver) -> tuple:
+    """The symmetric bifurcations a stored state crossed (``hdf5.write_equilibrium``)."""
+    from ..solvers.bifurcation import Bifurcation
+
+    if "bifurcation_tensions" not in solver:
+        return ()
+    return tuple(Bifurcation(p, str(side), str(rule)) for p, side, rule in zip(
+        solver["bifurcation_tensions"][()], solver.attrs["bifurcation_sides"],
+        solver.attrs["bifurcation_rules"]))
 
 
 def loading_of(fh) -> str:

@@ -28,6 +28,9 @@ def equilibrium_summary(arm: Arm, eq: Equilibrium) -> dict:
         "stable": bool(eq.stable),
         "unstable_modes": int(eq.unstable_modes),
         "snaps_at_tensions": [rounded(p) for p in eq.snaps],
+        "bifurcations": [{"critical_tensions": rounded(b.p_critical, 8),
+                          "critical_tensions_N": rounded(arm.tensions_to_N(b.p_critical), 8),
+                          "side": b.side, "rule": b.rule} for b in eq.bifurcations],
         "elements": int(eq.disc.n_elements),
         "tensions": rounded(eq.p),
         "tensions_N": rounded(arm.tensions_to_N(eq.p)),
@@ -57,6 +60,11 @@ def format_equilibrium(arm: Arm, summary: dict) -> str:
         "yes" if s["stable"] else f"NO ({s['unstable_modes']} negative stiffness eigenvalue(s))"))
     for p in s["snaps_at_tensions"]:
         lines.append(f"note: the loading path snapped (limit point) at p = {p}")
+    for b in s["bifurcations"]:
+        lines.append("note: the loading path crossed a symmetric bifurcation (not a limit point) "
+                     "at critical tensions p = (" + ", ".join(f"{v:.6g}" for v in
+                                                            b["critical_tensions"])
+                     + f") and took the {b['side']} branch: {b['rule']}")
     lines.append(f"tip: ({s['tip_mm'][0]:.3f}, {s['tip_mm'][1]:.3f}) mm")
     lines.append(f"{'tendon':>6} {'s [mm]':>8} {'p=Pl^2/B':>10} {'P [N]':>9} "
                  f"{'attachment [mm]':>22} {'cable [mm]':>11}")
@@ -78,8 +86,9 @@ def stability_summary(arm: Arm, eq: Equilibrium, result, freqs: dict | None,
     maximum tracing speed v = 2 pi f_1 * ``amplitude_mm``."""
     from ..solvers.stability import max_tracing_speed_mm_s
 
+    eq_summary = equilibrium_summary(arm, eq)
     summary = {
-        "equilibrium": equilibrium_summary(arm, eq),
+        "equilibrium": eq_summary,
         "stable": bool(result.stable),
         "eigenvalues": rounded(result.eigenvalues, 8),
         "lambda_min": round(float(result.lambda_min), 8),
@@ -89,6 +98,8 @@ def stability_summary(arm: Arm, eq: Equilibrium, result, freqs: dict | None,
         "asymmetry": float(f"{result.asymmetry:.3g}"),
         "eps_reason": result.reason,
         "mass": result.mass,
+        # bifurcations crossed on the way: where the smallest eigenvalue crossed zero
+        "critical_loads_crossed": eq_summary["bifurcations"],
         "units": {"eigenvalues": "lambda l^2/B (K v = lambda M v, lumped mass)",
                   "lambda_min_raw": "lambda_min(K) / (B/l) at this mesh (paper Fig. 5b)"},
     }
@@ -113,6 +124,12 @@ def format_stability(arm: Arm, summary: dict) -> str:
              f"  negative eigenvalues: {summary['negative_eigenvalues']} (inertia count: "
              f"{summary['inertia_negative_eigenvalues']});  asymmetry ||K-K^T||/||K|| = "
              f"{summary['asymmetry']:.2e}"]
+    for b in summary.get("critical_loads_crossed", []):
+        lines.append("  critical load crossed on the way (smallest eigenvalue of K through zero, "
+                     "a bifurcation): p_cr = (" + ", ".join(f"{v:.8g}" for v in
+                                                          b["critical_tensions"])
+                     + ") = (" + ", ".join(f"{v:.6g}" for v in b["critical_tensions_N"])
+                     + f") N; the path continued on the {b['side']} buckled branch")
     for control, hz in summary.get("frequencies_hz", {}).items():
         held = "tensions held" if control == "load" else "cable lengths held"
         lines.append(f"  natural frequencies ({held}): " + ", ".join(f"{v:.4g}" for v in hz)

@@ -78,22 +78,26 @@ cable lengths grow with the tensions along the branch.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from petsc4py import PETSc
 
 from ..core.deflation import Deflation
 from .equilibrium import SNES_REASONS, Equilibrium
 from ..core.errors import InputError
 from ..core.fem import Discretisation
+from .bifurcation import inverse_iteration
 from .inertia import BorderedInertia, InertiaCounter
 from .linalg import use_bordered_lu
 
 # A tension below this (non-dimensional, p = P l^2/B) counts as zero: the
 # cable is slack or just taut and constrains nothing (module docstring).
 TAUT_TOL = 1e-8
+# |q . dL| / (|(v, q)| |dL|) below this: a loss of stability under length control is a
+# bifurcation, not a limit point (instability_kind; calibrated on Fig. 7 only, 0.005).
+LENGTH_BIFURCATION_TOL = 0.05
 # Two states are the same equilibrium if no nodal angle differs by more (rad).
 SAME_SHAPE_TOL = 1e-4
 # PETSc options (under the solver's prefix) for deflated solves, unless the
@@ -118,8 +122,12 @@ class LengthEquilibrium(Equilibrium):
     jumps : cable lengths (units of l) at which a continuation path jumped
         to a distant state (snap or buckling); empty for a smooth path.
     instabilities : cable lengths at which the continued branch ended: it
-        lost stability under length control (bifurcation) or Newton could
-        not continue it at any step size (limit point).
+        lost stability under length control or Newton could not continue it
+        at any step size.
+    instability_kinds : for each of ``instabilities``, "bifurcation" (the
+        critical mode does not change the path's lengths: buckling, two
+        branches) or "limit point" (a fold: the arm snaps), by
+        :func:`instability_kind`.
     label : where the state came from (start and method), for searches.
     """
 
@@ -128,6 +136,7 @@ class LengthEquilibrium(Equilibrium):
     length_mm: float | None = None
     jumps: tuple = ()
     instabilities: tuple = ()
+    instability_kinds: tuple = ()
     label: str = ""
 
     @property
@@ -310,8 +319,9 @@ class AugmentedSystem:
                              shape=(self.size, self.size))
 
     # --- one solve ---------------------------------------------------------------------
-    def newton(self, z0, target) -> tuple[np.ndarray, int, str, bool]:
-        """One VI Newton solve from z0: (z, iterations, reason, converged)."""
+    def newton(self, z0, target, max_it: int | None = None) -> tuple[np.ndarray, int, str, bool]:
+        """One VI Newton solve from z0: (z, iterations, reason, converged);
+        ``max_it`` caps the Newton iterations of this solve only."""
         self.target = np.asarray(target, float)
         z0 = np.array(z0, float)
         if self.mode == "length":
@@ -325,10 +335,15 @@ class AugmentedSystem:
         self.xl.setValue(self.imu, floor)
         self.xl.assemble()
         self.x.setArray(z0)
+        default_max_it = self.snes.getTolerances()[3]
+        if max_it is not None:
+            self.snes.setTolerances(max_it=max_it)
         try:
             self.snes.solve(None, self.x)
         except PETSc.Error:                      # e.g. a zero pivot in the LU
             return z0, self.snes.getIterationNumber(), "PETSC_ERROR", False
+        finally:
+            self.snes.setTolerances(max_it=default_max_it)
         reason = self.snes.getConvergedReason()
         z = self.x.getArray().copy()
         return z, self.snes.getIterationNumber(), SNES_REASONS.get(reason, str(reason)), \
@@ -392,14 +407,16 @@ class LengthInertia(BorderedInertia):
         return self.count(vals, self.disc.n_tendons + m)
 
 
-def constrained_mode(system: AugmentedSystem, z, iterations: int = 30) -> tuple[float, np.ndarray]:
+def constrained_mode(system: AugmentedSystem, z, iterations: int = 30,
+                     full: bool = False) -> tuple:
     """Eigenpair of K v = lambda h v on null(C_taut^T) with the smallest
     |lambda| (the buckling mode near a loss of stability), by inverse
     iteration with the length-control Jacobian [[J, dF/dp], [dg/du, 0]]
-    (sparse LU, O(N)).  Returns (lambda, v) with v the N nodal angle
-    increments, max |v| = 1.  Slack cables (p = 0) have no constraint."""
+    (sparse LU, O(N), :func:`~elastica_petsc.solvers.bifurcation.inverse_iteration`).
+    Returns (lambda, v) with v the N nodal angle increments, max |v| = 1;
+    with ``full`` also the tension increments q (n) that go with v (zero for
+    slack cables, which have no constraint)."""
     disc = system.disc
-    N = disc.n_elements
     z = np.array(z, float)
     z[system.imu] = 1.0
     A = system.scipy_jacobian(z).tolil()
@@ -409,17 +426,26 @@ def constrained_mode(system: AugmentedSystem, z, iterations: int = 30) -> tuple[
         A[r, :] = 0.0
         A[:, r] = 0.0
         A[r, r] = 1.0
-    lu = spla.splu(A.tocsc())
-    rng = np.random.default_rng(0)
-    v = rng.standard_normal(N)
-    lam = 0.0
-    for _ in range(iterations):
-        rhs = np.zeros(system.size)
-        rhs[:N] = disc.h * v
-        w = lu.solve(rhs)[:N]
-        lam = float(np.dot(v, disc.h * v) / np.dot(v, disc.h * w))
-        v = w / np.max(np.abs(w))
-    return lam, v
+    lam, v, w = inverse_iteration(A, disc.n_elements, disc.h, iterations)
+    return (lam, v, w[system.ip:system.imu]) if full else (lam, v)
+
+
+def instability_kind(system: AugmentedSystem, z, dL) -> str:
+    """"bifurcation" or "limit point" for a loss of stability under length
+    control at the state z, the lengths moving along ``dL``: the
+    constrained critical mode (v, q) (:func:`constrained_mode`) is the null
+    vector of the symmetric length-control Jacobian, and the path derivative
+    of the residual is -dL in the cable rows, so the test of
+    :mod:`~elastica_petsc.solvers.bifurcation` reads |q . dL| <=
+    LENGTH_BIFURCATION_TOL |(v, q)| |dL| (v weighted by h).  The tolerance
+    is looser than under load control: a path of straight segments in the
+    lengths only approximates a perfect column (Fig. 7's aligned path:
+    measured 0.005 one step before the crossing)."""
+    _, v, q = constrained_mode(system, z, full=True)
+    dL = np.asarray(dL, float)
+    scale = math.sqrt(system.disc.h * float(v @ v) + float(q @ q)) * float(np.linalg.norm(dL))
+    return "bifurcation" if abs(float(q @ dL)) <= LENGTH_BIFURCATION_TOL * scale \
+        else "limit point"
 
 
 # --- the length-control solver ----------------------------------------------------------
@@ -482,7 +508,7 @@ class LengthSolver:
                 self.inertia.negative_eigenvalues(u, p))
 
     def _result(self, z, lengths, its, reason, ok, *, steps=1, message="", jumps=(),
-                instabilities=(), label="") -> LengthEquilibrium:
+                instabilities=(), kinds=(), label="") -> LengthEquilibrium:
         u, p, _ = self.system.parts(z)
         p = np.where(p <= 0.0, 0.0, p)
         modes = self.stability(u, p) if ok else (-1, -1)
@@ -490,25 +516,27 @@ class LengthSolver:
             self.disc, p.copy(), u.copy(), ok, reason, its, steps, message=message,
             unstable_modes=modes[0], lengths_requested=np.asarray(lengths, float).copy(),
             length_unstable_modes=modes[1], length_mm=self.length_mm, jumps=tuple(jumps),
-            instabilities=tuple(instabilities), label=label)
+            instabilities=tuple(instabilities), instability_kinds=tuple(kinds), label=label)
 
     # --- one VI Newton solve ------------------------------------------------------------
-    def solve(self, lengths, start=None, *, deflate=None, label: str = "") -> LengthEquilibrium:
+    def solve(self, lengths, start=None, *, deflate=None, label: str = "",
+              max_it: int | None = None) -> LengthEquilibrium:
         """Equilibrium with cable lengths ``lengths`` (units of l) by one VI
         Newton solve from ``start`` (an Equilibrium, a pair (u, p), or None:
         the straight arm with p = 0).  ``deflate``: a :class:`Deflation`
-        holding states Newton must not converge to again."""
+        holding states Newton must not converge to again; ``max_it``: at most
+        this many Newton iterations (default: the SNES's, 50)."""
         L = check_lengths(lengths, self.disc.n_tendons)
         u0, p0 = self._start(start)
         if deflate is None:
             sys = self.system
             sys.deflation = Deflation(self.disc.h)
-            z, its, reason, ok = sys.newton(sys.augment(u0, p0), L)
+            z, its, reason, ok = sys.newton(sys.augment(u0, p0), L, max_it)
         else:
             sys = self.deflated_system
             sys.deflation = deflate
             try:
-                z, its, reason, ok = sys.newton(sys.augment(u0, p0), L)
+                z, its, reason, ok = sys.newton(sys.augment(u0, p0), L, max_it)
             finally:
                 sys.deflation = Deflation(self.disc.h)
         msg = "" if ok else (f"no length-controlled equilibrium reached from the start "
@@ -554,7 +582,7 @@ class LengthSolver:
         keep = keep_stable and self.inertia.negative_eigenvalues(u, p) == 0
         lam, dlam, its_total, steps = 0.0, full, 0, 0
         z_prev = dlam_prev = None
-        jumps, instabilities = [], []
+        jumps, instabilities, kinds = [], [], []
         reason = "CONVERGED_ITERATING"
         n_ang = self.disc.n_elements
 
@@ -585,15 +613,8 @@ class LengthSolver:
             # a limit point or bifurcation at L_t: the branch cannot be followed
             if lost or not ok:
                 instabilities.append(L_t.copy())
-            base = z_new if ok else z
-            # post-critical states: perturb along +- the buckling mode at L_t, or a
-            # little further along the path if the critical point is too close
-            candidates = []
-            for t in sorted({lam + step, min(1.0, lam + 0.1 * full), min(1.0, lam + 0.5 * full)}):
-                found = self.branches(base[: sys.nu], base[sys.ip:sys.imu], where(t))
-                candidates = [(t, sys.augment(b.u, b.p, 1.0)) for b in found]
-                if candidates:
-                    break
+                kinds.append(instability_kind(sys, z, L_end - L_start))
+            candidates = self._post_critical(z_new if ok else z, where, lam, step, full)
             if ok and jumped and (not lost or not keep):
                 candidates.append((lam + step, z_new))
             if candidates:
@@ -602,16 +623,29 @@ class LengthSolver:
                 jumps.append(where(t_best))
                 z, z_prev, lam, dlam, steps = z_best, None, t_best, full, steps + 1
                 continue
-            msg = (("lost stability under length control" if lost else
-                    f"length continuation stopped (PETSc SNES reason {reason})")
+            kind = f" at a {kinds[-1]}" if kinds else ""
+            msg = (("lost stability under length control" + kind if lost else
+                    f"length continuation stopped{kind} (PETSc SNES reason {reason})")
                    + " at L/l = (" + ", ".join(f"{v:.6g}" for v in where(lam))
                    + ") on the way to (" + ", ".join(f"{v:.6g}" for v in L_end)
                    + "), and no stable state to jump to was found")
             return self._result(z, where(lam), its_total, "UNSTABLE_STATE" if lost else reason,
                                 False, steps=steps, message=msg, jumps=jumps,
-                                instabilities=instabilities, label=label)
+                                instabilities=instabilities, kinds=kinds, label=label)
         return self._result(z, L_end, its_total, reason, True, steps=steps, jumps=jumps,
-                            instabilities=instabilities, label=label)
+                            instabilities=instabilities, kinds=kinds, label=label)
+
+    def _post_critical(self, base, where, lam: float, step: float, full: float) -> list:
+        """Stable states past a critical point of a continuation: the state
+        ``base`` perturbed along +- its buckling mode (:meth:`branches`) at the
+        path parameter lam + step, or a little further along the path if the
+        critical point is too close; as (parameter, augmented state) pairs."""
+        sys = self.system
+        for t in sorted({lam + step, min(1.0, lam + 0.1 * full), min(1.0, lam + 0.5 * full)}):
+            found = self.branches(base[: sys.nu], base[sys.ip:sys.imu], where(t))
+            if found:
+                return [(t, sys.augment(b.u, b.p, 1.0)) for b in found]
+        return []
 
     def _tension_guess(self, u) -> np.ndarray:
         """Least-squares tensions for a shape: min_p |F(u, p)| (F is linear in p)."""
@@ -684,3 +718,11 @@ class LengthSolver:
 
     def __exit__(self, *exc) -> None:
         self.destroy()
+
+
+def follow_lengths(arm, lengths_mm, *, elements: int | None = None) -> LengthEquilibrium:
+    """The equilibrium with cable lengths ``lengths_mm`` (mm) reached from the
+    straight arm by length continuation (:meth:`LengthSolver.follow`: a stable
+    path, snaps and buckling recorded), with a solver made for it."""
+    with LengthSolver.from_arm(arm, elements) as solver:
+        return solver.follow(solver.to_l(lengths_mm))

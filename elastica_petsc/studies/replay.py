@@ -72,12 +72,27 @@ class Replay:
         return [(q.index, np.asarray(L) * q.state.length_mm)
                 for q in self.points for L in q.state.jumps]
 
+    @property
+    def instabilities(self) -> list[tuple[int, np.ndarray, str]]:
+        """(point index, cable lengths in mm, kind) of every loss of stability on
+        the way: kind "bifurcation" (buckling: the path switched to a stable
+        branch beside it) or "limit point" (a fold: the arm snapped),
+        :func:`~elastica_petsc.solvers.lengths.instability_kind`."""
+        return [(q.index, np.asarray(L) * q.state.length_mm, kind)
+                for q in self.points
+                for L, kind in zip(q.state.instabilities, q.state.instability_kinds)]
+
     def summary(self) -> str:
         lines = [f"replayed {len(self.points)} of {self.n_planned} points under length control "
                  f"(first point by {self.start_method}); max tip error "
                  f"{self.max_tip_error_mm:.3g} mm; "
                  + ("stayed on the planned branch" if self.all_on_branch else
                     f"left the planned branch at point {self.first_departure}")]
+        for k, L, kind in self.instabilities:
+            what = ("a bifurcation (buckling; switched to a stable branch beside it)"
+                    if kind == "bifurcation" else "a limit point (the arm snaps)")
+            lines.append(f"  stability lost before point {k} at L = ("
+                         + ", ".join(f"{v:.3f}" for v in L) + f") mm: {what}")
         for k, L in self.jumps:
             lines.append(f"  jump (snap/buckling) before point {k} at L = ("
                          + ", ".join(f"{v:.3f}" for v in L) + ") mm")
@@ -164,3 +179,20 @@ def replay(solver: LengthSolver, lengths_mm, planned_tips_mm, planned_tensions=N
         if not state.converged:
             break
     return Replay(tuple(points), K, method)
+
+
+def replay_trace(trace: dict, *, first_by_lengths: bool = False, tip_tol_mm: float = 1e-3,
+                 shape_tol: float = 1e-3) -> Replay:
+    """:func:`replay` of a traced path as read by
+    :func:`elastica_petsc.io.replay.read_trace` (its arm, mesh, cable lengths
+    and tips in mm, planned tensions and shapes), with a solver made for it;
+    ``first_by_lengths``: reach the first point by length continuation instead
+    of the load-controlled state at the planned tensions."""
+    from ..core.fem import Discretisation
+
+    arm = trace["arm"]
+    disc = Discretisation.from_arm(arm, trace["elements"])
+    with LengthSolver(disc, length_mm=arm.length_mm) as solver:
+        return replay(solver, trace["cable_lengths"], trace["tip"],
+                      None if first_by_lengths else trace["tensions"], trace["theta"],
+                      tip_tol_mm=tip_tol_mm, shape_tol=shape_tol)

@@ -191,6 +191,7 @@ class TargetSampler(_Sampler):
         else:
             out["tip"][k] = result.tip * self.arm.length_mm
             out["tensions"][k] = result.p
+            out["tensions_N"][k] = self.arm.tensions_to_N(result.p)    # N wherever p is
 
     def destroy(self) -> None:
         self.controller.destroy()

@@ -277,6 +277,17 @@ GRID_ATTRS = ("mode", "config_json", "elements", "grid_json", "petsc_options",
               "elastica_petsc_version")
 
 
+def lattice_index(grid: Grid) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Integer lattice coordinates (S, d) of the samples along each coordinate
+    of ``grid.points`` (targets: x then y; tensions: p_1, p_2, ...) and the
+    lattice axes, so a 2-D map is ``A[index[:, 1], index[:, 0]] = field``."""
+    origin = grid.points.min(axis=0)
+    spacing = float(grid.meta["spacing"])
+    index = np.rint((grid.points - origin) / spacing).astype(np.int64)
+    axes = [origin[d] + spacing * np.arange(index[:, d].max() + 1) for d in range(index.shape[1])]
+    return index, axes
+
+
 def write_results(path: Path, results: Results, attrs: dict, limits: dict, timing: dict) -> None:
     """Write the whole file aside and rename it into place (always valid)."""
     from ..io.hdf5 import atomic_h5, put, write_attrs
@@ -294,6 +305,12 @@ def write_results(path: Path, results: Results, attrs: dict, limits: dict, timin
             "sample indices in chunk order; chunk c is chunk_order[chunk_bounds[c]:chunk_bounds[c+1]]")
         put(grid, "chunk_bounds", bounds, "1", "offsets of the chunks in chunk_order")
         put(grid, "chunk_done", results.chunk_done, "1", "chunk finished and stored")
+        index, axes = lattice_index(results.grid)
+        put(grid, "index", index, "1", "lattice indices of each sample along each coordinate of "
+            "points: a 2-D map is A[index[:, 1], index[:, 0]] = samples/FIELD")
+        for d, axis in enumerate(axes):
+            put(grid, f"axis_{d}", axis, "mm" if results.grid.mode == "targets" else "P l^2/B",
+                f"lattice coordinates along coordinate {d} of points (index[:, {d}])")
         samples = fh.create_group("samples")
         done = np.zeros(results.grid.size, bool)
         for c in np.flatnonzero(results.chunk_done):
