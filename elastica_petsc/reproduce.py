@@ -352,6 +352,42 @@ def write_report(ctx: Context, command: str) -> Path:
     return path
 
 
+def planned_files() -> list[str]:
+    """Every file name :func:`run` writes into the output folder."""
+    names = ["fig8.h5", "fig8.png"]
+    names += [f"fig2_{m}.{ext}" for m in ("gd", "blmvm") for ext in ("h5", "png")]
+    names += [f"{n}{tail}" for n in ("fig3a", "fig3b") for tail in (".h5", "_schedule.csv", ".png")]
+    names += ["fig6a.png", "fig6b.png", "fig6c.png", "fig4_workspace.h5", "fig4.png",
+              "fig4_restrictions.png", "fig7.png", "REPORT.md", "report.json"]
+    return names
+
+
+def check_output_folder(out: str | Path, overwrite: bool) -> Path:
+    """Before any computation: ``out`` is (or can be made) a writable folder, and
+    no file :func:`run` would write exists there unless ``overwrite``.
+    Creates the folder and returns it."""
+    from .core.errors import InputError
+    from .io.hdf5 import check_output_path
+
+    if not str(out).strip():
+        raise InputError("--out: empty folder name")
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} exists and is not a folder")
+    existing = [name for name in planned_files() if (out / name).exists()]
+    if existing and not overwrite:
+        more = f" and {len(existing) - 1} more" if len(existing) > 1 else ""
+        raise InputError(f"{out} already holds {existing[0]}{more}; pass --overwrite to "
+                         "replace them")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise InputError(f"--out {out}: cannot create the folder ({err.strerror})") from None
+    for name in planned_files():
+        check_output_path(out / name, overwrite=True)
+    return out
+
+
 EXPERIMENTS = ("workspace", "fig8", "fig2", "fig3", "fig4_5", "fig7", "aluminium")
 
 

@@ -191,42 +191,44 @@ def test_interrupt_and_resume_one_rank(targets_1, tmp_path):
 
 
 @needs_mpi
-@pytest.mark.parametrize("target", ["mpiexec", "rank 0"])
+@pytest.mark.parametrize("target", ["mpiexec", "rank 0", "group", "rank 1"])
 def test_interrupt_and_resume_two_ranks(target, slow_targets_1, tmp_path):
-    """SIGINT to mpiexec (Open MPI passes a SIGTERM on to every rank), or SIGTERM to
-    rank 0 alone (it stops the other ranks through the chunk counter): rank 0 writes a
-    last checkpoint and the job ends."""
+    """SIGINT to mpiexec (Open MPI passes a SIGTERM on to every rank), SIGTERM to rank 0
+    or to rank 1 alone (it stops the others through the chunk counter), SIGINT to the
+    whole process group (Ctrl-C): every rank stops, rank 0 writes a last checkpoint and
+    the job ends; --resume completes it to the uninterrupted map (issue 15; the
+    20-trial study is scripts/fault_study.py)."""
     out = tmp_path / "ws.h5"
     proc = start(*SLOW_TARGETS, "--out", out, ranks=2)
     wait_for_checkpoint(out, proc)
     if target == "mpiexec":
         proc.send_signal(signal.SIGINT)
+    elif target == "group":
+        os.killpg(proc.pid, signal.SIGINT)
     else:
-        os.kill(rank_pids(proc.pid)[0], signal.SIGTERM)
+        os.kill(rank_pids(proc.pid)[int(target[-1])], signal.SIGTERM)
     status, stderr = finish(proc)
-    assert status == 130 if target == "rank 0" else status != 0
+    assert status == 130 if target.startswith("rank") else status != 0
     assert "continue with --resume" in stderr
     assert_valid_partial(out)
     ok(workspace(*SLOW_TARGETS, "--out", out, "--resume", ranks=2))
     assert_same_samples(slow_targets_1, out)
 
 
+def _fault_study():
+    """scripts/fault_study.py (its helpers find the ranks of an mpiexec)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("fault_study",
+                                                  ROOT / "scripts" / "fault_study.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def rank_pids(mpiexec_pid: int) -> dict[int, int]:
-    """{rank: pid} of the processes that mpiexec started (from their environment)."""
-    ranks = {}
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            if int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1]) != mpiexec_pid:
-                continue
-            env = (entry / "environ").read_bytes().split(b"\0")
-        except (OSError, IndexError, ValueError):
-            continue
-        for item in env:
-            if item.startswith(b"OMPI_COMM_WORLD_RANK="):
-                ranks[int(item.split(b"=")[1])] = int(entry.name)
-    return ranks
+    """{rank: pid} of the processes that mpiexec started."""
+    return _fault_study().rank_pids(mpiexec_pid)
 
 
 @needs_mpi
@@ -509,3 +511,20 @@ def test_run_map_returns_the_arrays_without_a_file(targets_1, tmp_path, monkeypa
     w0 = ws.masks["W0"]
     np.testing.assert_allclose(ws.tensions_N[w0], ws.tensions[w0] * arm.force_scale_N)
     assert not ws.tip_mm.flags.writeable
+
+
+def test_read_map_gives_back_the_file(targets_1):
+    """``read_map`` (behind ``ep.read``) rebuilds the map the command line wrote."""
+    from elastica_petsc.studies.workspace import read_map
+
+    ws = read_map(targets_1)
+    assert ws.complete and ws.samples_total == 77 and ws.mode == "targets"
+    reference = samples(targets_1)
+    for name in ("tip", "tensions", "status", "reason", "lambda_min"):
+        x = ws.samples[name]
+        assert (np.array_equal(x, reference[name], equal_nan=True) if x.dtype.kind == "f"
+                else np.array_equal(x, reference[name])), name
+    with h5py.File(targets_1, "r") as fh:
+        for name, mask in ws.masks.items():
+            assert np.array_equal(mask, fh["masks"][name][()]), name
+    assert ws.summary()["masks"]["W0"] == int(ws.masks["W0"].sum()) > 0

@@ -99,8 +99,6 @@ def format_control(s: dict) -> str:
 
 
 def run(args) -> int:
-    import numpy as np
-
     from ..solvers.control import TipController
     from ..core.errors import InputError
 
@@ -109,8 +107,7 @@ def run(args) -> int:
     if not args.tol_mm > 0:
         raise InputError(f"--tol-mm must be positive, got {args.tol_mm}")
     guess = common.guess(args, disc)
-    if not np.all(np.isfinite(args.target)):
-        raise InputError("--target must be two finite numbers in mm")
+    common.check_target_mm(arm, args.target)
     if args.animate:
         from ..plots.animate import check_animation_path
         check_animation_path(args.animate, args.overwrite)

@@ -318,6 +318,7 @@ def run(args) -> int:
 
     arm, disc = common.load_arm(args)
     L_mm = check_lengths_mm(args.lengths, disc.n_tendons)
+    common.check_cable_lengths(arm, L_mm)
     settings = check_search_options(args)
     common.check_outputs(args)
     data = {"control": "length", "lengths_mm": rounded(L_mm), "elements": disc.n_elements}

@@ -23,7 +23,8 @@ def add_parser(sub) -> None:
     parser.add_argument("--jobs", type=int, default=1, metavar="N",
                         help="MPI ranks for the workspace sampling (spawns mpiexec; default 1)")
     parser.add_argument("--overwrite", action="store_true",
-                        help="allow writing into a folder that already holds a REPORT.md")
+                        help="replace the files of an earlier run in --out (without it, any of "
+                         "them there is refused before computing)")
     parser.add_argument("--config", metavar="TOML",
                         help="arm configuration (default: the paper's arm)")
     parser.add_argument("--quiet", action="store_true",
@@ -42,20 +43,21 @@ def run(args) -> int:
 
     from ..core.config import load_config
     from ..core.errors import InputError
-    from ..reproduce import Context, run as run_all
+    from ..reproduce import Context, check_output_folder, run as run_all
 
     comm = MPI.COMM_WORLD
     if args.jobs < 1:
         raise InputError(f"--jobs must be at least 1, got {args.jobs}")
-    out = Path(args.out)
-    if comm.rank == 0:
-        if out.exists() and not out.is_dir():
-            raise InputError(f"--out {out} exists and is not a folder")
-        if (out / "REPORT.md").exists() and not args.overwrite:
-            raise InputError(f"{out} already holds a REPORT.md; pass --overwrite to replace it")
-        out.mkdir(parents=True, exist_ok=True)
-    comm.Barrier()
-    arm = load_config(args.config)
+    from ..studies.workspace import agree
+
+    out, error = Path(args.out), None
+    try:
+        if comm.rank == 0:
+            check_output_folder(args.out, args.overwrite)
+        arm = load_config(args.config)
+    except InputError as err:
+        error = str(err)
+    agree(comm, error)
     alu = Path(args.aluminium_config) if args.aluminium_config else \
         Path(str(resources.files("elastica_petsc") / "configs" / "aluminium.toml"))
     ctx = Context(arm=arm, out=out, quick=args.quick, jobs=args.jobs, comm=comm)

@@ -40,6 +40,10 @@ def run(args) -> int:
     if not args.amplitude_mm > 0:
         raise InputError(f"--amplitude-mm must be positive, got {args.amplitude_mm}")
     arm, disc = common.load_arm(args)
+    if args.modes > disc.n_elements:
+        raise InputError(f"--modes must be at most {disc.n_elements} (the stiffness of "
+                         f"{disc.n_elements} elements has {disc.n_elements} eigenvalues), "
+                         f"got {args.modes}")
     common.check_outputs(args)
     state = solve_state(args, arm, disc)
     if not state.converged:

@@ -86,6 +86,7 @@ def targets(args):
         if args.end is None:
             raise InputError("--shape line needs --end X Y (it runs from --center)")
         points = paths.line(args.center, args.end)
+    common.check_path_points(points, args.step)
     return paths.densify(points, args.step)
 
 

@@ -51,9 +51,11 @@ def run(args) -> int:
     try:
         return _run(args, comm)
     except CollectiveInputError:                   # raised on every rank alike: one line, exit 2
-        if comm.rank == 0:
+        raise
+    except KeyboardInterrupt:                      # outside the stop protocol (set-up)
+        if comm.size == 1:
             raise
-        return 2
+        _exit_without_finalize(130, "interrupted")
     except Exception as err:                       # never leave the other ranks waiting
         if comm.size == 1:
             raise
@@ -86,9 +88,11 @@ def _run(args, comm) -> int:
     else:
         print(format_summary(summary))
     if not summary["complete"]:
-        print(f"elastica-petsc: interrupted: {summary['samples_done']} of "
-              f"{summary['samples_total']} samples saved in {args.out}; continue with --resume",
-              file=sys.stderr)
+        message = (f"interrupted: {summary['samples_done']} of {summary['samples_total']} "
+                   f"samples saved in {args.out}; continue with --resume")
+        if result.stranded:
+            _exit_without_finalize(130, message)
+        print(f"elastica-petsc: {message}", file=sys.stderr)
         return 130
     if args.plot:
         from ..plots.workspace import plot_workspace, read_overlays
@@ -97,6 +101,16 @@ def _run(args, comm) -> int:
         from ..io.vtk import write_workspace_vtk
         write_workspace_vtk(args.vtk, args.out)
     return 0
+
+
+def _exit_without_finalize(status: int, message: str) -> None:
+    """End this rank now: another rank is busy and will never join MPI's
+    finalisation; the launcher ends the others once this one is gone."""
+    import os
+
+    print(f"elastica-petsc: {message}", file=sys.stderr, flush=True)
+    sys.stdout.flush()
+    os._exit(status)
 
 
 def _check_inputs(args):
@@ -112,10 +126,17 @@ def _check_inputs(args):
     if args.overlay:
         from ..plots.workspace import read_overlays
         read_overlays(args.overlay)                 # refuse a bad file before computing
-    if args.plot:
-        from ..io.hdf5 import check_output_path
-        check_output_path(args.plot, args.overwrite)
+    common.check_outputs(args, _derived_plots(args), resume=args.resume)
     return arm, disc
+
+
+def _derived_plots(args) -> dict:
+    """The second figure ``plot_workspace`` draws beside --plot (Fig. 5)."""
+    if not args.plot:
+        return {}
+    from pathlib import Path
+    plot = Path(args.plot)
+    return {"--plot (Fig. 5)": plot.with_name(plot.stem + "_restrictions.png")}
 
 
 def format_summary(s: dict) -> str:

@@ -126,6 +126,9 @@ class Arm:
         return 2.0 * self.limits.failure_strain * self.length_mm / self.thickness_mm
 
 
+MAX_ROUTE_DISTANCE = 1e12     # arm lengths: far beyond any dead load (tests use 1e6 l)
+
+
 def validate(arm: Arm) -> None:
     """Raise ModelError with one line naming the offending key."""
 
@@ -153,6 +156,9 @@ def validate(arm: Arm) -> None:
         if len(tendon.route_mm) != 2 or not all(
                 isinstance(c, (int, float)) and math.isfinite(c) for c in tendon.route_mm):
             raise ModelError(f"{key}.route_mm must be two numbers [x, y] in mm")
+        if math.hypot(*tendon.route_mm) > MAX_ROUTE_DISTANCE * arm.length_mm:
+            raise ModelError(f"{key}.route_mm lies more than {MAX_ROUTE_DISTANCE:g} arm lengths "
+                             "from the clamp (a dead load is modelled well long before that)")
         gap = math.hypot(tendon.route_mm[0] - tendon.attach_mm, tendon.route_mm[1])
         if gap < 1e-9 * arm.length_mm:
             raise ModelError(
