@@ -142,3 +142,14 @@ def test_boundary_in_one_call():
     assert b.areas_mm2["W0"] > 0 and b.solves > 0
     tip = ep.solve(arm, tensions=[10.0, 5.0], elements=60).tip_mm
     assert any(winding_number(poly, tip[None, :])[0] != 0 for poly in b.polygons_mm["W0"])
+
+
+def test_workspace_file_reads_back_as_the_map(tmp_path):
+    arm = ep.Arm.paper()
+    wmap = ep.workspace(arm, spacing_mm=150, out=tmp_path / "w.h5")
+    back = ep.read(tmp_path / "w.h5")
+    assert type(back) is type(wmap) and back.complete
+    assert (back.status == wmap.status).all()
+    for name, mask in wmap.masks.items():
+        np.testing.assert_array_equal(back.masks[name], mask)
+    np.testing.assert_array_equal(back.tensions_N, wmap.tensions_N)
