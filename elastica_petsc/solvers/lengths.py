@@ -90,6 +90,7 @@ from ..core.errors import InputError
 from ..core.fem import Discretisation
 from .bifurcation import inverse_iteration
 from .inertia import BorderedInertia, InertiaCounter
+from .options import set_from_options
 from .linalg import use_bordered_lu
 
 # A tension below this (non-dimensional, p = P l^2/B) counts as zero: the
@@ -230,17 +231,7 @@ class AugmentedSystem:
         self.atol = max(1e-10, 1e-14 * N ** 1.5)
         snes.setTolerances(rtol=1e-10, atol=self.atol, stol=1e-14, max_it=max_it)
         use_bordered_lu(snes.getKSP())
-        # defaults given in code go under the prefix only for setFromOptions and
-        # only where the user has not set them; then they are removed again
-        db = PETSc.Options()
-        pushed = [k for k in (options or {}) if not db.hasName(prefix + k)]
-        for k in pushed:
-            db.setValue(prefix + k, options[k])
-        try:
-            snes.setFromOptions()
-        finally:
-            for k in pushed:
-                db.delValue(prefix + k)
+        set_from_options(snes, prefix, options)
         self.snes = snes
 
     # --- layout ----------------------------------------------------------------------
