@@ -447,39 +447,14 @@ def _interpolate(x, xs, values):
     return (1 - w) * np.asarray(values[k]) + w * np.asarray(values[k + 1])
 
 
-def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
-         shortenings_mm=ALIGNED_SHORTENINGS_MM, experiment_shortenings_mm=EXPERIMENT_SHORTENINGS_MM,
-         post_shortening_mm: float | None = None, max_shortening_mm: float = 20.0,
-         critical=None) -> Fig7Result:
-    """The Fig. 7 scenario of the paper (Sec. 4.6) on the arm of ``length_solver``
-    (``eq_solver`` on the same discretisation), see the module docstring.
-
-    shortenings_mm : dL_2 of the aligned family (positive, increasing);
-        extended by its last spacing, up to ``max_shortening_mm``, until the
-        constrained eigenvalue changes sign.  A point where Newton fails on
-        the straight column (at the crossing its Jacobian is singular) is
-        moved on by 0.3 or 0.6 of the spacing.
-    experiment_shortenings_mm : dL_2 of the paper's experiment (L_1 held).
-    post_shortening_mm : where the post-buckling states are computed (on the
-        aligned lengths); default 60 % of the way through the bracketing
-        interval of the crossing, but at least a quarter of the way from the
-        crossing to its end (paper's arm: 1.8 mm).
-    critical : (p_1*, equilibrium) if already known.
-    """
-    t0 = time.perf_counter()
-    disc = length_solver.disc
-    m1 = _check_arm(disc)
-    if eq_solver.disc.n_elements != disc.n_elements or \
-            tuple(eq_solver.disc.attach_nodes) != tuple(disc.attach_nodes):
-        raise InputError("fig7: the equilibrium and length solvers discretise different arms")
-    l_mm = _length_mm(length_solver)
-    critical = critical if critical is not None else critical_configuration(eq_solver)
-    p1s, e0 = critical
-    L0 = e0.cable_lengths.copy()
-
-    # aligned family, extended until the constrained eigenvalue crosses zero.  At the
-    # crossing itself the length-control Jacobian of the straight column is singular
-    # and Newton may fail: such a point is moved on by a fraction of the spacing.
+def family_to_crossing(length_solver: LengthSolver, L0, e0, shortenings_mm,
+                       max_shortening_mm: float):
+    """The aligned (perfect-column) family of Fig. 7 held at the critical cable
+    lengths ``L0`` minus each shortening dL_2, extended by its last spacing
+    until the constrained eigenvalue changes sign: ``(states by dL_2 [mm],
+    eigenvalues by dL_2, (last positive dL_2, first non-positive dL_2))``.  A point
+    where Newton fails on the straight column (its Jacobian is singular at the
+    crossing) is moved on by 0.3 or 0.6 of the spacing."""
     state = length_solver.solve(L0, e0)
     if not state.converged:
         raise BucklingError(f"the critical configuration held at its cable lengths: "
@@ -524,7 +499,71 @@ def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
                 f"the straight column did not lose stability under length control up to "
                 f"dL_2 = {keys[-1]:g} mm (constrained eigenvalue {lam[keys[-1]]:.3g})")
         add(keys[-1] + step, step)
-    lo, hi = crossing()
+    return aligned, lam, crossing()
+
+
+def post_buckling(length_solver: LengthSolver, aligned: dict, lam: dict, bracket, dl_cr: float,
+                  post_shortening_mm: float | None):
+    """States at the aligned lengths a little beyond the crossing ``dl_cr``
+    [mm] (default 60 % into the bracketing interval, at least a quarter of the
+    way past the crossing): the straight (unstable) column and the buckled
+    branches, sorted by the deviation of the free segment from the straight
+    line [mm].  Returns (dL_2 [mm], lengths / l, straight, buckled, deviations)."""
+    disc = length_solver.disc
+    m1, l_mm = _check_arm(disc), _length_mm(length_solver)
+    keys, (lo, hi) = sorted(aligned), bracket
+    if post_shortening_mm is None:
+        post = max(lo + 0.6 * (hi - lo), dl_cr + 0.25 * (hi - dl_cr))
+    else:
+        post = float(post_shortening_mm)
+        if not dl_cr < post <= keys[-1]:
+            raise InputError(f"post_shortening_mm = {post:g} mm must lie beyond the critical "
+                             f"{dl_cr:.3f} mm and within the aligned family (<= {keys[-1]:g} mm)")
+    L_post = _interpolate(post, keys, [aligned[d].lengths_requested for d in keys])
+    nxt = keys[int(np.searchsorted(keys, post))]             # first aligned point >= post
+    prv = keys[int(np.searchsorted(keys, post)) - 1]
+    last_stable = aligned[prv] if lam[prv] > 0 else aligned[lo]
+    straight = length_solver.solve(L_post, aligned[nxt])
+    if not straight.converged:
+        raise BucklingError(f"the straight column at dL_2 = {post:g} mm: {straight.message}")
+    buckled = length_solver.branches(last_stable.u, last_stable.p, L_post)
+    dev = np.array([segment_geometry(disc, s.u, m1)[1] * l_mm for s in buckled])
+    order = np.argsort(dev)
+    return post, L_post, straight, tuple(buckled[k] for k in order), dev[order]
+
+
+def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
+         shortenings_mm=ALIGNED_SHORTENINGS_MM, experiment_shortenings_mm=EXPERIMENT_SHORTENINGS_MM,
+         post_shortening_mm: float | None = None, max_shortening_mm: float = 20.0,
+         critical=None) -> Fig7Result:
+    """The Fig. 7 scenario of the paper (Sec. 4.6) on the arm of ``length_solver``
+    (``eq_solver`` on the same discretisation), see the module docstring.
+
+    shortenings_mm : dL_2 of the aligned family (positive, increasing);
+        extended by its last spacing, up to ``max_shortening_mm``, until the
+        constrained eigenvalue changes sign.  A point where Newton fails on
+        the straight column (at the crossing its Jacobian is singular) is
+        moved on by 0.3 or 0.6 of the spacing.
+    experiment_shortenings_mm : dL_2 of the paper's experiment (L_1 held).
+    post_shortening_mm : where the post-buckling states are computed (on the
+        aligned lengths); default 60 % of the way through the bracketing
+        interval of the crossing, but at least a quarter of the way from the
+        crossing to its end (paper's arm: 1.8 mm).
+    critical : (p_1*, equilibrium) if already known.
+    """
+    t0 = time.perf_counter()
+    disc = length_solver.disc
+    m1 = _check_arm(disc)
+    if eq_solver.disc.n_elements != disc.n_elements or \
+            tuple(eq_solver.disc.attach_nodes) != tuple(disc.attach_nodes):
+        raise InputError("fig7: the equilibrium and length solvers discretise different arms")
+    l_mm = _length_mm(length_solver)
+    critical = critical if critical is not None else critical_configuration(eq_solver)
+    p1s, e0 = critical
+    L0 = e0.cable_lengths.copy()
+
+    aligned, lam, (lo, hi) = family_to_crossing(length_solver, L0, e0, shortenings_mm,
+                                                max_shortening_mm)
     keys = sorted(aligned)
     states = [aligned[d] for d in keys]
 
@@ -545,25 +584,8 @@ def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
     event_kind = next((s.instability_kinds[0] for s in path if s.instability_kinds), None)
     jumped = next((s for s in path if s.jumps), None)
 
-    # post-buckling states on the aligned lengths beyond the crossing
-    if post_shortening_mm is None:
-        post = max(lo + 0.6 * (hi - lo), dl_cr + 0.25 * (hi - dl_cr))
-    else:
-        post = float(post_shortening_mm)
-        if not dl_cr < post <= keys[-1]:
-            raise InputError(f"post_shortening_mm = {post:g} mm must lie beyond the critical "
-                             f"{dl_cr:.3f} mm and within the aligned family (<= {keys[-1]:g} mm)")
-    L_post = _interpolate(post, keys, [s.lengths_requested for s in states])
-    nxt = keys[int(np.searchsorted(keys, post))]             # first aligned point >= post
-    prv = keys[int(np.searchsorted(keys, post)) - 1]
-    last_stable = aligned[prv] if lam[prv] > 0 else aligned[lo]
-    straight = length_solver.solve(L_post, aligned[nxt])
-    if not straight.converged:
-        raise BucklingError(f"the straight column at dL_2 = {post:g} mm: {straight.message}")
-    buckled = length_solver.branches(last_stable.u, last_stable.p, L_post)
-    dev = [segment_geometry(disc, s.u, m1)[1] * l_mm for s in buckled]
-    order = np.argsort(dev)
-    buckled = tuple(buckled[k] for k in order)
+    post, L_post, straight, buckled, dev = post_buckling(
+        length_solver, aligned, lam, (lo, hi), dl_cr, post_shortening_mm)
 
     # the paper's experiment: L_1 held, L_2 shortened
     exp_dl = np.asarray([float(d) for d in experiment_shortenings_mm])
@@ -585,7 +607,7 @@ def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
         jump_L_mm=None if jumped is None else np.asarray(jumped.jumps[0]) * l_mm,
         jumped=jumped,
         post_dL2_mm=float(post), post_L_mm=L_post * l_mm, post_buckling=buckled,
-        post_deviation_mm=np.array([dev[k] for k in order]),
+        post_deviation_mm=dev,
         post_p2=np.array([s.p[1] for s in buckled]),
         straight=straight,
         straight_deviation_mm=segment_geometry(disc, straight.u, m1)[1] * l_mm,
