@@ -60,7 +60,7 @@ def run(args) -> int:
     from ..core.errors import InputError
     from ..studies.replay import replay_trace
     from ..io.replay import read_trace, write_replay
-    from ..io.summary import rounded
+    from ..io.summary import replay_summary
 
     for name in ("tip_tol_mm", "shape_tol"):
         if not getattr(args, name) > 0:
@@ -71,49 +71,8 @@ def run(args) -> int:
     result = replay_trace(trace, first_by_lengths=args.first_by_lengths,
                           tip_tol_mm=args.tip_tol_mm, shape_tol=args.shape_tol)
     pts = result.points
-    first_jump = next((q.index for q in pts if q.jumped), None)
-    planned_ok = trace["converged"]
-    data = {
-        "file": str(args.trace),
-        "elements": int(trace["elements"]),
-        "points_planned": K,
-        "points_replayed": len(pts),
-        "completed": bool(result.completed),
-        "all_on_branch": bool(result.all_on_branch),
-        "first_departure": result.first_departure,
-        "first_jump": first_jump,
-        "max_tip_error_mm": float(f"{result.max_tip_error_mm:.6g}"),
-        "start_method": result.start_method,
-        "branch_criterion": (f"shape within {args.shape_tol:g} rad of the planned shape"
-                             if trace["theta"] is not None else
-                             f"tip within {args.tip_tol_mm:g} mm of the planned tip"),
-        "jumps": [{"before_point": int(k), "lengths_mm": rounded(L)} for k, L in result.jumps],
-        "instabilities": [{"before_point": int(k), "lengths_mm": rounded(L), "kind": kind}
-                          for k, L, kind in result.instabilities],
-        "unstable_points": [q.index for q in pts if q.state.converged and not q.stable],
-        "points": [],
-        "units": {"lengths_mm": "mm", "tip_mm": "mm", "tip_error_mm": "mm",
-                  "shape_error": "rad", "tensions": "P l^2/B", "tensions_N": "N"},
-    }
-    for q in pts:
-        s = q.state
-        entry = {"index": q.index, "lengths_mm": rounded(q.lengths_mm),
-                 "planned_tip_mm": rounded(q.planned_tip_mm), "tip_mm": rounded(s.tip_mm),
-                 "tip_error_mm": float(f"{q.tip_error_mm:.6g}"),
-                 "shape_error": None if q.shape_error is None else float(f"{q.shape_error:.6g}"),
-                 "on_branch": bool(q.on_branch), "jumped": bool(q.jumped),
-                 "converged": bool(s.converged),
-                 "stable": bool(s.converged and q.stable),
-                 "stable_under_load_control": bool(s.converged and s.stable),
-                 "tensions": rounded(s.p), "tensions_N": rounded(arm.tensions_to_N(s.p)),
-                 "slack_mm": rounded(np.where(s.slack_mm > 0, s.slack_mm, 0.0)),
-                 "message": s.message}
-        if trace["tensions"] is not None:
-            entry["planned_tensions"] = rounded(trace["tensions"][q.index])
-        if planned_ok is not None:
-            entry["planned_converged"] = bool(planned_ok[q.index])
-        data["points"].append(entry)
-
+    data = replay_summary(args.trace, trace, result, tip_tol_mm=args.tip_tol_mm,
+                          shape_tol=args.shape_tol)
     if args.json:
         common.print_json(data)
     else:

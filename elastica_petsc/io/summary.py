@@ -138,3 +138,55 @@ def format_stability(arm: Arm, summary: dict) -> str:
         lines.append(f"  suggested max tracing speed: {summary['max_tracing_speed_mm_s']:.3g} "
                      f"mm/s ({summary['units']['max_tracing_speed_mm_s']})")
     return "\n".join(lines)
+
+
+def replay_summary(path, trace: dict, result, *, tip_tol_mm: float, shape_tol: float) -> dict:
+    """A replay under length control (``elastica-petsc replay``) in the user's
+    units: the verdict, the jumps and instabilities met, and every point."""
+    arm, K = trace["arm"], trace["K"]
+    pts = result.points
+    first_jump = next((q.index for q in pts if q.jumped), None)
+    data = {
+        "file": str(path),
+        "elements": int(trace["elements"]),
+        "points_planned": K,
+        "points_replayed": len(pts),
+        "completed": bool(result.completed),
+        "all_on_branch": bool(result.all_on_branch),
+        "first_departure": result.first_departure,
+        "first_jump": first_jump,
+        "max_tip_error_mm": float(f"{result.max_tip_error_mm:.6g}"),
+        "start_method": result.start_method,
+        "branch_criterion": (f"shape within {shape_tol:g} rad of the planned shape"
+                             if trace["theta"] is not None else
+                             f"tip within {tip_tol_mm:g} mm of the planned tip"),
+        "jumps": [{"before_point": int(k), "lengths_mm": rounded(L)} for k, L in result.jumps],
+        "instabilities": [{"before_point": int(k), "lengths_mm": rounded(L), "kind": kind}
+                          for k, L, kind in result.instabilities],
+        "unstable_points": [q.index for q in pts if q.state.converged and not q.stable],
+        "units": {"lengths_mm": "mm", "tip_mm": "mm", "tip_error_mm": "mm",
+                  "shape_error": "rad", "tensions": "P l^2/B", "tensions_N": "N"},
+    }
+    data["points"] = [_replay_point(q, arm, trace) for q in pts]
+    return data
+
+
+def _replay_point(q, arm: Arm, trace: dict) -> dict:
+    """One replayed point of :func:`replay_summary`."""
+    s = q.state
+    entry = {"index": q.index, "lengths_mm": rounded(q.lengths_mm),
+             "planned_tip_mm": rounded(q.planned_tip_mm), "tip_mm": rounded(s.tip_mm),
+             "tip_error_mm": float(f"{q.tip_error_mm:.6g}"),
+             "shape_error": None if q.shape_error is None else float(f"{q.shape_error:.6g}"),
+             "on_branch": bool(q.on_branch), "jumped": bool(q.jumped),
+             "converged": bool(s.converged),
+             "stable": bool(s.converged and q.stable),
+             "stable_under_load_control": bool(s.converged and s.stable),
+             "tensions": rounded(s.p), "tensions_N": rounded(arm.tensions_to_N(s.p)),
+             "slack_mm": rounded(np.where(s.slack_mm > 0, s.slack_mm, 0.0)),
+             "message": s.message}
+    if trace["tensions"] is not None:
+        entry["planned_tensions"] = rounded(trace["tensions"][q.index])
+    if trace["converged"] is not None:
+        entry["planned_converged"] = bool(trace["converged"][q.index])
+    return entry
