@@ -12,10 +12,6 @@ from __future__ import annotations
 
 import datetime
 import json
-import os
-import shutil
-import subprocess
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,6 +51,7 @@ class Context:
     files: dict = field(default_factory=dict)      # figure -> [file names]
     traces: dict = field(default_factory=dict)     # name -> TraceResult
     seconds: dict = field(default_factory=dict)
+    command: str = "elastica-petsc reproduce"
 
     @property
     def trace_step_mm(self) -> float:
@@ -85,8 +82,9 @@ def fig8(ctx: Context) -> None:
     from .solvers.equilibrium import EquilibriumSolver
     from .core.fem import Discretisation
     from .io.hdf5 import atomic_h5, provenance, write_attrs, write_equilibrium
-    from .solvers.lengths import LengthSolver, length_equilibria
-    from .plots.common import plot_equilibria
+    from .solvers.lengths import LengthSolver
+    from .studies.search import length_equilibria
+    from .plots.lengths import plot_states
 
     arm, l_mm = ctx.arm, ctx.arm.length_mm
     disc = Discretisation.from_arm(arm)
@@ -116,12 +114,13 @@ def fig8(ctx: Context) -> None:
         write_attrs(fh, provenance(arm, "fig8"))
         for name, eq in (("state1", state1), ("state2", found2), ("state3", state3)):
             write_equilibrium(fh.create_group(name), arm, eq)
-    plot_equilibria(arm, [(state1, "state 1: p = (25.2, 10.8), L = " + _fmt(L1)),
-                          (found2, "state 2: p = " + _fmt(found2.p) + ", L = "
-                           + _fmt(found2.cable_lengths * l_mm)),
-                          (state3, "state 3: p = (25.2, 10.8), L = " + _fmt(L3))],
-                    ctx.path("fig8.png", "Fig. 8"),
-                    title="Fig. 8: states 1, 2 share cable lengths; states 1, 3 share tensions")
+    plot_states(arm, [(state1, "state 1: p = (25.2, 10.8), L = " + _fmt(L1)),
+                      (found2, "state 2: p = " + _fmt(found2.p) + ", L = "
+                       + _fmt(found2.cable_lengths * l_mm)),
+                      (state3, "state 3: p = (25.2, 10.8), L = " + _fmt(L3))],
+                ctx.path("fig8.png", "Fig. 8"), circles_mm=FIG8_LENGTHS_MM,
+                title="Fig. 8: states 1, 2 share cable lengths (attachments on the dashed "
+                      "circles); states 1, 3 share tensions")
 
 
 # --- Fig. 2: descent iterations ----------------------------------------------------------
@@ -158,9 +157,12 @@ def _trace(ctx: Context, name: str, points, figure: str):
     from .plots.control import plot_trace
     from .core.schedule import schedule_from_trace
 
+    from .core.progress import Progress
+
     targets = densify(points, ctx.trace_step_mm)
-    with TipController(ctx.arm) as controller:
-        result = trace(controller, targets, p0=np.full(2, 2.0), keep_results=True)
+    with TipController(ctx.arm) as controller, Progress(len(targets), f"trace {name}") as bar:
+        result = trace(controller, targets, p0=np.full(2, 2.0), keep_results=True,
+                       on_point=bar.update)
     schedule = schedule_from_trace(result, ctx.arm)
     with atomic_h5(ctx.path(f"{name}.h5", figure), overwrite=True) as fh:
         write_attrs(fh, provenance(ctx.arm, "trace"))
@@ -214,27 +216,27 @@ def fig3(ctx: Context) -> None:
 
 # --- Figs. 4-5: workspace -------------------------------------------------------------------
 def workspace(ctx: Context) -> Path:
-    """Sample the workspace (all ranks take part under mpiexec)."""
+    """Sample the workspace (all ranks take part under mpiexec; with ``jobs`` > 1
+    outside mpiexec, a job of that many ranks is spawned: :mod:`.studies.workspace_job`)."""
+    from .core.errors import InputError
+    from .core.fem import Discretisation
+    from .studies.workspace import run_map
+
     out = ctx.out / "fig4_workspace.h5"
-    args = ["workspace", "--spacing", f"{ctx.spacing_mm:g}", "--out", str(out), "--overwrite"]
+    kwargs = dict(spacing_mm=ctx.spacing_mm, out=str(out), overwrite=True,
+                  provenance={"command_line": ctx.command})
     if ctx.comm.size == 1 and ctx.jobs > 1:
-        mpiexec = shutil.which("mpiexec")
-        if mpiexec is None:
-            from .core.errors import InputError
-            raise InputError("--jobs > 1 needs mpiexec on the PATH (package openmpi-bin)")
-        env = dict(os.environ)
-        if os.geteuid() == 0:
-            env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-        env["OMPI_MCA_rmaps_base_oversubscribe"] = "1"
-        subprocess.run([mpiexec, "-n", str(ctx.jobs), sys.executable, "-m", "elastica_petsc.cli",
-                        *args, "--json"], check=True, env=env, stdout=subprocess.DEVNULL)
+        from .studies.workspace_job import spawn
+        status = spawn(ctx.arm, ctx.arm.elements, ctx.jobs, **kwargs)
+        if status == 130:
+            raise KeyboardInterrupt
+        if status != 0:
+            raise InputError(f"the workspace job on {ctx.jobs} ranks ended with status {status}")
     else:
-        from .cli import build_parser
-        parsed = build_parser().parse_args(args + ["--json"])
-        import contextlib
-        import io
-        with contextlib.redirect_stdout(io.StringIO()):
-            parsed.run(parsed)
+        result = run_map(ctx.arm, Discretisation.from_arm(ctx.arm), comm=ctx.comm,
+                         progress=False, **kwargs)
+        if not result.complete:
+            raise KeyboardInterrupt
     return out
 
 
@@ -289,7 +291,8 @@ def fig4_5(ctx: Context, out: Path) -> None:
 
 # --- Fig. 7: buckling under length control ----------------------------------------------
 def fig7(ctx: Context) -> None:
-    from .studies.buckling import fig7 as fig7_scenario, plot_fig7
+    from .plots.buckling import plot_fig7
+    from .studies.buckling import fig7 as fig7_scenario
     from .solvers.equilibrium import EquilibriumSolver
     from .core.fem import Discretisation
     from .solvers.lengths import LengthSolver
@@ -349,6 +352,42 @@ def write_report(ctx: Context, command: str) -> Path:
     return path
 
 
+def planned_files() -> list[str]:
+    """Every file name :func:`run` writes into the output folder."""
+    names = ["fig8.h5", "fig8.png"]
+    names += [f"fig2_{m}.{ext}" for m in ("gd", "blmvm") for ext in ("h5", "png")]
+    names += [f"{n}{tail}" for n in ("fig3a", "fig3b") for tail in (".h5", "_schedule.csv", ".png")]
+    names += ["fig6a.png", "fig6b.png", "fig6c.png", "fig4_workspace.h5", "fig4.png",
+              "fig4_restrictions.png", "fig7.png", "REPORT.md", "report.json"]
+    return names
+
+
+def check_output_folder(out: str | Path, overwrite: bool) -> Path:
+    """Before any computation: ``out`` is (or can be made) a writable folder, and
+    no file :func:`run` would write exists there unless ``overwrite``.
+    Creates the folder and returns it."""
+    from .core.errors import InputError
+    from .io.hdf5 import check_output_path
+
+    if not str(out).strip():
+        raise InputError("--out: empty folder name")
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} exists and is not a folder")
+    existing = [name for name in planned_files() if (out / name).exists()]
+    if existing and not overwrite:
+        more = f" and {len(existing) - 1} more" if len(existing) > 1 else ""
+        raise InputError(f"{out} already holds {existing[0]}{more}; pass --overwrite to "
+                         "replace them")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise InputError(f"--out {out}: cannot create the folder ({err.strerror})") from None
+    for name in planned_files():
+        check_output_path(out / name, overwrite=True)
+    return out
+
+
 EXPERIMENTS = ("workspace", "fig8", "fig2", "fig3", "fig4_5", "fig7", "aluminium")
 
 
@@ -356,6 +395,7 @@ def run(ctx: Context, command: str, aluminium_config: Path, log=print) -> Path |
     """All experiments.  The workspace comes first: under mpiexec every rank
     takes part in it, then rank 0 alone does the rest (the other ranks are
     done, not spinning in a collective).  Returns the report path on rank 0."""
+    ctx.command = command
     def timed(name, action):
         t0 = time.perf_counter()
         value = action()

@@ -11,14 +11,21 @@
 #     sample is a small problem on one rank (PETSc.COMM_SELF), chunks of samples are
 #     handed out dynamically, rank 0 gathers the results and rewrites the HDF5 file
 #     atomically every $ELASTICA_PETSC_CHECKPOINT_SECONDS seconds;
-#   * passes --resume when the output file already exists, so a requeued or
-#     resubmitted job (after a time limit, a preemption, a node failure) continues
-#     with the chunks not yet done instead of starting again.  The result does not
-#     depend on the number of ranks nor on the interruptions;
+#   * always passes --resume: a requeued or resubmitted job (after a time limit, a
+#     preemption, a node failure) continues with the chunks not yet done, and a
+#     first run (no file yet) simply starts.  --resume refuses a file made with
+#     another grid, arm, version or result-changing PETSc option.  The result does
+#     not depend on the number of ranks nor on the interruptions;
 #   * SLURM sends SIGTERM to the job at its time limit (--signal asks for it a
-#     little earlier) and at scancel/preemption: rank 0 then writes a last
-#     checkpoint and the command exits with status 130 (interrupted, resumable);
-#     the script requeues the job in that case.
+#     little earlier) and at scancel/preemption: every rank stops at its next
+#     sample, rank 0 writes a checkpoint at once (before mpiexec kills the ranks,
+#     about 2 s after forwarding the signal), then the last one once the chunks in
+#     flight are in, and the command exits with status 130 (interrupted,
+#     resumable); the script requeues the job in that case.  A rank killed
+#     outright loses at most the chunks finished since the previous checkpoint
+#     (every $ELASTICA_PETSC_CHECKPOINT_SECONDS seconds);
+#   * a second job on the same output file is refused while the first runs (a
+#     lock beside the file), so two submissions cannot overwrite each other.
 #
 # No `module load`: the Python environment .venv (see scripts/setup.sh) brings
 # petsc4py, slepc4py, mpi4py and h5py; mpiexec must be the MPI that mpi4py was
@@ -49,18 +56,16 @@ PLOT=${PLOT:-results/workspace.png}
 GRID=(--spacing "${SPACING:-11.67}" --elements "${ELEMENTS:-180}" --chunk 24)
 export ELASTICA_PETSC_CHECKPOINT_SECONDS=${ELASTICA_PETSC_CHECKPOINT_SECONDS:-30}
 # Open MPI refuses to run as root unless told (containers); harmless otherwise.
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# execute_quiet: an input error is one line, without mpiexec's banner about it.
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_orte_execute_quiet=1
 
 mkdir -p "$(dirname "$OUT")"
-RESUME=()
-if [ -e "$OUT" ]; then
-    RESUME=(--resume)              # continue the chunks not yet done
-    echo "resuming $OUT"
-fi
+[ -e "$OUT" ] && echo "resuming $OUT"
 
-# --plot is drawn when the map is complete; --overwrite replaces an old plot.
+# --resume continues the chunks not yet done (or starts); --plot is drawn when the
+# map is complete; --overwrite replaces an old plot.
 mpiexec -n "$RANKS" .venv/bin/elastica-petsc workspace "${GRID[@]}" \
-    --out "$OUT" "${RESUME[@]}" --plot "$PLOT" --overwrite --json > "${OUT%.h5}.json"
+    --out "$OUT" --resume --plot "$PLOT" --overwrite --json > "${OUT%.h5}.json"
 status=$?
 
 case $status in

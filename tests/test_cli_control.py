@@ -8,6 +8,7 @@ import sys
 
 import h5py
 import numpy as np
+import pytest
 
 
 def cli(*args):
@@ -94,11 +95,16 @@ def test_trace_paper_triangle_schedule_and_hdf5(tmp_path):
     assert 0.5 < data["f1_min_hz"] < 5 and data["max_tracing_speed_mm_s"] > 0
     with open(sched, newline="") as fh:
         rows = list(csv.DictReader(fh))
-    assert len(rows) == data["points"]
-    expected = ["index", "target_x_mm", "target_y_mm", "tip_x_mm", "tip_y_mm"]
+    # an approach from the straight arm, then the path, timed at the suggested speed
+    assert len(rows) == data["schedule_rows"] == data["approach_points"] + data["points"]
+    assert [r["phase"] for r in rows].count("path") == data["points"]
+    assert data["speed_mm_s"] == data["max_tracing_speed_mm_s"]
+    assert float(rows[-1]["time_s"]) == pytest.approx(data["duration_s"], abs=1e-3)
+    expected = ["row", "phase", "point", "time_s", "reached", "target_x_mm", "target_y_mm",
+                "tip_x_mm", "tip_y_mm"]
     for i in (1, 2):
-        expected += [f"tension_{i}_N", f"length_{i}_mm", f"revolutions_{i}", f"steps_{i}",
-                     f"rounding_error_{i}_mm"]
+        expected += [f"tension_{i}_N", f"tension_{i}_p", f"length_{i}_mm", f"revolutions_{i}",
+                     f"steps_{i}", f"step_increment_{i}", f"rounding_error_{i}_mm"]
     assert list(rows[0]) == expected
     # one microstep moves 2 pi r / (200 * 16) = 0.0609 mm of cable: rounding <= half of it
     errors = [abs(float(r[f"rounding_error_{i}_mm"])) for r in rows for i in (1, 2)]

@@ -137,6 +137,7 @@ def fig8_lengths(tmp_path_factory):
     out, png = d / "states.h5", d / "states.png"
     run = cli("lengths", "--lengths", *L_FIG8_MM, "--all", "--json", "--out", out, "--plot", png)
     assert run.returncode == 0, run.stderr
+    assert run.stderr == ""                       # issue 12: no warnings, no overflows
     return json.loads(run.stdout), out, png
 
 
@@ -162,11 +163,14 @@ def test_fig8_equilibria_load_control(fig8_load):
         np.testing.assert_allclose(s["tensions_N"], [14.0, 6.0], atol=1e-6)
         assert s["stable"] == s["stable_under_load_control"]
         assert s["slack_mm"] == [0.0, 0.0] and s["taut"] == [True, True]
-    for expected in ([147.1, 472.5], L_STATE3_MM):
+    for number, expected in ((1, [147.1, 472.5]), (3, L_STATE3_MM)):
         err = [np.max(np.abs(np.array(s["cable_lengths_mm"]) - expected)) for s in states]
         k = int(np.argmin(err))
         assert err[k] <= 0.5, (expected, [s["cable_lengths_mm"] for s in states])
         assert states[k]["stable"] is True
+        assert states[k]["number"] == number          # the paper's numbering (Fig. 8)
+    assert sorted(s["number"] for s in states) == [s["number"] for s in states]
+    assert 2 not in [s["number"] for s in states]     # state 2 has other tensions
     assert data["search"]["starts"] >= 10 and data["search"]["attempts"] >= len(states)
     assert "not proven complete" in data["note"]
     assert_units_everywhere(out)
@@ -191,7 +195,13 @@ def test_fig8_lengths_finds_states_1_and_2(fig8_lengths, fig8_load, disc, ls):
 
     assert data["control"] == "length" and data["lengths_mm"] == [147.1, 472.5]
     states = data["equilibria"]
-    assert len(states) >= 2
+    assert len(states) >= 5                   # issue 12: five with p >= 0, three unstable
+    assert all(min(s["tensions"]) >= 0 for s in states)
+    assert [s["stable"] for s in states].count(True) == 2
+    cov = data["search"]["coverage"]
+    assert cov["by_method"]["deflated continuation"]["new_states"] >= 4
+    assert 0 < cov["last_new_state_at_attempt"] <= data["search"]["attempts"]
+    assert data["search"]["effort"]["steps"] == 12 and data["search"]["effort"]["effort"] == 1
     for s in states:
         for key in ("tensions", "tensions_N", "tip_mm", "cable_lengths_mm", "slack_mm",
                     "taut", "stable", "stable_under_load_control",
@@ -202,7 +212,7 @@ def test_fig8_lengths_finds_states_1_and_2(fig8_lengths, fig8_load, disc, ls):
     search = data["search"]
     assert search["starts"] == len(search["start_labels"]) >= 10
     assert search["attempts"] >= search["starts"]
-    assert [f["state"] for f in search["found_from"]] == list(range(1, len(states) + 1))
+    assert [f["state"] for f in search["found_from"]] == [s["number"] for s in states]
     assert all(f["start"] in search["start_labels"] for f in search["found_from"])
     assert search["complete"] is False and "not proven complete" in data["note"]
 
@@ -210,11 +220,13 @@ def test_fig8_lengths_finds_states_1_and_2(fig8_lengths, fig8_load, disc, ls):
     with h5py.File(out, "r") as fh:
         assert fh.attrs["kind"] == "length_equilibria"
         assert fh.attrs["n_equilibria"] == len(states)
-        groups = [fh[f"equilibria/state_{k}"] for k in range(1, len(states) + 1)]
-        for p_paper in (P_FIG8, P_STATE2):
+        assert list(fh.attrs["state_numbers"]) == [s["number"] for s in states]
+        groups = [fh[f"equilibria/state_{s['number']}"] for s in states]
+        for number, p_paper in ((1, P_FIG8), (2, P_STATE2)):
             k = int(np.argmin([np.max(np.abs(np.array(s["tensions"]) - p_paper))
                                for s in states]))
             found = states[k]
+            assert found["number"] == number          # the paper's numbering (Fig. 8)
             assert found["stable"] is True and found["taut"] == [True, True]
             u, p = state_from_h5(disc, groups[k])
             np.testing.assert_allclose(p, found["tensions"], atol=1e-6)
@@ -332,9 +344,17 @@ def test_replay_reports_the_fig7_buckling(tmp_path, arm, disc, eqs, ls):
     assert jump["before_point"] == 4
     assert abs(L0[1] * L_MM - jump["lengths_mm"][1] - 1.61) < 0.05
     assert data["points"][-1]["stable"] and data["points"][-1]["tip_error_mm"] > 1.0
+    (event,) = data["instabilities"]                  # issue 12: reported as a bifurcation
+    assert event["before_point"] == 4 and event["kind"] == "bifurcation"
     assert_png(png)
-    text = cli("replay", path)
+    out = tmp_path / "fig7_replay.h5"
+    text = cli("replay", path, "--out", out)
     assert text.returncode == 0 and "jump (snap/buckling) before point 4" in text.stdout
+    assert "a bifurcation (buckling; switched to a stable branch beside it)" in text.stdout
+    with h5py.File(out, "r") as fh:
+        assert [k.decode() for k in fh["instabilities/kind"][()]] == ["bifurcation"]
+        assert list(fh["instabilities/before_point"][()]) == [4]
+    assert_units_everywhere(out)
 
 
 # --- errors ------------------------------------------------------------------------------
@@ -356,6 +376,9 @@ def _not_hdf5(tmp_path):
     (["lengths", "--lengths", 147.1, 472.5, 3.0], "expected 2 cable lengths"),
     (["lengths", "--lengths", 147.1, -5], "must be a positive number"),
     (["lengths", "--lengths", 0, 472.5], "must be a positive number"),
+    (["lengths", "--lengths", 147.1, 472.5, "--all", "--effort", 0],
+     "--effort must be an integer >= 1"),
+    (["equilibria", "--tensions", 25.2, 10.8, "--effort", -2], "--effort must be an integer"),
     (["lengths", "--lengths", 147.1, 472.5, "--all", "--deflation-rounds", -1],
      "--deflation-rounds"),
     (["equilibria", "--tensions", 25.2, -1], "negative"),

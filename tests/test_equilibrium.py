@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.solvers import control
+from elastica_petsc.solvers.equilibrium import CABLE_COLLAPSE, EquilibriumSolver
 from elastica_petsc.core.fem import Discretisation, DiscretisationError
 
 from conftest import make_arm
@@ -171,6 +172,7 @@ def test_collapse_onto_routing_point_is_reported(paper_solver):
     solve must not report success and must say why."""
     eq = paper_solver.solve([0.0, 30.0])
     assert not eq.converged
+    assert eq.reason == CABLE_COLLAPSE == control.CABLE_COLLAPSE    # one name everywhere
     assert "tendon 2 pulled its attachment point onto its routing point" in eq.message
     np.testing.assert_array_equal(eq.p_requested, [0.0, 30.0])
     assert eq.p[0] == 0.0 and 20.0 < eq.p[1] < 23.5    # measured 22.73

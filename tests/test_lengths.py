@@ -23,9 +23,10 @@ from elastica_petsc.core.deflation import Deflation
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.core.fem import Discretisation
-from elastica_petsc.solvers.lengths import (LengthInertia, LengthSolver, _AugmentedSystem,
-                                    constrained_mode, equilibria, length_equilibria, replay,
-                                    tension_starts)
+from elastica_petsc.solvers.lengths import (AugmentedSystem, LengthInertia, LengthSolver,
+                                            constrained_mode)
+from elastica_petsc.studies.replay import replay
+from elastica_petsc.studies.search import equilibria, length_equilibria, tension_starts
 from elastica_petsc.core.model import Arm, Tendon
 
 L_MM = 600.0
@@ -104,7 +105,7 @@ def test_augmented_jacobian_is_consistent(arm, mode):
     differences of the residual, with two deflated roots (the rank-one term
     F grad M^T is carried by the mu row and column)."""
     disc = Discretisation.from_arm(arm, 30)
-    system = _AugmentedSystem(disc, mode, f"test_{mode}_")
+    system = AugmentedSystem(disc, mode, f"test_{mode}_")
     try:
         rng = np.random.default_rng(2)
         s = np.linspace(0, 1, 31)
@@ -191,7 +192,16 @@ def test_fig8_length_control_finds_states_1_and_2(eqs, ls, starts):
     constrained strain energy), which is checked as well."""
     L = L_FIG8_MM / L_MM
     res = length_equilibria(ls, L, starts)
-    assert len(res) >= 2, res.summary()
+    # issue 12: an independent multi-start found five states with p >= 0, three of
+    # them unstable; the default search (deflated continuation + multi-start) finds
+    # (25.25, 10.80), (9.62, 12.58), (6.49, 53.62), (58.66, 46.80), (105.25, 109.01)
+    assert len(res) >= 5, res.summary()
+    assert [f.state.stable_under_length_control for f in res.states].count(True) == 2
+    assert all(f.state.length_unstable_modes >= 0 and f.state.unstable_modes >= 0
+               for f in res.states)
+    methods = res.methods()
+    assert methods["deflated continuation"][1] >= 4, methods       # new states by DC
+    assert 0 < res.last_new_attempt <= res.attempts
     eq1 = eqs.solve(P_FIG8, order=(2, 1))
     dL_model = np.abs(eq1.cable_lengths * L_MM - L_FIG8_MM)        # (0.11, 0.02) mm
     assert np.all(dL_model < 0.15)
@@ -380,6 +390,7 @@ def test_fig7_length_path_buckles_the_straight_segment(eqs, ls, fig7):
     assert abs((fig7["L0"][1] - L_event[1]) * L_MM - dl_cr) < 0.02
     assert np.max(np.abs(L_event - L_cr)) * L_MM < 0.05
     assert len(path[-1].jumps) == 1
+    assert path[-1].instability_kinds == ("bifurcation",)      # buckling, not a fold
     assert path[-1].length_unstable_modes == 0
     assert abs(_column(disc, path[-1].u, m1)[1]) * L_MM > 1.0           # buckled
 
@@ -492,5 +503,8 @@ def test_replay_reports_where_the_arm_buckles(ls, fig7):
     assert r.first_departure == 4
     assert [q.jumped for q in r.points] == [False] * 4 + [True]
     (k, L_mm), = r.jumps
+    (k_event, _, kind), = r.instabilities
+    assert k_event == 4 and kind == "bifurcation"
+    assert "a bifurcation (buckling" in r.summary()
     assert k == 4 and abs(fig7["L0"][1] * L_MM - L_mm[1] - 1.61) < 0.05
     assert r.points[-1].tip_error_mm > 1.0 and r.points[-1].stable

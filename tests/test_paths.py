@@ -149,13 +149,15 @@ def test_schedule_csv(traced, tmp_path):
     sched = write_schedule_csv(out, tr, arm)
     with open(out, newline="") as fh:
         rows = list(csv.DictReader(fh))
-    expected = ["index", "target_x_mm", "target_y_mm", "tip_x_mm", "tip_y_mm"]
+    expected = ["row", "phase", "point", "time_s", "reached", "target_x_mm", "target_y_mm",
+                "tip_x_mm", "tip_y_mm"]
     for i in (1, 2):
-        expected += [f"tension_{i}_N", f"length_{i}_mm", f"revolutions_{i}", f"steps_{i}",
-                     f"rounding_error_{i}_mm"]
+        expected += [f"tension_{i}_N", f"tension_{i}_p", f"length_{i}_mm", f"revolutions_{i}",
+                     f"steps_{i}", f"step_increment_{i}", f"rounding_error_{i}_mm"]
     assert list(rows[0].keys()) == expected
     assert len(rows) == tr.n_points
-    assert [int(r["index"]) for r in rows] == list(range(tr.n_points))
+    assert [int(r["point"]) for r in rows] == list(range(tr.n_points))
+    assert {r["phase"] for r in rows} == {"path"}       # no approach traced here
     for i in (1, 2):
         assert float(rows[0][f"revolutions_{i}"]) == 0.0 and int(rows[0][f"steps_{i}"]) == 0
     # spool arithmetic: 31 mm spool, 200 x 16 microsteps per revolution

@@ -191,42 +191,44 @@ def test_interrupt_and_resume_one_rank(targets_1, tmp_path):
 
 
 @needs_mpi
-@pytest.mark.parametrize("target", ["mpiexec", "rank 0"])
+@pytest.mark.parametrize("target", ["mpiexec", "rank 0", "group", "rank 1"])
 def test_interrupt_and_resume_two_ranks(target, slow_targets_1, tmp_path):
-    """SIGINT to mpiexec (Open MPI passes a SIGTERM on to every rank), or SIGTERM to
-    rank 0 alone (it stops the other ranks through the chunk counter): rank 0 writes a
-    last checkpoint and the job ends."""
+    """SIGINT to mpiexec (Open MPI passes a SIGTERM on to every rank), SIGTERM to rank 0
+    or to rank 1 alone (it stops the others through the chunk counter), SIGINT to the
+    whole process group (Ctrl-C): every rank stops, rank 0 writes a last checkpoint and
+    the job ends; --resume completes it to the uninterrupted map (issue 15; the
+    20-trial study is scripts/fault_study.py)."""
     out = tmp_path / "ws.h5"
     proc = start(*SLOW_TARGETS, "--out", out, ranks=2)
     wait_for_checkpoint(out, proc)
     if target == "mpiexec":
         proc.send_signal(signal.SIGINT)
+    elif target == "group":
+        os.killpg(proc.pid, signal.SIGINT)
     else:
-        os.kill(rank_pids(proc.pid)[0], signal.SIGTERM)
+        os.kill(rank_pids(proc.pid)[int(target[-1])], signal.SIGTERM)
     status, stderr = finish(proc)
-    assert status == 130 if target == "rank 0" else status != 0
+    assert status == 130 if target.startswith("rank") else status != 0
     assert "continue with --resume" in stderr
     assert_valid_partial(out)
     ok(workspace(*SLOW_TARGETS, "--out", out, "--resume", ranks=2))
     assert_same_samples(slow_targets_1, out)
 
 
+def _fault_study():
+    """scripts/fault_study.py (its helpers find the ranks of an mpiexec)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("fault_study",
+                                                  ROOT / "scripts" / "fault_study.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def rank_pids(mpiexec_pid: int) -> dict[int, int]:
-    """{rank: pid} of the processes that mpiexec started (from their environment)."""
-    ranks = {}
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            if int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1]) != mpiexec_pid:
-                continue
-            env = (entry / "environ").read_bytes().split(b"\0")
-        except (OSError, IndexError, ValueError):
-            continue
-        for item in env:
-            if item.startswith(b"OMPI_COMM_WORLD_RANK="):
-                ranks[int(item.split(b"=")[1])] = int(entry.name)
-    return ranks
+    """{rank: pid} of the processes that mpiexec started."""
+    return _fault_study().rank_pids(mpiexec_pid)
 
 
 @needs_mpi
@@ -426,7 +428,6 @@ def test_resume_with_another_spacing_is_refused(ranks, targets_1, tmp_path):
     ([], ["--out"]),
     (["--out", "{new}", "--box", "0", "-10", "0", "100"], ["--box", "xmin < xmax"]),
     (["--out", "{new}", "--box", "0", "100", "50", "50"], ["--box"]),
-    (["--out", "{new}", "--resume"], ["--resume", "does not exist"]),
     (["--out", "{new}", "--spacing", "-5"], ["--spacing"]),
 ])
 def test_bad_input_exits_2_with_one_line(args, words, targets_1, tmp_path):
@@ -482,3 +483,49 @@ def test_fig4_legend_names_routing_points_and_reasons(targets_1):
     assert "not converged (3: CABLE_COLLAPSE 2, MAX_ITERATIONS 1)" in labels
     assert "routing points r_1, r_2" in labels
     np.testing.assert_allclose(np.column_stack(routes.get_data()), [[46.3, -97.1], [26.1, 51.1]])
+
+
+# --- g. the library entry point (issue 10) ------------------------------------------------------
+def test_run_map_returns_the_arrays_without_a_file(targets_1, tmp_path, monkeypatch):
+    """``run_map`` in this process, no ``out``: the same samples and masks as the
+    command line's file, in mm and N, status and reasons as strings; nothing written."""
+    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.fem import Discretisation
+    from elastica_petsc.studies.workspace import run_map
+
+    monkeypatch.chdir(tmp_path)
+    arm = load_config(ROOT / "configs" / "paper.toml")
+    ws = run_map(arm, Discretisation.from_arm(arm, ELEMENTS), box_mm=(-120, 480, 60, 420),
+                 spacing_mm=60, chunk=4, progress=False)
+    assert list(tmp_path.iterdir()) == [] and ws.file is None
+    assert ws.complete and ws.samples_done == ws.samples_total == 77 and ws.ranks == 1
+    reference = samples(targets_1)
+    for name in ("tip", "tensions", "tensions_N", "lambda_min", "status"):
+        assert np.array_equal(ws.samples[name], reference[name], equal_nan=True), name
+    with h5py.File(targets_1, "r") as fh:
+        for name in ("W0", "WY", "WS", "WE", "WP"):
+            assert ws.masks[name].dtype == bool
+            assert np.array_equal(ws.masks[name], fh["masks"][name][()]), name
+    assert set(ws.status) == {"REACHED", "NEEDS_NEGATIVE"}
+    assert np.array_equal(ws.status == "REACHED", ws.masks["W0"])
+    assert ws.reason[ws.masks["W0"]][0] == "TARGET_REACHED"
+    w0 = ws.masks["W0"]
+    np.testing.assert_allclose(ws.tensions_N[w0], ws.tensions[w0] * arm.force_scale_N)
+    assert not ws.tip_mm.flags.writeable
+
+
+def test_read_map_gives_back_the_file(targets_1):
+    """``read_map`` (behind ``ep.read``) rebuilds the map the command line wrote."""
+    from elastica_petsc.studies.workspace import read_map
+
+    ws = read_map(targets_1)
+    assert ws.complete and ws.samples_total == 77 and ws.mode == "targets"
+    reference = samples(targets_1)
+    for name in ("tip", "tensions", "status", "reason", "lambda_min"):
+        x = ws.samples[name]
+        assert (np.array_equal(x, reference[name], equal_nan=True) if x.dtype.kind == "f"
+                else np.array_equal(x, reference[name])), name
+    with h5py.File(targets_1, "r") as fh:
+        for name, mask in ws.masks.items():
+            assert np.array_equal(mask, fh["masks"][name][()]), name
+    assert ws.summary()["masks"]["W0"] == int(ws.masks["W0"].sum()) > 0

@@ -7,9 +7,12 @@ start with a single dash (``-eq_snes_monitor``, ``-ctl_tao_monitor``,
 ``-stab_eps_view``) are handed to PETSc: ``petsc4py.init`` happens here,
 once, before any solver module is imported.
 
-Exit status: 0 success; 1 a solve that did not converge; 2 bad input (one
-line on stderr, no traceback); 3 a target outside the workspace; 130
-interrupted.
+Exit status: 0 success; 1 a solve that did not converge; 2 bad input or an
+output that cannot be written (one line on stderr, no traceback); 3 a target
+outside the workspace; 130 interrupted (SIGINT or SIGTERM).  Under mpiexec an
+input error found by every rank is printed once, by rank 0; Open MPI's own
+banner about a non-zero exit status is mpiexec's to print (``mpiexec --quiet``
+or ``OMPI_MCA_orte_execute_quiet=1`` silences it).
 """
 from __future__ import annotations
 
@@ -20,8 +23,8 @@ import sys
 
 from ..core.errors import InputError
 
-COMMANDS = ("solve", "control", "trace", "stability", "workspace", "lengths", "equilibria", "replay",
-            "reproduce")
+COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "design", "lengths",
+            "equilibria", "replay", "reproduce")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed
@@ -29,8 +32,9 @@ above is passed to PETSc, e.g. -eq_snes_monitor, -eq_snes_rtol 1e-12
 (equilibrium Newton solver, prefix eq_), -ctl_tao_monitor (tip control,
 prefix ctl_), -stab_eps_view (eigen solver, prefix stab_).
 
-Exit status: 0 ok, 1 not converged, 2 bad input, 3 target proven unreachable
-(control: |target| > l), 4 target not reached and not proven unreachable."""
+Exit status: 0 ok, 1 not converged, 2 bad input (or an output that cannot be
+written), 3 target proven unreachable (control: |target| > l), 4 target not
+reached and not proven unreachable, 130 interrupted."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -73,23 +77,89 @@ def _is_number(token: str) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # SIGTERM (a batch system, kill) ends a command like Ctrl-C: "interrupted", 130
+    signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:                   # during start-up
+        print("elastica-petsc: interrupted", file=sys.stderr)
+        return 130
+
+
+def warn_unused(petsc_options: list[str]) -> None:
+    """One line per PETSc option from the command line that no solver read
+    (a misspelt -eq_snes_monitr), as PETSc's -options_left would (rank 0)."""
+    from ..solvers.options import unused_options
+
+    names = [t for t in petsc_options if t.startswith("-") and not _is_number(t)]
+    for name in (unused_options(names, root_only=True) if names else None) or ():
+        print(f"elastica-petsc: warning: PETSc option {name} was not used by any solver "
+              "(misspelt, or not for this command?)", file=sys.stderr)
+
+
+def _main(argv: list[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
     args, rest = parser.parse_known_args(argv)
     petsc_options = split_petsc_options(parser, rest)
-    import petsc4py
-    petsc4py.init([parser.prog] + petsc_options)
-    from petsc4py import PETSc  # noqa: F401  (initialises PETSc with those options)
+    from ..solvers import runtime
+    # PETSc errors become one line here (main), not PETSc's error stack on stderr
+    runtime.init(parser.prog, petsc_options)
+    from ..core import progress
     # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, _interrupt)   # again: PETSc's initialisation may take it
+    progress.configure(quiet=getattr(args, "quiet", False))
     try:
-        return args.run(args)
+        status = args.run(args)
     except InputError as err:
-        print(f"elastica-petsc: error: {err}", file=sys.stderr)
+        progress.close_all()
+        if _first_to_say(err):
+            print(f"elastica-petsc: error: {err}", file=sys.stderr)
+        return 2
+    except OSError as err:                      # an output that could not be written
+        progress.close_all()
+        where = f" {err.filename}" if err.filename else ""
+        print(f"elastica-petsc: error: cannot write{where}: {err.strerror or err}",
+              file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        progress.close_all()
         print("elastica-petsc: interrupted", file=sys.stderr)
         return 130
+    except Exception as err:
+        what = runtime.error_text(err)
+        if what is None:
+            raise
+        progress.close_all()
+        return _petsc_error(what, petsc_options)
+    warn_unused(petsc_options)
+    return status
+
+
+def _petsc_error(what: str, petsc_options: list[str]) -> int:
+    """One line for a PETSc error: with PETSc options given, most likely one of
+    them (a value PETSc cannot read): bad input, status 2; otherwise status 1."""
+    if petsc_options:
+        print(f"elastica-petsc: error: PETSc: {what}; check the PETSc options "
+              f"{' '.join(petsc_options)}", file=sys.stderr)
+        return 2
+    print(f"elastica-petsc: error: PETSc: {what}", file=sys.stderr)
+    return 1
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def _first_to_say(err: InputError) -> bool:
+    """An error every rank raised alike is printed by rank 0 only."""
+    from ..studies.workspace import CollectiveInputError
+
+    if not isinstance(err, CollectiveInputError):
+        return True
+    from mpi4py import MPI
+    return MPI.COMM_WORLD.rank == 0
 
 
 if __name__ == "__main__":

@@ -22,7 +22,10 @@ def add_output_options(parser: argparse.ArgumentParser, plot: bool = True) -> No
                         help="print one JSON object on stdout instead of the text summary")
     parser.add_argument("--out", metavar="H5", help="write the results to this HDF5 file")
     parser.add_argument("--overwrite", action="store_true",
-                        help="replace an existing --out/--plot file")
+                        help="replace existing output files (--out, --plot and the like)")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress bar or progress lines (for batch jobs); results and "
+                             "errors are still printed")
     if plot:
         parser.add_argument("--plot", metavar="PNG", help="draw a figure into this PNG file")
 
@@ -33,6 +36,35 @@ def add_tension_options(parser: argparse.ArgumentParser, required: bool = True) 
                        help="cable tensions, non-dimensional p_i = P_i l^2 / B, one per tendon")
     group.add_argument("--tensions-N", type=float, nargs="+", metavar="P",
                        help="cable tensions in newtons, one per tendon")
+
+
+def add_tension_option(parser: argparse.ArgumentParser, flag: str, *, help: str,
+                       nargs=None, default=None, metavar: str = "P") -> None:
+    """``flag`` in p = P l^2/B and its newton form ``flag-N``, mutually
+    exclusive; :func:`load_arm` turns a given ``flag-N`` into ``flag``'s p."""
+    group = parser.add_mutually_exclusive_group()
+    shown = "" if default is None else "; default " + " ".join(
+        f"{v:g}" for v in (default if isinstance(default, list) else [default]))
+    group.add_argument(flag, type=float, nargs=nargs, default=default, metavar=metavar,
+                       help=f"{help} (non-dimensional p = P l^2/B{shown})")
+    group.add_argument(f"{flag}-N", type=float, nargs=nargs, metavar="N",
+                       help=f"the same in newtons (instead of {flag})")
+
+
+def newton_forms(args, arm: Arm) -> None:
+    """Replace every given ``--X-N`` value (newtons) by ``--X`` in p = P l^2/B."""
+    import math
+
+    for key in list(vars(args)):
+        value = getattr(args, key)
+        if not key.endswith("_N") or key == "tensions_N" or value is None:
+            continue
+        flag = "--" + key[:-2].replace("_", "-") + "-N"
+        values = value if isinstance(value, list) else [value]
+        if not all(math.isfinite(v) and v >= 0 for v in values):
+            raise InputError(f"{flag}: tensions must be finite and >= 0 N, got {value}")
+        p = [float(v) for v in arm.tensions_from_N(values)]
+        setattr(args, key[:-2], p if isinstance(value, list) else p[0])
 
 
 def add_order_option(parser: argparse.ArgumentParser) -> None:
@@ -46,6 +78,7 @@ def load_arm(args) -> tuple[Arm, "Discretisation"]:
     from ..core.fem import Discretisation
 
     arm = load_config(args.config)
+    newton_forms(args, arm)
     if args.elements is not None and args.elements < 2:
         raise InputError(f"--elements must be at least 2, got {args.elements}")
     return arm, Discretisation.from_arm(arm, args.elements)
@@ -59,7 +92,8 @@ def tensions(args, arm: Arm):
 
 
 def guess(args, disc):
-    """Validated initial tensions from ``--guess`` (non-dimensional), or None."""
+    """Validated initial tensions from ``--guess`` (non-dimensional p) or
+    ``--guess-N`` (newtons, converted by :func:`load_arm`), or None."""
     if args.guess is None:
         return None
     from ..solvers.equilibrium import check_tensions
@@ -67,7 +101,7 @@ def guess(args, disc):
 
 
 def order(args) -> tuple[int, ...] | None:
-    if not args.order:
+    if args.order is None:
         return None
     try:
         return tuple(int(k) for k in args.order.split(","))
@@ -76,13 +110,67 @@ def order(args) -> tuple[int, ...] | None:
                          "e.g. 2,1") from None
 
 
-def check_outputs(args) -> None:
-    """Fail early, before any computing, on output paths that would be refused."""
-    from ..io.hdf5 import check_output_path
+def check_cable_lengths(arm: Arm, lengths_mm) -> None:
+    """Refuse a cable length no state of the arm can have taut: the attachment x_i
+    lies within s_i of the clamp (inextensible arm), so |r_i - x_i| <= |r_i| + s_i.
+    A longer cable is slack in every state (and the continuation towards it would
+    take a number of steps that grows with the length)."""
+    import math
 
-    for path in (getattr(args, "out", None), getattr(args, "plot", None)):
-        if path:
-            check_output_path(path, args.overwrite)
+    for i, (tendon, L) in enumerate(zip(arm.tendons, lengths_mm), 1):
+        longest = math.hypot(*tendon.route_mm) + tendon.attach_mm
+        if L > longest:
+            raise InputError(f"--lengths: cable {i} cannot be {L:g} mm long and taut: its "
+                             f"longest possible span is |r_{i}| + s_{i} = {longest:.1f} mm")
+
+
+MAX_TARGET_DISTANCE = 100.0      # arm lengths
+MAX_PATH_POINTS = 1_000_000
+
+
+def check_target_mm(arm: Arm, target, option: str = "--target") -> None:
+    """A target in mm: finite, and within 100 arm lengths of the clamp (farther,
+    E of Eq. (10) would overflow; nothing there is reachable anyway)."""
+    import math
+
+    if not all(math.isfinite(v) for v in target):
+        raise InputError(f"{option} must be two finite numbers in mm")
+    if math.hypot(*target) > MAX_TARGET_DISTANCE * arm.length_mm:
+        raise InputError(f"{option} ({target[0]:g}, {target[1]:g}) mm lies more than "
+                         f"{MAX_TARGET_DISTANCE:g} arm lengths from the clamp; the arm reaches "
+                         f"{arm.length_mm:g} mm")
+
+
+def check_path_points(points, step_mm: float) -> None:
+    """Refuse a path that ``step_mm`` would cut into more than a million targets."""
+    import numpy as np
+
+    length = float(np.sum(np.linalg.norm(np.diff(np.asarray(points, float), axis=0), axis=1)))
+    if not (np.isfinite(length) and length / step_mm <= MAX_PATH_POINTS):
+        raise InputError(f"--step {step_mm:g} mm would cut the {length:.6g} mm path into more "
+                         f"than {MAX_PATH_POINTS:,} targets; use a larger --step")
+
+
+def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None:
+    """Fail early, before any computing, on output paths that would be refused:
+    --out (.h5), --plot (.png/.pdf/.svg), --schedule (.csv) and ``extra``
+    ({option: path}); two options naming one file are refused too.  With
+    ``resume`` an existing --out is the file to continue."""
+    from ..io.hdf5 import H5_SUFFIXES, PLOT_SUFFIXES, check_distinct, check_output_path
+
+    kinds = {"out": ("--out", H5_SUFFIXES), "plot": ("--plot", PLOT_SUFFIXES),
+             "schedule": ("--schedule", (".csv",))}
+    paths = {}
+    for attr, (option, suffixes) in kinds.items():
+        path = getattr(args, attr, None)
+        if path is not None:
+            check_output_path(path, args.overwrite or (resume and attr == "out"), suffixes,
+                              option)
+            paths[option] = path
+    for option, path in (extra or {}).items():
+        check_output_path(path, args.overwrite, None, option)
+        paths[option] = path
+    check_distinct(paths)
 
 
 def print_json(data: dict) -> None:

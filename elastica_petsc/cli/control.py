@@ -27,8 +27,8 @@ def add_parser(sub) -> None:
     parser.add_argument("--method", choices=("blmvm", "gd"), default="blmvm",
                         help="blmvm: TAO bound-constrained quasi-Newton (default); gd: the "
                              "paper's gradient descent with adaptive step (Algorithm 1)")
-    parser.add_argument("--guess", type=float, nargs="+", metavar="P",
-                        help="initial tensions, non-dimensional p = P l^2/B (default 0)")
+    common.add_tension_option(parser, "--guess", nargs="+",
+                              help="initial tensions, one per tendon (default 0)")
     parser.add_argument("--tol-mm", type=float, default=1e-5, metavar="MM",
                         help="tip tolerance in mm (default 1e-5, the paper's eps = 1e-10 mm^2)")
     parser.add_argument("--local", action="store_true",
@@ -39,6 +39,12 @@ def add_parser(sub) -> None:
                              "a crossing, keeping the crossing state if none is found; require "
                              "reports such a target as not reached (exit 4); ignore only flags")
     add_share_options(parser)
+    parser.add_argument("--animate", metavar="GIF|MP4",
+                        help="write an animation of the arm through the optimiser's iterations "
+                             "(Fig. 2 as a movie; .gif with Pillow, .mp4 needs ffmpeg)")
+    parser.add_argument("--vtk", metavar="DIR",
+                        help="write the final state (arm and cables) for ParaView as "
+                             "DIR/control.vtu")
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
@@ -167,8 +173,13 @@ def run(args) -> int:
     if not args.tol_mm > 0:
         raise InputError(f"--tol-mm must be positive, got {args.tol_mm}")
     guess = common.guess(args, disc)
-    if not np.all(np.isfinite(args.target)):
-        raise InputError("--target must be two finite numbers in mm")
+    common.check_target_mm(arm, args.target)
+    if args.animate:
+        from ..plots.animate import check_animation_path
+        check_animation_path(args.animate, args.overwrite)
+    if args.vtk:
+        from ..io.vtk import check_directory
+        check_directory(args.vtk, args.overwrite)
     with TipController(arm, n_elements=disc.n_elements, method=args.method,
                        tip_tol_mm=args.tol_mm) as controller:
         result = Reacher(controller).reach(np.asarray(args.target) / arm.length_mm, p0=guess,
@@ -179,6 +190,9 @@ def run(args) -> int:
             result = sharer.solve(result)
         result = dataclasses.replace(result, loading=simplest_loading(
             controller.solver, result.equilibrium, result.loading))
+        if args.animate:
+            from ..plots.animate import animate_control
+            animate_control(controller, result, args.animate)
     summary = control_summary(arm, result)
     if args.json:
         common.print_json(summary)
@@ -192,6 +206,12 @@ def run(args) -> int:
     if args.plot:
         from ..plots.control import plot_descent
         plot_descent(arm, result, args.plot)
+    if args.vtk:
+        from pathlib import Path
+
+        from ..io.vtk import write_state
+        Path(args.vtk).mkdir(exist_ok=True)
+        write_state(Path(args.vtk) / "control.vtu", arm, result.equilibrium)
     if result.converged:
         return 0
     print(f"elastica-petsc: {unreachable_message(summary)}", file=sys.stderr)

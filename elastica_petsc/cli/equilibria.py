@@ -1,7 +1,7 @@
 """``elastica-petsc equilibria``: several equilibria for fixed tensions (load control,
 paper Fig. 8: states 1 and 3 share p = (25.2, 10.8)).
 
-The multi-start search of :func:`lengths.equilibria`: loading paths from the
+The multi-start search of :func:`elastica_petsc.studies.search.equilibria`: loading paths from the
 straight arm (proportional and every order), loading paths from a spread of
 load-controlled starts, then deflated Newton solves.  Output layout as for
 ``elastica-petsc lengths`` (see :mod:`.lengths`); ``stable`` is the stability
@@ -17,7 +17,8 @@ def add_parser(sub) -> None:
     parser = sub.add_parser(
         "equilibria", help="several equilibria for given tensions (load control, Fig. 8)",
         description="Search for several equilibria of the arm at fixed cable tensions (load "
-                    "control): loading paths from the straight arm in every order, loading "
+                    "control): loading paths from the straight arm in every order (both sides "
+                    "of every bifurcation), deflated continuation in the tensions, loading "
                     "paths from a spread of load-controlled starts, and deflated Newton solves "
                     "(Fig. 8: states 1 and 3 share p = (25.2, 10.8)). Each state is reported "
                     "with tip, cable lengths and its stability under load control and, held "
@@ -31,25 +32,23 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..solvers.equilibrium import EquilibriumSolver, check_tensions
-    from ..solvers.lengths import equilibria, tension_starts
+    from ..solvers.equilibrium import check_tensions
+    from ..studies.search import search_tensions
     from ..io.summary import rounded
     from .lengths import NOT_COMPLETE, check_search_options, finish, search_summary, \
         state_summary
 
     arm, disc = common.load_arm(args)
     p = check_tensions(common.tensions(args, arm), disc.n_tendons)
-    check_search_options(args)
+    settings = check_search_options(args)
     common.check_outputs(args)
-    with EquilibriumSolver(disc) as eqs:
-        starts = tension_starts(eqs, levels=args.levels)
-        result = equilibria(eqs, p, starts, deflation_rounds=args.deflation_rounds,
-                            length_mm=arm.length_mm)
+    result = search_tensions(arm, p, elements=disc.n_elements, effort=args.effort,
+                             levels=args.levels, deflation_rounds=args.deflation_rounds)
     states = [f.state for f in result.states]
     data = {"control": "load", "tensions": rounded(p), "tensions_N": rounded(arm.tensions_to_N(p)),
             "elements": disc.n_elements,
             "equilibria": [state_summary(arm, f.state, "load", f) for f in result.states],
-            "search": search_summary(result), "note": NOT_COMPLETE}
+            "search": search_summary(result, settings), "note": NOT_COMPLETE}
     title = ("Equilibria found at p = (" + ", ".join(f"{v:g}" for v in p)
              + ") (load control)")
     return finish(args, arm, data, states, "load_equilibria", title)

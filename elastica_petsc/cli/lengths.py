@@ -3,7 +3,7 @@ paper Sec. 4.6, Fig. 8; docs/model.md §4.7).
 
 Without ``--all``: the equilibrium reached from the straight arm by continuation
 in the cable lengths (a stable path; snaps and buckling are recorded).  With
-``--all``: the multi-start deflated search of :func:`lengths.length_equilibria`.
+``--all``: the multi-start deflated search of :func:`elastica_petsc.studies.search.length_equilibria`.
 
 The helpers below (state summaries, text report, HDF5 layout) are shared with
 ``elastica-petsc equilibria`` (load control), which prints the same layout.
@@ -13,13 +13,15 @@ HDF5 layout (``--out``), besides the provenance attributes of every file::
     target/lengths_mm        (n,)  mm        prescribed cable lengths   (lengths)
     target/tensions          (n,)  P l^2/B   prescribed tensions        (equilibria)
     target/tensions_N        (n,)  N
-    equilibria/state_K/...   one group per state: the layout of io.hdf5.write_equilibrium
+    equilibria/state_K/...   one group per state K (the paper's numbers for Fig. 8's
+                             states, see studies.search.state_numbers): the layout of io.hdf5.write_equilibrium
                              plus tendons/lengths_requested (mm), tendons/slack (mm),
                              tendons/taut (1); solver attributes also hold
                              length_unstable_modes, stable_under_length_control,
                              found_start, found_method, hits
-    root attributes          control, n_equilibria, search_* (method, starts,
-                             attempts, failed, refound, start_labels_json), note
+    root attributes          control, n_equilibria, state_numbers, search_* (method, starts,
+                             attempts, failed, refound, start_labels_json, coverage_json,
+                             effort_json), note
 """
 from __future__ import annotations
 
@@ -33,13 +35,17 @@ NOT_COMPLETE = ("These are the equilibria that the listed starts and methods rea
 
 
 def add_search_options(parser) -> None:
-    parser.add_argument("--levels", type=float, nargs="+", default=[5.0, 10.0, 20.0],
-                        metavar="P",
-                        help="tension levels (non-dimensional) of the load-controlled start "
-                             "states of the search: every combination, every loading order "
-                             "(default 5 10 20)")
-    parser.add_argument("--deflation-rounds", type=int, default=2, metavar="K",
-                        help="deflated Newton solves per start and sweep (default 2)")
+    parser.add_argument("--effort", type=int, default=1, metavar="K",
+                        help="spend about K times the default work: K x 12 deflated "
+                             "continuation points per path segment, K x 2 deflated solves per "
+                             "start, and the start tension levels doubled K-1 more times "
+                             "(default 1)")
+    common.add_tension_option(parser, "--levels", nargs="+",
+                              help="tension levels of the load-controlled start states of the "
+                                   "search: every combination, every loading order "
+                                   "(default 5 10 20, extended by --effort)")
+    parser.add_argument("--deflation-rounds", type=int, metavar="K",
+                        help="deflated Newton solves per start and sweep (default 2 x effort)")
 
 
 def add_parser(sub) -> None:
@@ -82,13 +88,21 @@ def check_lengths_mm(values, n_tendons: int):
     return L
 
 
-def check_search_options(args) -> None:
+def check_search_options(args) -> dict:
+    """Validated search settings (studies.search.effort_settings) from the options."""
     from ..core.errors import InputError
+    from ..studies.search import effort_settings
 
-    if args.deflation_rounds < 0:
+    if args.effort < 1:
+        raise InputError(f"--effort must be an integer >= 1, got {args.effort}")
+    if args.deflation_rounds is not None and args.deflation_rounds < 0:
         raise InputError(f"--deflation-rounds must be >= 0, got {args.deflation_rounds}")
-    if not all(math.isfinite(v) and v > 0 for v in args.levels):
+    if args.levels is not None and not all(math.isfinite(v) and v > 0 for v in args.levels):
         raise InputError("--levels: tension levels must be positive numbers")
+    settings = effort_settings(args.effort, args.levels)
+    if args.deflation_rounds is not None:
+        settings["deflation_rounds"] = args.deflation_rounds
+    return dict(settings, effort=args.effort)
 
 
 # --- plain data ------------------------------------------------------------------------
@@ -118,6 +132,7 @@ def state_summary(arm, state, control: str, found=None) -> dict:
         "instabilities_at_lengths_mm": [rounded(np.asarray(L) * l_mm)
                                         for L in state.instabilities],
     })
+    s["number"] = int(found.number) if found is not None and found.number else 1
     if found is not None:
         s["found_from"] = {"start": found.start, "method": found.method,
                            "attempts_reaching_it": int(found.hits)}
@@ -126,17 +141,32 @@ def state_summary(arm, state, control: str, found=None) -> dict:
     return s
 
 
-def search_summary(result) -> dict:
-    """How a SearchResult was obtained."""
+def search_summary(result, settings: dict) -> dict:
+    """How a SearchResult was obtained, and its coverage."""
+    what = "cable lengths" if result.control == "length" else "tensions"
     how = "length continuation" if result.control == "length" else "loading paths"
-    return {"method": f"multi-start search: {how} from each start, then deflated Newton "
-                      "solves (Farrell et al. 2015)",
+    method = (f"deflated continuation in the {what} from the straight arm along every "
+              f"loading order ({settings['steps']} points per segment; Farrell et al. 2016), "
+              f"then a multi-start search: {how} and up to {settings['deflation_rounds']} "
+              "deflated Newton solves (Farrell et al. 2015) from each start (load-controlled "
+              "states at the tension levels " + " ".join(f"{v:g}" for v in settings["levels"])
+              + " in every loading order, and any branch the continuation lost)")
+    if result.control == "load":
+        method = ("loading paths from the straight arm (every order, both sides of each "
+                  "bifurcation), " + method)
+    if settings["effort"] > 1:
+        method += (f"; effort {settings['effort']}: the searches of every lower effort first, "
+                   "then this one (the numbers above are its own)")
+    return {"method": method, "effort": settings,
+            "coverage": {"by_method": {m: {"attempts": a, "new_states": k}
+                                       for m, (a, k) in result.methods().items()},
+                         "last_new_state_at_attempt": result.last_new_attempt},
             "starts": len(result.starts), "attempts": int(result.attempts),
             "failed": int(result.failures), "refound": int(result.duplicates),
             "start_labels": list(result.starts),
-            "found_from": [{"state": k, "start": f.start, "method": f.method,
+            "found_from": [{"state": f.number, "start": f.start, "method": f.method,
                             "attempts_reaching_it": int(f.hits)}
-                           for k, f in enumerate(result.states, 1)],
+                           for f in result.states],
             "complete": False}
 
 
@@ -153,8 +183,19 @@ def format_states(arm, data: dict) -> str:
     lines = [f"{n} equilibri{'um' if n == 1 else 'a'} at {target}",
              f"search: {search['method']}; {search['starts']} start(s), {search['attempts']} "
              f"attempt(s), {search['failed']} failed, {search['refound']} re-found a known state"]
+    if "coverage" in search:
+        cov = search["coverage"]
+        lines.append("coverage: " + "; ".join(
+            f"{m}: {v['attempts']} attempt(s), {v['new_states']} new"
+            for m, v in cov["by_method"].items())
+            + f"; the last new state came at attempt {cov['last_new_state_at_attempt']} of "
+              f"{search['attempts']} (more effort: --effort)")
     other = "load" if data["control"] == "length" else "length"
-    for k, s in enumerate(data["equilibria"], 1):
+    numbers = [s["number"] for s in data["equilibria"]]
+    if numbers != list(range(1, n + 1)):
+        lines.append("state numbers: the paper's (Fig. 8) for the states it shows, the others "
+                     "after them")
+    for s in data["equilibria"]:
         own = "yes" if s["stable"] else "NO"
         oth = s[f"stable_under_{other}_control"]
         oth = "yes" if oth else ("not computed" if oth is None else "NO")
@@ -164,7 +205,7 @@ def format_states(arm, data: dict) -> str:
             origin = f"; first found from '{f['start']}' by {f['method']}, " \
                      f"reached {f['attempts_reaching_it']}x"
         lines.append("")
-        lines.append(f"state {k}{origin}")
+        lines.append(f"state {s['number']}{origin}")
         lines.append(f"  stable under {data['control']} control: {own}; "
                      f"under {other} control: {oth}  (negative stiffness eigenvalues load/length: "
                      f"{s['unstable_modes']}/{s['unstable_modes_length_control']})")
@@ -207,7 +248,10 @@ def write_states(path, overwrite: bool, arm, data: dict, states, kind: str) -> N
                          "search_attempts": search["attempts"], "search_failed": search["failed"],
                          "search_refound": search["refound"],
                          "search_start_labels_json": json.dumps(search["start_labels"]),
-                         "search_complete": False, "note": data["note"]})
+                         "search_coverage_json": json.dumps(search.get("coverage", {})),
+                         "search_effort_json": json.dumps(search.get("effort", {})),
+                         "search_complete": False, "note": data["note"],
+                         "state_numbers": [int(s["number"]) for s in data["equilibria"]]})
         target = fh.create_group("target")
         if data["control"] == "length":
             put(target, "lengths_mm", data["lengths_mm"], "mm", "prescribed cable lengths L_i")
@@ -215,8 +259,8 @@ def write_states(path, overwrite: bool, arm, data: dict, states, kind: str) -> N
             put(target, "tensions", data["tensions"], "P l^2/B", "prescribed tensions p_i")
             put(target, "tensions_N", data["tensions_N"], "N", "prescribed tensions P_i")
         group = fh.create_group("equilibria")
-        for k, (state, summary) in enumerate(zip(states, data["equilibria"]), 1):
-            g = group.create_group(f"state_{k}")
+        for state, summary in zip(states, data["equilibria"]):
+            g = group.create_group(f"state_{summary['number']}")
             write_equilibrium(g, arm, state)
             put(g["tendons"], "lengths_requested", state.lengths_requested * l_mm, "mm",
                 "prescribed cable lengths L_i (load control: the state's own chords)")
@@ -238,14 +282,15 @@ def plot(arm, data: dict, states, path, title: str) -> None:
     from ..plots.lengths import plot_states
 
     entries = []
-    for k, (state, s) in enumerate(zip(states, data["equilibria"]), 1):
+    for state, s in zip(states, data["equilibria"]):
         stab = "stable" if s["stable"] else "UNSTABLE"
-        label = (f"state {k}: p = (" + ", ".join(f"{v:.1f}" for v in s["tensions"])
+        label = (f"state {s['number']}: p = (" + ", ".join(f"{v:.1f}" for v in s["tensions"])
                  + "), L = (" + ", ".join(f"{v:.1f}" for v in s["cable_lengths_mm"])
                  + f") mm, {stab}")
         entries.append((state, label))
     circles = data["lengths_mm"] if data["control"] == "length" else None
-    plot_states(arm, entries, path, title=title, circles_mm=circles)
+    plot_states(arm, entries, path, title=title, circles_mm=circles,
+                numbers=[s["number"] for s in data["equilibria"]])
 
 
 def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
@@ -267,45 +312,41 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
 
 # --- the command -----------------------------------------------------------------------
 def run(args) -> int:
-    from ..solvers.lengths import LengthSolver, length_equilibria, tension_starts
+    from ..solvers.lengths import follow_lengths
+    from ..studies.search import search_lengths
     from ..io.summary import rounded
 
     arm, disc = common.load_arm(args)
     L_mm = check_lengths_mm(args.lengths, disc.n_tendons)
-    check_search_options(args)
+    common.check_cable_lengths(arm, L_mm)
+    settings = check_search_options(args)
     common.check_outputs(args)
-    l_mm = arm.length_mm
     data = {"control": "length", "lengths_mm": rounded(L_mm), "elements": disc.n_elements}
-    with LengthSolver(disc, length_mm=l_mm) as solver:
-        if args.all:
-            from ..solvers.equilibrium import EquilibriumSolver
-            with EquilibriumSolver(disc) as eqs:
-                starts = tension_starts(eqs, levels=args.levels)
-            result = length_equilibria(solver, L_mm / l_mm, starts,
-                                       deflation_rounds=args.deflation_rounds)
-            states = [f.state for f in result.states]
-            data["equilibria"] = [state_summary(arm, f.state, "length", f)
-                                  for f in result.states]
-            data["search"] = search_summary(result)
-            data["note"] = NOT_COMPLETE
-        else:
-            state = solver.follow(L_mm / l_mm)
-            states = [state] if state.converged else []
-            data["equilibria"] = [state_summary(arm, s, "length") for s in states]
-            data["search"] = {
-                "method": "length continuation from the straight arm (stable path; snaps "
-                          "and buckling recorded)",
-                "starts": 1, "attempts": 1, "failed": 0 if state.converged else 1,
-                "refound": 0, "start_labels": ["straight arm"],
-                "found_from": [{"state": 1, "start": "straight arm",
-                                "method": "continuation", "attempts_reaching_it": 1}]
-                if state.converged else [],
-                "complete": False}
-            data["note"] = ("One equilibrium: the one reached from the straight arm by length "
-                            "continuation. Others may share these cable lengths: --all searches "
-                            "for them; the list is not proven complete.")
-            if not state.converged:
-                data["message"] = state.message
+    if args.all:
+        result = search_lengths(arm, L_mm, elements=disc.n_elements, effort=args.effort,
+                                levels=args.levels, deflation_rounds=args.deflation_rounds)
+        states = [f.state for f in result.states]
+        data["equilibria"] = [state_summary(arm, f.state, "length", f) for f in result.states]
+        data["search"] = search_summary(result, settings)
+        data["note"] = NOT_COMPLETE
+    else:
+        state = follow_lengths(arm, L_mm, elements=disc.n_elements)
+        states = [state] if state.converged else []
+        data["equilibria"] = [state_summary(arm, s, "length") for s in states]
+        data["search"] = {
+            "method": "length continuation from the straight arm (stable path; snaps "
+                      "and buckling recorded)",
+            "starts": 1, "attempts": 1, "failed": 0 if state.converged else 1,
+            "refound": 0, "start_labels": ["straight arm"],
+            "found_from": [{"state": 1, "start": "straight arm",
+                            "method": "continuation", "attempts_reaching_it": 1}]
+            if state.converged else [],
+            "complete": False}
+        data["note"] = ("One equilibrium: the one reached from the straight arm by length "
+                        "continuation. Others may share these cable lengths: --all searches "
+                        "for them; the list is not proven complete.")
+        if not state.converged:
+            data["message"] = state.message
     title = ("Equilibria found at L = (" + ", ".join(f"{v:g}" for v in L_mm)
              + ") mm (length control)")
     return finish(args, arm, data, states, "length_equilibria", title)

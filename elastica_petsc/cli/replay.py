@@ -9,7 +9,7 @@ Reads the HDF5 file written by ``elastica-petsc trace --out``: root attributes
 The first point is reached from the straight arm (through the load-controlled
 state at the first planned tensions when they are given), every further one
 by continuation in the cable lengths from the previous one
-(:func:`lengths.replay`).
+(:func:`elastica_petsc.studies.replay.replay`).
 
 HDF5 layout (``--out``)::
 
@@ -19,6 +19,8 @@ HDF5 layout (``--out``)::
     replay/jumped, replay/stable, replay/converged (k,) 1, replay/tensions (k, n),
     replay/tensions_N (k, n) N, replay/theta (k, N+1) rad
     jumps/before_point (j,) 1, jumps/lengths (j, n) mm
+    instabilities/before_point (i,) 1, instabilities/lengths (i, n) mm,
+    instabilities/kind (i,) strings: "bifurcation" or "limit point"
 """
 from __future__ import annotations
 
@@ -52,75 +54,13 @@ def add_parser(sub) -> None:
     parser.set_defaults(run=run)
 
 
-def read_trace(path) -> dict:
-    """The planned path of a trace file; one-line InputError for anything else."""
-    import json
-    from pathlib import Path
-
-    import numpy as np
-
-    from ..core.config import arm_from_dict
-    from ..core.errors import InputError
-
-    import h5py
-
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"{p}: no such trace file")
-    try:
-        fh = h5py.File(p, "r")
-    except OSError:
-        raise InputError(f"{p}: not an HDF5 file (expected the output of "
-                         "`elastica-petsc trace --out`)") from None
-    with fh:
-        kind = fh.attrs.get("kind")
-        kind = kind.decode() if isinstance(kind, bytes) else kind
-        if kind != "trace":
-            raise InputError(f"{p}: not a trace file (kind {kind!r}, expected 'trace'; write "
-                             "one with `elastica-petsc trace --out`)")
-        if "config_json" not in fh.attrs:
-            raise InputError(f"{p}: trace file without the attribute config_json")
-        try:
-            arm = arm_from_dict(json.loads(fh.attrs["config_json"]))
-        except (ValueError, TypeError) as err:
-            raise InputError(f"{p}: attribute config_json: {err}") from None
-        if "path" not in fh:
-            raise InputError(f"{p}: trace file without the group /path")
-        g = fh["path"]
-        data = {}
-        for name in ("cable_lengths", "tip", "tensions", "tensions_N", "theta", "target",
-                     "converged"):
-            data[name] = g[name][()] if name in g else None
-        for name in ("cable_lengths", "tip"):
-            if data[name] is None:
-                raise InputError(f"{p}: trace file without the dataset /path/{name}")
-        elements = fh.attrs.get("elements")
-    L, tip = np.asarray(data["cable_lengths"], float), np.asarray(data["tip"], float)
-    K, n = len(L), arm.n_tendons
-    if K == 0:
-        raise InputError(f"{p}: the traced path has no points")
-    if L.shape != (K, n) or tip.shape != (K, 2):
-        raise InputError(f"{p}: /path/cable_lengths must be ({K}, {n}) and /path/tip ({K}, 2); "
-                         f"got {L.shape} and {tip.shape}")
-    if elements is None:
-        elements = arm.elements if data["theta"] is None else np.shape(data["theta"])[1] - 1
-    elements = int(elements)
-    for name, shape in (("tensions", (K, n)), ("theta", (K, elements + 1)), ("target", (K, 2)),
-                        ("converged", (K,))):
-        if data[name] is not None and np.shape(data[name]) != shape:
-            raise InputError(f"{p}: /path/{name} has shape {np.shape(data[name])}, expected "
-                             f"{shape}")
-    data.update(arm=arm, elements=elements, K=K)
-    return data
-
-
 def run(args) -> int:
     import numpy as np
 
     from ..core.errors import InputError
-    from ..core.fem import Discretisation
-    from ..solvers.lengths import LengthSolver, replay
-    from ..io.summary import rounded
+    from ..studies.replay import replay_trace
+    from ..io.replay import read_trace, write_replay
+    from ..io.summary import replay_summary
 
     for name in ("tip_tol_mm", "shape_tol"):
         if not getattr(args, name) > 0:
@@ -128,53 +68,11 @@ def run(args) -> int:
     trace = read_trace(args.trace)
     common.check_outputs(args)
     arm, K = trace["arm"], trace["K"]
-    disc = Discretisation.from_arm(arm, trace["elements"])
-    with LengthSolver(disc, length_mm=arm.length_mm) as solver:
-        planned_p = None if args.first_by_lengths else trace["tensions"]
-        result = replay(solver, trace["cable_lengths"], trace["tip"], planned_p,
-                        trace["theta"], tip_tol_mm=args.tip_tol_mm, shape_tol=args.shape_tol)
+    result = replay_trace(trace, first_by_lengths=args.first_by_lengths,
+                          tip_tol_mm=args.tip_tol_mm, shape_tol=args.shape_tol)
     pts = result.points
-    first_jump = next((q.index for q in pts if q.jumped), None)
-    planned_ok = trace["converged"]
-    data = {
-        "file": str(args.trace),
-        "elements": disc.n_elements,
-        "points_planned": K,
-        "points_replayed": len(pts),
-        "completed": bool(result.completed),
-        "all_on_branch": bool(result.all_on_branch),
-        "first_departure": result.first_departure,
-        "first_jump": first_jump,
-        "max_tip_error_mm": float(f"{result.max_tip_error_mm:.6g}"),
-        "start_method": result.start_method,
-        "branch_criterion": (f"shape within {args.shape_tol:g} rad of the planned shape"
-                             if trace["theta"] is not None else
-                             f"tip within {args.tip_tol_mm:g} mm of the planned tip"),
-        "jumps": [{"before_point": int(k), "lengths_mm": rounded(L)} for k, L in result.jumps],
-        "unstable_points": [q.index for q in pts if q.state.converged and not q.stable],
-        "points": [],
-        "units": {"lengths_mm": "mm", "tip_mm": "mm", "tip_error_mm": "mm",
-                  "shape_error": "rad", "tensions": "P l^2/B", "tensions_N": "N"},
-    }
-    for q in pts:
-        s = q.state
-        entry = {"index": q.index, "lengths_mm": rounded(q.lengths_mm),
-                 "planned_tip_mm": rounded(q.planned_tip_mm), "tip_mm": rounded(s.tip_mm),
-                 "tip_error_mm": float(f"{q.tip_error_mm:.6g}"),
-                 "shape_error": None if q.shape_error is None else float(f"{q.shape_error:.6g}"),
-                 "on_branch": bool(q.on_branch), "jumped": bool(q.jumped),
-                 "converged": bool(s.converged),
-                 "stable": bool(s.converged and q.stable),
-                 "stable_under_load_control": bool(s.converged and s.stable),
-                 "tensions": rounded(s.p), "tensions_N": rounded(arm.tensions_to_N(s.p)),
-                 "slack_mm": rounded(np.where(s.slack_mm > 0, s.slack_mm, 0.0)),
-                 "message": s.message}
-        if trace["tensions"] is not None:
-            entry["planned_tensions"] = rounded(trace["tensions"][q.index])
-        if planned_ok is not None:
-            entry["planned_converged"] = bool(planned_ok[q.index])
-        data["points"].append(entry)
-
+    data = replay_summary(args.trace, trace, result, tip_tol_mm=args.tip_tol_mm,
+                          shape_tol=args.shape_tol)
     if args.json:
         common.print_json(data)
     else:
@@ -231,47 +129,3 @@ def format_replay(data: dict, summary: str) -> str:
                      f"{p:>18} {'yes' if e['on_branch'] else 'NO':>6} "
                      f"{'yes' if e['stable'] else 'NO':>6} {'YES' if e['jumped'] else '':>4}")
     return "\n".join(lines)
-
-
-def write_replay(path, overwrite: bool, arm, trace: dict, result) -> None:
-    import numpy as np
-
-    from ..io.hdf5 import atomic_h5, provenance, put, write_attrs
-
-    pts = result.points
-    n = arm.n_tendons
-    with atomic_h5(path, overwrite) as fh:
-        write_attrs(fh, provenance(arm, "replay"))
-        write_attrs(fh, {"elements": int(trace["elements"]), "completed": bool(result.completed),
-                         "all_on_branch": bool(result.all_on_branch),
-                         "first_departure": -1 if result.first_departure is None
-                         else int(result.first_departure),
-                         "start_method": result.start_method,
-                         "max_tip_error_mm": float(result.max_tip_error_mm)})
-        g = fh.create_group("planned")
-        put(g, "cable_lengths", trace["cable_lengths"], "mm", "planned cable lengths L_i")
-        put(g, "tip", trace["tip"], "mm", "planned tip (load-controlled trace)")
-        if trace["tensions"] is not None:
-            put(g, "tensions", trace["tensions"], "P l^2/B", "planned tensions p_i")
-        r = fh.create_group("replay")
-        put(r, "index", [q.index for q in pts], "1", "point of the planned path")
-        put(r, "tip", np.array([q.state.tip_mm for q in pts]).reshape(-1, 2), "mm",
-            "replayed tip under length control")
-        put(r, "tip_error", [q.tip_error_mm for q in pts], "mm", "|replayed - planned tip|")
-        put(r, "shape_error", [np.nan if q.shape_error is None else q.shape_error for q in pts],
-            "rad", "max |theta - planned theta| (NaN: no planned shape)")
-        put(r, "on_branch", [q.on_branch for q in pts], "1", "on the planned branch")
-        put(r, "jumped", [q.jumped for q in pts], "1", "snap/buckling on the way to the point")
-        put(r, "stable", [q.state.converged and q.stable for q in pts], "1",
-            "stable under length control")
-        put(r, "converged", [q.state.converged for q in pts], "1", "length-controlled solve "
-                                                                    "converged")
-        P = np.array([q.state.p for q in pts]).reshape(-1, n)
-        put(r, "tensions", P, "P l^2/B", "replayed tensions p_i")
-        put(r, "tensions_N", arm.tensions_to_N(P), "N", "replayed tensions P_i")
-        put(r, "theta", np.array([q.state.theta for q in pts]), "rad", "replayed nodal angles")
-        j = fh.create_group("jumps")
-        jumps = result.jumps
-        put(j, "before_point", [k for k, _ in jumps], "1", "point reached after the jump")
-        put(j, "lengths", np.array([L for _, L in jumps]).reshape(-1, n), "mm",
-            "cable lengths at which the arm jumped")

@@ -11,12 +11,16 @@ def add_parser(sub) -> None:
         "solve", help="equilibrium of the arm for given cable tensions (load control)",
         description="Solve the equilibrium (paper Eq. (9)) for given tensions with PETSc SNES, "
                     "stepping the load from the straight arm along the chosen loading order. "
+                    "Where the path crosses a symmetric bifurcation (the straight arm buckling "
+                    "under a cable along its axis) it switches onto a stable buckled branch "
+                    "(--side). "
                     "Prints the tip, attachment points, cable lengths, energy and curvature. "
                     "With --from FILE: reproduce the state recorded in an --out file of solve, "
                     "control, trace (--point K), lengths or equilibria (--state K), replaying "
                     "its loading path (the arm and mesh come from the file).")
     common.add_tension_options(parser, required=False)
     common.add_order_option(parser)
+    add_side_option(parser)
     parser.add_argument("--from", dest="source", metavar="H5",
                         help="reproduce the state recorded in this HDF5 output file")
     parser.add_argument("--point", type=int, metavar="K",
@@ -26,6 +30,22 @@ def add_parser(sub) -> None:
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
+
+
+def add_side_option(parser) -> None:
+    parser.add_argument("--side", choices=("left", "right"),
+                        help="at a symmetric bifurcation take the branch on which the tip moves "
+                             "to the left (counter-clockwise) or right of its tangent (default: "
+                             "the branch of lower potential energy; on equal energies the left "
+                             "one)")
+
+
+def solve_state(args, arm, disc):
+    """The state of ``solve`` and ``stability`` (api.solve with the options)."""
+    from .. import api
+
+    return api.solve(arm, tensions=common.tensions(args, arm), order=common.order(args),
+                     side=args.side, elements=disc.n_elements)
 
 
 def check_source(args) -> None:
@@ -40,16 +60,16 @@ def check_source(args) -> None:
                 raise InputError(f"--{name} needs --from FILE")
         return
     clash = [opt for opt, v in (("--tensions", given), ("--order", args.order),
-                                ("--config", args.config), ("--elements", args.elements)) if v]
+                                ("--side", args.side), ("--config", args.config),
+                                ("--elements", args.elements)) if v]
     if clash:
         raise InputError(f"--from FILE takes the state, arm and mesh from the file; drop "
                          f"{', '.join(clash)}")
 
 
-def solve_state(args):
-    """(arm, equilibrium, loading, extra summary fields)."""
+def state_from_source(args):
+    """(arm, equilibrium, loading, extra summary fields) of --from or --tensions."""
     from ..core.loading import Loading
-    from ..solvers.equilibrium import EquilibriumSolver
 
     if args.source is not None:
         from ..studies.restore import state_from_file
@@ -60,9 +80,9 @@ def solve_state(args):
                  "theta_difference_rad": float(f"{got.theta_difference:.3g}")}
         return got.arm, got.equilibrium, got.loading, extra
     arm, disc = common.load_arm(args)
-    with EquilibriumSolver(disc) as solver:
-        eq = solver.solve(common.tensions(args, arm), order=common.order(args))
-    return arm, eq, Loading.ordered(eq.p_requested, common.order(args)), {}
+    eq = solve_state(args, arm, disc).equilibrium
+    requested = eq.p if eq.p_requested is None else eq.p_requested
+    return arm, eq, Loading.ordered(requested, common.order(args)), {}
 
 
 def loading_order(args, loading) -> str:
@@ -80,7 +100,7 @@ def run(args) -> int:
 
     check_source(args)
     common.check_outputs(args)
-    arm, eq, loading, extra = solve_state(args)
+    arm, eq, loading, extra = state_from_source(args)
     summary = equilibrium_summary(arm, eq)
     summary["loading"] = None if loading is None else loading.to_json()
     summary.update(extra)
@@ -92,13 +112,9 @@ def run(args) -> int:
             print(f"reproduced {extra['from']}: {extra['reproduced_by']}; tip differs from the "
                   f"stored one by {extra['tip_difference_mm']:.3g} mm")
     if args.out:
-        from ..io.hdf5 import (atomic_h5, provenance, write_attrs, write_equilibrium,
-                               write_loading)
-        with atomic_h5(args.out, args.overwrite) as fh:
-            write_attrs(fh, provenance(arm, "equilibrium"))
-            fh.attrs["loading_order"] = loading_order(args, loading)
-            write_equilibrium(fh, arm, eq)
-            write_loading(fh, loading)
+        from ..io.save import save_state
+        save_state(args.out, arm, eq, overwrite=args.overwrite,
+                   loading=loading_order(args, loading), loading_path=loading)
     if args.plot:
         from ..plots.common import plot_equilibria, tension_label
         order = f"order {args.order}" if args.order else "proportional loading"

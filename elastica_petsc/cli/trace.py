@@ -31,9 +31,32 @@ def add_parser(sub) -> None:
                         help="end point of --shape line in mm")
     parser.add_argument("--step", type=float, default=1.0, metavar="MM",
                         help="largest distance between consecutive targets in mm (default 1)")
-    parser.add_argument("--guess", type=float, nargs="+", metavar="P",
-                        help="initial tensions for the first point, non-dimensional")
-    parser.add_argument("--schedule", metavar="CSV", help="write the motor schedule CSV here")
+    common.add_tension_option(parser, "--guess", nargs="+",
+                              help="initial tensions, one per tendon: the approach starts at "
+                                   "their load-controlled state (default: the straight arm)")
+    parser.add_argument("--schedule", metavar="CSV",
+                        help="write the timed motor schedule CSV here: an approach move from "
+                             "the straight arm, then the path; columns row, phase, point, "
+                             "time_s, reached, targets, tips, and per tendon tension (N and p), "
+                             "cable length, revolutions, steps from row 0 (> 0 pays the cable "
+                             "out, < 0 reels it in), step increment, rounding error")
+    parser.add_argument("--speed-mm-s", type=float, metavar="V",
+                        help="tip speed of the schedule's time column in mm/s (default: the "
+                             "suggested safe tracing speed, see --amplitude-mm)")
+    parser.add_argument("--animate", metavar="GIF|MP4",
+                        help="write an animation of the arm, its cables and the tip trail along "
+                             "the path (.gif with Pillow; .mp4 needs ffmpeg)")
+    parser.add_argument("--vtk", metavar="DIR",
+                        help="write ParaView files into this folder: trace.pvd (the arm and "
+                             "cables at every point of the approach and the path, timed as the "
+                             "schedule) and trace_path.vtu (the tips with per-point fields)")
+    parser.add_argument("--per-point", action="store_true",
+                        help="with --json: add 'per_point', one entry per path point (target, "
+                             "tip, reached, tip error, tensions in p and N, cable lengths, "
+                             "iterations, stopping reason, time in the schedule)")
+    parser.add_argument("--no-approach", action="store_true",
+                        help="start the schedule at the first target instead of tracing an "
+                             "approach from the straight arm (or from --guess)")
     parser.add_argument("--amplitude-mm", type=float, default=1.0, metavar="MM",
                         help="tolerated vibration amplitude for the suggested tracing speed "
                              "v_max = 2 pi f_1 * amplitude (default 1 mm; needs "
@@ -63,6 +86,7 @@ def targets(args):
         if args.end is None:
             raise InputError("--shape line needs --end X Y (it runs from --center)")
         points = paths.line(args.center, args.end)
+    common.check_path_points(points, args.step)
     return paths.densify(points, args.step)
 
 
@@ -110,6 +134,25 @@ def trace_summary(arm, result, schedule) -> dict:
     }
 
 
+def point_entries(result, schedule) -> list[dict]:
+    """One JSON entry per path point (mm, N, p = P l^2/B, s)."""
+    import math
+
+    from ..io.summary import rounded
+
+    times = schedule.time_s[schedule.path_rows()]
+    out = []
+    for k, r in enumerate(result.results):
+        out.append({"point": k, "target_mm": rounded(result.targets_mm[k]),
+                    "tip_mm": rounded(result.tips_mm[k]), "reached": bool(result.converged[k]),
+                    "tip_error_mm": float(f"{result.tip_errors_mm[k]:.6g}"),
+                    "tensions": rounded(result.p[k]), "tensions_N": rounded(result.tensions_N[k]),
+                    "cable_lengths_mm": rounded(result.cable_lengths_mm[k]),
+                    "iterations": int(result.iterations[k]), "reason": r.reason,
+                    "time_s": None if math.isnan(times[k]) else round(float(times[k]), 4)})
+    return out
+
+
 def format_trace(s: dict) -> str:
     lines = [f"traced {s['points']} points: {s['reached']} reached "
              f"(max tip error {s['max_tip_error_mm']:.2e} mm) in {s['seconds']:.2f} s "
@@ -134,6 +177,12 @@ def format_trace(s: dict) -> str:
                      f"(|target| > l), {s['not_reached_undecided']} undecided")
     lines.append(f"motor schedule: {s['mm_per_microstep']:.4g} mm per microstep, largest rounding "
                  f"error {s['max_rounding_error_mm']:.3g} mm")
+    if s["approach_points"]:
+        lines.append(f"approach from the {s['approach_start']}: {s['approach_points']} points, "
+                     f"{s['approach_reached']} reached")
+    if s["duration_s"] is not None:
+        lines.append(f"schedule: {s['schedule_rows']} rows, {s['duration_s']:.1f} s at "
+                     f"{s['speed_mm_s']:.3g} mm/s ({s['speed_source']})")
     if s.get("max_tracing_speed_mm_s") is not None:
         lines.append(f"lowest natural frequency along the path {s['f1_min_hz']:.3g} Hz (tensions "
                      f"held): suggested max tracing speed {s['max_tracing_speed_mm_s']:.3g} mm/s, "
@@ -142,52 +191,46 @@ def format_trace(s: dict) -> str:
     return "\n".join(lines)
 
 
-def tracing_speed(arm, disc, result, amplitude_mm: float, snapshots: int = 6) -> dict:
-    """Suggested maximum tracing speed (Sec. 4.5 (vi)): the lowest first
-    natural frequency f_1 over a few states along the path, tensions held
-    (the lower, conservative one), and v_max = 2 pi f_1 * amplitude — a jump
-    dv of the tip velocity excites a vibration of amplitude dv / (2 pi f_1)."""
-    import numpy as np
+def schedule_summary(planned, guessed: bool) -> dict:
+    """The approach and the timing of the schedule (for the summary)."""
+    import math
 
-    from ..solvers.stability import StabilitySolver, max_tracing_speed_mm_s
-
-    if arm.mass_per_length_kg_m is None:
-        return {}
-    picks = np.unique(np.linspace(0, result.n_points - 1, snapshots).round().astype(int))
-    with StabilitySolver(disc, nev=1) as stab:
-        f1 = min(stab.frequencies(result.results[k].equilibrium.u, result.results[k].p,
-                                  arm, nev=1).f1_hz for k in picks)
-    steps = np.linalg.norm(np.diff(result.targets_mm, axis=0), axis=1)
-    return {"f1_min_hz": round(f1, 4),
-            "max_tracing_speed_mm_s": round(max_tracing_speed_mm_s(f1, amplitude_mm), 4),
-            "path_length_mm": round(float(steps.sum()), 3),
-            "amplitude_mm": amplitude_mm}
+    sched, before = planned.schedule, planned.approach
+    out = {"approach_start": None if before is None else
+           ("load-controlled state at --guess" if guessed else "straight arm"),
+           "approach_points": 0 if before is None else int(before.n_points),
+           "approach_reached": None if before is None else int(before.converged.sum()),
+           "schedule_rows": int(sched.n_rows),
+           "speed_mm_s": planned.speed["speed_mm_s"],
+           "speed_source": planned.speed["speed_source"],
+           "duration_s": None if math.isnan(sched.duration_s) else round(sched.duration_s, 3)}
+    return out
 
 
-def run(args) -> int:
-    from ..solvers.control import TipController
-    from ..studies.trace import trace
-    from ..core.progress import Progress
-    from ..core.schedule import schedule_from_trace
+def check_options(args) -> None:
+    """Refuse, before any computing, options and output paths that cannot work."""
+    from ..core.errors import InputError
+    from ..io.hdf5 import check_output_path
 
-    arm, disc = common.load_arm(args)
     common.check_outputs(args)
     if args.schedule:
-        from ..io.hdf5 import check_output_path
         check_output_path(args.schedule, args.overwrite)
-    points = targets(args)
-    guess = common.guess(args, disc)
-    bar = Progress(len(points), "trace")
-    with TipController(arm, n_elements=disc.n_elements) as controller:
-        result = trace(controller, points, p0=guess, keep_results=True, on_point=bar.update)
-    bar.close(result.n_points)
-    schedule = schedule_from_trace(result, arm)
-    summary = trace_summary(arm, result, schedule)
-    summary.update(tracing_speed(arm, disc, result, args.amplitude_mm))
-    if args.json:
-        common.print_json(summary)
-    else:
-        print(format_trace(summary))
+    if args.animate:
+        from ..plots.animate import check_animation_path
+        check_animation_path(args.animate, args.overwrite)
+    if args.vtk:
+        from ..io.vtk import check_directory
+        check_directory(args.vtk, args.overwrite)
+    if args.per_point and not args.json:
+        raise InputError("--per-point adds per-point results to the JSON output: use it with "
+                         "--json")
+    if args.speed_mm_s is not None and not args.speed_mm_s > 0:
+        raise InputError(f"--speed-mm-s must be positive, got {args.speed_mm_s}")
+
+
+def write_outputs(args, arm, disc, planned) -> None:
+    """--schedule, --out, --plot, --vtk and --animate files."""
+    result, schedule = planned.path, planned.schedule
     if args.schedule:
         schedule.write_csv(args.schedule)
     if args.out:
@@ -201,8 +244,51 @@ def run(args) -> int:
     if args.plot:
         from ..plots.control import plot_trace_figures
         plot_trace_figures(arm, result, args.plot)
+    if args.vtk:
+        from ..io.vtk import write_trace as write_vtk
+        rows = schedule.path_rows()
+        write_vtk(args.vtk, arm, result, times_s=schedule.time_s[rows],
+                  approach=planned.approach, approach_times_s=schedule.time_s[:rows[0]])
+    if args.animate:
+        from ..plots.animate import animate_trace
+        animate_trace(arm, result, args.animate, approach=planned.approach)
+
+
+def run(args) -> int:
+    from ..core.progress import Progress
+    from ..solvers.control import TipController
+    from ..studies.schedule import trace_schedule
+
+    arm, disc = common.load_arm(args)
+    check_options(args)
+    points = targets(args)
+    guess = common.guess(args, disc)
+    with TipController(arm, n_elements=disc.n_elements) as controller, \
+            Progress(len(points), "trace") as bar:
+        planned = trace_schedule(controller, points, step_mm=args.step,
+                                 speed_mm_s=args.speed_mm_s, amplitude_mm=args.amplitude_mm,
+                                 approach=not args.no_approach, p0=guess,
+                                 on_point=lambda done, total: bar.update(done, total=total))
+    result = planned.path
+    summary = trace_summary(arm, result, planned.schedule)
+    summary.update({k: v for k, v in planned.speed.items() if k not in ("speed_mm_s",
+                                                                           "speed_source")})
+    summary.update(schedule_summary(planned, guess is not None))
+    if args.json:
+        if args.per_point:
+            summary["per_point"] = point_entries(result, planned.schedule)
+        common.print_json(summary)
+    else:
+        print(format_trace(summary))
+    write_outputs(args, arm, disc, planned)
+    before = planned.approach
+    if before is not None and not before.all_converged:
+        print(f"elastica-petsc: warning: {before.n_points - int(before.converged.sum())} of "
+              f"{before.n_points} approach points were not reached (rows with reached = false "
+              "in the schedule); try --no-approach or another --guess", file=sys.stderr)
     if not result.all_converged:
         print(f"elastica-petsc: {result.n_points - summary['reached']} of {result.n_points} "
-              "points were not reached (see the HDF5/JSON per-point results)", file=sys.stderr)
+              "points were not reached (per point: --json --per-point, or path/converged in "
+              "--out, or the reached column of --schedule)", file=sys.stderr)
         return 1
     return 0

@@ -4,9 +4,7 @@ Run under MPI for speed: ``mpiexec -n 4 elastica-petsc workspace --spacing 10 --
 """
 from __future__ import annotations
 
-import json
 import sys
-from pathlib import Path
 
 from . import common
 
@@ -25,10 +23,10 @@ def add_parser(sub) -> None:
                         help="target grid spacing in mm (mode targets; default 20)")
     parser.add_argument("--box", type=float, nargs=4, metavar=("XMIN", "XMAX", "YMIN", "YMAX"),
                         help="target box in mm (default: the half-disc y >= 0 within reach l)")
-    parser.add_argument("--tension-spacing", type=float, default=2.0, metavar="P",
-                        help="tension grid spacing, non-dimensional (mode tensions; default 2)")
-    parser.add_argument("--tension-max", type=float, default=40.0, metavar="P",
-                        help="largest tension on the grid, non-dimensional (default 40)")
+    common.add_tension_option(parser, "--tension-spacing", default=2.0,
+                              help="tension grid spacing in mode tensions")
+    common.add_tension_option(parser, "--tension-max", default=40.0,
+                              help="largest tension on the grid in mode tensions")
     parser.add_argument("--chunk", type=int, default=24, metavar="K",
                         help="samples per work unit (warm-started in a row; default 24)")
     parser.add_argument("--resume", action="store_true",
@@ -37,6 +35,9 @@ def add_parser(sub) -> None:
     parser.add_argument("--overlay", nargs="+", metavar="H5",
                         help="traced paths (files from `trace --out`) drawn on the --plot maps")
     common.add_arm_options(parser)
+    parser.add_argument("--vtk", metavar="DIR",
+                        help="also write the map for ParaView as DIR/workspace.vtu (samples as "
+                             "points with every field, lattice cells as quads)")
     common.add_output_options(parser)
     parser.set_defaults(run=run)
 
@@ -50,9 +51,11 @@ def run(args) -> int:
     try:
         return _run(args, comm)
     except CollectiveInputError:                   # raised on every rank alike: one line, exit 2
-        if comm.rank == 0:
+        raise
+    except KeyboardInterrupt:                      # outside the stop protocol (set-up)
+        if comm.size == 1:
             raise
-        return 2
+        _exit_without_finalize(130, "interrupted")
     except Exception as err:                       # never leave the other ranks waiting
         if comm.size == 1:
             raise
@@ -63,106 +66,77 @@ def run(args) -> int:
 
 
 def _run(args, comm) -> int:
-    from ..core.config import arm_to_dict
     from ..core.errors import InputError
-    from ..io.hdf5 import provenance
-    from ..studies.sampling import TargetSampler, TensionSampler
     from ..studies import workspace
 
     # Input errors are agreed on by all ranks before any collective work (one line, exit 2).
     try:
-        arm, disc, grid, out, checkpoint_seconds = _check_inputs(args)
+        arm, disc = _check_inputs(args)
         error = None
     except InputError as err:
         error = str(err)
     workspace.agree(comm, error)
-    if grid.mode == "targets":
-        sampler = TargetSampler(arm, disc)
-    else:
-        sampler = TensionSampler(arm, disc)
-    attrs = provenance(arm, "workspace")
-    attrs.update(mode=grid.mode, elements=disc.n_elements, n_tendons=disc.n_tendons,
-                 config_json=json.dumps(arm_to_dict(arm)), grid_json=json.dumps(grid.meta))
-    limits = {"kappa_limit": arm.kappa_limit,
-              "strain_energy_max": arm.limits.strain_energy_max_SE0,
-              "max_tension": arm.max_tension}
-    try:
-        results = workspace.run(grid, sampler, out, attrs, limits, comm=comm, resume=args.resume,
-                                checkpoint_seconds=checkpoint_seconds,
-                                progress_label=f"workspace ({grid.mode}, {comm.size} rank(s))")
-    finally:
-        sampler.destroy()
+    result = workspace.run_map(
+        arm, disc, mode=args.mode, spacing_mm=args.spacing, box_mm=args.box,
+        tension_spacing=args.tension_spacing, tension_max=args.tension_max, chunk=args.chunk,
+        comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite)
     if comm.rank != 0:
         return 0
-    summary = workspace_summary(results, limits, out)
+    summary = result.summary()
     if args.json:
         common.print_json(summary)
     else:
         print(format_summary(summary))
     if not summary["complete"]:
-        print(f"elastica-petsc: interrupted: {summary['samples_done']} of "
-              f"{summary['samples_total']} samples saved in {out}; continue with --resume",
-              file=sys.stderr)
+        message = (f"interrupted: {summary['samples_done']} of {summary['samples_total']} "
+                   f"samples saved in {args.out}; continue with --resume")
+        if result.stranded:
+            _exit_without_finalize(130, message)
+        print(f"elastica-petsc: {message}", file=sys.stderr)
         return 130
     if args.plot:
         from ..plots.workspace import plot_workspace, read_overlays
-        plot_workspace(out, args.plot, paths=read_overlays(args.overlay or ()))
+        plot_workspace(args.out, args.plot, paths=read_overlays(args.overlay or ()))
+    if args.vtk:
+        from ..io.vtk import write_workspace_vtk
+        write_workspace_vtk(args.vtk, args.out)
     return 0
 
 
+def _exit_without_finalize(status: int, message: str) -> None:
+    """End this rank now: another rank is busy and will never join MPI's
+    finalisation; the launcher ends the others once this one is gone."""
+    import os
+
+    print(f"elastica-petsc: {message}", file=sys.stderr, flush=True)
+    sys.stdout.flush()
+    os._exit(status)
+
+
 def _check_inputs(args):
-    """Everything that can be refused before computing:
-    (arm, discretisation, grid, output path, checkpoint seconds)."""
+    """What the command line refuses before the library sees it: (arm, discretisation)."""
     from ..core.errors import InputError
-    from ..studies import workspace
 
     if not args.out:
         raise InputError("workspace needs --out FILE.h5 (results are written as they come)")
-    if args.chunk < 1:
-        raise InputError(f"--chunk must be at least 1, got {args.chunk}")
+    if args.vtk:
+        from ..io.vtk import check_directory
+        check_directory(args.vtk, args.overwrite)
     arm, disc = common.load_arm(args)
     if args.overlay:
         from ..plots.workspace import read_overlays
         read_overlays(args.overlay)                 # refuse a bad file before computing
-    out = Path(args.out)
-    if args.resume and not out.exists():
-        raise InputError(f"--resume: {out} does not exist")
-    if not args.resume:
-        common.check_outputs(args)
-    elif args.plot:
-        from ..io.hdf5 import check_output_path
-        check_output_path(args.plot, args.overwrite)
-    if args.mode == "targets":
-        if disc.n_tendons < 2:
-            raise InputError("mode targets needs at least 2 tendons (a 2-D workspace); "
-                             "use --mode tensions")
-        grid = workspace.target_grid(arm.length_mm, args.spacing,
-                                     None if args.box is None else tuple(args.box), args.chunk)
-    else:
-        grid = workspace.tension_grid(disc.n_tendons, args.tension_spacing, args.tension_max,
-                                      args.chunk)
-    return arm, disc, grid, out, workspace.checkpoint_interval()
+    common.check_outputs(args, _derived_plots(args), resume=args.resume)
+    return arm, disc
 
 
-def workspace_summary(results, limits: dict, out: Path) -> dict:
-    import numpy as np
-
-    from ..studies.workspace import STATUS_NAMES
-
-    status = results.data["status"]
-    masks = results.masks(limits)
-    return {
-        "file": str(out),
-        "complete": bool(results.chunk_done.all()),
-        "samples_total": int(results.grid.size),
-        "samples_done": int(results.samples_done),
-        "status_counts": {STATUS_NAMES[k]: int(np.sum(status == k)) for k in STATUS_NAMES
-                          if k != 0},
-        "masks": {name: int(m.sum()) for name, m in masks.items()},
-        "lambda_min_raw_min": float(np.nanmin(results.data["lambda_min_raw"]))
-        if masks["W0"].any() else None,
-        "kappa_max_max": float(np.nanmax(results.data["kappa_max"])) if masks["W0"].any() else None,
-    }
+def _derived_plots(args) -> dict:
+    """The second figure ``plot_workspace`` draws beside --plot (Fig. 5)."""
+    if not args.plot:
+        return {}
+    from pathlib import Path
+    plot = Path(args.plot)
+    return {"--plot (Fig. 5)": plot.with_name(plot.stem + "_restrictions.png")}
 
 
 def format_summary(s: dict) -> str:

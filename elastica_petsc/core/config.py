@@ -60,7 +60,11 @@ def load_config(path: str | Path | None = None) -> Arm:
             data = tomllib.load(fh)
     except FileNotFoundError:
         raise ConfigError(f"{path}: no such config file") from None
-    except tomllib.TOMLDecodeError as err:
+    except IsADirectoryError:
+        raise ConfigError(f"{path}: is a folder, not a config file") from None
+    except OSError as err:
+        raise ConfigError(f"{path}: cannot read it ({err.strerror})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
         raise ConfigError(f"{path}: not valid TOML: {err}") from None
     try:
         return arm_from_dict(data)
@@ -125,5 +129,8 @@ def arm_to_dict(arm: Arm) -> dict:
     data = asdict(arm)
     data["tendon"] = [dict(attach_mm=t["attach_mm"], route_mm=list(t["route_mm"]))
                       for t in data.pop("tendons")]
-    return {"arm": {k: data[k] for k in SCHEMA["arm"]}, "tendon": data["tendon"],
-            "motor": data["motor"], "limits": data["limits"]}
+    def given(section: dict) -> dict:      # an unset optional key is left out, as in TOML
+        return {k: v for k, v in section.items() if v is not None}
+
+    return {"arm": given({k: data[k] for k in SCHEMA["arm"]}), "tendon": data["tendon"],
+            "motor": given(data["motor"]), "limits": given(data["limits"])}

@@ -32,7 +32,12 @@ bordered system: LU in the natural order still fills only the border, O(N).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+# exp of more than this overflows a double: M is then reported as +inf
+_LOG_MAX = math.log(np.finfo(float).max) - 1.0
 
 
 class Deflation:
@@ -68,15 +73,21 @@ class Deflation:
         return np.sqrt(self.h * np.sum(diff * diff, axis=1))
 
     def factor_and_gradient(self, theta: np.ndarray) -> tuple[float, np.ndarray]:
-        """M(theta) and dM/dtheta; M = 1, grad = 0 when nothing is deflated."""
+        """M(theta) and dM/dtheta; M = 1, grad = 0 when nothing is deflated.
+
+        Evaluated through log M = sum_k log(s_k^(-q/2) + sigma), s_k = ||theta - theta_k||^2,
+        so that no intermediate overflows: at (or within round-off of) a deflated
+        root M is returned as +inf with a zero gradient, without a warning."""
         if not self.roots:
             return 1.0, np.zeros_like(theta)
         q, sigma = self.power, self.shift
         diff = theta[None, :] - np.asarray(self.roots)             # (K, N)
-        s = np.maximum(self.h * np.sum(diff * diff, axis=1), 1e-300)   # ||.||^2
-        inv = s ** (-0.5 * q)                                       # ||.||^-q
-        factors = inv + sigma
-        M = float(np.prod(factors))
-        # d/dtheta log(s^(-q/2) + sigma) = -(q/2) s^(-q/2 - 1) * 2 h diff / factor
-        dlog = (-(q / 2.0) * inv / s / factors)[:, None] * (2.0 * self.h * diff)
-        return M, M * np.sum(dlog, axis=0)
+        s = np.maximum(self.h * np.sum(diff * diff, axis=1), np.finfo(float).tiny)
+        # log(s^(-q/2) + sigma) = -(q/2) log s + log(1 + sigma s^(q/2))
+        log_M = float(np.sum(-(q / 2.0) * np.log(s) + np.log1p(sigma * s ** (q / 2.0))))
+        if log_M > _LOG_MAX:
+            return math.inf, np.zeros_like(theta)
+        M = math.exp(log_M)
+        # d/dtheta log(s^(-q/2) + sigma) = -(q/2) / (s (1 + sigma s^(q/2))) * 2 h diff
+        coeff = -(q / 2.0) / (s * (1.0 + sigma * s ** (q / 2.0)))
+        return M, M * (coeff @ (2.0 * self.h * diff))

@@ -188,7 +188,7 @@ class Discretisation:
         x_attach = self.h * np.column_stack((support @ c, support @ s))   # Eq. (2) at s_i
         return np.concatenate((f_theta, (y - x_attach).ravel()))
 
-    def _bordered_pattern(self, supports, upper: bool = False):
+    def bordered_pattern(self, supports, upper: bool = False):
         """CSR structure of a tridiagonal N x N block bordered by one column and
         one row per entry of ``supports`` (column b is nonzero in rows
         0..supports[b]-1), with a diagonal corner block.
@@ -222,15 +222,15 @@ class Discretisation:
     @cached_property
     def pattern(self):
         """CSR structure of the bordered Jacobian (2 border columns per tendon)."""
-        return self._bordered_pattern(np.repeat(self.attach_nodes, 2))
+        return self.bordered_pattern(np.repeat(self.attach_nodes, 2))
 
     @cached_property
     def stability_pattern(self):
         """Upper-triangle CSR structure of the symmetric stability matrix H
         (one border column per tendon)."""
-        return self._bordered_pattern(np.asarray(self.attach_nodes), upper=True)
+        return self.bordered_pattern(np.asarray(self.attach_nodes), upper=True)
 
-    def _band(self, theta, d, p) -> np.ndarray:
+    def band(self, theta, d, p) -> np.ndarray:
         """Tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper)."""
         N, h = self.n_elements, self.h
         phi = self.element_angles(theta)
@@ -255,10 +255,10 @@ class Discretisation:
         g = self.attachment_gradients(theta)                    # (n, N, 2)
         # dF_theta/dy_i = p_i/L_i (I - d d^T) g = p_i/L_i (d_perp . g) d_perp   (Eq. (17))
         d_perp = np.column_stack((-d[:, 1], d[:, 0]))
-        lever = (p / lengths)[:, None] * (g[..., 0] * d_perp[:, :1] + g[..., 1] * d_perp[:, 1:])
+        lever = (p / lengths)[:, None] * self.transverse_gradients(g, d)
         border = (lever[:, :, None] * d_perp[:, None, :]).transpose(1, 0, 2).reshape(N, 2 * n)
         yrows = -g.transpose(0, 2, 1).reshape(2 * n, N)        # dF_y/dtheta = -dX/dtheta
-        source = np.concatenate((self._band(theta, d, p).ravel(), border.ravel(),
+        source = np.concatenate((self.band(theta, d, p).ravel(), border.ravel(),
                                  yrows.ravel(), np.ones(2 * n)))
         return source[self.pattern[2]]
 
@@ -271,13 +271,25 @@ class Discretisation:
         """
         p = np.asarray(p, float)
         theta, y = self.split(u)
-        lengths, d = self.cables(y)
-        g = self.attachment_gradients(theta)
-        d_perp = np.column_stack((-d[:, 1], d[:, 0]))
-        w = np.sqrt(p / lengths)[:, None] * (g[..., 0] * d_perp[:, :1] + g[..., 1] * d_perp[:, 1:])
-        source = np.concatenate((self._band(theta, d, p).ravel(), w.T.ravel(), w.ravel(),
+        w = self.stiffness_border(theta, y, p)
+        source = np.concatenate((self.band(theta, self.cables(y)[1], p).ravel(), w.T.ravel(),
+                                 w.ravel(),
                                  -np.ones(self.n_tendons)))
         return source[self.stability_pattern[2]]
+
+    @staticmethod
+    def transverse_gradients(g: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """(dX_i/dtheta_k) . d_i^perp, shape (n, N), from the attachment gradients
+        ``g`` (n, N, 2) and unit cable directions ``d`` (n, 2): how each angle
+        turns cable i (Eq. (17))."""
+        return g[..., 0] * (-d[:, 1:2]) + g[..., 1] * d[:, :1]
+
+    def stiffness_border(self, theta: np.ndarray, y: np.ndarray, p) -> np.ndarray:
+        """W, shape (n, N): W[i] = sqrt(p_i / L_i) (dX_i/dtheta)^T d_i^perp, so that
+        K = T + W^T W (docs/model.md §2); a tension p_i <= 0 gives a zero row."""
+        lengths, d = self.cables(y)
+        weights = np.sqrt(np.maximum(np.asarray(p, float), 0.0) / lengths)
+        return weights[:, None] * self.transverse_gradients(self.attachment_gradients(theta), d)
 
     def load_derivative(self, u: np.ndarray) -> np.ndarray:
         """dF/dp, shape (n, size): row i is dF/dp_i (right-hand sides of Eq. (14))."""

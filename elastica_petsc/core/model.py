@@ -63,6 +63,18 @@ class Arm:
     def __post_init__(self) -> None:
         validate(self)
 
+    @classmethod
+    def paper(cls) -> "Arm":
+        """The arm of the paper's Fig. 1 (``configs/paper.toml``)."""
+        from .config import load_config
+        return load_config(None)
+
+    @classmethod
+    def from_toml(cls, path) -> "Arm":
+        """An arm from a TOML configuration file (layout: ``configs/paper.toml``)."""
+        from .config import load_config
+        return load_config(path)
+
     # --- unit conversions (docs/model.md §3) -------------------------------------
     @property
     def force_scale_N(self) -> float:
@@ -87,6 +99,14 @@ class Arm:
         """Routing points r_i / l, shape (n, 2)."""
         return np.array([t.route_mm for t in self.tendons], dtype=float) / self.length_mm
 
+    def to_mm(self, values) -> np.ndarray:
+        """Lengths in units of l to millimetres."""
+        return np.asarray(values, dtype=float) * self.length_mm
+
+    def from_mm(self, values_mm) -> np.ndarray:
+        """Millimetres to lengths in units of l."""
+        return np.asarray(values_mm, dtype=float) / self.length_mm
+
     def tensions_to_N(self, p) -> np.ndarray:
         return np.asarray(p, dtype=float) * self.force_scale_N
 
@@ -104,6 +124,9 @@ class Arm:
     def kappa_limit(self) -> float:
         """l * kappa_max allowed by Eq. (19): 2 eps_Y l / h."""
         return 2.0 * self.limits.failure_strain * self.length_mm / self.thickness_mm
+
+
+MAX_ROUTE_DISTANCE = 1e12     # arm lengths: far beyond any dead load (tests use 1e6 l)
 
 
 def validate(arm: Arm) -> None:
@@ -133,6 +156,9 @@ def validate(arm: Arm) -> None:
         if len(tendon.route_mm) != 2 or not all(
                 isinstance(c, (int, float)) and math.isfinite(c) for c in tendon.route_mm):
             raise ModelError(f"{key}.route_mm must be two numbers [x, y] in mm")
+        if math.hypot(*tendon.route_mm) > MAX_ROUTE_DISTANCE * arm.length_mm:
+            raise ModelError(f"{key}.route_mm lies more than {MAX_ROUTE_DISTANCE:g} arm lengths "
+                             "from the clamp (a dead load is modelled well long before that)")
         gap = math.hypot(tendon.route_mm[0] - tendon.attach_mm, tendon.route_mm[1])
         if gap < 1e-9 * arm.length_mm:
             raise ModelError(

@@ -1,41 +1,178 @@
-"""A one-line progress bar with time left, shown only on a terminal."""
+"""Progress of long runs: a live bar with time left on a terminal, sparse log lines otherwise.
+
+* If stderr or stdout is a terminal (under ``mpiexec``: if mpiexec's own
+  output is, see :func:`_launcher_on_terminal`), a one-line bar ``label [#####.....] done/total  elapsed  ~left``
+  is drawn there and redrawn by a background thread every ``interval``
+  seconds (default 1 s), so the elapsed time and the estimate keep moving
+  even while the caller is inside a long chunk of work.
+* Otherwise (logs, pipes, batch jobs) one line
+  ``label: done/total (25 %), 12 s elapsed, ~36 s left`` is written to
+  stderr each time another ``log_percent`` (default 5 %) of the work is
+  done, at most one every ``log_seconds`` (default 2 s); runs shorter than
+  that print nothing.
+* :func:`configure` (``quiet=True``, the command line's ``--quiet``)
+  silences every bar and line of the process.
+"""
 from __future__ import annotations
 
+import os
 import sys
+import threading
 import time
+
+_SETTINGS = {"quiet": False}
+_OPEN: set = set()
+
+
+def configure(*, quiet: bool = False) -> None:
+    """Process-wide switch: ``quiet=True`` turns every later Progress off."""
+    _SETTINGS["quiet"] = bool(quiet)
+
+
+def close_all() -> None:
+    """Stop the redraw threads of every bar still open (on errors and interrupts)."""
+    for bar in list(_OPEN):
+        bar.stop()
+
+
+MPI_RANK_VARIABLES = ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK")
+
+
+def _launcher_on_terminal() -> bool:
+    """Whether the process that started us (mpiexec) writes to a terminal.
+    OpenMPI gives every rank's stdout a pseudo-terminal of its own, whether
+    or not mpiexec's output goes to a terminal, so a rank's isatty() says
+    nothing; mpiexec's own stdout does (Linux /proc; False elsewhere)."""
+    try:
+        target = os.readlink(f"/proc/{os.getppid()}/fd/1")
+    except OSError:
+        return False
+    return target.startswith(("/dev/pts/", "/dev/tty", "/dev/console"))
+
+
+def _terminal():
+    """The stream to draw a bar on, or None: stderr or stdout if a terminal;
+    under an MPI launcher, stdout only if the launcher itself writes to one."""
+    under_mpi = any(v in os.environ for v in MPI_RANK_VARIABLES)
+    for stream in (sys.stderr, sys.stdout):
+        try:
+            if stream.isatty() and not (under_mpi and not _launcher_on_terminal()):
+                return stream
+        except (AttributeError, ValueError):
+            continue
+    return None
 
 
 class Progress:
-    """``update(done)`` redraws ``[#####.....] done/total  elapsed  ~left`` on stderr
-    (at most every ``interval`` seconds); silent when stderr is not a terminal."""
+    """``update(done)`` after each unit of work; ``close(done)`` at the end
+    (or use it as a context manager).  ``already``: units done before this
+    run started (a resume), left out of the rate."""
 
-    def __init__(self, total: int, label: str, *, stream=None, interval: float = 0.5,
-                 already: int = 0):
-        self.total, self.label = total, label
-        self.stream = stream if stream is not None else sys.stderr
-        self.enabled = self.stream.isatty()
-        self.interval = interval
+    def __init__(self, total: int, label: str, *, stream=None, interval: float = 1.0,
+                 already: int = 0, log_percent: float = 5.0, log_seconds: float = 2.0):
+        self.total, self.label = int(total), label
+        self.interval, self.log_percent, self.log_seconds = interval, log_percent, log_seconds
+        self.already = self.done = already
         self.start = time.monotonic()
-        self.already = already        # done before this run started (resume): not in the rate
-        self._last = 0.0
+        self.mode = "off"
+        if not _SETTINGS["quiet"]:
+            if stream is not None:
+                self.stream, self.mode = stream, ("bar" if stream.isatty() else "log")
+            else:
+                tty = _terminal()
+                self.stream, self.mode = (tty, "bar") if tty is not None else (sys.stderr, "log")
+        self.enabled = self.mode == "bar"
+        self._lock = threading.Lock()
+        self._logged_step, self._logged_at = 0, self.start
+        self._halt = threading.Event()
+        self._thread = None
+        if self.mode == "bar":
+            self._draw()
+            self._thread = threading.Thread(target=self._tick, daemon=True, name="progress")
+            _OPEN.add(self)
+            self._thread.start()
 
-    def update(self, done: int, force: bool = False) -> None:
-        now = time.monotonic()
-        if not self.enabled or (not force and now - self._last < self.interval):
-            return
-        self._last = now
-        elapsed = now - self.start
-        fresh = done - self.already
-        left = (self.total - done) * elapsed / fresh if fresh > 0 else float("nan")
+    # --- the caller's side -----------------------------------------------------
+    def update(self, done: int, force: bool = False, total: int | None = None) -> None:
+        """Record ``done`` units (of a new ``total`` when given); draw or log if due."""
+        self.done = int(done)
+        if total is not None:
+            self.total = int(total)
+        if self.mode == "bar" and force:
+            self._draw()
+        elif self.mode == "log":
+            self._log(force)
+
+    def close(self, done: int | None = None) -> None:
+        if done is not None:
+            self.done = int(done)
+        if self.mode == "bar":
+            self.stop()
+            self._draw()
+            with self._lock:
+                self.stream.write("\n")
+                self.stream.flush()
+        elif self.mode == "log":
+            final = int(100.0 * self.done / max(self.total, 1) // self.log_percent)
+            self._log(force=self.done > self.already and self._logged_step < final
+                      and time.monotonic() - self.start >= self.log_seconds)
+        self.mode = "off"
+
+    def stop(self) -> None:
+        """Stop redrawing (the line is left as it is)."""
+        self._halt.set()
+        _OPEN.discard(self)
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=2 * self.interval)
+
+    def __enter__(self) -> "Progress":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if exc[0] is None:
+            self.close()
+        else:
+            self.stop()
+            if self.mode == "bar":
+                with self._lock:
+                    self.stream.write("\n")
+                    self.stream.flush()
+            self.mode = "off"
+
+    # --- drawing ---------------------------------------------------------------
+    def status(self) -> tuple[float, float]:
+        """(elapsed, estimated seconds left; NaN while nothing new is done)."""
+        elapsed = time.monotonic() - self.start
+        fresh = self.done - self.already
+        left = (self.total - self.done) * elapsed / fresh if fresh > 0 else float("nan")
+        return elapsed, left
+
+    def _tick(self) -> None:
+        while not self._halt.wait(self.interval):
+            self._draw()
+
+    def _draw(self) -> None:
+        elapsed, left = self.status()
         width = 30
-        filled = int(width * done / max(self.total, 1))
+        filled = int(width * min(self.done, self.total) / max(self.total, 1))
         eta = f"~{left:.0f} s left" if left == left else "estimating"
-        self.stream.write(f"\r{self.label} [{'#' * filled}{'.' * (width - filled)}] "
-                          f"{done}/{self.total}  {elapsed:.0f} s  {eta}   ")
-        self.stream.flush()
-
-    def close(self, done: int) -> None:
-        if self.enabled:
-            self.update(done, force=True)
-            self.stream.write("\n")
+        with self._lock:
+            if self._halt.is_set() and self.mode != "bar":
+                return
+            self.stream.write(f"\r{self.label} [{'#' * filled}{'.' * (width - filled)}] "
+                              f"{self.done}/{self.total}  {elapsed:.0f} s  {eta}   ")
             self.stream.flush()
+
+    def _log(self, force: bool) -> None:
+        now = time.monotonic()
+        step = int(100.0 * self.done / max(self.total, 1) // self.log_percent)
+        due = step > self._logged_step and now - self._logged_at >= self.log_seconds
+        if not (due or force):
+            return
+        self._logged_step, self._logged_at = step, now
+        elapsed, left = self.status()
+        eta = f", ~{left:.0f} s left" if left == left and self.done < self.total else ""
+        self.stream.write(f"{self.label}: {self.done}/{self.total} "
+                          f"({100.0 * self.done / max(self.total, 1):.0f} %), "
+                          f"{elapsed:.0f} s elapsed{eta}\n")
+        self.stream.flush()

@@ -24,7 +24,9 @@ Layout of an equilibrium group (``write_equilibrium``)::
     tendons/tensions_N     (n,)     N
     tendons/cable_clear    (n,)     bool    cable segment does not cross the arm
     solver (attributes)    converged, reason, message, iterations, load_steps,
-                           unstable_modes, stable
+                           unstable_modes, stable; after a symmetric bifurcation
+                           bifurcation_sides, bifurcation_rules and the dataset
+                           solver/bifurcation_tensions (k, n) P l^2/B
 """
 from __future__ import annotations
 
@@ -46,31 +48,158 @@ from ..core.errors import InputError
 from ..core.model import Arm
 
 
-def check_output_path(path: str | Path, overwrite: bool) -> Path:
-    """Refuse to clobber an existing file unless asked; the folder must exist."""
-    path = Path(path)
+H5_SUFFIXES = (".h5", ".hdf5")
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+class OutputError(InputError):
+    """An output location that cannot be written (reported like bad input)."""
+
+
+def check_output_path(path: str | Path, overwrite: bool, suffixes=None,
+                      option: str = "--out") -> Path:
+    """Refuse, before any computation, an output file that could not be written:
+    an empty name, a folder (or a name ending in '/'), an unknown extension
+    (``suffixes``), a folder that does not exist or cannot be written to, and an
+    existing file without ``overwrite`` (or one that cannot be replaced)."""
+    text = str(path)
+    if not text.strip():
+        raise OutputError(f"{option}: empty file name")
+    path = Path(text)
+    if text.endswith(("/", os.sep)) or path.is_dir():
+        raise OutputError(f"{option} {text}: is a folder; give a file name")
+    if suffixes and path.suffix.lower() not in suffixes:
+        raise OutputError(f"{option} {text}: unknown extension {path.suffix or '(none)'!r}; "
+                          f"expected {' or '.join(suffixes)}")
     if path.exists() and not overwrite:
-        raise InputError(f"{path} exists; pass --overwrite to replace it")
-    if not path.parent.exists():
-        raise InputError(f"{path.parent}: no such directory for the output file")
+        raise OutputError(f"{path} exists; pass --overwrite to replace it")
+    folder = path.parent
+    if not folder.is_dir():
+        raise OutputError(f"{folder}: no such directory for the output file")
+    _probe_writable(folder, path)
     return path
+
+
+def _probe_writable(folder: Path, path: Path) -> None:
+    """Create and remove a file beside ``path`` (root ignores permission bits, so
+    only trying tells a read-only mount); an existing file must be replaceable."""
+    probe = folder / f".{path.name}.probe-{os.getpid()}"
+    try:
+        fd = os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as err:
+        raise OutputError(f"{folder}: cannot write there ({err.strerror})") from None
+    if path.exists() and not os.access(path, os.W_OK):
+        raise OutputError(f"{path}: cannot be replaced (read-only or immutable)")
+
+
+def check_distinct(paths: dict) -> None:
+    """Refuse two outputs of one command that name the same file ({option: path})."""
+    seen = {}
+    for option, path in paths.items():
+        if not path:
+            continue
+        key = os.path.realpath(path)
+        if key in seen:
+            raise OutputError(f"{seen[key]} and {option} name the same file {path}")
+        seen[key] = option
+
+
+def remove_orphans(path: Path) -> None:
+    """Remove temporaries of ``path`` left by writers that died (their pid is gone)."""
+    for tmp in path.parent.glob(f".{path.name}.tmp-*"):
+        try:
+            pid = int(tmp.name.rsplit("-", 1)[1])
+            os.kill(pid, 0)
+        except ValueError:
+            continue
+        except ProcessLookupError:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+        except PermissionError:
+            pass
 
 
 @contextlib.contextmanager
 def atomic_h5(path: str | Path, overwrite: bool = False):
-    """An h5py.File open for writing at a temporary name, renamed to ``path`` on
-    success and removed on failure."""
+    """An h5py.File to fill, built in memory and written to a temporary name,
+    synced and renamed to ``path``.  HDF5 itself never writes to the disk, so a
+    full disk is one ``OSError`` of a plain write, raised as
+    :class:`OutputError`, and any earlier file at ``path`` stays as it was."""
+    import io
+
     import h5py
 
     path = check_output_path(path, overwrite)
+    remove_orphans(path)
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as fh:
+        yield fh
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
-        with h5py.File(tmp, "w") as fh:
-            yield fh
+        with open(tmp, "wb") as raw:
+            raw.write(buffer.getbuffer())
+            raw.flush()
+            os.fsync(raw.fileno())
         os.replace(tmp, path)
+    except OSError as err:
+        raise OutputError(f"cannot write {path}: {err.strerror or err}") from None
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+class OutputLock:
+    """Exclusive ownership of an output file for the duration of a run: an
+    ``flock`` on ``.<name>.lock`` beside it (released by the kernel if the
+    process dies, so it never goes stale).  A second run on the same file is
+    refused with :class:`OutputError`."""
+
+    def __init__(self, path: str | Path):
+        import fcntl
+
+        self.path = Path(path)
+        self.lock = self.path.with_name(f".{self.path.name}.lock")
+        self.fd = os.open(self.lock, os.O_CREAT | os.O_RDWR, 0o644)
+        try:
+            fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            owner = os.pread(self.fd, 32, 0).decode(errors="replace").strip() or "?"
+            os.close(self.fd)
+            raise OutputError(f"{self.path} is being written by another run (pid {owner}); "
+                              "wait for it to end or choose another --out") from None
+        os.ftruncate(self.fd, 0)
+        os.pwrite(self.fd, str(os.getpid()).encode(), 0)
+        remove_orphans(self.path)
+
+    def release(self) -> None:
+        if self.fd is not None:
+            with contextlib.suppress(OSError):
+                self.lock.unlink()
+            os.close(self.fd)                   # closing releases the flock
+            self.fd = None
+
+    def __enter__(self) -> "OutputLock":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+# PETSc options that change no number (monitors, viewers, logging): not part of a result
+NEUTRAL_OPTIONS = ("monitor", "view", "log", "info", "options_left", "help", "malloc",
+                   "signal_handler", "error_output")
+
+
+def petsc_options() -> str:
+    """The PETSc options in force that can change results, ``name=value`` sorted
+    and space-separated ('' if none)."""
+    from petsc4py import PETSc
+
+    items = PETSc.Options().getAll().items()
+    return " ".join(f"{k}={v}" for k, v in sorted(items)
+                    if not any(word in k for word in NEUTRAL_OPTIONS))
 
 
 def provenance(arm: Arm, kind: str) -> dict:
@@ -84,6 +213,7 @@ def provenance(arm: Arm, kind: str) -> dict:
         "petsc_version": "%d.%d.%d" % PETSc.Sys.getVersion(),
         "python_version": platform.python_version(),
         "command_line": " ".join(sys.argv),
+        "petsc_options": petsc_options(),
         "created_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "length_unit": "mm",
         "tension_unit": "P l^2/B (non-dimensional); *_N datasets in newtons",
@@ -139,6 +269,11 @@ def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
                          "message": eq.message, "iterations": int(eq.iterations),
                          "load_steps": int(eq.load_steps), "stable": bool(eq.stable),
                          "unstable_modes": int(eq.unstable_modes)})
+    if eq.bifurcations:
+        put(solver, "bifurcation_tensions", np.array([b.p_critical for b in eq.bifurcations]),
+            "P l^2/B", "critical tensions of the symmetric bifurcations crossed, in order")
+        write_attrs(solver, {"bifurcation_sides": [b.side for b in eq.bifurcations],
+                             "bifurcation_rules": [b.rule for b in eq.bifurcations]})
 
 
 def write_control(group, arm: Arm, result) -> None:
@@ -171,9 +306,10 @@ def write_trace(group, arm: Arm, trace, schedule) -> None:
     (K,2) mm, path/tensions (K,n) P l^2/B, path/tensions_N (K,n) N,
     path/cable_lengths (K,n) mm, path/theta (K,N+1) rad, path/curvature (K,N),
     path/tip_sensitivity (K,n,2) mm per unit p, path/iterations (K,),
-    path/converged (K,), path/tip_error (K,) mm, path/loading_node (K,) (the
-    point's loading path in the tree /loading, :func:`write_loading_tree`); schedule/revolutions,
-    schedule/steps, schedule/rounding_error (K,n).
+    path/converged (K,), path/tip_error (K,) mm, path/cable_clear (K,n) bool,
+    path/loading_node (K,) (the point's loading path in the tree /loading,
+    :func:`write_loading_tree`); schedule/ the timed motor
+    schedule (:func:`write_schedule`: R >= K rows, the approach first).
     """
     l_mm = arm.length_mm
     results = trace.results
@@ -198,13 +334,31 @@ def write_trace(group, arm: Arm, trace, schedule) -> None:
     ends = write_loading_tree(group, [r.loading for r in results])
     put(path, "loading_node", ends, "1",
         "per point: last vertex of its loading path in /loading (-1: p = 0, -2: unknown)")
-    sched = group.create_group("schedule")
-    put(sched, "revolutions", schedule.revolutions, "rev", "spool revolutions from the first point")
-    put(sched, "steps", schedule.steps, "microsteps", "motor microsteps from the first point")
+    write_schedule(group.create_group("schedule"), schedule)
+
+
+def write_schedule(sched, schedule) -> None:
+    """The timed motor schedule (:mod:`elastica_petsc.core.schedule`), the
+    same rows and columns as its CSV: R rows (approach, then path), n tendons."""
+    put(sched, "phase", schedule.phase.astype("S"), "1", "approach or path")
+    put(sched, "point", schedule.point, "1", "index within the phase (path: index of path/)")
+    put(sched, "time", schedule.time_s, "s", "time of the row at the tip speed (NaN: no speed)")
+    put(sched, "reached", schedule.reached.astype(bool), "1", "tip within tolerance of the target")
+    put(sched, "target", schedule.targets_mm, "mm", "target tip position")
+    put(sched, "tip", schedule.tips_mm, "mm", "tip position of the planned state")
+    put(sched, "tensions", schedule.p, "P l^2/B", "non-dimensional tensions p_i")
+    put(sched, "tensions_N", schedule.tensions_N, "N", "tensions P_i")
+    put(sched, "cable_lengths", schedule.lengths_mm, "mm", "cable lengths L_i")
+    put(sched, "revolutions", schedule.revolutions, "rev", "spool revolutions from row 0")
+    put(sched, "steps", schedule.steps, "microsteps",
+        "motor microsteps from row 0 (> 0: cable paid out, < 0: reeled in)")
+    put(sched, "step_increments", schedule.step_increments, "microsteps",
+        "microsteps from the previous row")
     put(sched, "rounding_error", schedule.rounding_error_mm, "mm",
         "imposed minus requested cable length change (integer steps)")
     write_attrs(sched, {"spool_radius_mm": schedule.spool_radius_mm,
-                        "steps_per_revolution": schedule.steps_per_revolution})
+                        "steps_per_revolution": schedule.steps_per_revolution,
+                        "speed_mm_s": schedule.speed_mm_s})
 
 
 # --- loading paths (how a state is reached from the straight arm) -----------------------

@@ -53,15 +53,33 @@ def _snapshots(count: int, wanted: int = 8) -> np.ndarray:
     return np.unique(np.linspace(0, count - 1, min(wanted, count)).round().astype(int))
 
 
+def draw_direction(ax, points, count: int = 10, colour: str = "tab:green") -> None:
+    """Arrowheads along a path of points (mm) showing its direction of travel."""
+    pts = np.asarray(points, float)
+    if len(pts) < 2:
+        return
+    for n, k in enumerate(np.unique(np.linspace(0, len(pts) - 2, count).round().astype(int))):
+        a, b = pts[k], pts[k + 1]
+        if np.allclose(a, b):
+            continue
+        ax.annotate("", xy=b, xytext=a, zorder=6,
+                    arrowprops=dict(arrowstyle="-|>", color=colour, lw=1.5, mutation_scale=16))
+    ax.plot([], [], marker=r"$\rightarrow$", ls="none", color=colour, ms=12,
+            label="direction of travel")
+
+
 def plot_trace(arm: Arm, trace, path) -> None:
-    """Fig. 3: targets, tips reached and snapshots of the arm along the path."""
+    """Fig. 3: targets (with the direction of travel), tips reached and
+    snapshots of the arm along the path."""
     fig, ax = figure(figsize=(8, 6))
     draw_setting(ax, arm)
     for k in _snapshots(trace.n_points, 6):
         draw_arm(ax, arm, trace.results[k].equilibrium, colour="0.55")
     ax.plot(*trace.targets_mm.T, "-", color="tab:green", lw=3, alpha=0.5, label="targets")
     ax.plot(*trace.tips_mm.T, "-", color="tab:red", lw=1, label="tip reached")
-    ax.plot(*trace.targets_mm[0], "go", label="start")
+    draw_direction(ax, trace.targets_mm, count=12)
+    ax.plot(*trace.targets_mm[0], "go", ms=8, zorder=7, label="start")
+    ax.plot(*trace.targets_mm[-1], "ks", mfc="none", ms=9, label="end")
     finish_geometry(ax, f"Traced path: {trace.n_points} points, max tip error "
                         f"{np.max(trace.tip_errors_mm):.1e} mm")
     save(fig, path)
@@ -88,35 +106,44 @@ def plot_tensions_lengths(arm: Arm, trace, path) -> None:
 
 
 def plot_sensitivities(arm: Arm, trace, path) -> None:
-    """Fig. 6b: tip sensitivity vectors d x_t / d P_i along the path (scaled)
-    and a polar plot of their magnitudes and directions."""
+    """Fig. 6b: tip sensitivity vectors d x_t / d P_i (Eq. (13)) along the
+    path, each tendon's arrows scaled on their own (the legend gives the
+    scale: tendon 2 moves the tip about ten times more per newton), and a
+    polar plot of their magnitudes [mm/N] and directions."""
     import matplotlib.pyplot as plt
 
     sens = np.array([r.sensitivity.tip for r in trace.results]) * arm.length_mm  # mm per p
-    sens_N = sens / arm.force_scale_N                                               # mm per N
-    fig = plt.figure(figsize=(13, 5.5))
+    sens_N = sens / arm.force_scale_N            # mm per N: p = P / (B / l^2)
+    fig = plt.figure(figsize=(13, 6.2))
     ax = fig.add_subplot(1, 2, 1)
-    every = max(1, trace.n_points // 40)
+    every = max(1, trace.n_points // 30)
     ax.plot(*trace.targets_mm.T, "-", color="0.6", lw=1)
-    scale = 20.0 / np.max(np.linalg.norm(sens_N, axis=2))
+    xy = trace.tips_mm[::every]
+    ends = [trace.targets_mm]
     for i in range(sens.shape[1]):
-        v = sens_N[::every, i] * scale
-        xy = trace.tips_mm[::every]
+        biggest = float(np.max(np.linalg.norm(sens_N[:, i], axis=1)))
+        arrow_mm = 25.0
+        v = sens_N[::every, i] * (arrow_mm / biggest if biggest > 0 else 0.0)
         ax.quiver(xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], angles="xy", scale_units="xy", scale=1,
-                  color=TENDON_COLOURS[i % len(TENDON_COLOURS)], width=0.004,
-                  label=f"d x_t / d P{i + 1} (scaled)")
+                  color=TENDON_COLOURS[i % len(TENDON_COLOURS)], width=0.005, zorder=3,
+                  label=f"d x_t / d P{i + 1}: {arrow_mm:g} mm arrow = {biggest:.3g} mm/N")
+        ends.append(xy + v)
+    ends = np.vstack(ends)
+    ax.set_xlim(ends[:, 0].min() - 5, ends[:, 0].max() + 5)
+    ax.set_ylim(ends[:, 1].min() - 5, ends[:, 1].max() + 5)
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_title("(Fig. 6b) tip sensitivities along the path")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.1), frameon=False)
     polar = fig.add_subplot(1, 2, 2, projection="polar")
     for i in range(sens.shape[1]):
         angle = np.arctan2(sens_N[:, i, 1], sens_N[:, i, 0])
         polar.plot(angle, np.linalg.norm(sens_N[:, i], axis=1), ".",
                    color=TENDON_COLOURS[i % len(TENDON_COLOURS)], label=f"|d x_t / d P{i + 1}|")
-    polar.set_title("magnitude [mm/N] and direction", fontsize=10)
-    polar.legend(fontsize=8, loc="lower right")
+    polar.set_title(f"magnitude [mm/N] and direction (1 N = p {1 / arm.force_scale_N:.3g})",
+                    fontsize=10)
+    polar.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.08), frameon=False)
     save(fig, path)
 
 
@@ -128,14 +155,21 @@ def plot_curvature(arm: Arm, trace, path) -> None:
     disc = trace.results[0].equilibrium.disc
     s_mid = (np.arange(disc.n_elements) + 0.5) / disc.n_elements * arm.length_mm
     nodes = [0] + sorted(set(disc.attach_nodes))
-    for j, k in enumerate(_snapshots(trace.n_points, 5)):
+    picks = _snapshots(trace.n_points, 5)
+    for j, k in enumerate(picks):
         eq = trace.results[k].equilibrium
-        line, = ax.plot(s_mid, eq.curvature, lw=1.6, label=f"point {k}")
+        # earlier curves wider and underneath: a closed path ends where it started,
+        # and its last curve must not hide the first
+        same = [int(q) for q in picks[:j]
+                if np.max(np.abs(trace.results[q].equilibrium.theta - eq.theta)) < 1e-6]
+        line, = ax.plot(s_mid, eq.curvature, lw=1.4 + 2.0 * (len(picks) - 1 - j) / len(picks),
+                        zorder=2 + j, label=f"point {k}" + (f" (same state as point {same[0]})"
+                                                            if same else ""))
         piecewise = np.empty(disc.n_elements)
         for a, b in zip(nodes[:-1], nodes[1:]):
             piecewise[a:b] = (eq.theta[b] - eq.theta[a]) / ((b - a) / disc.n_elements)
         piecewise[nodes[-1]:] = 0.0
-        ax.plot(s_mid, piecewise, "--", color=line.get_color(), lw=1)
+        ax.plot(s_mid, piecewise, "--", color=line.get_color(), lw=1, zorder=2 + j)
     for k in disc.attach_nodes:
         ax.axvline(k / disc.n_elements * arm.length_mm, color="0.6", lw=0.8, ls=":")
     ax.set_xlabel("arc length s [mm]")

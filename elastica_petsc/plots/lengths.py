@@ -29,8 +29,10 @@ def draw_state(ax, arm: Arm, eq, label: str, colour: str, number: int | None = N
                     color=colour, fontsize=11, fontweight="bold", zorder=6)
 
 
-def plot_states(arm: Arm, entries, path: str | Path, title: str, circles_mm=None) -> None:
-    """Every equilibrium in ``entries`` [(state, label)], numbered at the tip.
+def plot_states(arm: Arm, entries, path: str | Path, title: str, circles_mm=None,
+                numbers=None) -> None:
+    """Every equilibrium in ``entries`` [(state, label)], numbered at the tip
+    (``numbers``, default 1, 2, ...: the states' own numbers).
     ``circles_mm``: prescribed cable lengths; the circles of radius L_i about
     r_i are drawn dashed (Fig. 8: x_i must lie on them when the cable is taut)."""
     fig, ax = figure(figsize=(8.5, 8.5))
@@ -42,8 +44,9 @@ def plot_states(arm: Arm, entries, path: str | Path, title: str, circles_mm=None
             ax.plot(r[0] + L * np.cos(a), r[1] + L * np.sin(a), "--", lw=0.9,
                     color=TENDON_COLOURS[i % len(TENDON_COLOURS)], zorder=1,
                     label=f"|x{i + 1} - r{i + 1}| = L{i + 1} = {L:.1f} mm")
-    for k, (eq, label) in enumerate(entries):
-        draw_state(ax, arm, eq, label, STATE_COLOURS[k % len(STATE_COLOURS)], number=k + 1)
+    numbers = range(1, len(entries) + 1) if numbers is None else numbers
+    for k, ((eq, label), number) in enumerate(zip(entries, numbers)):
+        draw_state(ax, arm, eq, label, STATE_COLOURS[k % len(STATE_COLOURS)], number=number)
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
@@ -113,26 +116,44 @@ def plot_replay(arm: Arm, data: dict, path: str | Path, title: str) -> None:
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), fontsize=8, ncol=1,
               frameon=False)
 
+    _replay_errors(ax2, data)
+    fig.subplots_adjust(wspace=0.3)
+    fig.suptitle(title, fontsize=11)
+    save(fig, path)
+
+
+def _replay_errors(ax2, data: dict) -> None:
+    """Distance from the plan per point: the tip error in mm on the left log
+    axis, the shape error in rad on its own right log axis."""
     floor = 1e-15
     err = np.asarray(data["tip_error"], float)
     k = np.arange(len(err))
     few = len(err) <= MARKERS_UP_TO
-    ax2.semilogy(k, np.maximum(err, floor), "o-" if few else "-", color="tab:red", ms=4,
-                 label="|replayed tip - planned tip| [mm]")
+    handles = ax2.semilogy(k, np.maximum(err, floor), "o-" if few else "-", color="tab:red",
+                           ms=4, label="|replayed tip - planned tip| [mm] (left axis)")
+    tol_axis = ax2
     if data.get("shape_error") is not None:
+        right = ax2.twinx()
         se = np.asarray(data["shape_error"], float)
-        ax2.semilogy(k, np.maximum(se, floor), "s--" if few else "--", color="tab:green", ms=4,
-                     label="max |theta - planned theta| [rad]")
-    unit = "mm (tip)" if data["criterion"] == "tip" else "rad (shape)"
-    ax2.axhline(data["tol"], color="0.4", ls="--", lw=1.0,
-                label=f"on-branch threshold {data['tol']:g} {unit}")
+        handles += right.semilogy(k, np.maximum(se, floor), "s--" if few else "--",
+                                  color="tab:green", ms=4,
+                                  label="max |theta - planned theta| [rad] (right axis)")
+        right.set_ylabel("shape error [rad]", color="tab:green")
+        right.tick_params(axis="y", colors="tab:green")
+        if data["criterion"] == "shape":
+            tol_axis = right
+    unit = "mm (tip)" if data["criterion"] == "tip" else "rad (shape, right axis)"
+    handles.append(tol_axis.axhline(data["tol"], color="0.4", ls="--", lw=1.0,
+                                    label=f"on-branch threshold {data['tol']:g} {unit}"))
     for n, j in enumerate(np.flatnonzero(np.asarray(data["jumped"], bool))):
-        ax2.axvline(j, color="tab:purple", lw=1.2, label="jump" if n == 0 else None)
+        line = ax2.axvline(j, color="tab:purple", lw=1.2, label="jump")
+        if n == 0:
+            handles.append(line)
     ax2.set_xlabel("point of the traced path")
-    ax2.set_ylabel("distance from the plan")
+    ax2.set_ylabel("tip error [mm]", color="tab:red")
+    ax2.tick_params(axis="y", colors="tab:red")
     ax2.xaxis.get_major_locator().set_params(integer=True)
     ax2.set_title(f"Distance from the plan (below {floor:g} drawn at {floor:g})", fontsize=10)
     ax2.grid(True, which="both", lw=0.3, alpha=0.6)
-    ax2.legend(fontsize=8)
-    fig.suptitle(title, fontsize=11)
-    save(fig, path)
+    ax2.legend(handles=handles, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13),
+               frameon=False)

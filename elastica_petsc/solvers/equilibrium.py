@@ -18,6 +18,8 @@ from petsc4py import PETSc
 
 from ..core.errors import InputError
 from ..core.fem import Discretisation
+from .bifurcation import (BIFURCATION_TOL, AmplitudeContinuation, Bifurcation, critical_mode,
+                          orthogonality, tip_side)
 from .inertia import InertiaCounter
 from .linalg import use_bordered_lu
 
@@ -25,6 +27,20 @@ SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not
 
 # A cable shorter than this (in units of l) has collapsed onto its routing point.
 COLLAPSE_LENGTH = 2e-3
+# The reason reported then (the same name as tip control's, solvers/control.py).
+CABLE_COLLAPSE = "CABLE_COLLAPSE"
+# A stable branch ends at a bifurcation (not a limit point) and no stable
+# post-critical state was found (a subcritical bifurcation): solvers/bifurcation.py.
+BIFURCATION = "BIFURCATION"
+# How a bifurcating branch ended before the end load (AmplitudeContinuation.branch).
+BRANCH_ENDS = {
+    "subcritical": "bends back below the critical load (subcritical: the arm would snap)",
+    "collapse": "pulls the attachment point onto its routing point before the end load",
+    "lost": "could not be followed",
+    "unstable": "reaches the end load unstable",
+    "reached": "reaches the end load"}
+# Which branch to take at a symmetric bifurcation (solvers/bifurcation.py, tip_side).
+SIDES = ("left", "right")
 
 
 @dataclass(frozen=True)
@@ -41,6 +57,7 @@ class Equilibrium:
     message: str = ""
     unstable_modes: int = 0       # negative eigenvalues of K (0: stable under load control)
     snaps: tuple = ()             # tensions at which the loading path snapped (limit points)
+    bifurcations: tuple = ()      # Bifurcation crossed on the way, each with the branch taken
     p_requested: np.ndarray | None = field(default=None, repr=False)
 
     @property
@@ -178,6 +195,7 @@ class EquilibriumSolver:
         # an absolute tolerance below that floor would only make Newton stall.
         atol = max(1e-10, 1e-14 * disc.n_elements ** 1.5)
         snes.setTolerances(rtol=1e-10, atol=atol, stol=1e-14, max_it=40)
+        self.atol = atol
         # at least one Newton step: a warm start whose residual is already below
         # atol (tension change < ~1e-8) must still respond to the change, or the
         # tip would be piecewise constant in p at the optimiser's last steps
@@ -214,7 +232,7 @@ class EquilibriumSolver:
 
     # --- load stepping ----------------------------------------------------------
     def solve(self, p, order=None, start: Equilibrium | None = None,
-              tangent: np.ndarray | None = None) -> Equilibrium:
+              tangent: np.ndarray | None = None, side: str | None = None) -> Equilibrium:
         """Equilibrium at tensions ``p`` reached along a loading path.
 
         From ``start`` (a previous equilibrium; default the straight, unloaded
@@ -224,10 +242,24 @@ class EquilibriumSolver:
         ``tangent``: du/dp at ``start``, shape (n, size) (Eq. (14),
         :meth:`Sensitivity.state_derivative`), for a first-order (Euler)
         predictor of the first load step instead of ``start`` itself.
+
+        Where a stable path loses stability at a bifurcation (the critical
+        mode orthogonal to dF/dp, :mod:`elastica_petsc.solvers.bifurcation`)
+        the solve switches onto the bifurcating branches on both sides and
+        continues on a stable one: ``side`` ("left" or "right": where the tip
+        moves relative to its tangent) if given, else the one of lower
+        potential energy Pi at the end of the load segment, and on equal
+        energies (a symmetric pitchfork) the left one.  Each crossing is
+        recorded in ``bifurcations`` and described in ``message``.  If
+        neither side has a stable state (subcritical), ``converged`` is False
+        with reason ``BIFURCATION``.
         """
         disc = self.disc
         p = check_tensions(p, disc.n_tendons)
         order = check_order(order, disc.n_tendons)
+        if side is not None and side not in SIDES:
+            raise InputError(f"side must be one of {', '.join(SIDES)} (or None), got {side!r}")
+        self._side, self._bifurcations, self._p_critical = side, [], None
         u = disc.straight() if start is None else start.u.copy()
         p_now = np.zeros(disc.n_tendons) if start is None else np.asarray(start.p, float)
         self._modes = (start.unstable_modes if start is not None
@@ -245,8 +277,9 @@ class EquilibriumSolver:
             if not ok:
                 break
         result = dict(converged=ok, reason=reason, iterations=iterations, load_steps=steps,
-                      unstable_modes=self._modes,
-                      snaps=tuple(self._snaps), p_requested=p)
+                      unstable_modes=self._modes, snaps=tuple(self._snaps),
+                      bifurcations=tuple(self._bifurcations), p_requested=p,
+                      message="; ".join(b.describe() for b in self._bifurcations))
         if not ok:
             result["message"] = self._failure_message(u, p_now, p, reason)
         return Equilibrium(disc, p_now, u, **result)
@@ -291,14 +324,68 @@ class EquilibriumSolver:
                     u, lam, steps, self._modes = u_new, lam + step, steps + 1, modes
                     if np.min(self.disc.cables(self.disc.split(u)[1])[0]) < COLLAPSE_LENGTH:
                         # a cable collapsed onto its routing point: no load beyond
-                        return u, pa + lam * (pb - pa), iterations, steps, "CABLE_COLLAPSED", False
+                        return u, pa + lam * (pb - pa), iterations, steps, CABLE_COLLAPSE, False
                     if its <= 4:
                         dlam = min(2.0 * dlam, full)
                     continue
+            if limit_point and reason == "UNSTABLE_STATE":
+                switched = self._switch(u, lam, u_new, lam + step, pa, pb)
+                if switched is not None:
+                    u, its, self._modes = switched
+                    return u, pb, iterations + its, steps + 1, "CONVERGED_FNORM_ABS", True
+                if self._p_critical is not None:
+                    reason = BIFURCATION
             if limit_point:
                 return u, pa + lam * (pb - pa), iterations, steps, reason, False
             dlam = 0.5 * step
         return u, pb, iterations, steps, reason, True
+
+    def _switch(self, u, lam: float, u_unstable, lam_unstable: float, pa, pb):
+        """At a loss of stability between the stable ``u`` (at ``lam``) and the
+        unstable ``u_unstable``: if it is a bifurcation, the stable state at
+        ``pb`` on the side chosen by the rule of :meth:`solve`, as (u,
+        iterations, unstable modes); None at a limit point or if no side has
+        a stable state (then ``_p_critical`` is set for a bifurcation)."""
+        disc = self.disc
+        mu0, v = critical_mode(disc, u, pa + lam * (pb - pa))
+        if orthogonality(disc, u, pb - pa, v) > BIFURCATION_TOL:
+            return None                                  # a limit point: v . f != 0
+        mu1, _ = critical_mode(disc, u_unstable, pa + lam_unstable * (pb - pa))
+        # the smallest eigenvalue is linear in the load near its zero
+        lam_c = lam + (lam_unstable - lam) * mu0 / (mu0 - mu1) if mu0 > 0 > mu1 else lam
+        self._p_critical = pa + lam_c * (pb - pa)
+        continuation = AmplitudeContinuation(disc, pa, pb, self.atol)
+        found, its, self._branch_ends = {}, 0, []
+        for sign in (1.0, -1.0):
+            outcome, ((u0, l0), (u1, l1)) = continuation.branch(u, lam, v, sign)
+            self._branch_ends.append(outcome)
+            if outcome != "reached":
+                continue
+            u_end, n, _ = self.newton(u0 + (1.0 - l0) / (l1 - l0) * (u1 - u0), pb)
+            its += n
+            if self.converged() and self.inertia.negative_eigenvalues(u_end, pb) == 0:
+                found.setdefault(tip_side(disc, u, u_end), u_end)
+            else:
+                self._branch_ends[-1] = "unstable"
+        side, rule = self._choose_side(found, pb)
+        if side is None:
+            return None
+        self._bifurcations.append(Bifurcation(self._p_critical.copy(), side, rule))
+        self._p_critical = None
+        return found[side], its, 0
+
+    def _choose_side(self, found: dict, p) -> tuple[str | None, str]:
+        """The rule of :meth:`solve`: the requested side, else the lower
+        potential energy, else (equal energies) the left side."""
+        if self._side is not None:
+            return (self._side, "requested") if self._side in found else (None, "")
+        if len(found) < 2:
+            return next(iter(found), None), "the only side with a stable state"
+        energy = {k: self.disc.potential(self.disc.split(u)[0], p) for k, u in found.items()}
+        if abs(energy["left"] - energy["right"]) <= 1e-9 * (1.0 + abs(energy["left"])):
+            return "left", "both sides have the same energy: the left one by convention"
+        low = min(energy, key=energy.get)
+        return low, "the lower potential energy"
 
     def _failure_message(self, u, p_reached, p_target, reason: str) -> str:
         lengths = np.linalg.norm(self.disc.routes - self.disc.split(u)[1], axis=1)
@@ -308,6 +395,13 @@ class EquilibriumSolver:
             return (f"tendon {shortest + 1} pulled its attachment point onto its routing point "
                     f"(cable length {lengths[shortest]:.2e} l) at {where}: the cable direction "
                     "is undefined beyond this load")
+        if reason == BIFURCATION:
+            side = f"on the {self._side} side" if self._side else "on either side"
+            return (f"the stable branch ends at {where} at a bifurcation (the critical mode is "
+                    "orthogonal to the load, not a limit point) and no stable post-critical "
+                    f"state was found {side}: " + "; ".join(
+                        f"{k} branch: {BRANCH_ENDS[e]}" for k, e in
+                        zip(("one", "other"), self._branch_ends)))
         if reason in ("BRANCH_JUMP", "UNSTABLE_STATE"):
             return (f"the stable equilibrium branch ends at {where} (limit point: the arm "
                     "snaps) and no stable state to snap to was found")
@@ -324,3 +418,13 @@ class EquilibriumSolver:
 
     def __exit__(self, *exc) -> None:
         self.destroy()
+
+
+def solve_equilibrium(disc: Discretisation, p, *, order=None, side: str | None = None,
+                      start: Equilibrium | None = None) -> Equilibrium:
+    """One equilibrium (Eq. (9)) reached along a loading path, with a solver
+    made and destroyed for it: :meth:`EquilibriumSolver.solve` (``side``: the
+    branch to take at a symmetric bifurcation, "left" or "right";
+    non-dimensional tensions p = P l^2/B)."""
+    with EquilibriumSolver(disc) as solver:
+        return solver.solve(p, order=order, start=start, side=side)

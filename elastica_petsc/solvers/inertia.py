@@ -17,31 +17,46 @@ from ..core.fem import Discretisation
 from .linalg import bordered_ldlt
 
 
-class InertiaCounter:
-    """Counts negative eigenvalues of K(u, p) for one discretised arm."""
+class BorderedInertia:
+    """Sylvester inertia of a symmetric bordered matrix (tridiagonal block and
+    dense borders, upper-triangle CSR ``pattern``) by one LDL^T in the natural
+    order; subclasses give the entries and how many negative eigenvalues the
+    border itself contributes (Haynsworth)."""
 
-    def __init__(self, disc: Discretisation):
-        self.disc = disc
-        indptr, indices, _ = disc.stability_pattern
+    def __init__(self, pattern, size: int, values: np.ndarray):
+        indptr, indices = pattern[0], pattern[1]
         self._csr = (indptr, indices)
-        n = disc.n_elements + disc.n_tendons
-        self.H = PETSc.Mat().createSBAIJ(
-            size=(n, n), bsize=1, comm=PETSc.COMM_SELF,
-            csr=(indptr, indices, disc.stability_values(disc.straight(), np.zeros(disc.n_tendons))))
+        self.H = PETSc.Mat().createSBAIJ(size=(size, size), bsize=1, comm=PETSc.COMM_SELF,
+                                         csr=(indptr, indices, values))
         self.pc = bordered_ldlt(self.H)
 
-    def negative_eigenvalues(self, u: np.ndarray, p) -> int:
-        """Number of negative eigenvalues of the tangent K at state ``u``."""
-        self.H.setValuesCSR(*self._csr, self.disc.stability_values(u, p))
+    def count(self, values: np.ndarray, border_negatives: int) -> int:
+        """Negative plus zero eigenvalues of the matrix with entries ``values``,
+        less ``border_negatives``; 1 if the factorisation meets a zero pivot
+        (numerically singular: marginal at best)."""
+        self.H.setValuesCSR(*self._csr, values)
         self.H.assemble()
         self.pc.setOperators(self.H)
         try:
             self.pc.setUp()
-        except PETSc.Error:      # zero pivot: K (numerically) singular, marginal at best
+        except PETSc.Error:
             return 1
         negative, zero, _ = self.pc.getFactorMatrix().getInertia()
-        return negative + zero - self.disc.n_tendons
+        return negative + zero - border_negatives
 
     def destroy(self) -> None:
         self.pc.destroy()
         self.H.destroy()
+
+
+class InertiaCounter(BorderedInertia):
+    """Counts negative eigenvalues of K(u, p) for one discretised arm."""
+
+    def __init__(self, disc: Discretisation):
+        self.disc = disc
+        super().__init__(disc.stability_pattern, disc.n_elements + disc.n_tendons,
+                         disc.stability_values(disc.straight(), np.zeros(disc.n_tendons)))
+
+    def negative_eigenvalues(self, u: np.ndarray, p) -> int:
+        """Number of negative eigenvalues of the tangent K at state ``u``."""
+        return self.count(self.disc.stability_values(u, p), self.disc.n_tendons)

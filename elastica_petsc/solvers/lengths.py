@@ -1,5 +1,5 @@
-"""Length-controlled equilibria, their stability, and searching for several
-equilibria (Sec. 4.1, 4.6, Figs. 7-8; docs/model.md §4.7).
+"""Length-controlled equilibria and their stability (Sec. 4.1, 4.6, Figs. 7-8;
+docs/model.md §4.7).
 
 Everything is non-dimensional (docs/model.md §3): lengths in units of l, tensions
 p = P l^2 / B; ``*_mm`` helpers convert with the arm length.
@@ -27,19 +27,17 @@ the rows dg_i/dy_i = d_i^T; its CSR pattern extends ``disc.pattern`` once
 and is filled with ``setValuesCSR``.  Natural-order LU fills only the
 border: O(N) per Newton step.
 
-Deflation (several equilibria)
-------------------------------
+Deflation
+---------
 :mod:`elastica_petsc.core.deflation`: the equation rows are multiplied by
 M(z) = prod_k (1/||theta - theta_k||^2 + 1), with mu = M(z) carried as one
 extra unknown (so every system here has the unknowns (u, p, mu) and the
 extra row mu - M(z); without deflated roots M = 1 and mu stays 1).  M > 0,
-so the complementarity signs are unchanged.  Load control
-(:func:`equilibria`) uses the same system with the p rows p_i - p_i* = 0.
-Searches (:func:`length_equilibria`, :func:`equilibria`) start from a spread
-of load-controlled states (:func:`tension_starts`); deflated solves use their
-own SNES (prefixes ``len_defl_`` and ``defl_``) with the l2 line search,
-which leaves the start's basin far more often than backtracking.  A search
-reports what it found and from where, never that nothing else exists.
+so the complementarity signs are unchanged.  Load control uses the same
+system with the p rows p_i - p_i* = 0.  Deflated solves use their own SNES
+(prefixes ``len_defl_`` and ``defl_``) with the l2 line search, which
+leaves the start's basin far more often than backtracking.  The searches
+built on this live in :mod:`elastica_petsc.studies.search`.
 
 Stability under length control (Sec. 4.6)
 -----------------------------------------
@@ -80,25 +78,27 @@ cable lengths grow with the tensions along the branch.
 from __future__ import annotations
 
 from dataclasses import dataclass
-import itertools
 import math
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from petsc4py import PETSc
 
 from ..core.deflation import Deflation
-from .equilibrium import (SNES_REASONS, Equilibrium, EquilibriumSolver, check_order,
-                          check_tensions)
+from .equilibrium import SNES_REASONS, Equilibrium
 from ..core.errors import InputError
 from ..core.fem import Discretisation
-from .inertia import InertiaCounter
-from .linalg import bordered_ldlt, use_bordered_lu
+from .bifurcation import inverse_iteration
+from .inertia import BorderedInertia, InertiaCounter
+from .options import set_from_options
+from .linalg import use_bordered_lu
 
 # A tension below this (non-dimensional, p = P l^2/B) counts as zero: the
 # cable is slack or just taut and constrains nothing (module docstring).
 TAUT_TOL = 1e-8
+# |q . dL| / (|(v, q)| |dL|) below this: a loss of stability under length control is a
+# bifurcation, not a limit point (instability_kind; calibrated on Fig. 7 only, 0.005).
+LENGTH_BIFURCATION_TOL = 0.05
 # Two states are the same equilibrium if no nodal angle differs by more (rad).
 SAME_SHAPE_TOL = 1e-4
 # PETSc options (under the solver's prefix) for deflated solves, unless the
@@ -123,8 +123,12 @@ class LengthEquilibrium(Equilibrium):
     jumps : cable lengths (units of l) at which a continuation path jumped
         to a distant state (snap or buckling); empty for a smooth path.
     instabilities : cable lengths at which the continued branch ended: it
-        lost stability under length control (bifurcation) or Newton could
-        not continue it at any step size (limit point).
+        lost stability under length control or Newton could not continue it
+        at any step size.
+    instability_kinds : for each of ``instabilities``, "bifurcation" (the
+        critical mode does not change the path's lengths: buckling, two
+        branches) or "limit point" (a fold: the arm snaps), by
+        :func:`instability_kind`.
     label : where the state came from (start and method), for searches.
     """
 
@@ -133,6 +137,7 @@ class LengthEquilibrium(Equilibrium):
     length_mm: float | None = None
     jumps: tuple = ()
     instabilities: tuple = ()
+    instability_kinds: tuple = ()
     label: str = ""
 
     @property
@@ -167,59 +172,6 @@ class LengthEquilibrium(Equilibrium):
         return self._mm(self.tip)
 
 
-@dataclass(frozen=True)
-class FoundState:
-    """One distinct equilibrium of a search and how it was found."""
-
-    state: Equilibrium            # LengthEquilibrium for length control
-    start: str                    # label of the first start that reached it
-    method: str                   # "loading path", "continuation" or "deflation"
-    hits: int                     # how many (start, method) attempts reached it
-
-
-@dataclass(frozen=True)
-class SearchResult:
-    """Distinct equilibria found from a set of starts.  Not a proof that no
-    other equilibrium exists: only what these starts and methods reached."""
-
-    control: str                  # "length" or "load"
-    target: np.ndarray            # L / l (length) or p (load)
-    states: tuple                 # FoundState, in order of discovery
-    starts: tuple                 # labels of every start tried
-    attempts: int                 # solves attempted (starts x methods)
-    failures: int                 # attempts that did not converge
-    duplicates: int               # converged attempts that re-found a known state
-    log: tuple = ()               # (start, method, outcome) per attempt
-
-    def __len__(self) -> int:
-        return len(self.states)
-
-    def closest(self, p=None, lengths=None) -> FoundState:
-        """The found state nearest to given tensions or cable lengths (units of l)."""
-        if (p is None) == (lengths is None):
-            raise ValueError("give exactly one of p, lengths")
-        ref = np.asarray(p if p is not None else lengths, float)
-        key = (lambda f: np.max(np.abs(f.state.p - ref))) if p is not None else \
-            (lambda f: np.max(np.abs(f.state.cable_lengths - ref)))
-        return min(self.states, key=key)
-
-    def summary(self) -> str:
-        what = "cable lengths L/l" if self.control == "length" else "tensions p"
-        lines = [f"{len(self.states)} distinct equilibria at {what} = "
-                 + ", ".join(f"{v:.6g}" for v in self.target)
-                 + f" from {len(self.starts)} starts ({self.attempts} attempts, "
-                 f"{self.failures} failed, {self.duplicates} re-found a known state); "
-                 "not a proof that there are no others"]
-        for k, f in enumerate(self.states, 1):
-            s = f.state
-            lm = getattr(s, "length_unstable_modes", -1)
-            lines.append(
-                f"  {k}: p = (" + ", ".join(f"{v:.4f}" for v in s.p) + "), L/l = ("
-                + ", ".join(f"{v:.6f}" for v in s.cable_lengths) + f"), tip = ({s.tip[0]:.6f}, "
-                f"{s.tip[1]:.6f}), unstable modes load/length = {s.unstable_modes}/{lm}; "
-                f"first from '{f.start}' by {f.method}, reached {f.hits}x")
-        return "\n".join(lines)
-
 
 def check_lengths(lengths, n_tendons: int) -> np.ndarray:
     """Positive, finite, one per tendon (units of l)."""
@@ -236,7 +188,7 @@ def same_shape(a: Equilibrium, b: Equilibrium, tol: float = SAME_SHAPE_TOL) -> b
 
 
 # --- the augmented system (u, p, mu) on one SNES VI --------------------------------------
-class _AugmentedSystem:
+class AugmentedSystem:
     """SNES ``vinewtonrsls`` on z = (theta, y, p, mu) (module docstring).
 
     ``mode="length"``: p rows g_i = L_i - |r_i - y_i| with p_i >= 0.
@@ -279,17 +231,7 @@ class _AugmentedSystem:
         self.atol = max(1e-10, 1e-14 * N ** 1.5)
         snes.setTolerances(rtol=1e-10, atol=self.atol, stol=1e-14, max_it=max_it)
         use_bordered_lu(snes.getKSP())
-        # defaults given in code go under the prefix only for setFromOptions and
-        # only where the user has not set them; then they are removed again
-        db = PETSc.Options()
-        pushed = [k for k in (options or {}) if not db.hasName(prefix + k)]
-        for k in pushed:
-            db.setValue(prefix + k, options[k])
-        try:
-            snes.setFromOptions()
-        finally:
-            for k in pushed:
-                db.delValue(prefix + k)
+        set_from_options(snes, prefix, options)
         self.snes = snes
 
     # --- layout ----------------------------------------------------------------------
@@ -368,8 +310,9 @@ class _AugmentedSystem:
                              shape=(self.size, self.size))
 
     # --- one solve ---------------------------------------------------------------------
-    def newton(self, z0, target) -> tuple[np.ndarray, int, str, bool]:
-        """One VI Newton solve from z0: (z, iterations, reason, converged)."""
+    def newton(self, z0, target, max_it: int | None = None) -> tuple[np.ndarray, int, str, bool]:
+        """One VI Newton solve from z0: (z, iterations, reason, converged);
+        ``max_it`` caps the Newton iterations of this solve only."""
         self.target = np.asarray(target, float)
         z0 = np.array(z0, float)
         if self.mode == "length":
@@ -383,10 +326,15 @@ class _AugmentedSystem:
         self.xl.setValue(self.imu, floor)
         self.xl.assemble()
         self.x.setArray(z0)
+        default_max_it = self.snes.getTolerances()[3]
+        if max_it is not None:
+            self.snes.setTolerances(max_it=max_it)
         try:
             self.snes.solve(None, self.x)
         except PETSc.Error:                      # e.g. a zero pivot in the LU
             return z0, self.snes.getIterationNumber(), "PETSC_ERROR", False
+        finally:
+            self.snes.setTolerances(max_it=default_max_it)
         reason = self.snes.getConvergedReason()
         z = self.x.getArray().copy()
         return z, self.snes.getIterationNumber(), SNES_REASONS.get(reason, str(reason)), \
@@ -417,68 +365,49 @@ class _AugmentedSystem:
 
 
 # --- stability under length control ------------------------------------------------------
-class LengthInertia:
+class LengthInertia(BorderedInertia):
     """Negative eigenvalues of K restricted to null(C^T) of the taut cables
     (module docstring), by the LDL^T inertia of the bordered H_c, O(N)."""
 
     def __init__(self, disc: Discretisation, taut_tol: float = TAUT_TOL):
         self.disc, self.taut_tol = disc, taut_tol
-        n = disc.n_tendons
         supports = np.concatenate((disc.attach_nodes, disc.attach_nodes))   # W cols, C cols
-        # Discretisation's own bordered-pattern builder (upper triangle for SBAIJ)
-        indptr, indices, self._src = disc._bordered_pattern(supports, upper=True)
-        self._csr = (indptr, indices)
-        size = disc.n_elements + 2 * n
-        self.H = PETSc.Mat().createSBAIJ(size=(size, size), bsize=1, comm=PETSc.COMM_SELF,
-                                         csr=(indptr, indices,
-                                              self.values(disc.straight(), np.zeros(n))[0]))
-        self.pc = bordered_ldlt(self.H)
+        pattern = disc.bordered_pattern(supports, upper=True)
+        self._src = pattern[2]
+        super().__init__(pattern, disc.n_elements + 2 * disc.n_tendons,
+                         self.values(disc.straight(), np.zeros(disc.n_tendons))[0])
 
     def values(self, u, p) -> tuple[np.ndarray, int]:
         """Upper-triangle entries of H_c and the number m of taut cables."""
         disc = self.disc
         p = np.asarray(p, float)
         theta, y = disc.split(u)
-        lengths, d = disc.cables(y)
-        g = disc.attachment_gradients(theta)
-        d_perp = np.column_stack((-d[:, 1], d[:, 0]))
-        w = np.sqrt(np.maximum(p, 0.0) / lengths)[:, None] * \
-            (g[..., 0] * d_perp[:, :1] + g[..., 1] * d_perp[:, 1:])         # (n, N)
+        w = disc.stiffness_border(theta, y, p)                              # (n, N)
         taut = p > self.taut_tol
         C = disc.load_derivative(u)[:, : disc.n_elements] * taut[:, None]  # grad L_i (n, N)
         border = np.vstack((w, C))                                          # (2n, N)
         corner = np.concatenate((-np.ones(disc.n_tendons), np.where(taut, 0.0, 1.0)))
-        source = np.concatenate((disc._band(theta, d, p).ravel(), border.T.ravel(),
-                                 border.ravel(), corner))
+        source = np.concatenate((disc.band(theta, disc.cables(y)[1], p).ravel(),
+                                 border.T.ravel(), border.ravel(), corner))
         return source[self._src], int(np.count_nonzero(taut))
 
     def negative_eigenvalues(self, u, p) -> int:
         """Negative (or zero) eigenvalues of K on null(C_taut^T); 0: stable
         under length control."""
         vals, m = self.values(u, p)
-        self.H.setValuesCSR(*self._csr, vals)
-        self.H.assemble()
-        self.pc.setOperators(self.H)
-        try:
-            self.pc.setUp()
-        except PETSc.Error:          # zero pivot: (numerically) singular, marginal at best
-            return 1
-        neg, zero, _ = self.pc.getFactorMatrix().getInertia()
-        return neg + zero - self.disc.n_tendons - m
-
-    def destroy(self) -> None:
-        self.pc.destroy()
-        self.H.destroy()
+        return self.count(vals, self.disc.n_tendons + m)
 
 
-def constrained_mode(system: _AugmentedSystem, z, iterations: int = 30) -> tuple[float, np.ndarray]:
+def constrained_mode(system: AugmentedSystem, z, iterations: int = 30,
+                     full: bool = False) -> tuple:
     """Eigenpair of K v = lambda h v on null(C_taut^T) with the smallest
     |lambda| (the buckling mode near a loss of stability), by inverse
     iteration with the length-control Jacobian [[J, dF/dp], [dg/du, 0]]
-    (sparse LU, O(N)).  Returns (lambda, v) with v the N nodal angle
-    increments, max |v| = 1.  Slack cables (p = 0) have no constraint."""
+    (sparse LU, O(N), :func:`~elastica_petsc.solvers.bifurcation.inverse_iteration`).
+    Returns (lambda, v) with v the N nodal angle increments, max |v| = 1;
+    with ``full`` also the tension increments q (n) that go with v (zero for
+    slack cables, which have no constraint)."""
     disc = system.disc
-    N = disc.n_elements
     z = np.array(z, float)
     z[system.imu] = 1.0
     A = system.scipy_jacobian(z).tolil()
@@ -488,17 +417,26 @@ def constrained_mode(system: _AugmentedSystem, z, iterations: int = 30) -> tuple
         A[r, :] = 0.0
         A[:, r] = 0.0
         A[r, r] = 1.0
-    lu = spla.splu(A.tocsc())
-    rng = np.random.default_rng(0)
-    v = rng.standard_normal(N)
-    lam = 0.0
-    for _ in range(iterations):
-        rhs = np.zeros(system.size)
-        rhs[:N] = disc.h * v
-        w = lu.solve(rhs)[:N]
-        lam = float(np.dot(v, disc.h * v) / np.dot(v, disc.h * w))
-        v = w / np.max(np.abs(w))
-    return lam, v
+    lam, v, w = inverse_iteration(A, disc.n_elements, disc.h, iterations)
+    return (lam, v, w[system.ip:system.imu]) if full else (lam, v)
+
+
+def instability_kind(system: AugmentedSystem, z, dL) -> str:
+    """"bifurcation" or "limit point" for a loss of stability under length
+    control at the state z, the lengths moving along ``dL``: the
+    constrained critical mode (v, q) (:func:`constrained_mode`) is the null
+    vector of the symmetric length-control Jacobian, and the path derivative
+    of the residual is -dL in the cable rows, so the test of
+    :mod:`~elastica_petsc.solvers.bifurcation` reads |q . dL| <=
+    LENGTH_BIFURCATION_TOL |(v, q)| |dL| (v weighted by h).  The tolerance
+    is looser than under load control: a path of straight segments in the
+    lengths only approximates a perfect column (Fig. 7's aligned path:
+    measured 0.005 one step before the crossing)."""
+    _, v, q = constrained_mode(system, z, full=True)
+    dL = np.asarray(dL, float)
+    scale = math.sqrt(system.disc.h * float(v @ v) + float(q @ q)) * float(np.linalg.norm(dL))
+    return "bifurcation" if abs(float(q @ dL)) <= LENGTH_BIFURCATION_TOL * scale \
+        else "limit point"
 
 
 # --- the length-control solver ----------------------------------------------------------
@@ -525,10 +463,10 @@ class LengthSolver:
         self.jump_tol = jump_tol
         self.max_step = max_step
         self.prefix = prefix
-        self.system = _AugmentedSystem(disc, "length", prefix)
+        self.system = AugmentedSystem(disc, "length", prefix)
         # deflated solves explore: the l2 (secant) line search leaves the basin
         # of the start far more often than backtracking (measured on Fig. 8)
-        self.deflated_system = _AugmentedSystem(disc, "length", prefix + "defl_",
+        self.deflated_system = AugmentedSystem(disc, "length", prefix + "defl_",
                                                 options=DEFLATION_OPTIONS)
         self.inertia = LengthInertia(disc)
         self.load_inertia = InertiaCounter(disc)
@@ -561,7 +499,7 @@ class LengthSolver:
                 self.inertia.negative_eigenvalues(u, p))
 
     def _result(self, z, lengths, its, reason, ok, *, steps=1, message="", jumps=(),
-                instabilities=(), label="") -> LengthEquilibrium:
+                instabilities=(), kinds=(), label="") -> LengthEquilibrium:
         u, p, _ = self.system.parts(z)
         p = np.where(p <= 0.0, 0.0, p)
         modes = self.stability(u, p) if ok else (-1, -1)
@@ -569,25 +507,27 @@ class LengthSolver:
             self.disc, p.copy(), u.copy(), ok, reason, its, steps, message=message,
             unstable_modes=modes[0], lengths_requested=np.asarray(lengths, float).copy(),
             length_unstable_modes=modes[1], length_mm=self.length_mm, jumps=tuple(jumps),
-            instabilities=tuple(instabilities), label=label)
+            instabilities=tuple(instabilities), instability_kinds=tuple(kinds), label=label)
 
     # --- one VI Newton solve ------------------------------------------------------------
-    def solve(self, lengths, start=None, *, deflate=None, label: str = "") -> LengthEquilibrium:
+    def solve(self, lengths, start=None, *, deflate=None, label: str = "",
+              max_it: int | None = None) -> LengthEquilibrium:
         """Equilibrium with cable lengths ``lengths`` (units of l) by one VI
         Newton solve from ``start`` (an Equilibrium, a pair (u, p), or None:
         the straight arm with p = 0).  ``deflate``: a :class:`Deflation`
-        holding states Newton must not converge to again."""
+        holding states Newton must not converge to again; ``max_it``: at most
+        this many Newton iterations (default: the SNES's, 50)."""
         L = check_lengths(lengths, self.disc.n_tendons)
         u0, p0 = self._start(start)
         if deflate is None:
             sys = self.system
             sys.deflation = Deflation(self.disc.h)
-            z, its, reason, ok = sys.newton(sys.augment(u0, p0), L)
+            z, its, reason, ok = sys.newton(sys.augment(u0, p0), L, max_it)
         else:
             sys = self.deflated_system
             sys.deflation = deflate
             try:
-                z, its, reason, ok = sys.newton(sys.augment(u0, p0), L)
+                z, its, reason, ok = sys.newton(sys.augment(u0, p0), L, max_it)
             finally:
                 sys.deflation = Deflation(self.disc.h)
         msg = "" if ok else (f"no length-controlled equilibrium reached from the start "
@@ -633,7 +573,7 @@ class LengthSolver:
         keep = keep_stable and self.inertia.negative_eigenvalues(u, p) == 0
         lam, dlam, its_total, steps = 0.0, full, 0, 0
         z_prev = dlam_prev = None
-        jumps, instabilities = [], []
+        jumps, instabilities, kinds = [], [], []
         reason = "CONVERGED_ITERATING"
         n_ang = self.disc.n_elements
 
@@ -664,15 +604,8 @@ class LengthSolver:
             # a limit point or bifurcation at L_t: the branch cannot be followed
             if lost or not ok:
                 instabilities.append(L_t.copy())
-            base = z_new if ok else z
-            # post-critical states: perturb along +- the buckling mode at L_t, or a
-            # little further along the path if the critical point is too close
-            candidates = []
-            for t in sorted({lam + step, min(1.0, lam + 0.1 * full), min(1.0, lam + 0.5 * full)}):
-                found = self.branches(base[: sys.nu], base[sys.ip:sys.imu], where(t))
-                candidates = [(t, sys.augment(b.u, b.p, 1.0)) for b in found]
-                if candidates:
-                    break
+                kinds.append(instability_kind(sys, z, L_end - L_start))
+            candidates = self._post_critical(z_new if ok else z, where, lam, step, full)
             if ok and jumped and (not lost or not keep):
                 candidates.append((lam + step, z_new))
             if candidates:
@@ -681,16 +614,29 @@ class LengthSolver:
                 jumps.append(where(t_best))
                 z, z_prev, lam, dlam, steps = z_best, None, t_best, full, steps + 1
                 continue
-            msg = (("lost stability under length control" if lost else
-                    f"length continuation stopped (PETSc SNES reason {reason})")
+            kind = f" at a {kinds[-1]}" if kinds else ""
+            msg = (("lost stability under length control" + kind if lost else
+                    f"length continuation stopped{kind} (PETSc SNES reason {reason})")
                    + " at L/l = (" + ", ".join(f"{v:.6g}" for v in where(lam))
                    + ") on the way to (" + ", ".join(f"{v:.6g}" for v in L_end)
                    + "), and no stable state to jump to was found")
             return self._result(z, where(lam), its_total, "UNSTABLE_STATE" if lost else reason,
                                 False, steps=steps, message=msg, jumps=jumps,
-                                instabilities=instabilities, label=label)
+                                instabilities=instabilities, kinds=kinds, label=label)
         return self._result(z, L_end, its_total, reason, True, steps=steps, jumps=jumps,
-                            instabilities=instabilities, label=label)
+                            instabilities=instabilities, kinds=kinds, label=label)
+
+    def _post_critical(self, base, where, lam: float, step: float, full: float) -> list:
+        """Stable states past a critical point of a continuation: the state
+        ``base`` perturbed along +- its buckling mode (:meth:`branches`) at the
+        path parameter lam + step, or a little further along the path if the
+        critical point is too close; as (parameter, augmented state) pairs."""
+        sys = self.system
+        for t in sorted({lam + step, min(1.0, lam + 0.1 * full), min(1.0, lam + 0.5 * full)}):
+            found = self.branches(base[: sys.nu], base[sys.ip:sys.imu], where(t))
+            if found:
+                return [(t, sys.augment(b.u, b.p, 1.0)) for b in found]
+        return []
 
     def _tension_guess(self, u) -> np.ndarray:
         """Least-squares tensions for a shape: min_p |F(u, p)| (F is linear in p)."""
@@ -765,366 +711,9 @@ class LengthSolver:
         self.destroy()
 
 
-# --- several equilibria: starts, continuation, deflation -----------------------------------
-def tension_starts(eq_solver: EquilibriumSolver, levels=(5.0, 10.0, 20.0), orders="all",
-                   include_straight: bool = True) -> list[tuple[str, Equilibrium]]:
-    """A spread of initial states: the straight arm and the load-controlled
-    equilibria at every combination of ``levels`` (one per tendon) reached
-    along every loading order (``orders="all"``: proportional and each
-    permutation), plus the intermediate states of the ordered paths (the
-    first tendons loaded, the others idle).  Paths that share a beginning
-    share its solves (warm starts); states reached several ways are kept
-    once (same shape, :data:`SAME_SHAPE_TOL`)."""
-    disc = eq_solver.disc
-    n = disc.n_tendons
-    levels = sorted(float(v) for v in levels if v > 0)
-    if orders == "all":
-        orders = [None] + list(itertools.permutations(range(1, n + 1)))
-    out: list[tuple[str, Equilibrium]] = []
-    straight = Equilibrium(disc, np.zeros(n), disc.straight(), True, "STRAIGHT", 0, 0,
-                           p_requested=np.zeros(n))
-    if include_straight:
-        out.append(("straight arm", straight))
-
-    def keep(eq, how):
-        if eq.converged and not any(same_shape(eq, s) for _, s in out):
-            out.append(("load p=(" + ", ".join(f"{v:g}" for v in eq.p) + f") {how}", eq))
-
-    def ordered(order, depth, state):
-        if depth == n:
-            return
-        k = order[depth] - 1
-        for level in levels:                  # raise tendon k through the levels, warm
-            target = np.array(state.p, float)
-            target[k] = level
-            nxt = eq_solver.solve(target, start=state)
-            if not nxt.converged:
-                break
-            keep(nxt, "order " + ",".join(map(str, order)))
-            ordered(order, depth + 1, nxt)
-            state = nxt
-
-    for order in orders:
-        order = check_order(order, n)
-        if order is None:
-            rays: dict[tuple, list[np.ndarray]] = {}
-            for p in itertools.product(levels, repeat=n):
-                p = np.array(p)
-                rays.setdefault(tuple(np.round(p / np.max(p), 12)), []).append(p)
-            for ps in rays.values():
-                state = straight
-                for p in sorted(ps, key=np.max):
-                    nxt = eq_solver.solve(p, start=state)
-                    if not nxt.converged:
-                        break
-                    keep(nxt, "proportional")
-                    state = nxt
-        else:
-            ordered(order, 0, straight)
-    return out
-
-
-class _Collector:
-    """Distinct states in order of discovery, compared by shape, and a log of
-    every attempt: (start, method, outcome) with outcome "new k", "again k"
-    (k: 1-based state number) or PETSc's reason of the failure."""
-
-    def __init__(self, tol: float):
-        self.tol = tol
-        self.found: list[list] = []          # [state, start, method, hits]
-        self.log: list[tuple[str, str, str]] = []
-        self.attempts = self.failures = self.duplicates = 0
-
-    def offer(self, state, start: str, method: str) -> bool:
-        self.attempts += 1
-        if state is None or not state.converged:
-            self.failures += 1
-            self.log.append((start, method, "failed" if state is None else
-                             f"failed ({state.reason})"))
-            return False
-        for k, entry in enumerate(self.found, 1):
-            if same_shape(entry[0], state, self.tol):
-                entry[3] += 1
-                self.duplicates += 1
-                self.log.append((start, method, f"again {k}"))
-                return False
-        self.found.append([state, start, method, 1])
-        self.log.append((start, method, f"new {len(self.found)}"))
-        return True
-
-    def result(self, control, target, starts) -> SearchResult:
-        return SearchResult(control, np.asarray(target, float),
-                            tuple(FoundState(*e) for e in self.found), tuple(starts),
-                            self.attempts, self.failures, self.duplicates, tuple(self.log))
-
-
-def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
-                      eq_solver: EquilibriumSolver | None = None, continuation: bool = True,
-                      deflation_rounds: int = 2, passes: int = 2,
-                      tol: float = SAME_SHAPE_TOL) -> SearchResult:
-    """Distinct equilibria with cable lengths ``lengths`` (units of l).
-
-    From every start (default :func:`tension_starts`): (1) continuation in
-    the cable lengths from the start's own lengths (:meth:`LengthSolver.follow`,
-    unstable states allowed), then (2) up to ``deflation_rounds`` deflated VI
-    Newton solves from the start itself, each deflating every state found so
-    far (Farrell et al. 2015, whose deflated solves here use the l2 line
-    search, :data:`DEFLATION_OPTIONS`).  While a sweep over the starts finds
-    new states, the deflated solves are repeated from every start (at most
-    ``passes`` sweeps), so early starts also see the roots found later.
-    States are distinct if some nodal angle
-    differs by more than ``tol`` rad.  Each state reports its stability under
-    load and length control.  What is returned is what these starts reached,
-    never a claim that no other equilibrium exists.
-    """
-    L = check_lengths(lengths, solver.disc.n_tendons)
-    if starts is None:
-        own = eq_solver is None
-        eq_solver = EquilibriumSolver(solver.disc) if own else eq_solver
-        try:
-            starts = tension_starts(eq_solver)
-        finally:
-            if own:
-                eq_solver.destroy()
-    found = _Collector(tol)
-    deflation = Deflation(solver.disc.h)
-    for sweep in range(max(1, passes)):
-        before = len(found.found)
-        for label, start in starts:
-            if continuation and sweep == 0:
-                state = solver.follow(L, start, keep_stable=False, label=f"{label}; continuation")
-                if found.offer(state, label, "continuation"):
-                    deflation.add(state.theta[1:])
-            for _ in range(deflation_rounds):
-                state = solver.solve(L, start, deflate=deflation, label=f"{label}; deflation")
-                if not found.offer(state, label, "deflation"):
-                    break
-                deflation.add(state.theta[1:])
-        if len(found.found) == before:
-            break
-    return found.result("length", L, [s[0] for s in starts])
-
-
-def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, deflation_rounds: int = 2,
-               passes: int = 2, tol: float = SAME_SHAPE_TOL, prefix: str = "defl_",
-               length_mm: float | None = None) -> SearchResult:
-    """Distinct load-controlled equilibria at fixed tensions ``p``.
-
-    (1) Loading paths from the straight arm: proportional and every order
-    (:meth:`EquilibriumSolver.solve`); (2) from every start (default
-    :func:`tension_starts`): the loading path from the start's tensions to
-    ``p``, then up to ``deflation_rounds`` deflated Newton solves on the
-    plain residual F(u; p) from the start, deflating every state found so
-    far (own SNES VI with unbounded p, options prefix ``defl_``, l2 line
-    search by default), repeated over all starts while a sweep finds new
-    states (at most ``passes`` sweeps).  Each state
-    is a :class:`LengthEquilibrium` whose prescribed lengths are its own
-    cable chords, with ``unstable_modes`` (load control) and
-    ``length_unstable_modes`` (the same state held at its cable lengths).
-    Not a proof of completeness.
-    """
-    disc = eq_solver.disc
-    p = check_tensions(p, disc.n_tendons)
-    found = _Collector(tol)
-    n = disc.n_tendons
-    length_inertia = LengthInertia(disc)
-
-    def examined(eq: Equilibrium | None, label: str):
-        if eq is None or not eq.converged:
-            return eq
-        lengths = disc.cables(disc.split(eq.u)[1])[0]
-        return LengthEquilibrium(
-            disc, np.asarray(eq.p, float).copy(), np.asarray(eq.u, float).copy(), True,
-            eq.reason, eq.iterations, eq.load_steps, unstable_modes=eq.unstable_modes,
-            snaps=eq.snaps, p_requested=p, lengths_requested=lengths,
-            length_unstable_modes=length_inertia.negative_eigenvalues(eq.u, eq.p),
-            length_mm=length_mm, label=label)
-
-    deflation = Deflation(disc.h)
-    system = _AugmentedSystem(disc, "load", prefix, deflation, options=DEFLATION_OPTIONS)
-    try:
-        for order in [None] + list(itertools.permutations(range(1, n + 1))):
-            how = "proportional" if order is None else "order " + ",".join(map(str, order))
-            label = f"straight arm, {how}"
-            if found.offer(examined(eq_solver.solve(p, order=order), label), label,
-                           "loading path"):
-                deflation.add(found.found[-1][0].theta[1:])
-        if starts is None:
-            starts = tension_starts(eq_solver)
-        for sweep in range(max(1, passes)):
-            before = len(found.found)
-            for label, start in starts:
-                if sweep == 0 and np.any(start.p != p):
-                    state = examined(eq_solver.solve(p, start=start), label)
-                    if found.offer(state, label, "loading path"):
-                        deflation.add(state.theta[1:])
-                for _ in range(deflation_rounds):
-                    z, its, reason, ok = system.newton(system.augment(start.u, p), p)
-                    state = None
-                    if ok:
-                        u = z[: system.nu]
-                        state = examined(Equilibrium(
-                            disc, p.copy(), u.copy(), True, reason, its, 0,
-                            unstable_modes=eq_solver.inertia.negative_eigenvalues(u, p),
-                            p_requested=p), label)
-                    if not found.offer(state, label, "deflation"):
-                        break
-                    deflation.add(state.theta[1:])
-            if len(found.found) == before:
-                break
-    finally:
-        system.destroy()
-        length_inertia.destroy()
-    return found.result("load", p, [s[0] for s in starts])
-
-
-# --- replaying a traced path under length control -------------------------------------------
-@dataclass(frozen=True)
-class ReplayPoint:
-    """One point of a replayed schedule (mm where named so, else units of l)."""
-
-    index: int
-    lengths_mm: np.ndarray        # prescribed cable lengths
-    planned_tip_mm: np.ndarray
-    state: LengthEquilibrium      # the replayed equilibrium (converged or not)
-    tip_error_mm: float           # |replayed tip - planned tip|
-    shape_error: float | None     # max |theta - planned theta| [rad], if planned shapes given
-    on_branch: bool               # shape (or tip) within tolerance of the plan
-    jumped: bool                  # a snap/buckling happened on the way to this point
-
-    @property
-    def tip_mm(self) -> np.ndarray:
-        return self.state.tip_mm
-
-    @property
-    def stable(self) -> bool:
-        """Stable under length control."""
-        return self.state.length_unstable_modes == 0
-
-
-@dataclass(frozen=True)
-class Replay:
-    """The length-controlled model stepped through a planned schedule."""
-
-    points: tuple                 # ReplayPoint per reached point
-    n_planned: int
-    start_method: str             # how the first point was reached
-
-    @property
-    def completed(self) -> bool:
-        return len(self.points) == self.n_planned and all(q.state.converged for q in self.points)
-
-    @property
-    def max_tip_error_mm(self) -> float:
-        return max((q.tip_error_mm for q in self.points), default=math.nan)
-
-    @property
-    def all_on_branch(self) -> bool:
-        return self.completed and all(q.on_branch for q in self.points)
-
-    @property
-    def first_departure(self) -> int | None:
-        """Index of the first point off the planned branch (or not reached)."""
-        for q in self.points:
-            if not (q.state.converged and q.on_branch):
-                return q.index
-        return None if self.completed else len(self.points)
-
-    @property
-    def jumps(self) -> list[tuple[int, np.ndarray]]:
-        """(point index, cable lengths in mm) of every snap/buckling on the way."""
-        return [(q.index, np.asarray(L) * q.state.length_mm)
-                for q in self.points for L in q.state.jumps]
-
-    def summary(self) -> str:
-        lines = [f"replayed {len(self.points)} of {self.n_planned} points under length control "
-                 f"(first point by {self.start_method}); max tip error "
-                 f"{self.max_tip_error_mm:.3g} mm; "
-                 + ("stayed on the planned branch" if self.all_on_branch else
-                    f"left the planned branch at point {self.first_departure}")]
-        for k, L in self.jumps:
-            lines.append(f"  jump (snap/buckling) before point {k} at L = ("
-                         + ", ".join(f"{v:.3f}" for v in L) + ") mm")
-        unstable = [q.index for q in self.points if q.state.converged and not q.stable]
-        if unstable:
-            lines.append(f"  unstable under length control at points {unstable}")
-        return "\n".join(lines)
-
-
-def replay(solver: LengthSolver, lengths_mm, planned_tips_mm, planned_tensions=None,
-           planned_thetas=None, *, eq_solver: EquilibriumSolver | None = None,
-           tip_tol_mm: float = 1e-3, shape_tol: float = 1e-3) -> Replay:
-    """Step the length-controlled arm through a schedule of cable lengths.
-
-    ``lengths_mm`` (K, n) and ``planned_tips_mm`` (K, 2) come from a traced
-    path (tip control at each point, Sec. 4.5 (v)); ``planned_tensions``
-    (K, n, non-dimensional p) and ``planned_thetas`` (K, N+1 nodal angles)
-    are optional.  The first point is reached from the straight arm: with
-    planned tensions, by the load-controlled state at the first planned
-    tensions (loading orders tried: proportional, then each permutation;
-    the one whose tip is nearest the plan is used) and a length-controlled
-    solve from it; without, by length continuation from the straight arm.
-    Every further point is reached by :meth:`LengthSolver.follow` from the
-    previous one (warm start, stability kept, snaps and buckling recorded).
-    A point is on the planned branch if its shape is within ``shape_tol``
-    rad of the planned shape (when given) or else its tip within
-    ``tip_tol_mm`` of the planned tip.  Stops after a point that cannot be
-    reached.
-    """
-    if solver.length_mm is None:
-        raise InputError("replay needs the arm length: build the solver with "
-                         "LengthSolver.from_arm()")
-    disc, l_mm = solver.disc, solver.length_mm
-    Ls = np.atleast_2d(np.asarray(lengths_mm, float))
-    tips = np.atleast_2d(np.asarray(planned_tips_mm, float))
-    K = Ls.shape[0]
-    if Ls.shape != (K, disc.n_tendons) or tips.shape != (K, 2):
-        raise InputError(f"replay needs lengths_mm of shape (K, {disc.n_tendons}) and "
-                         f"planned_tips_mm of shape (K, 2); got {Ls.shape} and {tips.shape}")
-    if planned_thetas is not None:
-        planned_thetas = np.atleast_2d(np.asarray(planned_thetas, float))
-        if planned_thetas.shape != (K, disc.n_elements + 1):
-            raise InputError(f"planned_thetas must have shape ({K}, {disc.n_elements + 1})")
-    for L in Ls:
-        check_lengths(L, disc.n_tendons)
-
-    start, method = None, "length continuation from the straight arm"
-    if planned_tensions is not None:
-        P = np.atleast_2d(np.asarray(planned_tensions, float))
-        if P.shape != (K, disc.n_tendons):
-            raise InputError(f"planned_tensions must have shape ({K}, {disc.n_tendons})")
-        own = eq_solver is None
-        eqs = EquilibriumSolver(disc) if own else eq_solver
-        try:
-            best = None
-            for order in [None] + list(itertools.permutations(range(1, disc.n_tendons + 1))):
-                eq = eqs.solve(P[0], order=order)
-                if eq.converged:
-                    err = np.linalg.norm(eq.tip * l_mm - tips[0])
-                    if best is None or err < best[0]:
-                        best = (err, eq, order)
-        finally:
-            if own:
-                eqs.destroy()
-        if best is not None:
-            start = best[1]
-            how = "proportional" if best[2] is None else "order " + ",".join(map(str, best[2]))
-            method = f"load-controlled state at the planned tensions ({how}), then length control"
-
-    points = []
-    state = start
-    for k in range(K):
-        state = solver.follow(Ls[k] / l_mm, state, keep_stable=True, label=f"point {k}")
-        tip_err = float(np.linalg.norm(state.tip * l_mm - tips[k]))
-        shape_err = None
-        if planned_thetas is not None:
-            shape_err = float(np.max(np.abs(state.theta - planned_thetas[k])))
-            on = shape_err <= shape_tol
-        else:
-            on = tip_err <= tip_tol_mm
-        points.append(ReplayPoint(k, Ls[k].copy(), tips[k].copy(), state, tip_err, shape_err,
-                                  bool(on and state.converged),
-                                  bool(state.jumps or state.instabilities)))
-        if not state.converged:
-            break
-    return Replay(tuple(points), K, method)
+def follow_lengths(arm, lengths_mm, *, elements: int | None = None) -> LengthEquilibrium:
+    """The equilibrium with cable lengths ``lengths_mm`` (mm) reached from the
+    straight arm by length continuation (:meth:`LengthSolver.follow`: a stable
+    path, snaps and buckling recorded), with a solver made for it."""
+    with LengthSolver.from_arm(arm, elements) as solver:
+        return solver.follow(solver.to_l(lengths_mm))

@@ -304,7 +304,10 @@ class StabilitySolver:
     Parameters
     ----------
     disc : the discretised arm.
-    nev : number of smallest eigenvalues wanted (``-<prefix>eps_nev`` overrides).
+    nev : number of smallest eigenvalues wanted (``-<prefix>eps_nev`` overrides),
+        at most N: K has N eigenvalues, and asking the bordered pencil for more
+        would return its infinite ones (the border unknowns) as huge numbers of
+        either sign.  Larger requests are clamped to N.
     mass : ``"lumped"`` (default; h at interior nodes, h/2 at the tip) or
         ``"paper"`` (M = h I, the paper's footnote).
     operator : ``"jacobian"`` (default; the SNES bordered Jacobian
@@ -351,7 +354,7 @@ class StabilitySolver:
         # depend on how samples are spread over ranks)
         self._v0 = self.A.createVecRight()
         self._v0.setArray(np.random.default_rng(2019).standard_normal(size))
-        self.eps = self._make_eps(self.A, self.B, nev, tol, prefix)
+        self.eps = self._make_eps(self.A, self.B, min(int(nev), N), tol, prefix)
         self.nev = self.eps.getDimensions()[0]
         self._user_target = PETSc.Options(prefix).hasName("eps_target")
         self.eps_raw = None
@@ -376,6 +379,9 @@ class StabilitySolver:
         st.setMatStructure(PETSc.Mat.Structure.SUBSET)   # diag(M, 0) lies on A's diagonal
         use_bordered_lu(st.getKSP())
         eps.setFromOptions()
+        n_theta = self.disc.n_elements
+        if eps.getDimensions()[0] > n_theta:          # -<prefix>eps_nev beyond N: clamp
+            eps.setDimensions(n_theta)
         return eps
 
     # --- assembly -------------------------------------------------------------------
@@ -393,7 +399,7 @@ class StabilitySolver:
         disc = self.disc
         theta, y = disc.split(np.asarray(u, float))
         _, d = disc.cables(y)
-        band = disc._band(theta, d, np.asarray(p, float))
+        band = disc.band(theta, d, np.asarray(p, float))
         w = self.m if weights is None else weights
         s = 1.0 / np.sqrt(w)
         lower = np.abs(band[1:, 0]) * s[1:] * s[:-1]      # |T[r, r-1]|, r >= 1
@@ -425,6 +431,7 @@ class StabilitySolver:
             if negatives > 0:
                 target = min(target, self.lower_bound(u, p, weights) - abs(target))
             eps.setTarget(target)
+        nev = min(nev, self.disc.n_elements)           # K has N eigenvalues (see nev)
         if eps.getDimensions()[0] < nev:
             eps.setDimensions(nev)
         eps.setOperators(self.A, B)     # SLEPc must be told that A was reassembled
@@ -449,7 +456,7 @@ class StabilitySolver:
         p = np.asarray(p, float)
         negatives = self.inertia.negative_eigenvalues(u, p)
         self._assemble(u, p)
-        nev = max(self.nev, negatives + 1)
+        nev = min(max(self.nev, negatives + 1), disc.n_elements)
         target, reason = self._run(self.eps, self.B, u, p, nev, negatives, self._user_target,
                                    self.m)
         values, imag, modes = _real_eigenpairs(self.eps, self.A, disc.n_elements, nev)

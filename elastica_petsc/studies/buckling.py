@@ -319,6 +319,7 @@ class Fig7Result:
     path: tuple                       # LengthEquilibrium per aligned point reached
     path_deviation_mm: np.ndarray     # their segment deviations (buckled: not ~0)
     event_L_mm: np.ndarray | None     # lengths where the path lost stability (instability)
+    event_kind: str | None            # "bifurcation" or "limit point" (lengths.instability_kind)
     event_dL2_mm: float | None
     jump_L_mm: np.ndarray | None      # lengths at which it jumped to a buckled state
     jumped: LengthEquilibrium | None  # the path's state at the point of the jump
@@ -378,6 +379,7 @@ class Fig7Result:
             "clamped_column_p2_N": N(self.p_clamped), "load_ratio": r(self.load_ratio),
             "continuation_instability_mm": None if self.event_L_mm is None else
             r(self.event_L_mm),
+            "continuation_instability_kind": self.event_kind,
             "continuation_instability_dL2_mm": None if self.event_dL2_mm is None else
             r(self.event_dL2_mm),
             "continuation_jump_mm": None if self.jump_L_mm is None else r(self.jump_L_mm),
@@ -417,8 +419,9 @@ class Fig7Result:
         ]
         if self.event_dL2_mm is not None:
             lines.append(f"  continuation: lost stability at dL2 = {self.event_dL2_mm:.4f} mm"
+                         f" ({self.event_kind})"
                          + ("" if self.jump_L_mm is None else
-                            f", jumped at L = ({self.jump_L_mm[0]:.3f}, "
+                            f", switched to a stable branch at L = ({self.jump_L_mm[0]:.3f}, "
                             f"{self.jump_L_mm[1]:.3f}) mm"))
         elif len(self.path):
             lines.append(f"  continuation: no instability reported up to dL2 = "
@@ -444,39 +447,14 @@ def _interpolate(x, xs, values):
     return (1 - w) * np.asarray(values[k]) + w * np.asarray(values[k + 1])
 
 
-def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
-         shortenings_mm=ALIGNED_SHORTENINGS_MM, experiment_shortenings_mm=EXPERIMENT_SHORTENINGS_MM,
-         post_shortening_mm: float | None = None, max_shortening_mm: float = 20.0,
-         critical=None) -> Fig7Result:
-    """The Fig. 7 scenario of the paper (Sec. 4.6) on the arm of ``length_solver``
-    (``eq_solver`` on the same discretisation), see the module docstring.
-
-    shortenings_mm : dL_2 of the aligned family (positive, increasing);
-        extended by its last spacing, up to ``max_shortening_mm``, until the
-        constrained eigenvalue changes sign.  A point where Newton fails on
-        the straight column (at the crossing its Jacobian is singular) is
-        moved on by 0.3 or 0.6 of the spacing.
-    experiment_shortenings_mm : dL_2 of the paper's experiment (L_1 held).
-    post_shortening_mm : where the post-buckling states are computed (on the
-        aligned lengths); default 60 % of the way through the bracketing
-        interval of the crossing, but at least a quarter of the way from the
-        crossing to its end (paper's arm: 1.8 mm).
-    critical : (p_1*, equilibrium) if already known.
-    """
-    t0 = time.perf_counter()
-    disc = length_solver.disc
-    m1 = _check_arm(disc)
-    if eq_solver.disc.n_elements != disc.n_elements or \
-            tuple(eq_solver.disc.attach_nodes) != tuple(disc.attach_nodes):
-        raise InputError("fig7: the equilibrium and length solvers discretise different arms")
-    l_mm = _length_mm(length_solver)
-    critical = critical if critical is not None else critical_configuration(eq_solver)
-    p1s, e0 = critical
-    L0 = e0.cable_lengths.copy()
-
-    # aligned family, extended until the constrained eigenvalue crosses zero.  At the
-    # crossing itself the length-control Jacobian of the straight column is singular
-    # and Newton may fail: such a point is moved on by a fraction of the spacing.
+def family_to_crossing(length_solver: LengthSolver, L0, e0, shortenings_mm,
+                       max_shortening_mm: float):
+    """The aligned (perfect-column) family of Fig. 7 held at the critical cable
+    lengths ``L0`` minus each shortening dL_2, extended by its last spacing
+    until the constrained eigenvalue changes sign: ``(states by dL_2 [mm],
+    eigenvalues by dL_2, (last positive dL_2, first non-positive dL_2))``.  A point
+    where Newton fails on the straight column (its Jacobian is singular at the
+    crossing) is moved on by 0.3 or 0.6 of the spacing."""
     state = length_solver.solve(L0, e0)
     if not state.converged:
         raise BucklingError(f"the critical configuration held at its cable lengths: "
@@ -521,7 +499,71 @@ def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
                 f"the straight column did not lose stability under length control up to "
                 f"dL_2 = {keys[-1]:g} mm (constrained eigenvalue {lam[keys[-1]]:.3g})")
         add(keys[-1] + step, step)
-    lo, hi = crossing()
+    return aligned, lam, crossing()
+
+
+def post_buckling(length_solver: LengthSolver, aligned: dict, lam: dict, bracket, dl_cr: float,
+                  post_shortening_mm: float | None):
+    """States at the aligned lengths a little beyond the crossing ``dl_cr``
+    [mm] (default 60 % into the bracketing interval, at least a quarter of the
+    way past the crossing): the straight (unstable) column and the buckled
+    branches, sorted by the deviation of the free segment from the straight
+    line [mm].  Returns (dL_2 [mm], lengths / l, straight, buckled, deviations)."""
+    disc = length_solver.disc
+    m1, l_mm = _check_arm(disc), _length_mm(length_solver)
+    keys, (lo, hi) = sorted(aligned), bracket
+    if post_shortening_mm is None:
+        post = max(lo + 0.6 * (hi - lo), dl_cr + 0.25 * (hi - dl_cr))
+    else:
+        post = float(post_shortening_mm)
+        if not dl_cr < post <= keys[-1]:
+            raise InputError(f"post_shortening_mm = {post:g} mm must lie beyond the critical "
+                             f"{dl_cr:.3f} mm and within the aligned family (<= {keys[-1]:g} mm)")
+    L_post = _interpolate(post, keys, [aligned[d].lengths_requested for d in keys])
+    nxt = keys[int(np.searchsorted(keys, post))]             # first aligned point >= post
+    prv = keys[int(np.searchsorted(keys, post)) - 1]
+    last_stable = aligned[prv] if lam[prv] > 0 else aligned[lo]
+    straight = length_solver.solve(L_post, aligned[nxt])
+    if not straight.converged:
+        raise BucklingError(f"the straight column at dL_2 = {post:g} mm: {straight.message}")
+    buckled = length_solver.branches(last_stable.u, last_stable.p, L_post)
+    dev = np.array([segment_geometry(disc, s.u, m1)[1] * l_mm for s in buckled])
+    order = np.argsort(dev)
+    return post, L_post, straight, tuple(buckled[k] for k in order), dev[order]
+
+
+def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
+         shortenings_mm=ALIGNED_SHORTENINGS_MM, experiment_shortenings_mm=EXPERIMENT_SHORTENINGS_MM,
+         post_shortening_mm: float | None = None, max_shortening_mm: float = 20.0,
+         critical=None) -> Fig7Result:
+    """The Fig. 7 scenario of the paper (Sec. 4.6) on the arm of ``length_solver``
+    (``eq_solver`` on the same discretisation), see the module docstring.
+
+    shortenings_mm : dL_2 of the aligned family (positive, increasing);
+        extended by its last spacing, up to ``max_shortening_mm``, until the
+        constrained eigenvalue changes sign.  A point where Newton fails on
+        the straight column (at the crossing its Jacobian is singular) is
+        moved on by 0.3 or 0.6 of the spacing.
+    experiment_shortenings_mm : dL_2 of the paper's experiment (L_1 held).
+    post_shortening_mm : where the post-buckling states are computed (on the
+        aligned lengths); default 60 % of the way through the bracketing
+        interval of the crossing, but at least a quarter of the way from the
+        crossing to its end (paper's arm: 1.8 mm).
+    critical : (p_1*, equilibrium) if already known.
+    """
+    t0 = time.perf_counter()
+    disc = length_solver.disc
+    m1 = _check_arm(disc)
+    if eq_solver.disc.n_elements != disc.n_elements or \
+            tuple(eq_solver.disc.attach_nodes) != tuple(disc.attach_nodes):
+        raise InputError("fig7: the equilibrium and length solvers discretise different arms")
+    l_mm = _length_mm(length_solver)
+    critical = critical if critical is not None else critical_configuration(eq_solver)
+    p1s, e0 = critical
+    L0 = e0.cable_lengths.copy()
+
+    aligned, lam, (lo, hi) = family_to_crossing(length_solver, L0, e0, shortenings_mm,
+                                                max_shortening_mm)
     keys = sorted(aligned)
     states = [aligned[d] for d in keys]
 
@@ -539,27 +581,11 @@ def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
     path = length_solver.path([aligned[d].lengths_requested for d in keys[1:upto + 1]],
                               aligned[0.0])
     event = next((s.instabilities[0] for s in path if s.instabilities), None)
+    event_kind = next((s.instability_kinds[0] for s in path if s.instability_kinds), None)
     jumped = next((s for s in path if s.jumps), None)
 
-    # post-buckling states on the aligned lengths beyond the crossing
-    if post_shortening_mm is None:
-        post = max(lo + 0.6 * (hi - lo), dl_cr + 0.25 * (hi - dl_cr))
-    else:
-        post = float(post_shortening_mm)
-        if not dl_cr < post <= keys[-1]:
-            raise InputError(f"post_shortening_mm = {post:g} mm must lie beyond the critical "
-                             f"{dl_cr:.3f} mm and within the aligned family (<= {keys[-1]:g} mm)")
-    L_post = _interpolate(post, keys, [s.lengths_requested for s in states])
-    nxt = keys[int(np.searchsorted(keys, post))]             # first aligned point >= post
-    prv = keys[int(np.searchsorted(keys, post)) - 1]
-    last_stable = aligned[prv] if lam[prv] > 0 else aligned[lo]
-    straight = length_solver.solve(L_post, aligned[nxt])
-    if not straight.converged:
-        raise BucklingError(f"the straight column at dL_2 = {post:g} mm: {straight.message}")
-    buckled = length_solver.branches(last_stable.u, last_stable.p, L_post)
-    dev = [segment_geometry(disc, s.u, m1)[1] * l_mm for s in buckled]
-    order = np.argsort(dev)
-    buckled = tuple(buckled[k] for k in order)
+    post, L_post, straight, buckled, dev = post_buckling(
+        length_solver, aligned, lam, (lo, hi), dl_cr, post_shortening_mm)
 
     # the paper's experiment: L_1 held, L_2 shortened
     exp_dl = np.asarray([float(d) for d in experiment_shortenings_mm])
@@ -576,12 +602,12 @@ def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
         ka_clamped=float(ka), p_clamped=float(p_clamped),
         path=tuple(path),
         path_deviation_mm=np.array([segment_geometry(disc, s.u, m1)[1] * l_mm for s in path]),
-        event_L_mm=None if event is None else np.asarray(event) * l_mm,
+        event_L_mm=None if event is None else np.asarray(event) * l_mm, event_kind=event_kind,
         event_dL2_mm=None if event is None else float((L0[1] - event[1]) * l_mm),
         jump_L_mm=None if jumped is None else np.asarray(jumped.jumps[0]) * l_mm,
         jumped=jumped,
         post_dL2_mm=float(post), post_L_mm=L_post * l_mm, post_buckling=buckled,
-        post_deviation_mm=np.array([dev[k] for k in order]),
+        post_deviation_mm=dev,
         post_p2=np.array([s.p[1] for s in buckled]),
         straight=straight,
         straight_deviation_mm=segment_geometry(disc, straight.u, m1)[1] * l_mm,
@@ -590,134 +616,3 @@ def fig7(eq_solver: EquilibriumSolver, length_solver: LengthSolver, *,
                                           for s in experiment]),
         experiment_p2=np.array([s.p[1] for s in experiment]),
         seconds=time.perf_counter() - t0)
-
-
-# --- the figure ------------------------------------------------------------------------------
-def plot_fig7(arm, result: Fig7Result, png) -> None:
-    """Fig. 7 of the paper, computed.  Left: the critical configuration and
-    both post-buckling states, zoomed on the segment beyond x_1 (equal
-    aspect, mm), and below it each state's deviation from its chord
-    x_1 -> tip.  Right: p_2 and the constrained eigenvalue against the
-    shortening of L_2 for the aligned family (perfect column) and for the
-    paper's experiment (L_1 held), with the critical point, the
-    clamped-column estimate and the continuation's instability."""
-    from ..plots.common import draw_arm, draw_setting, figure, finish_geometry, save
-
-    r = result
-    l_mm = arm.length_mm
-    disc = r.critical.disc
-    m1 = disc.attach_nodes[0]
-    fig, axes = figure(nrows=2, ncols=2, figsize=(15, 11),
-                       gridspec_kw={"width_ratios": [1.1, 1.0], "height_ratios": [1.6, 1.0]})
-    (ax, ax_p), (ax_w, ax_l) = axes
-    post_colours = ("tab:red", "tab:cyan")
-    states = [(r.critical, f"critical: p = ({r.p1_star:.2f}, 0), cable 2 just taut", "k")]
-    for k, (s, w) in enumerate(zip(r.post_buckling, r.post_deviation_mm)):
-        states.append((s, f"post-buckling {k + 1}: deviation {w:+.2f} mm, p = ({s.p[0]:.2f}, "
-                          f"{s.p[1]:.2f})", post_colours[k % 2]))
-    straight_label = (f"straight column at the same lengths (unstable), p = "
-                      f"({r.straight.p[0]:.2f}, {r.straight.p[1]:.2f})")
-
-    # -- geometry (equal aspect, mm), the segment beyond x_1 in view, and a zoom on its middle
-    draw_setting(ax, arm)
-    for s, label, colour in states:
-        draw_arm(ax, arm, s, label=label, colour=colour)
-    x_s = r.straight.x * l_mm
-    ax.plot(x_s[m1:, 0], x_s[m1:, 1], ":", color="0.3", lw=1.4, zorder=3, label=straight_label)
-    x1 = r.critical.x[m1] * l_mm
-    ax.plot(*x1, "o", color="k", ms=6, mfc="white", zorder=6)
-    ax.annotate("x1", x1, xytext=(-18, -12), textcoords="offset points", fontsize=10)
-    pts = np.vstack([q.x[m1:] * l_mm for q, _, _ in states] + [arm.routes()[1:2] * l_mm])
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    pad = 0.08 * np.max(hi - lo)
-    ax.set_xlim(lo[0] - pad, hi[0] + pad)
-    ax.set_ylim(lo[1] - pad, hi[1] + pad)
-    finish_geometry(ax, "Critical state and the two post-buckling states "
-                        f"(dL2 = {r.post_dL2_mm:.2f} mm on the aligned path)")
-    ax.title.set_fontsize(10)
-    ax.legend(loc="lower left", fontsize=7.5, framealpha=0.9)
-    # zoom: a square window (equal aspect) around the middle of the straight column
-    mid = 0.5 * (x_s[m1] + x_s[-1])
-    half = max(4.0 * float(np.max(np.abs(r.post_deviation_mm), initial=0.0)), 5.0)
-    ins = ax.inset_axes([0.60, 0.58, 0.38, 0.38])
-    for s, _, colour in states:
-        x = s.x * l_mm
-        ins.plot(x[:, 0], x[:, 1], "-", color=colour, lw=2.0)
-    ins.plot(x_s[:, 0], x_s[:, 1], ":", color="0.3", lw=1.6)
-    ins.set_xlim(mid[0] - half, mid[0] + half)
-    ins.set_ylim(mid[1] - half, mid[1] + half)
-    ins.set_aspect("equal")
-    ins.tick_params(labelsize=6)
-    ins.grid(True, lw=0.3, alpha=0.6)
-    ins.set_title(f"zoom, middle of the segment ({2 * half:.0f} mm square)", fontsize=8, pad=3)
-    ax.indicate_inset_zoom(ins, edgecolor="0.4")
-
-    # -- deviation from the chord, magnified
-    for s, label, colour in states + [(r.straight, "straight column (unstable)", "0.3")]:
-        xi, w = segment_profile(disc, s.u, m1)
-        ax_w.plot(xi * l_mm, w * l_mm, ":" if s is r.straight else "-", color=colour, lw=1.8,
-                  label=label.split(":")[0])
-    ax_w.axhline(0.0, color="0.6", lw=0.8)
-    ax_w.set_xlabel("distance along the chord x1 -> tip [mm]")
-    ax_w.set_ylabel("deviation from the chord [mm]")
-    ax_w.set_title("Deviation of the segment from its chord (not to scale)", fontsize=10)
-    ax_w.grid(True, lw=0.3, alpha=0.6)
-    ax_w.legend(fontsize=8)
-
-    # -- p_2 against the shortening of L_2
-    d_al, p_al = r.aligned_shortenings_mm, r.aligned_p2
-    k_hi = r.bracket[1]
-    ax_p.plot(d_al[:k_hi], p_al[:k_hi], "o-", color="tab:blue", ms=5,
-              label="aligned family (perfect column, L1 let out), stable")
-    ax_p.plot(d_al[k_hi - 1:], p_al[k_hi - 1:], "o--", color="tab:blue", ms=5, mfc="white",
-              label="aligned family, unstable under length control")
-    d_ex = np.concatenate(([0.0], r.experiment_shortenings_mm))
-    p_ex = np.concatenate(([r.aligned[0].p[1]], r.experiment_p2))
-    ax_p.plot(d_ex, p_ex, "s-", color="tab:green", ms=3.5,
-              label="paper's experiment: L1 held (imperfect column), stable")
-    load_unstable = np.array([False] + [s.unstable_modes > 0 for s in r.experiment])
-    if load_unstable.any():
-        ax_p.plot(d_ex[load_unstable], p_ex[load_unstable], "s", color="tab:green", ms=6,
-                  mfc="white", label="  ... stable only under length control (K indefinite)")
-    ax_p.axhline(r.p_clamped, color="tab:purple", ls=":", lw=1.4,
-                 label=f"clamped-column estimate tan(ka) = -k(c - a): p2 = {r.p_clamped:.2f}")
-    ax_p.plot(r.dL2_cr_mm, r.p2_cr, "*", color="k", ms=15, zorder=6,
-              label=f"critical: dL2 = {r.dL2_cr_mm:.3f} mm, p2 = {r.p2_cr:.2f}")
-    if r.event_dL2_mm is not None:
-        ax_p.axvline(r.event_dL2_mm, color="0.5", lw=1.0, ls="-.",
-                     label=f"continuation: instability reported at dL2 = "
-                           f"{r.event_dL2_mm:.3f} mm")
-    for k, s in enumerate(r.post_buckling):
-        ax_p.plot(r.post_dL2_mm, s.p[1], "D", color=post_colours[k % 2], ms=7, zorder=6,
-                  label=f"post-buckling {k + 1}" if k < 2 else None)
-    ax_p.plot(r.post_dL2_mm, r.straight_p2, "D", color="0.3", mfc="white", ms=7, zorder=6,
-              label="straight column there (unstable)")
-    ax_p.set_xlabel("shortening of L2, dL2 [mm]")
-    ax_p.set_ylabel("tension p2 = P2 l^2 / B")
-    sec = ax_p.secondary_yaxis("right", functions=(lambda p: p * arm.force_scale_N,
-                                                   lambda P: P / arm.force_scale_N))
-    sec.set_ylabel("P2 [N]")
-    ax_p.set_title("Tension of cable 2 as L2 is shortened", fontsize=10)
-    ax_p.grid(True, lw=0.3, alpha=0.6)
-    ax_p.legend(fontsize=7.5, loc="lower right")
-
-    # -- constrained eigenvalue
-    ax_l.plot(d_al, r.aligned_lambda, "o-", color="tab:blue", ms=5,
-              label="eigenvalue of K on null(C^T) nearest zero, aligned family")
-    ax_l.axhline(0.0, color="k", lw=0.8)
-    ax_l.plot(r.dL2_cr_mm, 0.0, "*", color="k", ms=15, zorder=6,
-              label=f"crossing: dL2 = {r.dL2_cr_mm:.3f} mm")
-    unstable = np.array([s.unstable_modes > 0 for s in r.aligned])
-    if unstable.any():
-        ax_l.plot(d_al[unstable], r.aligned_lambda[unstable], "o", ms=11, mfc="none",
-                  color="tab:orange", label="K alone indefinite (unstable under load control)")
-    ax_l.set_xlabel("shortening of L2, dL2 [mm]")
-    ax_l.set_ylabel("lambda  (K v = lambda h v)")
-    ax_l.set_title("Stability under length control of the perfect column", fontsize=10)
-    ax_l.grid(True, lw=0.3, alpha=0.6)
-    ax_l.legend(fontsize=8)
-    ax_l.set_xlim(-0.05 * d_al[-1], 1.05 * d_al[-1])
-    fig.suptitle(f"Buckling of the straight segment under length control ({PAPER}); "
-                 f"{disc.n_elements} elements", fontsize=11)
-    fig.tight_layout()
-    save(fig, png)

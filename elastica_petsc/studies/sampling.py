@@ -131,8 +131,12 @@ class TargetSampler(_Sampler):
     def _classify(self, result) -> int:
         if result.converged:
             return REACHED
+        # local evidence only (a stationary point of E with a tension on P = 0 and the
+        # gradient pushing through it): the class is 'needs a negative tension from
+        # here', not a proof about W_0 (solvers/reach.py: reachable stays None)
         lower = any(side == "lower" for _, side in result.on_bound)
-        return NEEDS_NEGATIVE if (result.reachable is False and lower) else NOT_CONVERGED
+        local_end = result.reason in ("STATIONARY", "STALLED")
+        return NEEDS_NEGATIVE if (local_end and lower) else NOT_CONVERGED
 
     def solve_chunk(self, points: np.ndarray, stop) -> dict | None:
         out = self._empty(len(points))
@@ -193,6 +197,7 @@ class TargetSampler(_Sampler):
         else:
             out["tip"][k] = result.tip * self.arm.length_mm
             out["tensions"][k] = result.p
+            out["tensions_N"][k] = self.arm.tensions_to_N(result.p)    # N wherever p is
 
     def destroy(self) -> None:
         self.controller.destroy()

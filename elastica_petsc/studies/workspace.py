@@ -16,13 +16,24 @@ Output: ranks send finished chunks to rank 0 (non-blocking sends, so a
 rank never waits for rank 0 to finish its own chunk), which holds the
 results and writes the whole file aside and renames it into place (a
 checkpoint) every few seconds and at the end.  A chunk is marked done only
-when all its samples are stored, so the file on disk is always valid: Ctrl-C
-or SIGTERM triggers a last checkpoint (on rank 0 alone, it also exhausts the
-chunk counter, so the other ranks stop after their current chunk; rank 0
-waits for them at most ``STOP_GRACE`` seconds); a killed rank loses at most
-the chunks finished since the previous checkpoint (the MPI launcher ends the
-job: Open MPI's mpiexec does; with srun use ``--kill-on-bad-exit=1``).
-``resume`` recomputes only chunks not done.
+when all its samples are stored, so the file on disk is always valid.
+
+Stop protocol (SIGINT/SIGTERM to any rank, to mpiexec or to its process
+group; :func:`run`): the stopped rank exhausts the shared chunk counter
+(one-sided, no rank waits), every rank sees it at its next sample and leaves
+its chunk; rank 0 writes a checkpoint at once (Open MPI's mpiexec kills the
+ranks about 2 s after forwarding a signal), receives until every rank has
+said it finished, and writes the last one.  No collective is entered unless
+every rank is known to reach it, so no rank is left in MPI_Waitall or in
+PETSc's finalisation.  A rank still busy ``STOP_GRACE`` seconds after a stop
+(one sample too slow) makes rank 0 return ``stranded``; the command line
+then exits without MPI finalisation and mpiexec ends the rest.  A rank
+killed outright loses at most the chunks finished since the previous
+checkpoint (the MPI launcher ends the job: Open MPI's mpiexec does; with
+srun use ``--kill-on-bad-exit=1``).  While a run owns its output file it
+holds a lock beside it (:class:`~elastica_petsc.io.hdf5.OutputLock`).
+``resume`` recomputes only chunks not done, and refuses a file made with
+another grid, arm, element count, version or result-changing PETSc options.
 Gathering to one writer instead of parallel HDF5 (mpio) was chosen because
 the data are tiny (a few hundred bytes per sample) and an atomic rename is
 the only way to keep the file valid when a process dies mid-write; the
@@ -55,7 +66,7 @@ from ..core.errors import InputError
 
 TAG_RESULT, TAG_FINISHED = 11, 12
 CHECKPOINT_ENV = "ELASTICA_PETSC_CHECKPOINT_SECONDS"
-STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the chunks other ranks finish
+STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the other ranks' last samples
 
 # status codes of a sample
 NOT_DONE, REACHED, NEEDS_NEGATIVE, NOT_CONVERGED = 0, 1, 2, 3
@@ -151,12 +162,28 @@ def _rows_to_chunks(rows: list[np.ndarray], chunk: int) -> tuple[np.ndarray, ...
     return tuple(out)
 
 
+MAX_SAMPLES = 2_000_000        # ~0.4 GB of results on rank 0; the paper's map has 4201
+
+
+def _check_size(count: float, what: str) -> None:
+    if not count <= MAX_SAMPLES:
+        raise InputError(f"{what} would give {count:.3g} samples; at most {MAX_SAMPLES:,} "
+                         "(use a larger spacing)")
+
+
 def target_grid(length_mm: float, spacing_mm: float, box=None, chunk: int = 24) -> Grid:
     """Targets on a square lattice of ``spacing_mm``: by default the half-plane
     y >= 0 within the arm's reach |x| <= l (paper Fig. 4), else ``box`` =
     (xmin, xmax, ymin, ymax) in mm.  Rows of constant y, cut into chunks."""
-    if not spacing_mm > 0:
-        raise InputError(f"--spacing must be positive, got {spacing_mm}")
+    if not (spacing_mm > 0 and np.isfinite(spacing_mm)):
+        raise InputError(f"--spacing must be a positive number of mm, got {spacing_mm}")
+    if box is not None and not np.all(np.isfinite(np.asarray(box, float))):
+        raise InputError(f"--box {tuple(box)}: expected four finite numbers of mm")
+    if box is None:
+        _check_size(2 * (length_mm / spacing_mm + 1) ** 2, f"--spacing {spacing_mm:g}")
+    else:
+        _check_size((abs(box[1] - box[0]) / spacing_mm + 1) * (abs(box[3] - box[2]) / spacing_mm
+                                                                + 1), f"--spacing {spacing_mm:g}")
     if box is None:
         reach = length_mm
         xs = np.arange(-np.floor(reach / spacing_mm), np.floor(reach / spacing_mm) + 1) * spacing_mm
@@ -187,8 +214,9 @@ def target_grid(length_mm: float, spacing_mm: float, box=None, chunk: int = 24) 
 def tension_grid(n_tendons: int, spacing: float, p_max: float, chunk: int = 24) -> Grid:
     """Tensions on a lattice 0 <= p_i <= p_max (non-dimensional), serpentine
     along the last tendon's axis."""
-    if not spacing > 0 or not p_max > 0:
-        raise InputError("--tension-spacing and --tension-max must be positive")
+    if not (spacing > 0 and p_max > 0 and np.isfinite(spacing) and np.isfinite(p_max)):
+        raise InputError("--tension-spacing and --tension-max must be positive numbers")
+    _check_size((p_max / spacing + 1) ** n_tendons, f"--tension-spacing {spacing:g}")
     axis = np.arange(0, np.floor(p_max / spacing + 1e-9) + 1) * spacing
     mesh = np.stack(np.meshgrid(*([axis] * n_tendons), indexing="ij"), -1).reshape(-1, n_tendons)
     rows, points = [], []
@@ -220,6 +248,8 @@ class Results:
         self.schema = fields(n_tendons)
         self.data = empty_fields(self.schema, grid.size)
         self.chunk_done = np.zeros(len(grid.chunks), bool)
+        self.stranded = False            # other ranks still busy after a stop (see run)
+        self.write_error = None          # why a checkpoint could not be written (see run)
 
     def store(self, chunk: int, values: dict) -> None:
         index = self.grid.chunks[chunk]
@@ -246,7 +276,20 @@ class Results:
         return {"W0": w0, "WY": wy, "WS": ws, "WE": we, "WP": wp, "WC": wc}
 
 
-GRID_ATTRS = ("mode", "config_json", "elements", "grid_json")
+# what must be equal for a resume: everything that changes a sample's result
+GRID_ATTRS = ("mode", "config_json", "elements", "grid_json", "petsc_options",
+              "elastica_petsc_version")
+
+
+def lattice_index(grid: Grid) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Integer lattice coordinates (S, d) of the samples along each coordinate
+    of ``grid.points`` (targets: x then y; tensions: p_1, p_2, ...) and the
+    lattice axes, so a 2-D map is ``A[index[:, 1], index[:, 0]] = field``."""
+    origin = grid.points.min(axis=0)
+    spacing = float(grid.meta["spacing"])
+    index = np.rint((grid.points - origin) / spacing).astype(np.int64)
+    axes = [origin[d] + spacing * np.arange(index[:, d].max() + 1) for d in range(index.shape[1])]
+    return index, axes
 
 
 def write_results(path: Path, results: Results, attrs: dict, limits: dict, timing: dict) -> None:
@@ -266,6 +309,12 @@ def write_results(path: Path, results: Results, attrs: dict, limits: dict, timin
             "sample indices in chunk order; chunk c is chunk_order[chunk_bounds[c]:chunk_bounds[c+1]]")
         put(grid, "chunk_bounds", bounds, "1", "offsets of the chunks in chunk_order")
         put(grid, "chunk_done", results.chunk_done, "1", "chunk finished and stored")
+        index, axes = lattice_index(results.grid)
+        put(grid, "index", index, "1", "lattice indices of each sample along each coordinate of "
+            "points: a 2-D map is A[index[:, 1], index[:, 0]] = samples/FIELD")
+        for d, axis in enumerate(axes):
+            put(grid, f"axis_{d}", axis, "mm" if results.grid.mode == "targets" else "P l^2/B",
+                f"lattice coordinates along coordinate {d} of points (index[:, {d}])")
         samples = fh.create_group("samples")
         done = np.zeros(results.grid.size, bool)
         for c in np.flatnonzero(results.chunk_done):
@@ -306,6 +355,9 @@ def read_results(path: Path, grid: Grid, n_tendons: int, attrs: dict) -> Results
                 results.data[name][...] = fh["samples"][name][()]
     except OSError as err:
         raise InputError(f"{path}: cannot resume from this file: {err}") from None
+    except (KeyError, ValueError, TypeError) as err:
+        raise InputError(f"{path}: cannot resume: not a complete workspace file "
+                         f"(missing or malformed {err})") from None
     return results
 
 
@@ -321,15 +373,28 @@ def _difference(key: str, stored, now) -> str:
             pass
     if key == "config_json":
         return "another arm configuration (--config/--elements)"
+    if key == "petsc_options":
+        return f"other PETSc options: {stored or '(none)'} (now {now or '(none)'})"
     return f"another {key}: {stored!r} (now {now!r})"
 
 
 class _Stop:
-    """SIGINT/SIGTERM set a flag; work stops at the next sample boundary."""
+    """The stop request of a run: SIGINT/SIGTERM on this rank, or any rank's
+    (seen through the shared chunk counter, which a stopping rank exhausts).
+
+    Calling it returns True once a stop was requested; work stops at the next
+    sample boundary.  The signal handler only sets a flag (no MPI call in a
+    handler); the first call that sees it exhausts the counter, so the other
+    ranks take no new chunk and leave their current one at its next sample.
+    """
+
+    POLL = 0.01                       # s between looks at the shared counter
 
     def __init__(self):
-        self.requested = False
+        self.counter = None           # attached by run() once the counter exists
+        self.signalled = False
         self._old = {}
+        self._next_poll = 0.0
 
     def __enter__(self):
         for sig in (signal.SIGINT, signal.SIGTERM):
@@ -337,21 +402,40 @@ class _Stop:
         return self
 
     def _handle(self, signum, frame):
-        self.requested = True
+        self.signalled = True
 
     def __exit__(self, *exc):
         for sig, handler in self._old.items():
             signal.signal(sig, handler)
 
     def __call__(self) -> bool:
-        return self.requested
+        if self.counter is None:
+            return self.signalled
+        if self.signalled:
+            self.counter.exhaust()
+            return True
+        if self.counter.exhausted:
+            return True
+        now = time.monotonic()
+        if now >= self._next_poll:
+            self._next_poll = now + self.POLL
+            self.counter.peek()
+        return self.counter.exhausted
+
+
+class _NoProgress:
+    def update(self, done: int) -> None:
+        pass
+
+    close = update
 
 
 class ChunkCounter:
     """Shared counter for dynamic scheduling: an atomic fetch-and-add on rank 0.
 
-    ``exhaust()`` (rank 0, on a stop) pushes it past any chunk index, so the
-    other ranks take no new chunk even if they were not signalled themselves."""
+    ``exhaust()`` (any rank, on a stop) pushes it past any chunk index, so no
+    rank takes a new chunk; ``peek()`` lets a busy rank see that.  Every
+    operation is one-sided (passive target): no rank waits for another."""
 
     EXHAUSTED = 2 ** 60
 
@@ -365,19 +449,23 @@ class ChunkCounter:
             self.win.Unlock(0)
         comm.Barrier()
         self._one, self._got = np.ones(1, "i8"), np.zeros(1, "i8")
+        self._zero = np.zeros(1, "i8")
         self.exhausted = False
 
-    def _add(self, value) -> int:
+    def _add(self, value, op=None) -> int:
         self.win.Lock(0, self.MPI.LOCK_SHARED)
-        self.win.Fetch_and_op(value, self._got, 0, 0, self.MPI.SUM)
+        self.win.Fetch_and_op(value, self._got, 0, 0, op or self.MPI.SUM)
         self.win.Unlock(0)
-        return int(self._got[0])
-
-    def next(self) -> int:
-        k = self._add(self._one)
+        k = int(self._got[0])
         if k >= self.EXHAUSTED:
             self.exhausted = True
         return k
+
+    def next(self) -> int:
+        return self._add(self._one)
+
+    def peek(self) -> int:
+        return self._add(self._zero, self.MPI.NO_OP)
 
     def exhaust(self) -> None:
         if not self.exhausted:
@@ -388,106 +476,438 @@ class ChunkCounter:
         self.win.Free()
 
 
-def run(grid: Grid, sampler, out: Path, attrs: dict, limits: dict, *, comm, resume: bool,
-        checkpoint_seconds: float | None = None,
-        progress_label: str = "workspace") -> Results | None:
-    """Sample the whole grid over the ranks of ``comm``.
+class _Collector:
+    """Rank 0's side: stores chunks (its own and those other ranks send), writes
+    checkpoints, and knows how many ranks have finished."""
 
-    ``sampler.solve_chunk(points, stop) -> dict of per-sample arrays`` (or
-    None when ``stop()`` became true mid-chunk) is called on every rank.
-    Returns the results on rank 0 (None elsewhere); ``results.chunk_done.all()``
-    is False after an interruption.  ``checkpoint_seconds``: default
-    :func:`checkpoint_interval`.  A file that cannot be resumed raises
-    :class:`CollectiveInputError` on every rank.
-    """
-    from ..core.progress import Progress
+    def __init__(self, comm, counter, results: Results, out, attrs, limits, checkpoint_seconds,
+                 bar):
+        self.comm, self.counter, self.results, self.out = comm, counter, results, out
+        self.attrs, self.limits, self.bar = attrs, limits, bar
+        self.checkpoint_seconds = checkpoint_seconds
+        self.finished = 1                                  # rank 0 itself, once done
+        self.timing = {"ranks": comm.size, "seconds_io": 0.0}
+        self.t_start = self.last_write = time.perf_counter()
 
-    if checkpoint_seconds is None:
-        checkpoint_seconds = checkpoint_interval()
-    n_tendons = attrs["n_tendons"]
+    def checkpoint(self) -> None:
+        """Write the file; a failed write (full disk) stops the run like a signal:
+        the file keeps its previous checkpoint, the error is reported at the end."""
+        if self.out is None or self.results.write_error is not None:
+            return
+        t0 = time.perf_counter()
+        self.timing["seconds_wall"] = t0 - self.t_start
+        try:
+            write_results(self.out, self.results, self.attrs, self.limits, self.timing)
+        except InputError as err:
+            self.results.write_error = str(err)
+            self.counter.exhaust()
+        self.last_write = time.perf_counter()
+        self.timing["seconds_io"] += self.last_write - t0
+
+    def store(self, chunk: int, values: dict) -> None:
+        self.results.store(chunk, values)
+        self.drain()
+        if time.perf_counter() - self.last_write > self.checkpoint_seconds:
+            self.checkpoint()
+
+    def drain(self) -> None:
+        """Store every chunk other ranks have sent so far (no waiting)."""
+        from mpi4py import MPI
+
+        status = MPI.Status()
+        while self.comm.iprobe(source=MPI.ANY_SOURCE, tag=MPI.ANY_TAG, status=status):
+            message = self.comm.recv(source=status.Get_source(), tag=status.Get_tag())
+            if status.Get_tag() == TAG_FINISHED:
+                self.finished += 1
+            else:
+                self.results.store(*message)
+        self.bar.update(self.results.samples_done)
+
+    def wait_for_ranks(self, stop) -> bool:
+        """Receive until every rank has finished; after a stop at most ``STOP_GRACE``
+        seconds (a stopped rank ends within one sample).  True if all finished."""
+        deadline = None
+        while True:
+            self.drain()
+            if self.finished >= self.comm.size:
+                return True
+            if stop():
+                deadline = deadline or time.monotonic() + STOP_GRACE
+                if time.monotonic() > deadline:
+                    return False
+            time.sleep(0.002)
+
+
+def _work(grid: Grid, sampler, todo: np.ndarray, counter: ChunkCounter, stop, deliver) -> None:
+    """Take chunks from the shared counter until none is left or a stop; hand each
+    finished chunk to ``deliver(chunk, values)``."""
+    while not stop():
+        k = counter.next()
+        if k >= len(todo):
+            return
+        chunk = int(todo[k])
+        values = sampler.solve_chunk(grid.points[grid.chunks[chunk]], stop)
+        if values is None:
+            return
+        deliver(chunk, values)
+
+
+def _continue_provenance(out: Path, attrs: dict) -> None:
+    """A resumed file keeps its first command line and creation time and lists
+    the command lines of every resume (``resumed_command_lines``, JSON)."""
+    import h5py
+
+    with h5py.File(out, "r") as fh:
+        first = {key: fh.attrs[key] for key in ("command_line", "created_utc") if key in fh.attrs}
+        resumed = json.loads(fh.attrs.get("resumed_command_lines", "[]"))
+    resumed.append(attrs.get("command_line", ""))
+    attrs.update(first, resumed_command_lines=json.dumps(resumed))
+
+
+def _load(grid: Grid, out, attrs: dict, resume: bool, comm) -> Results | None:
+    """Rank 0 reads the file to resume (or starts afresh); every rank learns which
+    chunks are done.  A file that cannot be resumed raises on every rank."""
     results = chunk_done = error = None
     if comm.rank == 0:
         try:
-            results = (read_results(out, grid, n_tendons, attrs) if resume and out.exists()
-                       else Results(grid, n_tendons))
+            results = (read_results(out, grid, attrs["n_tendons"], attrs)
+                       if resume and out is not None and out.exists()
+                       else Results(grid, attrs["n_tendons"]))
             chunk_done = results.chunk_done
+            if out is not None and resume and out.exists():
+                _continue_provenance(out, attrs)
         except InputError as err:
             error = str(err)
     error, chunk_done = comm.bcast((error, chunk_done), root=0)
     if error is not None:
         raise CollectiveInputError(error)
-    todo = np.flatnonzero(~chunk_done)
-    counter = ChunkCounter(comm)
-    timing = {"ranks": comm.size, "seconds_io": 0.0}
-    t_start = time.perf_counter()
-    with _Stop() as stop:
-        if comm.rank == 0:
-            bar = Progress(grid.size, progress_label, already=results.samples_done)
-            last_write = time.perf_counter()
-            finished = 1                                    # rank 0 itself, once done
+    return results, np.flatnonzero(~chunk_done)
 
-            def checkpoint():
-                t0 = time.perf_counter()
-                timing["seconds_wall"] = t0 - t_start
-                write_results(out, results, attrs, limits, timing)
-                timing["seconds_io"] += time.perf_counter() - t0
 
-            def drain(block: bool) -> None:
-                """Store the chunks other ranks sent; with ``block``, until every rank
-                has finished (after a stop: at most STOP_GRACE seconds more)."""
-                nonlocal finished
-                from mpi4py import MPI
-                status = MPI.Status()
-                deadline = None
-                while True:
-                    if comm.iprobe(source=MPI.ANY_SOURCE, tag=MPI.ANY_TAG, status=status):
-                        message = comm.recv(source=status.Get_source(), tag=status.Get_tag())
-                        if status.Get_tag() == TAG_FINISHED:
-                            finished += 1
-                        else:
-                            results.store(*message)
-                        continue
-                    if not block or finished >= comm.size:
-                        break
-                    if stop():
-                        counter.exhaust()                   # others take no new chunk
-                        deadline = deadline or time.perf_counter() + STOP_GRACE
-                        if time.perf_counter() > deadline:
-                            break
-                    time.sleep(0.002)
-                bar.update(results.samples_done)
+def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, comm, resume: bool,
+        checkpoint_seconds: float | None = None, progress=None,
+        progress_label: str = "workspace", stop: "_Stop | None" = None) -> Results | None:
+    """Sample the whole grid over the ranks of ``comm`` (stop protocol below).
 
-        sends = []                                          # results on their way to rank 0
-        while not stop():
-            k = counter.next()
-            if k >= len(todo):
-                break
-            chunk = int(todo[k])
-            values = sampler.solve_chunk(grid.points[grid.chunks[chunk]], stop)
-            if values is None:
-                break
-            if comm.rank == 0:
-                results.store(chunk, values)
-                drain(block=False)
-                if time.perf_counter() - last_write > checkpoint_seconds:
-                    checkpoint()
-                    last_write = time.perf_counter()
-            else:
-                # non-blocking: a chunk's results exceed the eager limit of shared-memory
-                # MPI, and a blocking send would wait until rank 0 ends its own chunk
-                # (measured: 23% of a worker's time)
-                sends.append(comm.isend((chunk, values), dest=0, tag=TAG_RESULT))
-        if comm.rank == 0:
-            drain(block=True)
-            checkpoint()
-            bar.close(results.samples_done)
-        else:
-            from mpi4py import MPI
-            MPI.Request.waitall(sends)
-            comm.send(None, dest=0, tag=TAG_FINISHED)
-        # Win.Free is collective: rank 0 decides (after a stop or a timed-out wait a rank
-        # may never get there; the window then goes with MPI_Finalize)
-        clean = comm.rank == 0 and not stop() and not counter.exhausted and finished == comm.size
-        if comm.bcast(clean, root=0):
-            counter.free()
+    ``sampler.solve_chunk(points, stop) -> dict of per-sample arrays`` (or
+    None when ``stop()`` became true mid-chunk) is called on every rank.
+    Returns the results on rank 0 (None elsewhere); ``results.chunk_done.all()``
+    is False after an interruption, and ``results.stranded`` is True when other
+    ranks did not finish within ``STOP_GRACE`` of a stop (the caller must then
+    end the process without MPI finalisation, e.g. ``os._exit``).
+
+    Stop protocol: a stopped rank exhausts the shared counter (one-sided), so
+    every rank leaves its chunk at the next sample; rank 0 writes a checkpoint
+    at once (a launcher kills the ranks ~2 s after forwarding a signal), then
+    receives until every rank has finished, then writes the last one.  No
+    collective is entered unless every rank is known to reach it.  ``stop``: a
+    :class:`_Stop` already catching signals (:func:`run_map` installs it before
+    its set-up, so a signal there stops the run at its first sample).
+    """
+    if stop is None:
+        with _Stop() as stop:
+            return run(grid, sampler, out, attrs, limits, comm=comm, resume=resume,
+                       checkpoint_seconds=checkpoint_seconds, progress=progress,
+                       progress_label=progress_label, stop=stop)
+    from ..core.progress import Progress
+
+    if checkpoint_seconds is None:
+        checkpoint_seconds = checkpoint_interval()
+    results, todo = _load(grid, out, attrs, resume, comm)
+    counter = stop.counter = ChunkCounter(comm)
+    if comm.rank == 0:
+        bar = (Progress(grid.size, progress_label, already=results.samples_done)
+               if progress is None else progress if progress else _NoProgress())
+        rank0 = _Collector(comm, counter, results, out, attrs, limits, checkpoint_seconds,
+                           bar)
+        _work(grid, sampler, todo, counter, stop, rank0.store)
+        if stop():
+            rank0.drain()
+            rank0.checkpoint()                         # before a launcher can kill us
+        all_done = rank0.wait_for_ranks(stop)
+        rank0.checkpoint()
+        bar.close(results.samples_done)
+        results.stranded = not all_done
+        if not all_done:
+            return results                             # no collective: a peer is busy
+    else:
+        sends = []                                     # results on their way to rank 0
+        # non-blocking: a chunk's results exceed the eager limit of shared-memory MPI,
+        # and a blocking send would wait until rank 0 ends its own chunk (measured:
+        # 23% of a worker's time); rank 0 receives until this rank says FINISHED
+        _work(grid, sampler, todo, counter, stop,
+              lambda chunk, values: sends.append(
+                  comm.isend((chunk, values), dest=0, tag=TAG_RESULT)))
+        from mpi4py import MPI
+        MPI.Request.waitall(sends)
+        comm.send(None, dest=0, tag=TAG_FINISHED)
+    counter.free()                      # collective: every rank finished (rank 0 saw it)
     return results
+
+
+# --- the library entry point ------------------------------------------------------------------
+STATUS_KEYS = {NOT_DONE: "NOT_COMPUTED", REACHED: "REACHED", NEEDS_NEGATIVE: "NEEDS_NEGATIVE",
+               NOT_CONVERGED: "NOT_CONVERGED"}
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array = np.array(array)
+    array.flags.writeable = False
+    return array
+
+
+@dataclass(frozen=True)
+class WorkspaceMap:
+    """A sampled workspace (Eq. (18), Fig. 4) and its restrictions (Eqs. (19)-(22), Fig. 5).
+
+    W_0 (the workspace) is the set of tips of stable equilibria connected to
+    the straight arm by quasi-static loading with all P_i >= 0; here: the
+    targets reached by tip control with non-negative tensions (``masks["W0"]``).
+    Arrays are per sample, in grid order, read-only.  Units: ``points`` are
+    targets in mm (mode ``targets``) or tensions p = P l^2/B (mode
+    ``tensions``); ``samples`` holds every field of :func:`fields` under its
+    name (target/tip/cable_lengths in mm, tensions in P l^2/B, tensions_N in
+    N, kappa_max as l*kappa, lambda_min in B/l^2, strain_energy in B/(2l)).
+    Samples not computed (an interrupted run) have status ``NOT_COMPUTED``.
+    """
+
+    mode: str
+    points: np.ndarray
+    chunk_done: np.ndarray
+    samples: dict
+    masks: dict
+    limits: dict
+    grid: dict
+    ranks: int
+    file: Path | None = None
+    stranded: bool = False
+
+    @classmethod
+    def from_results(cls, results: "Results", limits: dict, ranks: int, file=None):
+        samples = {name: _frozen(values) for name, values in results.data.items()}
+        masks = {name: _frozen(mask) for name, mask in results.masks(limits).items()}
+        return cls(results.grid.mode, _frozen(results.grid.points),
+                   _frozen(results.chunk_done), samples, masks, dict(limits),
+                   dict(results.grid.meta), ranks, None if file is None else Path(file),
+                   results.stranded)
+
+    @property
+    def complete(self) -> bool:
+        return bool(self.chunk_done.all())
+
+    @property
+    def samples_total(self) -> int:
+        return len(self.points)
+
+    @property
+    def done(self) -> np.ndarray:
+        """Per sample: computed and stored."""
+        return self.samples["status"] != NOT_DONE
+
+    @property
+    def samples_done(self) -> int:
+        return int(self.done.sum())
+
+    @property
+    def status(self) -> np.ndarray:
+        """Per sample: REACHED, NEEDS_NEGATIVE (outside W_0), NOT_CONVERGED or NOT_COMPUTED."""
+        return np.array([STATUS_KEYS[int(k)] for k in self.samples["status"]])
+
+    @property
+    def reason(self) -> np.ndarray:
+        """Per sample: why its solve stopped (TARGET_REACHED, CABLE_COLLAPSE, ...; '' if not done)."""
+        return np.array([r.decode() for r in self.samples["reason"]])
+
+    @property
+    def target_mm(self) -> np.ndarray:
+        return self.samples["target"]
+
+    @property
+    def tip_mm(self) -> np.ndarray:
+        return self.samples["tip"]
+
+    @property
+    def tensions(self) -> np.ndarray:
+        """Non-dimensional tensions p_i = P_i l^2/B."""
+        return self.samples["tensions"]
+
+    @property
+    def tensions_N(self) -> np.ndarray:
+        return self.samples["tensions_N"]
+
+    @property
+    def cable_lengths_mm(self) -> np.ndarray:
+        return self.samples["cable_lengths"]
+
+    def summary(self) -> dict:
+        """Counts in words (what the command line prints), JSON-ready."""
+        status = self.samples["status"]
+        w0 = self.masks["W0"].any()
+        return {
+            "file": None if self.file is None else str(self.file),
+            "complete": self.complete,
+            "samples_total": self.samples_total,
+            "samples_done": self.samples_done,
+            "status_counts": {STATUS_NAMES[k]: int(np.sum(status == k)) for k in STATUS_NAMES
+                              if k != NOT_DONE},
+            "masks": {name: int(m.sum()) for name, m in self.masks.items()},
+            "lambda_min_raw_min": float(np.nanmin(self.samples["lambda_min_raw"])) if w0 else None,
+            "kappa_max_max": float(np.nanmax(self.samples["kappa_max"])) if w0 else None,
+        }
+
+
+def read_map(path) -> WorkspaceMap:
+    """A workspace file written by :func:`run_map` (or ``workspace --out``), complete
+    or partial, back into a :class:`WorkspaceMap`."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as fh:
+            order, bounds = fh["grid/chunk_order"][()], fh["grid/chunk_bounds"][()]
+            chunks = tuple(order[bounds[c]:bounds[c + 1]] for c in range(len(bounds) - 1))
+            mode = fh.attrs["mode"]
+            mode = mode.decode() if isinstance(mode, bytes) else str(mode)
+            grid = Grid(mode, fh["grid/points"][()], chunks,
+                        json.loads(fh.attrs.get("grid_json", "{}")))
+            results = Results(grid, int(fh.attrs["n_tendons"]))
+            results.chunk_done[:] = fh["grid/chunk_done"][()]
+            for name in results.schema:
+                results.data[name][...] = fh["samples"][name][()]
+            limits = {key: fh["masks"].attrs.get(key) for key in
+                      ("kappa_limit", "strain_energy_max", "max_tension")}
+            ranks = int(fh["timing"].attrs.get("ranks", 1))
+    except OSError as err:
+        raise InputError(f"{path}: cannot read it as HDF5: {err}") from None
+    except (KeyError, ValueError) as err:
+        raise InputError(f"{path}: not a workspace file (missing or malformed {err})") from None
+    return WorkspaceMap.from_results(results, limits, ranks, path)
+
+
+def limits_of(arm) -> dict:
+    """The admissibility limits of Eqs. (19), (21), (22) in non-dimensional form."""
+    return {"kappa_limit": arm.kappa_limit,
+            "strain_energy_max": arm.limits.strain_energy_max_SE0,
+            "max_tension": arm.max_tension}
+
+
+def make_grid(arm, disc, mode: str, spacing_mm: float, box_mm, tension_spacing: float,
+              tension_max: float, chunk: int) -> Grid:
+    """The sample grid of :func:`run_map`; :class:`InputError` for a bad request."""
+    if mode not in ("targets", "tensions"):
+        raise InputError(f"mode {mode!r}: expected 'targets' or 'tensions'")
+    if not isinstance(chunk, (int, np.integer)) or chunk < 1:
+        raise InputError(f"--chunk must be at least 1, got {chunk}")
+    if mode == "targets":
+        if disc.n_tendons < 2:
+            raise InputError("mode targets needs at least 2 tendons (a 2-D workspace); "
+                             "use --mode tensions")
+        return target_grid(arm.length_mm, spacing_mm, None if box_mm is None else tuple(box_mm),
+                           chunk)
+    return tension_grid(disc.n_tendons, tension_spacing, tension_max, chunk)
+
+
+def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_mm=None,
+            tension_spacing: float = 2.0, tension_max: float = 40.0, chunk: int = 24,
+            comm=None, out=None, resume: bool = False, overwrite: bool = False,
+            progress=None, checkpoint_seconds: float | None = None,
+            provenance: dict | None = None) -> WorkspaceMap:
+    """Sample the workspace W_0 of ``arm`` (Eq. (18), Fig. 4) and its restrictions
+    W_Y, W_S, W_E, W_P (Eqs. (19)-(22), Fig. 5) on ``disc``.
+
+    Mode ``targets``: tip control (Eqs. (10)-(12)) to every target of a square
+    lattice of ``spacing_mm`` mm over the half-disc y >= 0 within reach l, or
+    over ``box_mm`` = (xmin, xmax, ymin, ymax) in mm.  Mode ``tensions``:
+    forward solves (Eq. (9)) on the lattice 0 <= p_i <= ``tension_max`` of
+    step ``tension_spacing`` (non-dimensional p = P l^2/B).  W_0 means: tips
+    of stable equilibria connected to the straight arm by quasi-static loading
+    with all P_i >= 0.
+
+    Collective over ``comm`` (default ``MPI.COMM_WORLD``; one rank runs
+    serially).  With ``out`` (an ``.h5`` path) the results are checkpointed
+    there every ``checkpoint_seconds`` (default
+    ``$ELASTICA_PETSC_CHECKPOINT_SECONDS`` or 2 s) and at the end; ``resume``
+    continues the chunks not yet done in ``out`` (and starts the run if
+    ``out`` does not exist); an existing ``out`` needs ``overwrite`` otherwise.
+    ``progress``: None (a bar on a terminal), False (none), or an object with
+    ``update(done)`` and ``close(done)``.  ``provenance``: root attributes
+    added to the file (e.g. ``command_line``).
+
+    Returns the :class:`WorkspaceMap` on every rank; ``complete`` is False after
+    an interruption (SIGINT/SIGTERM on any rank stops all of them within one
+    sample; the file then holds every finished chunk).  Only if other ranks do
+    not finish within ``STOP_GRACE`` seconds of a stop does rank 0 return alone
+    with ``stranded`` True: the process must then end without MPI finalisation
+    (``os._exit``), which makes the launcher end the others.  Bad input raises
+    :class:`CollectiveInputError` on every rank before any computation.
+    """
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD if comm is None else comm
+    lock = None
+    with _Stop() as stop:             # from here a signal stops the run at its first sample
+        try:
+            try:
+                grid = make_grid(arm, disc, mode, spacing_mm, box_mm, tension_spacing,
+                                 tension_max, chunk)
+                if checkpoint_seconds is None:
+                    checkpoint_seconds = checkpoint_interval()
+                path = None if out is None else _check_out(out, resume, overwrite)
+                if path is not None and comm.rank == 0:
+                    from ..io.hdf5 import OutputLock
+                    lock = OutputLock(path)            # one run per output file
+                error = None
+            except InputError as err:
+                error = str(err)
+            agree(comm, error)
+            results = _sample(arm, disc, grid, path, comm, resume, checkpoint_seconds,
+                              progress, provenance, stop)
+        finally:
+            if lock is not None:
+                lock.release()
+    limits = limits_of(arm)
+    ws = None
+    if comm.rank == 0:
+        ws = WorkspaceMap.from_results(results, limits, comm.size, path)
+        if ws.stranded:
+            return ws                                # no collective: a peer is still busy
+    ws, error = comm.bcast((ws, None if comm.rank else results.write_error), root=0)
+    if error is not None:                            # a checkpoint failed (full disk, ...)
+        raise CollectiveInputError(error)
+    return ws
+
+
+def _sample(arm, disc, grid: Grid, path, comm, resume: bool, checkpoint_seconds: float,
+            progress, provenance: dict | None, stop: _Stop) -> "Results":
+    """The sampler of ``grid.mode`` over the ranks (:func:`run`)."""
+    from .sampling import TargetSampler, TensionSampler
+
+    attrs = _attrs(arm, disc, grid, provenance)
+    sampler = (TargetSampler if grid.mode == "targets" else TensionSampler)(arm, disc)
+    try:
+        return run(grid, sampler, path, attrs, limits_of(arm), comm=comm, resume=resume,
+                   checkpoint_seconds=checkpoint_seconds, progress=progress,
+                   progress_label=f"workspace ({grid.mode}, {comm.size} rank(s))", stop=stop)
+    finally:
+        sampler.destroy()
+
+
+def _check_out(out, resume: bool, overwrite: bool) -> Path:
+    from ..io.hdf5 import check_output_path
+
+    path = Path(out)
+    if resume and path.exists():
+        check_output_path(path, overwrite=True)
+        return path
+    return check_output_path(path, overwrite)
+
+
+def _attrs(arm, disc, grid: Grid, extra: dict | None) -> dict:
+    """Root attributes of a workspace file: provenance and what defines its grid."""
+    from ..core.config import arm_to_dict
+    from ..io.hdf5 import provenance
+
+    attrs = provenance(arm, "workspace")
+    attrs.update(mode=grid.mode, elements=disc.n_elements, n_tendons=disc.n_tendons,
+                 config_json=json.dumps(arm_to_dict(arm)), grid_json=json.dumps(grid.meta))
+    attrs.update(extra or {})
+    return attrs

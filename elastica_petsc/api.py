@@ -1,0 +1,303 @@
+"""The public Python API: one call per study, in millimetres and newtons.
+
+Every function takes an :class:`~elastica_petsc.core.model.Arm` (``Arm.paper()``
+or ``Arm.from_toml(path)``) and returns a frozen result whose fields carry
+their unit in their name (``tip_mm``, ``tensions_N``); the non-dimensional
+values of the solvers (lengths / l, p = P l^2 / B, docs/model.md §3) sit
+beside them (``tensions``, ``equilibrium``).  Solver objects stay available
+for loops (``with TipController(arm) as c: c.solve_mm(...)``).
+
+PETSc is initialised on first use with no options; to pass PETSc options
+from a script call ``petsc4py.init(sys.argv)`` before importing this package
+(the command line does exactly that).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+from .core.errors import InputError
+from .core.fem import Discretisation
+from .core.model import Arm
+from .solvers.equilibrium import Equilibrium, EquilibriumSolver, check_order, check_tensions
+
+
+@dataclass(frozen=True)
+class State:
+    """A load-controlled equilibrium (Eq. (9)) of ``arm`` in user units.
+
+    ``equilibrium`` is the solver's non-dimensional state; ``loading`` says how
+    it was reached from the straight arm (``"proportional"`` or ``"order 2,1"``),
+    since several stable states can share the same tensions (Fig. 8).
+    """
+
+    arm: Arm
+    equilibrium: Equilibrium
+    loading: str = "proportional"
+
+    @property
+    def converged(self) -> bool:
+        return bool(self.equilibrium.converged)
+
+    @property
+    def reason(self) -> str:
+        return self.equilibrium.reason
+
+    @property
+    def message(self) -> str:
+        return self.equilibrium.message
+
+    @property
+    def stable(self) -> bool:
+        """Stable under load control: K positive definite (docs/model.md §2)."""
+        return bool(self.equilibrium.stable)
+
+    @property
+    def tensions(self) -> np.ndarray:
+        """Non-dimensional tensions p_i = P_i l^2 / B."""
+        return np.asarray(self.equilibrium.p, dtype=float)
+
+    @property
+    def tensions_N(self) -> np.ndarray:
+        return self.arm.tensions_to_N(self.equilibrium.p)
+
+    @cached_property
+    def x_mm(self) -> np.ndarray:
+        """Centreline at the nodes, shape (N+1, 2), mm (Eq. (2))."""
+        return self.arm.to_mm(self.equilibrium.x)
+
+    @property
+    def tip_mm(self) -> np.ndarray:
+        return self.x_mm[-1]
+
+    @property
+    def attachments_mm(self) -> np.ndarray:
+        return self.arm.to_mm(self.equilibrium.attachments)
+
+    @property
+    def cable_lengths_mm(self) -> np.ndarray:
+        """L_i = |r_i - x_i| in mm (Eq. (3))."""
+        return self.arm.to_mm(self.equilibrium.cable_lengths)
+
+    @property
+    def strain_energy_J(self) -> float:
+        """Strain energy (Eq. (21)) in joules."""
+        return float(self.equilibrium.strain_energy * self.arm.energy_scale_J)
+
+    @property
+    def kappa_max(self) -> float:
+        """max_s l |theta'| (Fig. 5a), non-dimensional."""
+        return float(self.equilibrium.kappa_max)
+
+    def summary(self) -> dict:
+        """The JSON object that ``elastica-petsc solve --json`` prints."""
+        from .io.summary import equilibrium_summary
+
+        return equilibrium_summary(self.arm, self.equilibrium)
+
+
+def _mesh(arm: Arm, elements: int | None) -> Discretisation:
+    if elements is not None and elements < 2:
+        raise InputError(f"elements must be at least 2, got {elements}")
+    return Discretisation.from_arm(arm, elements)
+
+
+def _tensions(arm: Arm, tensions_N, tensions) -> np.ndarray:
+    """Non-dimensional tensions from exactly one of newtons or p."""
+    if (tensions_N is None) == (tensions is None):
+        raise InputError("give exactly one of tensions_N= (newtons) or tensions= (p = P l^2/B)")
+    p = arm.tensions_from_N(tensions_N) if tensions is None else tensions
+    return check_tensions(p, arm.n_tendons)
+
+
+def _loading(order) -> str:
+    return "proportional" if order is None else "order " + ",".join(map(str, order))
+
+
+def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None, side: str | None = None,
+          elements: int | None = None) -> State:
+    """The equilibrium reached by loading the straight arm to the given tensions
+    (Eq. (9), PETSc SNES with load stepping).
+
+    ``order=(2, 1)`` tensions tendon 2 fully before tendon 1; ``None`` loads all
+    tendons proportionally (the order selects the state, Fig. 8).  At a
+    symmetric bifurcation crossed on the way, ``side="left"``/``"right"``
+    picks the buckled branch on which the tip moves counter-clockwise /
+    clockwise of its tangent; by default the branch of lower potential energy
+    (equal energies: left).  ``State.equilibrium.bifurcations`` lists them.
+    """
+    from .solvers.equilibrium import solve_equilibrium
+
+    p = _tensions(arm, tensions_N, tensions)
+    order = check_order(order, arm.n_tendons)
+    if side not in (None, "left", "right"):
+        raise InputError(f"side must be 'left' or 'right', got {side!r}")
+    eq = solve_equilibrium(_mesh(arm, elements), p, order=order, side=side)
+    return State(arm, eq, _loading(order))
+
+
+def control(arm: Arm, target_mm, *, guess_N=None, method: str = "blmvm",
+            tol_mm: float = 1e-5, elements: int | None = None):
+    """Non-negative tensions that put the tip on ``target_mm`` (Eqs. (10)-(12)):
+    TAO BLMVM (``method="blmvm"``) or the paper's gradient descent
+    (``"gd"``, Algorithm 1).  Returns a ``ControlResult`` (``tensions_N``,
+    ``cable_lengths_mm``, ``tip_mm``, ``converged``, ``reachable``)."""
+    from .solvers.control import TipController
+
+    target = np.asarray(target_mm, dtype=float).ravel()
+    if target.size != 2 or not np.all(np.isfinite(target)):
+        raise InputError("target_mm must be two finite numbers [x, y] in mm")
+    p0 = None if guess_N is None else check_tensions(arm.tensions_from_N(guess_N), arm.n_tendons)
+    with TipController(arm, n_elements=elements, method=method, tip_tol_mm=tol_mm) as ctl:
+        return ctl.solve_mm(target, p0=p0)
+
+
+def _points(points_mm) -> np.ndarray:
+    points = np.asarray(points_mm, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 2 or len(points) < 1:
+        raise InputError("points_mm must be an array of shape (K, 2) in mm")
+    return points
+
+
+def trace(arm: Arm, points_mm, *, step_mm: float | None = None, elements: int | None = None):
+    """Tip control along a path, each target warm-started from the previous
+    solution (Sec. 4.5, Fig. 3).  ``step_mm`` inserts points so that no two
+    consecutive targets are further apart.  Returns a ``TraceResult``
+    (``tips_mm``, ``tensions_N``, ``cable_lengths_mm`` per point) and its
+    for a timed motor schedule with an approach move see :func:`schedule`."""
+    from .solvers.control import TipController
+    from .studies import trace as paths
+
+    points = _points(points_mm)
+    if step_mm is not None:
+        points = paths.densify(points, step_mm)
+    with TipController(arm, n_elements=elements) as ctl:
+        return paths.trace(ctl, points)
+
+
+def schedule(arm: Arm, points_mm, *, step_mm: float = 1.0, speed_mm_s: float | None = None,
+             approach: bool = True, guess_N=None, elements: int | None = None):
+    """A timed motor schedule for a path (Sec. 4.5): an approach move from the
+    straight arm (or the state at ``guess_N``) to the first point, then the
+    path traced at ``step_mm`` spacing, cable lengths turned into spool
+    revolutions and microsteps, timed at ``speed_mm_s`` (default: the safe
+    tracing speed from the lowest natural frequency, Sec. 4.5 (vi)).  Returns
+    a ``TracedSchedule``: ``.schedule`` (``write_csv(path)``, ``lengths_at(t)``),
+    ``.path`` and ``.approach`` (``TraceResult``), ``.speed``."""
+    from .solvers.control import TipController
+    from .studies import trace as paths
+    from .studies.schedule import trace_schedule
+
+    p0 = None if guess_N is None else check_tensions(arm.tensions_from_N(guess_N), arm.n_tendons)
+    points = paths.densify(_points(points_mm), step_mm)
+    with TipController(arm, n_elements=elements) as ctl:
+        return trace_schedule(ctl, points, step_mm=step_mm, speed_mm_s=speed_mm_s,
+                              approach=approach, p0=p0)
+
+
+def stability(state: State, *, modes: int = 4):
+    """The smallest eigenvalues of K v = lambda M v at ``state`` (SLEPc,
+    Sec. 4.3 (ii)); ``lambda l^2/B`` is pi^2/4 for the unloaded arm.  Returns a
+    ``Stability`` (``eigenvalues``, ``lambda_min``, ``stable``, ``negative``)."""
+    from .solvers.stability import StabilitySolver
+
+    eq = state.equilibrium
+    with StabilitySolver(eq.disc, nev=modes) as solver:
+        return solver.solve(eq.u, eq.p)
+
+
+def frequencies(state: State, *, control: str = "load", modes: int = 3):
+    """The lowest natural frequencies about ``state`` (small vibrations,
+    K v = Omega M v with the arm's mass per length), with tensions held
+    (``control="load"``) or cable lengths held (``"length"``).  Returns a
+    ``Frequencies`` (``hz``, ``f1_hz``); needs ``mass_per_length_kg_m`` in the
+    arm's configuration."""
+    from .solvers.stability import StabilitySolver
+
+    if state.arm.mass_per_length_kg_m is None:
+        raise InputError("natural frequencies need [arm] mass_per_length_kg_m in the config")
+    eq = state.equilibrium
+    with StabilitySolver(eq.disc) as solver:
+        return solver.frequencies(eq.u, eq.p, state.arm, nev=modes, control=control)
+
+
+def lengths(arm: Arm, lengths_mm, *, all: bool = False, elements: int | None = None):
+    """Length control (Sec. 4.6): the equilibrium, with its tensions, that
+    prescribed cable lengths impose (slack cables carry no tension).  With
+    ``all=True``, a deflated multi-start search for several equilibria
+    (a ``SearchResult``: the list found, not a proof that there are no more)."""
+    from .solvers.lengths import LengthSolver
+    from .studies.search import length_equilibria, tension_starts
+
+    disc = _mesh(arm, elements)
+    with LengthSolver(disc, length_mm=arm.length_mm) as solver:
+        if not all:
+            return solver.follow_mm(lengths_mm)
+        with EquilibriumSolver(disc) as eqs:
+            starts = tension_starts(eqs)
+        return length_equilibria(solver, solver.to_l(lengths_mm), starts)
+
+
+def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None = None):
+    """Equilibria that share the given tensions (load control, Fig. 8), by a
+    deflated multi-start search; a ``SearchResult``."""
+    from .studies.search import equilibria as search, tension_starts
+
+    p = _tensions(arm, tensions_N, tensions)
+    with EquilibriumSolver(_mesh(arm, elements)) as eqs:
+        return search(eqs, p, tension_starts(eqs), length_mm=arm.length_mm)
+
+
+def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",
+              out: str | Path | None = None, overwrite: bool = False, comm=None,
+              elements: int | None = None):
+    """Sample the workspace W_0 and its restrictions (Eqs. (18)-(22), Figs. 4-5)
+    on a grid of targets (``mode="targets"``: tip control to each) or of
+    tensions (``"tensions"``).  Runs serially, or on every rank of ``comm``
+    (default ``MPI.COMM_WORLD``) when launched with ``mpiexec``; writes HDF5
+    only when ``out`` is given.  Returns a ``WorkspaceMap`` of per-sample
+    arrays (``status``, masks ``W0``... , ``tip_mm``, ``tensions_N``)."""
+    from .studies.workspace import run_map
+
+    return run_map(arm, _mesh(arm, elements), mode=mode, spacing_mm=spacing_mm, box_mm=box_mm,
+                   comm=comm, out=out, overwrite=overwrite)
+
+
+def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None):
+    """The boundary of the workspace W_0 of a two-tendon arm (and of the
+    restricted workspace, Eqs. (18)-(22)) traced by pseudo-arclength
+    continuation in tension space instead of sampling.  Returns a
+    ``BoundaryResult``: ``polygons_mm`` and ``areas_mm2`` per set
+    (``"W0"``, ``"restricted"``), ``solves``, ``messages`` (where the method
+    stops, e.g. fold curves of the tip map it does not trace)."""
+    from .studies.boundary import trace_boundary
+
+    return trace_boundary(arm, _mesh(arm, elements), restricted=restricted)
+
+
+def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
+           reach_mm: float = 100.0, margin: float = 1.1, elements: int | None = None):
+    """Routing points that make every point of a path reachable with P >= 0
+    (TAO BLMVM on the exact gradient; ``vary``: ``"tendonK.route"`` names).
+    Returns a ``DesignResult``: ``arm_after`` is the designed arm,
+    ``misfit_before``/``misfit_after`` the path's reachability, ``history``."""
+    from .studies.design import design_for_path, parse_vary
+
+    tendons = parse_vary(list(vary), arm.n_tendons)
+    return design_for_path(arm, tendons, _points(points_mm), elements=elements,
+                           reach_mm=reach_mm, margin=margin)
+
+
+def read(path: str | Path):
+    """Load a file written by the tool back into its result: a :class:`State`
+    for ``solve``/``control``/``stability`` files (the final state), a
+    ``WorkspaceMap`` for workspace maps, otherwise a dict of its datasets."""
+    from .io.reader import file_kind, read_file
+
+    if file_kind(path) == "workspace":
+        from .studies.workspace import read_map
+        return read_map(path)
+    return read_file(path, State)

@@ -1,0 +1,127 @@
+"""``elastica-petsc boundary``: the workspace boundary by continuation (two tendons)."""
+from __future__ import annotations
+
+from . import common
+
+
+def add_parser(sub) -> None:
+    parser = sub.add_parser(
+        "boundary", help="trace the boundary of the workspace W_0 by continuation (2 tendons)",
+        description="Trace the boundary of the workspace W_0 (tips of stable equilibria "
+                    "connected to the straight arm by quasi-static loading with all P_i >= 0) "
+                    "by pseudo-arclength continuation around the region of tension space it "
+                    "comes from: the faces P_i = 0 (and P_i = P_crit, Eq. (22)), cable "
+                    "collapse and the fold where stability is lost (Eq. (20)); and the "
+                    "restricted workspace (also l*kappa_max and strain energy within their "
+                    "limits, Eqs. (19), (21)). Polygons in mm: each is closed (the last vertex "
+                    "joins the first); the region is where its winding number is nonzero.")
+    parser.add_argument("--no-restricted", action="store_true",
+                        help="trace W_0 only (not the restricted workspace)")
+    parser.add_argument("--overlay", metavar="H5",
+                        help="a sampled map (`workspace --out`, mode targets) drawn under the "
+                             "--plot and compared with the W_0 polygon")
+    common.add_arm_options(parser)
+    common.add_output_options(parser)
+    parser.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from ..studies.boundary import compare_restricted, compare_with_samples, trace_boundary
+
+    common.check_outputs(args)
+    arm, disc = common.load_arm(args)
+    samples = _read_samples(args.overlay) if args.overlay else None
+    result = trace_boundary(arm, disc, restricted=not args.no_restricted)
+    summary = _summary(result)
+    if samples is not None:
+        summary["agreement"] = compare_with_samples(
+            result.polygons_mm["W0"][0], samples["target"], samples["status"], samples["spacing"])
+        if "restricted" in result.polygons_mm:
+            summary["agreement_restricted"] = compare_restricted(
+                result.polygons_mm["restricted"][0], samples["target"], samples["masks"],
+                samples["spacing"])
+    if args.out:
+        from ..io.boundary import write_boundary
+        write_boundary(args.out, result, args.overwrite)
+        summary["file"] = args.out
+    if args.plot:
+        from ..io.boundary import read_boundary
+        from ..plots.boundary import plot_boundary
+        data = read_boundary(args.out) if args.out else _as_data(result)
+        plot_boundary(data, args.plot, arm_length_mm=arm.length_mm,
+                      routes_mm=arm.routes() * arm.length_mm, samples=samples)
+    if args.json:
+        summary["polygons"] = {k: [p.tolist() for p in v] for k, v in result.polygons_mm.items()}
+        summary["tip_folds_mm"] = result.tip_folds_mm.tolist()
+        common.print_json(summary)
+    else:
+        print(_format(summary))
+    return 0 if all(r.closed for r in result.regions.values()) else 1
+
+
+def _read_samples(path):
+    from ..core.errors import InputError
+    from ..plots.workspace import read_workspace
+
+    try:
+        data = read_workspace(path)
+    except (OSError, KeyError) as err:
+        raise InputError(f"--overlay {path}: not a workspace file ({err})") from None
+    if data["mode"] != "targets":
+        raise InputError(f"--overlay {path}: needs a map of targets (workspace --mode targets)")
+    return data
+
+
+def _as_data(result) -> dict:
+    regions = {}
+    for name, region in result.regions.items():
+        nodes = region.nodes()
+        regions[name] = {"polygon": result.polygons_mm[name][0],
+                         "area_mm2": result.areas_mm2[name],
+                         "tip": nodes["tip"] * result.arm.length_mm}
+    return {"regions": regions, "tip_folds": result.tip_folds_mm}
+
+
+def _summary(result) -> dict:
+    return {
+        "area_mm2": result.areas_mm2["W0"],
+        "restricted_area_mm2": result.areas_mm2.get("restricted"),
+        "solves": result.solves,
+        "seconds": result.seconds,
+        "closed": {k: r.closed for k, r in result.regions.items()},
+        "curves": {k: [c.constraint for c in r.curves] for k, r in result.regions.items()},
+        "messages": result.messages,
+        "polygon_convention": "closed (last vertex joins the first); inside = nonzero "
+                              "winding number; no separate hole lists",
+    }
+
+
+def _format(s: dict) -> str:
+    lines = [f"W_0 area: {s['area_mm2']:.0f} mm^2 ({s['solves']} continuation solves, "
+             f"{s['seconds']:.2f} s)"]
+    if s["restricted_area_mm2"] is not None:
+        lines.append(f"restricted workspace area: {s['restricted_area_mm2']:.0f} mm^2")
+    for name, curves in s["curves"].items():
+        lines.append(f"  {name} loop ({'closed' if s['closed'][name] else 'NOT closed'}): "
+                     + " -> ".join(curves))
+    lines += [f"  note: {m}" for m in s["messages"]]
+    if "agreement" in s:
+        a = s["agreement"]
+        lines.append(
+            f"  vs sampled map: {a['reached_outside']} of {a['reached']} reached samples "
+            f"outside by more than one spacing; {a['needs_negative_inside']} of "
+            f"{a['needs_negative']} needing a negative tension inside by more than one spacing")
+        if "area_y_ge_0_mm2" in a:
+            lines.append(f"  area in y >= 0: {a['area_y_ge_0_mm2']:.0f} mm^2; sample count "
+                         f"estimate {a['sample_area_mm2']:.0f} "
+                         f"+- {a['sampling_error_mm2']:.0f} mm^2")
+    if "agreement_restricted" in s:
+        r = s["agreement_restricted"]
+        lines.append(
+            f"  restricted vs sampled masks: {r['admissible_outside']} of {r['admissible']} "
+            f"admissible samples outside by more than one spacing; "
+            f"{r['reached_inadmissible_inside']} of {r['reached_inadmissible']} reached but "
+            "inadmissible inside by more than one spacing")
+    if "file" in s:
+        lines.append(f"  -> {s['file']}")
+    return "\n".join(lines)

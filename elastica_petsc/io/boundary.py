@@ -1,0 +1,79 @@
+"""HDF5 writer and reader of workspace boundaries (``elastica-petsc boundary --out``).
+
+Layout (root attributes: provenance of :func:`elastica_petsc.io.hdf5.provenance`,
+``kind = "boundary"``, ``solves``, ``seconds``, ``messages_json``)::
+
+    <region>/                     one group per region: W0, restricted
+        attrs: closed, message, area_mm2
+        polygon        (k, 2)  mm       closed polygon (last vertex joins the first);
+                                        orientation as the tip map gives it, the
+                                        region is where its winding number is nonzero
+        nodes/tip      (m, 2)  mm       continuation nodes, in order around the loop
+        nodes/tensions (m, 2)  P l^2/B  tensions at the nodes
+        nodes/tensions_N (m, 2) N
+        nodes/curve    (m,)    1        index of the curve each node lies on
+        curves         attrs: names_json (constraint of each curve, in order),
+                              ends_json (why each curve ended)
+    tip_folds          (f, 2)  mm       points of the W0 loop where det S changes sign
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from .hdf5 import atomic_h5, provenance, put, write_attrs
+
+
+def write_boundary(path, result, overwrite: bool = False) -> None:
+    """Write a :class:`~elastica_petsc.studies.boundary.BoundaryResult`."""
+    arm = result.arm
+    l_mm = arm.length_mm
+    with atomic_h5(path, overwrite) as fh:
+        write_attrs(fh, provenance(arm, "boundary"))
+        fh.attrs["solves"] = result.solves
+        fh.attrs["seconds"] = result.seconds
+        fh.attrs["messages_json"] = json.dumps(result.messages)
+        for name, region in result.regions.items():
+            group = fh.create_group(name)
+            group.attrs["closed"] = bool(region.closed)
+            group.attrs["message"] = region.message
+            group.attrs["area_mm2"] = result.areas_mm2[name]
+            put(group, "polygon", result.polygons_mm[name][0], "mm",
+                "closed polygon of the region's boundary; inside = nonzero winding number")
+            nodes = region.nodes()
+            sub = group.create_group("nodes")
+            put(sub, "tip", nodes["tip"] * l_mm, "mm", "continuation nodes around the loop")
+            put(sub, "tensions", nodes["p"], "P l^2/B", "tensions p_i at the nodes")
+            put(sub, "tensions_N", arm.tensions_to_N(nodes["p"]), "N", "tensions P_i")
+            put(sub, "curve", nodes["curve"], "1", "index of the curve of each node")
+            curves = group.create_group("curves")
+            curves.attrs["names_json"] = json.dumps([c.constraint for c in region.curves])
+            curves.attrs["ends_json"] = json.dumps([c.end for c in region.curves])
+        put(fh, "tip_folds", result.tip_folds_mm, "mm",
+            "points of the W0 loop where det(d x_t/d p) changes sign (tip-map folds)")
+
+
+def read_boundary(path) -> dict:
+    """{region: {polygon, area_mm2, closed, tip, tensions, curve, names}} and tip_folds."""
+    import h5py
+
+    from ..core.errors import InputError
+
+    try:
+        with h5py.File(path, "r") as fh:
+            if fh.attrs.get("kind") != "boundary":
+                raise InputError(f"{path}: not a file written by `boundary --out`")
+            out = {"tip_folds": fh["tip_folds"][()], "regions": {}}
+            for name in ("W0", "restricted"):
+                if name not in fh:
+                    continue
+                g = fh[name]
+                out["regions"][name] = {
+                    "polygon": g["polygon"][()], "area_mm2": float(g.attrs["area_mm2"]),
+                    "closed": bool(g.attrs["closed"]), "tip": g["nodes/tip"][()],
+                    "tensions": g["nodes/tensions"][()], "curve": g["nodes/curve"][()],
+                    "names": json.loads(g["curves"].attrs["names_json"])}
+    except OSError as err:
+        raise InputError(f"{path}: cannot read it as HDF5: {err}") from None
+    return out

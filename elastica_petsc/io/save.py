@@ -1,0 +1,39 @@
+"""One writer per result the command line saves (layouts in :mod:`.hdf5`):
+each opens the file aside, writes provenance and the result, and renames it
+into place."""
+from __future__ import annotations
+
+from ..core.model import Arm
+from ..solvers.equilibrium import Equilibrium
+from .hdf5 import atomic_h5, provenance, put, write_attrs, write_equilibrium, write_loading
+
+
+def save_state(path, arm: Arm, eq: Equilibrium, *, overwrite: bool = False,
+               loading: str = "proportional", kind: str = "equilibrium",
+               loading_path=None) -> None:
+    """A solved state (``solve --out``); ``loading`` is how it was reached; with
+    ``loading_path`` (a :class:`~elastica_petsc.core.loading.Loading`) the path
+    is written too (group ``loading``, read back by ``solve --from``)."""
+    with atomic_h5(path, overwrite) as fh:
+        write_attrs(fh, provenance(arm, kind))
+        fh.attrs["loading_order"] = loading
+        write_equilibrium(fh, arm, eq)
+        if loading_path is not None:
+            write_loading(fh, loading_path)
+
+
+def save_stability(path, arm: Arm, eq: Equilibrium, result, freqs: dict | None, *,
+                   overwrite: bool = False, loading: str = "proportional") -> None:
+    """A state and its stability (``stability --out``): eigenvalues, modes,
+    the paper's raw lambda_min, the asymmetry of K and natural frequencies."""
+    with atomic_h5(path, overwrite) as fh:
+        write_attrs(fh, provenance(arm, "stability"))
+        fh.attrs["loading_order"] = loading
+        write_equilibrium(fh, arm, eq)
+        g = fh.create_group("stability")
+        put(g, "eigenvalues", result.eigenvalues, "B/l^2", "lambda l^2/B, smallest first")
+        put(g, "modes", result.modes, "rad", "theta part of the eigenvectors (N+1 nodes)")
+        put(g, "lambda_min_raw", result.raw_min, "B/l", "lambda_min(K) at this mesh")
+        put(g, "asymmetry", result.asymmetry, "1", "||K - K^T|| / ||K|| (probe estimate)")
+        for control, f in (freqs or {}).items():
+            put(g, f"frequencies_{control}_hz", f.hz, "Hz", f"natural frequencies, control={control}")

@@ -1,0 +1,198 @@
+"""Animations: the arm, its cables and the tip trail, frame by frame (GIF or MP4).
+
+* :func:`animate_trace` — the arm along a traced path (Fig. 3 as a movie),
+  one frame per path point (subsampled to at most ``max_frames``).
+* :func:`animate_control` — the arm through the iterations of one tip-control
+  solve (Fig. 2 as a movie): the equilibrium (Eq. (9)) at each iterate of the
+  tensions, re-solved warm-started from the previous iterate.
+
+GIF is written with Pillow (matplotlib's ``PillowWriter``); MP4 needs the
+``ffmpeg`` program on PATH (:func:`check_animation_path` says so before any
+computing).  Geometry in mm, tensions in N beside p = P l^2/B.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..core.errors import InputError
+from ..core.model import Arm
+from .common import TENDON_COLOURS, draw_setting, figure
+
+FORMATS = (".gif", ".mp4")
+DPI = 80                     # 6.4 x 5.2 in -> 512 x 416 pixels
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One picture: the centreline and attachment points [mm] and a caption."""
+
+    x_mm: np.ndarray              # (N+1, 2)
+    attachments_mm: np.ndarray    # (n, 2)
+    tip_mm: np.ndarray            # (2,)
+    caption: str
+
+
+def check_animation_path(path, overwrite: bool = False) -> Path:
+    """Refuse (InputError, one line) a file we could not write, before computing."""
+    from matplotlib import animation
+
+    path = Path(path)
+    if path.suffix.lower() not in FORMATS:
+        raise InputError(f"{path}: animations are written as .gif or .mp4, got {path.suffix!r}")
+    if path.suffix.lower() == ".mp4" and not animation.writers.is_available("ffmpeg"):
+        raise InputError(f"{path}: MP4 needs the ffmpeg program, which is not installed "
+                         "(apt-get install ffmpeg); write a .gif instead")
+    if path.exists() and not overwrite:
+        raise InputError(f"{path} exists; pass --overwrite to replace it")
+    if not path.parent.exists():
+        raise InputError(f"{path.parent}: no such directory for the animation")
+    return path
+
+
+def _frame(arm: Arm, eq, caption: str) -> Frame:
+    l_mm = arm.length_mm
+    return Frame(eq.x * l_mm, eq.attachments * l_mm, eq.tip * l_mm, caption)
+
+
+def _tensions(arm: Arm, p) -> str:
+    P = arm.tensions_to_N(p)
+    return ", ".join(f"P{i + 1} = {v:.2f} N" for i, v in enumerate(P))
+
+
+def _pick(count: int, max_frames: int) -> np.ndarray:
+    return np.unique(np.linspace(0, count - 1, min(count, max_frames)).round().astype(int))
+
+
+def trace_frames(arm: Arm, trace, max_frames: int = 150, approach=None) -> list[Frame]:
+    """Frames of a traced path (``trace.results`` needed: trace with
+    keep_results), preceded by those of its ``approach`` (another trace) if given."""
+    parts = [(name, t) for name, t in (("approach", approach), ("point", trace)) if t is not None]
+    if any(not t.results for _, t in parts):
+        raise InputError("animating a trace needs its per-point states (keep_results=True)")
+    rows = [(name, k, t) for name, t in parts for k in range(t.n_points)]
+    frames = []
+    for j in _pick(len(rows), max_frames):
+        name, k, t = rows[j]
+        frames.append(_frame(arm, t.results[k].equilibrium,
+                             f"{name} {k + 1}/{t.n_points}: {_tensions(arm, t.p[k])}"
+                             + ("" if t.converged[k] else "  (NOT reached)")))
+    return frames
+
+
+def control_frames(controller, result) -> list[Frame]:
+    """Frames of one tip-control solve: the equilibrium at every iterate of the
+    tensions (``result.history_p``), solved warm-started in turn."""
+    arm, frames, state = controller.arm, [], None
+    l_mm = arm.length_mm
+    for k, p in enumerate(result.history_p):
+        state = controller.forward(p, start=state)
+        E = result.history_E[k] * l_mm ** 2
+        frames.append(_frame(arm, state, f"iteration {k}: {_tensions(arm, p)}, "
+                                         f"E = {E:.3g} mm^2"))
+    return frames
+
+
+def animate(arm: Arm, frames: list[Frame], path, *, targets_mm=None, title: str = "",
+            fps: float = 10.0) -> Path:
+    """Write the frames as a GIF or MP4 (by the suffix of ``path``): the arm,
+    its cables to the routing points, the tip trail so far and the targets."""
+    from matplotlib import animation
+
+    path = Path(path)
+    if not frames:
+        raise InputError("nothing to animate (no frames)")
+    fig, ax = figure(figsize=(6.4, 5.2))
+    draw_setting(ax, arm)
+    routes = arm.routes() * arm.length_mm
+    if targets_mm is not None:
+        t = np.atleast_2d(targets_mm)
+        ax.plot(t[:, 0], t[:, 1], "-" if len(t) > 1 else "*", color="tab:green", lw=3,
+                ms=12, alpha=0.45, label="target" + ("s" if len(t) > 1 else ""))
+    arm_line, = ax.plot([], [], "k-", lw=2.2, zorder=3, label="arm")
+    trail, = ax.plot([], [], "-", color="tab:red", lw=1, zorder=4, label="tip trail")
+    tip, = ax.plot([], [], "o", color="k", ms=5, zorder=5)
+    cables = [ax.plot([], [], "-", lw=1.0, color=TENDON_COLOURS[i % len(TENDON_COLOURS)],
+                      zorder=2)[0] for i in range(arm.n_tendons)]
+    caption = ax.text(0.02, 0.02, "", transform=ax.transAxes, fontsize=8)
+    pts = np.vstack([f.x_mm for f in frames] + [routes, [[0.0, 0.0], [arm.length_mm, 0.0]]])
+    pad = 0.05 * np.ptp(pts, axis=0).max()
+    ax.set_xlim(pts[:, 0].min() - pad, pts[:, 0].max() + pad)
+    ax.set_ylim(pts[:, 1].min() - pad, pts[:, 1].max() + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, lw=0.3, alpha=0.6)
+    ax.legend(loc="upper left", fontsize=7)
+    tips = np.array([f.tip_mm for f in frames])
+
+    def draw(k):
+        f = frames[k]
+        arm_line.set_data(f.x_mm[:, 0], f.x_mm[:, 1])
+        tip.set_data([f.tip_mm[0]], [f.tip_mm[1]])
+        trail.set_data(tips[:k + 1, 0], tips[:k + 1, 1])
+        for c, a, r in zip(cables, f.attachments_mm, routes):
+            c.set_data([a[0], r[0]], [a[1], r[1]])
+        caption.set_text(f.caption)
+        return [arm_line, tip, trail, caption, *cables]
+
+    import matplotlib.pyplot as plt
+    try:
+        if path.suffix.lower() == ".gif":
+            _write_gif(fig, draw, len(frames), path, fps)
+        else:
+            movie = animation.FuncAnimation(fig, draw, frames=len(frames), blit=False)
+            movie.save(path, writer=animation.FFMpegWriter(fps=fps), dpi=DPI)
+    finally:
+        plt.close(fig)
+    return path
+
+
+def _write_gif(fig, draw, count: int, path: Path, fps: float) -> None:
+    """Blitted frames into an animated GIF with Pillow: the static picture
+    (axes, routing points, targets) is drawn once, each frame redraws only
+    the moving artists (5x faster than redrawing the figure twice per frame
+    as matplotlib's writer does)."""
+    from PIL import Image
+
+    fig.set_dpi(DPI)
+    canvas = fig.canvas
+    moving = draw(0)
+    for artist in moving:
+        artist.set_animated(True)
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+    images = []
+    for k in range(count):
+        canvas.restore_region(background)
+        for artist in draw(k):
+            artist.axes.draw_artist(artist)
+        rgb = np.asarray(canvas.buffer_rgba())[..., :3]
+        images.append(Image.fromarray(rgb.copy()))      # Pillow picks a palette per frame
+    images[0].save(path, save_all=True, append_images=images[1:], loop=0,
+                   duration=int(round(1000.0 / fps)), optimize=False)
+
+
+def animate_trace(arm: Arm, trace, path, *, approach=None, max_frames: int = 150,
+                  fps: float = 10.0) -> Path:
+    """The arm along a traced path (GIF/MP4 by suffix), at most ``max_frames``
+    frames, after the ``approach`` from the straight arm when given (the
+    motors' whole schedule, :func:`elastica_petsc.studies.schedule.trace_schedule`)."""
+    targets = trace.targets_mm if approach is None else np.vstack((approach.targets_mm,
+                                                                   trace.targets_mm))
+    reached = int(np.sum(trace.converged))
+    return animate(arm, trace_frames(arm, trace, max_frames, approach), path, targets_mm=targets,
+                   title=f"Traced path: {trace.n_points} points ({reached} reached)"
+                         + ("" if approach is None else
+                            f", after a {approach.n_points}-point approach"), fps=fps)
+
+
+def animate_control(controller, result, path, *, fps: float = 2.0) -> Path:
+    """The arm through the iterations of a tip-control solve (Fig. 2 as a movie)."""
+    return animate(controller.arm, control_frames(controller, result), path,
+                   targets_mm=result.target_mm,
+                   title=f"Tip control ({result.method}): {result.iterations} iterations, "
+                         f"{result.reason}", fps=fps)

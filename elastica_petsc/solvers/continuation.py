@@ -1,0 +1,575 @@
+"""Pseudo-arclength continuation of curves on the equilibrium manifold.
+
+For an arm with n tendons the equilibria form an n-dimensional manifold
+M = {(u, p) : F(u, p) = 0} (F: the bordered residual of Eq. (9),
+:mod:`elastica_petsc.core.fem`).  With two tendons, one more scalar
+equation c(u, p) = 0 cuts a curve out of M: a face of the tension domain
+(c = p_i, or c = p_i - p_crit, Eq. (22)), a cable about to collapse onto its
+routing point (c = L_i - eps), a level curve of a restriction (Eqs. (19),
+(21)) or the fold of M over tension space, where the tangent K is singular
+and stability under load control is lost (Eq. (20); c = sigma, the
+minimally extended system below).
+
+Predictor-corrector (Keller's pseudo-arclength), unknowns w = (u, p):
+
+    predictor   w* = w_k + ds t_k
+    corrector   G(w) = [F(u, p); c(w); t_k . D (w - w*)] = 0    (SNES, Newton)
+    tangent     [dF/dw; dc/dw; t_k^T D] t_{k+1} = [0; 0; 1],  normalised in D
+
+D = diag(h for the angles, 1 for the attachment unknowns, 1/p_ref^2 for the
+tensions) weighs the angles by the mesh size, so steps do not depend on N.
+The corrector's Jacobian is the bordered Jacobian of fem with n dense
+columns (dF/dp, Eq. (14)) and two dense rows, factored by a sparse LU with
+partial pivoting (:func:`use_pivoting_lu`: J is singular on the fold).
+Debian's PETSc 3.18 has no SNESNEWTONAL, so the extended system is set up
+here on a plain SNES (Newton with line search, options prefix ``cont_``).
+
+Step control: the step doubles after a corrector of at most 3 Newton
+iterations and halves on failure, on a corrector that moved any angle by
+more than ``jump_tol`` from the predictor (a jump to another branch) or on a
+tip step longer than ``max_tip_step``.
+
+Test functions along a curve (evaluated at every accepted point):
+stability (negative eigenvalues of K by Sylvester inertia: a change is a
+limit point of M, a *fold*); the sign of det [dG/dw] with the tangent row
+(a change without a fold is a *branch point* of the curve); and the sign of
+det S, S = d x_t / d p the 2 x 2 tip Jacobian (Eq. (13)), whose change marks
+a fold of the tip map (where an interior fold curve of the workspace meets
+this curve).
+
+The fold constraint (minimally extended system, Griewank-Reddien): with
+bordering vectors b, c (approximate right and left null vectors of J),
+
+    [J  b] [v]   [0]          [J^T c] [psi]   [0]
+    [c^T 0] [s] = [1],         [b^T 0] [ s ] = [1],     sigma(w) = s,
+
+sigma vanishes exactly where J (hence K, its Schur complement) is singular,
+and d sigma/dw = -psi^T (dJ/dw) v.  The last term is a directional second
+derivative of F; it is computed as the central difference, in the direction
+v, of the gradient of psi^T F (one Jacobian evaluation on each side: error
+O(eps^2) ~ 1e-10 relative).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from petsc4py import PETSc
+
+from ..core.fem import Discretisation
+from .equilibrium import SNES_REASONS
+from .inertia import InertiaCounter
+from .linalg import use_bordered_lu
+
+# LU with partial pivoting for the extended systems: their leading block J is
+# singular on the fold and their last rows have no diagonal entry, so the
+# natural-order LU without pivoting of linalg.use_bordered_lu would break down.
+PIVOTING_LU = ("umfpack", "superlu", "mumps")
+
+
+def use_pivoting_lu(ksp: PETSc.KSP) -> PETSc.KSP:
+    """KSP preonly with a sparse LU that pivots (first available package)."""
+    use_bordered_lu(ksp)
+    pc = ksp.getPC()
+    for package in PIVOTING_LU:
+        try:
+            pc.setFactorSolverType(package)
+            return ksp
+        except PETSc.Error:
+            continue
+    raise ContinuationError("no pivoting sparse LU (UMFPACK, SuperLU or MUMPS) in this PETSc")
+
+
+class ContinuationError(RuntimeError):
+    """The curve could not be followed (step too small, singular system)."""
+
+
+class BorderedAIJ:
+    """A PETSc AIJ matrix [[A, C], [R]]: the sparse pattern A (size x size) of
+    fem's Jacobian bordered by k dense columns C and k dense rows R
+    (k x (size + k)); the pattern is fixed, values are reset in one call."""
+
+    def __init__(self, indptr, indices, size: int, k: int):
+        nnz_rows = np.diff(indptr)
+        counts = np.concatenate((nnz_rows + k, np.full(k, size + k)))
+        new_ptr = np.concatenate(([0], np.cumsum(counts))).astype(np.int32)
+        row_of = np.repeat(np.arange(size), nnz_rows)
+        self.base_pos = new_ptr[row_of] + (np.arange(len(indices)) - indptr[row_of])
+        self.col_pos = (new_ptr[:size] + nnz_rows)[:, None] + np.arange(k)
+        self.row_pos = new_ptr[size:size + k][:, None] + np.arange(size + k)
+        new_idx = np.empty(new_ptr[-1], np.int32)
+        new_idx[self.base_pos] = indices
+        new_idx[self.col_pos] = size + np.arange(k)
+        new_idx[self.row_pos] = np.arange(size + k)
+        self.csr = (new_ptr, new_idx)
+        self.size, self.k = size, k
+        self.values = np.zeros(new_ptr[-1])
+        self.mat = PETSc.Mat().createAIJ(size=(size + k, size + k), csr=(new_ptr, new_idx,
+                                         self.values), comm=PETSc.COMM_SELF)
+
+    def fill(self, base_values, columns, rows, mat: PETSc.Mat | None = None) -> None:
+        self.values[self.base_pos] = base_values
+        self.values[self.col_pos] = columns
+        self.values[self.row_pos] = rows
+        target = self.mat if mat is None else mat
+        target.setValuesCSR(*self.csr, self.values)
+        target.assemble()
+
+    def dense(self) -> np.ndarray:
+        """The current matrix as a dense array (for determinant signs)."""
+        n = self.size + self.k
+        return sp.csr_matrix((self.values, self.csr[1], self.csr[0]), shape=(n, n)).toarray()
+
+    def destroy(self) -> None:
+        self.mat.destroy()
+
+
+class Manifold:
+    """F(u, p) = 0 of one discretised arm as functions of w = (u, p)."""
+
+    def __init__(self, disc: Discretisation, p_ref: float = 10.0):
+        self.disc = disc
+        self.size = disc.size
+        self.n = disc.n_tendons
+        self.m = self.size + self.n
+        indptr, indices, _ = disc.pattern
+        self.csr = (indptr, indices)
+        weights = np.ones(self.m)
+        weights[: disc.n_elements] = disc.h
+        weights[self.size:] = 1.0 / p_ref**2
+        self.metric = weights                      # D of the module docstring
+
+    def split(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return w[: self.size], w[self.size:]
+
+    def residual(self, w: np.ndarray) -> np.ndarray:
+        u, p = self.split(w)
+        return self.disc.residual(u, p)
+
+    def jacobian(self, w: np.ndarray) -> sp.csr_matrix:
+        u, p = self.split(w)
+        return sp.csr_matrix((self.disc.jacobian_values(u, p), self.csr[1], self.csr[0]),
+                             shape=(self.size, self.size))
+
+    def load_columns(self, w: np.ndarray) -> np.ndarray:
+        """dF/dp, (size, n): the tensions' columns (Eq. (14)); F is linear in p."""
+        return self.disc.load_derivative(self.split(w)[0]).T
+
+    def route_derivative(self, w: np.ndarray, i: int) -> np.ndarray:
+        """dF/dr_i, (size, 2), at fixed u and p: F_theta depends on r_i only through
+        d_i = (r_i - y_i)/|r_i - y_i| (Eqs. (3)-(4), (9)), so dF/dr_i = -dF/dy_i on the
+        angle rows (the border columns of tendon i of the Jacobian) and 0 on the
+        attachment rows (y - X(theta) does not involve r_i)."""
+        N = self.disc.n_elements
+        cols = N + 2 * i + np.arange(2)
+        out = np.zeros((self.size, 2))
+        out[:N] = -self.jacobian(w)[:N][:, cols].toarray()
+        return out
+
+    def tip(self, w: np.ndarray) -> np.ndarray:
+        theta = self.disc.split(self.split(w)[0])[0]
+        return self.disc.node_positions(theta)[-1]
+
+    def tip_velocity(self, w: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """d x_t along the direction t of w (Eq. (13) with the midpoint rule)."""
+        disc = self.disc
+        theta = disc.split(self.split(w)[0])[0]
+        dtheta = disc.split(self.split(t)[0])[0]
+        phi = disc.element_angles(theta)
+        dphi = disc.element_angles(dtheta)
+        return disc.h * np.array([np.sum(-np.sin(phi) * dphi), np.sum(np.cos(phi) * dphi)])
+
+    def norm(self, t: np.ndarray) -> float:
+        return float(np.sqrt(np.sum(self.metric * t * t)))
+
+
+# --- constraints c(w) = 0 cutting curves out of M ----------------------------------
+class Constraint:
+    """A scalar c(w); the admissible side is ``side * c >= 0``."""
+
+    name = "constraint"
+    side = 1.0
+
+    def value(self, w: np.ndarray) -> float:
+        raise NotImplementedError
+
+    def gradient(self, w: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def margin(self, w: np.ndarray) -> float:
+        """side * c: >= 0 on the admissible side."""
+        return self.side * self.value(w)
+
+    def route_gradient(self, w: np.ndarray, i: int) -> np.ndarray:
+        """dc/dr_i at fixed w, (2,): zero unless c involves the routing points."""
+        return np.zeros(2)
+
+
+class TensionBound(Constraint):
+    """Face of the tension domain: p_i = bound (0 below, p_crit above, Eq. (22))."""
+
+    def __init__(self, manifold: Manifold, i: int, bound: float, upper: bool = False):
+        self.mf, self.i, self.bound = manifold, i, float(bound)
+        self.side = -1.0 if upper else 1.0
+        self.name = f"P{i + 1}=P_crit" if upper else f"P{i + 1}=0"
+
+    def value(self, w):
+        return float(w[self.mf.size + self.i] - self.bound)
+
+    def gradient(self, w):
+        g = np.zeros(self.mf.m)
+        g[self.mf.size + self.i] = 1.0
+        return g
+
+
+class CableCollapse(Constraint):
+    """L_i = eps: the attachment point of tendon i within eps (units of l) of its
+    routing point; beyond it the cable direction of Eq. (3) is undefined."""
+
+    def __init__(self, manifold: Manifold, i: int, eps: float):
+        self.mf, self.i, self.eps = manifold, i, float(eps)
+        self.name = f"L{i + 1}=0"
+
+    def _offset(self) -> int:
+        return self.mf.disc.n_elements + 2 * self.i
+
+    def value(self, w):
+        y = w[self._offset():self._offset() + 2]
+        return float(np.linalg.norm(self.mf.disc.routes[self.i] - y) - self.eps)
+
+    def gradient(self, w):
+        y = w[self._offset():self._offset() + 2]
+        chord = self.mf.disc.routes[self.i] - y
+        g = np.zeros(self.mf.m)
+        g[self._offset():self._offset() + 2] = -chord / np.linalg.norm(chord)
+        return g
+
+    def route_gradient(self, w, i):
+        if i != self.i:
+            return np.zeros(2)
+        y = w[self._offset():self._offset() + 2]
+        chord = self.mf.disc.routes[self.i] - y
+        return chord / np.linalg.norm(chord)                      # d|r_i - y_i|/dr_i
+
+
+class StateLevel(Constraint):
+    """A level curve limit - f(theta) >= 0 of a function of the angles only:
+    l*kappa_max (Eq. (19)) or the strain energy in units of SE_0 (Eq. (21))."""
+
+    def __init__(self, manifold: Manifold, kind: str, limit: float):
+        if kind not in ("kappa", "energy"):
+            raise ValueError(kind)
+        self.mf, self.kind, self.limit = manifold, kind, float(limit)
+        self.name = "l*kappa_max=limit" if kind == "kappa" else "SE=SE_max"
+
+    def _theta(self, w):
+        return self.mf.disc.split(self.mf.split(w)[0])[0]
+
+    def value(self, w):
+        theta, disc = self._theta(w), self.mf.disc
+        if self.kind == "kappa":
+            return float(self.limit - np.max(np.abs(disc.curvature(theta))))
+        return float(self.limit - 2.0 * disc.strain_energy(theta))
+
+    def gradient(self, w):
+        theta, disc = self._theta(w), self.mf.disc
+        jump = np.diff(theta)
+        dtheta = np.zeros(len(theta))
+        if self.kind == "kappa":                       # the element of largest |theta'|
+            e = int(np.argmax(np.abs(jump)))
+            sign = np.sign(jump[e]) / disc.h
+            dtheta[e + 1] -= sign
+            dtheta[e] += sign
+        else:                                          # d(2 sum jump^2/(2h))/dtheta
+            dtheta[1:] -= 2.0 * jump / disc.h
+            dtheta[:-1] += 2.0 * jump / disc.h
+        g = np.zeros(self.mf.m)
+        g[: disc.n_elements] = dtheta[1:]
+        return g
+
+
+class FoldSystem:
+    """The minimally extended system of the module docstring: sigma(w) and its
+    gradient, with LU solves (PETSc KSP) of J bordered by b and c."""
+
+    def __init__(self, manifold: Manifold, prefix: str = "fold_"):
+        self.mf = manifold
+        self.mat = BorderedAIJ(*manifold.csr, manifold.size, 1)
+        self.rhs = PETSc.Vec().createSeq(manifold.size + 1, comm=PETSc.COMM_SELF)
+        self.sol = self.rhs.duplicate()
+        self.ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+        self.ksp.setOptionsPrefix(prefix)
+        self.ksp.setOperators(self.mat.mat)
+        use_pivoting_lu(self.ksp)
+        self.ksp.setFromOptions()
+        self.b = self.c = None
+        self._cache = {}
+
+    def set_vectors(self, v: np.ndarray) -> None:
+        """Bordering vectors from an approximate null vector of J."""
+        v = v / np.linalg.norm(v)
+        self.b, self.c = v.copy(), v.copy()
+        self._cache = {}
+
+    def null_vector(self, w: np.ndarray, guess: np.ndarray | None = None, its: int = 3):
+        """Approximate null vector of J(w) by inverse iteration (J near singular)."""
+        J = self.mf.jacobian(w).tocsc()
+        from scipy.sparse.linalg import splu
+        lu = splu(J, permc_spec="NATURAL")
+        v = np.ones(self.mf.size) if guess is None else guess.copy()
+        for _ in range(its):
+            v = lu.solve(v)
+            v /= np.linalg.norm(v)
+        return v
+
+    def _solve(self, w, transpose: bool) -> tuple[np.ndarray, float]:
+        """Solution of the bordered system (or its transpose) at w; the matrix is
+        filled (and factored) once per w and bordering, results are cached."""
+        key = w.tobytes()
+        if self._cache.get("w") != key:
+            u, p = self.mf.split(w)
+            self.mat.fill(self.mf.disc.jacobian_values(u, p), self.b[:, None],
+                          np.append(self.c, 0.0)[None, :])
+            self.ksp.setOperators(self.mat.mat)
+            self._cache = {"w": key}
+        if transpose not in self._cache:
+            rhs = np.zeros(self.mf.size + 1)
+            rhs[-1] = 1.0
+            self.rhs.setArray(rhs)
+            (self.ksp.solveTranspose if transpose else self.ksp.solve)(self.rhs, self.sol)
+            x = self.sol.getArray(readonly=True).copy()
+            self._cache[transpose] = (x[:-1], float(x[-1]))
+        return self._cache[transpose]
+
+    def sigma(self, w) -> float:
+        return self._solve(w, False)[1]
+
+    def sigma_gradient(self, w) -> tuple[float, np.ndarray, np.ndarray]:
+        """sigma, d sigma / dw and the null vector v (normalised)."""
+        v, s = self._solve(w, False)
+        # transpose of [J b; c^T 0] is [J^T c; b^T 0]: its solution is (psi, s)
+        psi, _ = self._solve(w, True)
+        eps = 1e-6 / max(np.linalg.norm(v), 1e-300)
+        u, p = self.mf.split(w)
+
+        def grad_psi_F(uu):
+            J = self.mf.jacobian(np.concatenate((uu, p)))
+            return np.concatenate((J.T @ psi, self.mf.disc.load_derivative(uu) @ psi))
+
+        dJv = (grad_psi_F(u + eps * v) - grad_psi_F(u - eps * v)) / (2 * eps)
+        return s, -dJv, v / np.linalg.norm(v)
+
+    def destroy(self) -> None:
+        for obj in (self.ksp, self.mat, self.rhs, self.sol):
+            obj.destroy()
+
+
+class Fold(Constraint):
+    """The fold of M over tension space (det K = 0, Eq. (20)): sigma(w) = 0.
+    ``side`` is set so that the stable side is admissible."""
+
+    name = "fold"
+
+    def __init__(self, system: FoldSystem):
+        self.sys = system
+
+    def value(self, w):
+        return self.sys.sigma(w)
+
+    def gradient(self, w):
+        return self.sys.sigma_gradient(w)[1]
+
+    def update(self, w) -> None:
+        """New bordering vectors at an accepted point (kept fixed within a solve)."""
+        if self.sys.b is None:
+            self.sys.set_vectors(self.sys.null_vector(w))
+        self.sys.set_vectors(self.sys.sigma_gradient(w)[2])
+
+    def route_gradient(self, w, i):
+        """d sigma/dr_i = -psi^T (d^2 F/du dr_i) v: the central difference in the
+        direction v of psi^T dF/dr_i (as for d sigma/dw)."""
+        system, mf = self.sys, self.sys.mf
+        v, _ = system._solve(w, False)
+        psi, _ = system._solve(w, True)
+        eps = 1e-6 / max(np.linalg.norm(v), 1e-300)
+        u, p = mf.split(w)
+        shifted = [np.concatenate((u + sign * eps * v, p)) for sign in (1.0, -1.0)]
+        a, b = (psi @ mf.route_derivative(ws, i) for ws in shifted)
+        return -(a - b) / (2 * eps)
+
+
+@dataclass
+class CurvePoint:
+    """An accepted point on a curve: state, tangent and test functions."""
+
+    w: np.ndarray
+    t: np.ndarray
+    tip: np.ndarray
+    tip_velocity: np.ndarray          # d x_t / ds along t
+    unstable_modes: int
+    det_sign: float                   # sign of det [dG/dw; t^T] (branch points)
+    iterations: int
+
+
+@dataclass
+class Curve:
+    """Points of one traced curve and why it ended."""
+
+    constraint: str
+    points: list = field(default_factory=list)
+    end: str = ""
+    end_constraint: str | None = None
+    active: object = field(default=None, repr=False)        # the Constraint followed
+    hit: object = field(default=None, repr=False)           # the one met at the end corner
+
+
+class CurveTracer:
+    """Pseudo-arclength continuation on M with one active constraint and SNES
+    as the corrector (options prefix ``cont_``).  ``solves`` counts the
+    corrector solves (each one nonlinear solve of the extended system)."""
+
+    def __init__(self, disc: Discretisation, *, jump_tol: float = 0.5,
+                 max_tip_step: float = 0.2, ds_max: float = 4.0, prefix: str = "cont_"):
+        self.mf = Manifold(disc)
+        mf = self.mf
+        self.jump_tol, self.max_tip_step, self.ds_max = jump_tol, max_tip_step, ds_max
+        self.A = BorderedAIJ(*mf.csr, mf.size, mf.n)
+        self.x = PETSc.Vec().createSeq(mf.m, comm=PETSc.COMM_SELF)
+        self.f = self.x.duplicate()
+        snes = PETSc.SNES().create(PETSc.COMM_SELF)
+        snes.setOptionsPrefix(prefix)
+        snes.setType(PETSc.SNES.Type.NEWTONLS)
+        snes.setFunction(self._form_function, self.f)
+        snes.setJacobian(self._form_jacobian, self.A.mat, self.A.mat)
+        atol = max(1e-10, 1e-14 * disc.n_elements ** 1.5)
+        snes.setTolerances(rtol=1e-10, atol=atol, stol=1e-14, max_it=12)
+        use_pivoting_lu(snes.getKSP())
+        snes.setFromOptions()
+        self.snes = snes
+        self.ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+        self.ksp.setOptionsPrefix(prefix + "tangent_")
+        use_pivoting_lu(self.ksp)
+        self.ksp.setFromOptions()
+        self.inertia = InertiaCounter(disc)
+        self.solves = 0
+        self._rows = None            # the two scalar equations: callables (value, gradient)
+
+    # --- the extended system G(w) = [F; r_1; r_2] -----------------------------
+    def _form_function(self, snes, X, Fv) -> None:
+        w = X.getArray(readonly=True)
+        Fv.setArray(np.concatenate((self.mf.residual(w), [value(w) for value, _ in self._rows])))
+
+    def _fill(self, w, rows) -> None:
+        u, p = self.mf.split(w)
+        self.A.fill(self.mf.disc.jacobian_values(u, p), self.mf.load_columns(w), rows)
+
+    def _form_jacobian(self, snes, X, J, P) -> None:
+        w = X.getArray(readonly=True)
+        self._fill(w, np.array([gradient(w) for _, gradient in self._rows]))
+
+    def _solve(self, w0: np.ndarray, rows) -> tuple[np.ndarray, bool, int]:
+        self._rows = rows
+        self.x.setArray(w0)
+        self.snes.solve(None, self.x)
+        self.solves += 1
+        reason = self.snes.getConvergedReason()
+        ok = reason > 0 and np.all(np.isfinite(self.x.getArray(readonly=True)))
+        return self.x.getArray().copy(), bool(ok), self.snes.getIterationNumber()
+
+    def reason(self) -> str:
+        return SNES_REASONS.get(self.snes.getConvergedReason(), "UNKNOWN")
+
+    @staticmethod
+    def _row(constraint: Constraint):
+        return constraint.value, constraint.gradient
+
+    def _arclength_row(self, t: np.ndarray, w_pred: np.ndarray):
+        dt = self.mf.metric * t
+        return (lambda w: float(dt @ (w - w_pred))), (lambda w: dt)
+
+    # --- tangents and test functions --------------------------------------------
+    def tangent(self, w: np.ndarray, constraint: Constraint, orient: np.ndarray) -> tuple:
+        """Unit tangent (metric D) of the curve {F = 0, c = 0} at w, oriented so
+        that t . D orient > 0, and the sign of det of the bordered matrix."""
+        row = self.mf.metric * orient
+        self._fill(w, np.array([constraint.gradient(w), row]))
+        self.ksp.setOperators(self.A.mat)
+        rhs = self.x.duplicate()
+        rhs.set(0.0)
+        rhs.setValue(self.mf.m - 1, 1.0)
+        rhs.assemble()
+        sol = rhs.duplicate()
+        self.ksp.solve(rhs, sol)
+        t = sol.getArray().copy()
+        rhs.destroy(); sol.destroy()
+        sign, _ = np.linalg.slogdet(self.A.dense())
+        return t / self.mf.norm(t), float(sign)
+
+    def point(self, w, t, det_sign, iterations) -> CurvePoint:
+        u, p = self.mf.split(w)
+        return CurvePoint(w=w.copy(), t=t.copy(), tip=self.mf.tip(w),
+                          tip_velocity=self.mf.tip_velocity(w, t),
+                          # on a face p_i = 0 a round-off -1e-17 must not reach sqrt(p)
+                          unstable_modes=self.inertia.negative_eigenvalues(u, np.maximum(p, 0)),
+                          det_sign=det_sign, iterations=iterations)
+
+    def correct(self, w_guess: np.ndarray, constraints) -> tuple[np.ndarray, bool]:
+        """Solve F = 0 with two scalar constraints (a corner of two curves)."""
+        w, ok, _ = self._solve(w_guess, [self._row(c) for c in constraints])
+        return w, ok
+
+    def route_velocity(self, w: np.ndarray, rows, i: int) -> np.ndarray:
+        """dw/dr_i, (m, 2), of a point of M held by two scalar equations ``rows``
+        (constraints, or a constraint and a fixed linear row given as a vector
+        g with g . dw = 0): differentiate [F; c_a; c_b](w, r) = 0,
+
+            [dF/dw; dc_a/dw; dc_b/dw] dw/dr_i = -[dF/dr_i; dc_a/dr_i; dc_b/dr_i].
+
+        At a corner both rows are constraints; inside a curve the second row
+        fixes how the point slides along the curve (the normal component of
+        the tip's motion does not depend on it)."""
+        grads, rhs = [], [self.mf.route_derivative(w, i)]
+        for row in rows:
+            if isinstance(row, np.ndarray):
+                grads.append(row)
+                rhs.append(np.zeros((1, 2)))
+            else:
+                grads.append(row.gradient(w))
+                rhs.append(row.route_gradient(w, i)[None, :])
+        self._fill(w, np.array(grads))
+        self.ksp.setOperators(self.A.mat)
+        b = -np.vstack(rhs)
+        out = np.empty((self.mf.m, 2))
+        rv, sol = self.x.duplicate(), self.x.duplicate()
+        for k in range(2):
+            rv.setArray(b[:, k])
+            self.ksp.solve(rv, sol)
+            out[:, k] = sol.getArray(readonly=True)
+        rv.destroy(); sol.destroy()
+        return out
+
+    def step(self, pt: CurvePoint, constraint: Constraint, ds: float):
+        """One predictor-corrector step of length ds: (point | None, iterations)."""
+        w_pred = pt.w + ds * pt.t
+        w, ok, its = self._solve(w_pred, [self._row(constraint), self._arclength_row(pt.t, w_pred)])
+        if not ok:
+            return None, its
+        n_angles = self.mf.disc.n_elements
+        if np.max(np.abs(w[:n_angles] - w_pred[:n_angles])) > self.jump_tol:
+            return None, its
+        if np.linalg.norm(self.mf.tip(w) - pt.tip) > self.max_tip_step:
+            return None, its
+        t, det_sign = self.tangent(w, constraint, pt.t)
+        return self.point(w, t, det_sign, its), its
+
+    def destroy(self) -> None:
+        self.inertia.destroy()
+        for obj in (self.snes, self.ksp, self.A, self.x, self.f):
+            obj.destroy()
+
+    def __enter__(self) -> "CurveTracer":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.destroy()

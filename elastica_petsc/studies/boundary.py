@@ -1,0 +1,580 @@
+"""Workspace boundaries by continuation (two tendons).
+
+W_0 (used alike by tip control, the sampled map and this module) is the set
+of tips of the stable equilibria connected to the straight arm by
+quasi-static loading with all P_i >= 0 (Eq. (18)): the image under the tip
+map of D, the connected component of the straight arm in the stable part of
+the equilibrium manifold M = {(u, p): F(u, p) = 0, p >= 0}.  D is bounded by
+
+* the faces P_i = 0 (and P_i = P_crit when the config sets a motor limit,
+  Eq. (22)),
+* cable collapse, L_i = 0 (the attachment point on its routing point, beyond
+  which the load direction of Eq. (3) is undefined; traced at L_i = eps =
+  COLLAPSE_LENGTH, 1.2 mm on the paper's arm),
+* the fold of M over tension space, where K is singular (lambda_min = 0,
+  Eq. (20)): the limit points beyond which the arm snaps.
+
+:func:`trace_region_boundary` walks once around D (a wall follower): it
+follows one of these curves by pseudo-arclength continuation
+(:class:`~elastica_petsc.solvers.continuation.CurveTracer`) with D on its
+left in tension space until another constraint becomes active (a bound is
+crossed or stability is lost), solves for that corner, and turns onto the
+new curve, until it is back at the straight arm.  The tip image of this
+closed loop is the W_0 polygon (mm, oriented as the tip map orients it);
+the region is the set the loop winds around (nonzero winding number) and
+its area is computed by scan lines (:func:`union_area`).  This is W_0
+exactly when the tip map has no fold inside D: a fold curve of the tip map
+(det S = 0, S = d x_t / d p, Eq. (13)) adds envelope pieces to the boundary,
+and tips covered twice with opposite orientation have winding number 0.
+Where such a curve meets the loop, det S changes sign along it; those points
+are reported (``tip_folds``) with a warning.  Fold curves of the tip map are
+*not* traced.  On the paper's arm they meet the loop at five points: three
+in y < 0 and two within 1 mm of the routing point r_2 (on the L2 = 0 curves,
+whose tip image is that point); the half-plane y >= 0 of Fig. 4 agrees with
+the sampled map.
+
+Limits found (issue 13): at a corner where a cable collapses (the tip on
+r_2) several equilibria with P_1 = 0 can share the corner, and which one the
+walk continues from can depend on the step sizes and the mesh; with a
+routing point moved (r_1 = (-53.7, -21.6), r_2 = (81.8, 10.0) mm) the walk
+took different loops at 60 and 180 elements, and at 180 elements 877
+samples that tip control reached lie outside the polygon (tip-map folds
+inside D).  Treat a polygon with a fold warning as a lower bound.
+
+The restricted workspace W_0 ∩ W_Y ∩ W_E ∩ W_P (Eqs. (19), (21), (22); W_S
+is W_0 itself under this definition, since D holds only stable states) is
+the image of the region D_r of D where also l*kappa_max <= 2 eps_Y l / h and
+SE <= SE_max: the same walk with those two level curves as extra
+constraints.  Where l*kappa_max switches between elements the constraint is
+only piecewise smooth; the corrector copes with it (the kink is a corner).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.errors import InputError
+from ..core.fem import Discretisation
+from ..core.model import Arm
+from ..solvers.continuation import (CableCollapse, Curve, CurveTracer, Fold, FoldSystem,
+                                    StateLevel, TensionBound)
+from ..solvers.equilibrium import COLLAPSE_LENGTH
+
+
+class BoundaryError(InputError):
+    """An arm whose boundary this method cannot trace (e.g. not two tendons)."""
+
+
+@dataclass
+class RegionBoundary:
+    """The closed loop around a region of M and its tip image.
+
+    curves: the pieces, in order; each :class:`Curve` holds the points.
+    closed: the walk came back to the straight arm.
+    """
+
+    name: str
+    curves: list
+    closed: bool
+    message: str = ""
+
+    def nodes(self) -> dict:
+        """Concatenated curve nodes: tip (mm-free, units of l), p, curve index."""
+        tips, ps, index, vel = [], [], [], []
+        for k, curve in enumerate(self.curves):
+            for pt in curve.points:
+                tips.append(pt.tip); ps.append(pt.w[-2:]); index.append(k)
+                vel.append(pt.tip_velocity)
+        return {"tip": np.array(tips), "p": np.array(ps), "curve": np.array(index),
+                "tip_velocity": np.array(vel)}
+
+
+@dataclass
+class BoundaryResult:
+    """W_0 and restricted boundaries of one arm (units: mm and mm^2)."""
+
+    arm: Arm
+    regions: dict                       # name -> RegionBoundary ("W0", "restricted")
+    polygons_mm: dict                   # name -> list of (k, 2) closed polygons
+    areas_mm2: dict
+    tip_folds_mm: np.ndarray            # where det S changes sign on the W0 loop
+    solves: int
+    seconds: float
+    messages: list = field(default_factory=list)
+    area_gradients: dict = field(default_factory=dict)   # name -> d area/d routes [mm^2/mm]
+
+    @property
+    def area_mm2(self) -> float:
+        return self.areas_mm2["W0"]
+
+
+def constraints_for(tracer: CurveTracer, arm: Arm, restricted: bool) -> list:
+    """Bounds of D (and D_r): faces, motor limit, collapse; fold handled apart."""
+    mf = tracer.mf
+    out = [TensionBound(mf, i, 0.0) for i in range(mf.n)]
+    if arm.max_tension is not None:
+        out += [TensionBound(mf, i, arm.max_tension, upper=True) for i in range(mf.n)]
+    out += [CableCollapse(mf, i, COLLAPSE_LENGTH) for i in range(mf.n)]
+    if restricted:
+        out += [StateLevel(mf, "kappa", arm.kappa_limit),
+                StateLevel(mf, "energy", arm.limits.strain_energy_max_SE0)]
+    return out
+
+
+class Walker:
+    """The wall follower around D of the module docstring."""
+
+    def __init__(self, tracer: CurveTracer, constraints: list, *, ds0: float = 0.3,
+                 ds_min: float = 1e-5, max_points: int = 400):
+        self.tr = tracer
+        self.constraints = constraints
+        self.fold_system = FoldSystem(tracer.mf)
+        self.fold = Fold(self.fold_system)
+        self.ds0, self.ds_min, self.max_points = ds0, ds_min, max_points
+
+    def destroy(self) -> None:
+        self.fold_system.destroy()
+
+    def _orient(self, constraint) -> np.ndarray:
+        """D^-1 times the gradient of side * c: tangents with t . grad > 0 move into
+        the admissible side of ``constraint``."""
+        return lambda w: constraint.side * constraint.gradient(w) / self.tr.mf.metric
+
+    def _start_point(self, w, active, into):
+        t, det_sign = self.tr.tangent(w, active, into(w))
+        return self.tr.point(w, t, det_sign, 0)
+
+    def _locate(self, a, b, active, hit) -> np.ndarray | None:
+        """Corner where ``hit`` becomes active between accepted points a and b."""
+        if hit is self.fold:
+            guess_v = self.fold_system.null_vector(b.w)
+            self.fold_system.set_vectors(guess_v)
+        ma, mb = hit.value(a.w), hit.value(b.w)
+        frac = ma / (ma - mb) if ma != mb else 0.5
+        frac = min(max(frac, 0.0), 1.0)
+        guess = a.w + frac * (b.w - a.w)
+        w, ok = self.tr.correct(guess, [active, hit])
+        if not ok:
+            return None
+        if hit is self.fold:
+            self.fold.update(w)
+            # the stable side (a is stable) is the admissible one
+            self.fold.side = 1.0 if self.fold.value(a.w) >= 0 else -1.0
+        return w
+
+    def _events(self, a, b, active):
+        """Constraints that became active between a and b (stability loss: fold)."""
+        hits = [c for c in self.constraints if c is not active and c.margin(b.w) < 0]
+        if b.unstable_modes > 0 and a.unstable_modes == 0 and active is not self.fold:
+            hits.append(self.fold)
+        return hits
+
+    def follow(self, start, active) -> tuple[Curve, object, np.ndarray | None]:
+        """Follow ``active`` from the point ``start`` until another constraint
+        becomes active: (curve, the new constraint, the corner state w)."""
+        curve = Curve(active.name, [start], active=active)
+        pt, ds = start, self.ds0
+        while len(curve.points) < self.max_points:
+            new, its = self.tr.step(pt, active, ds)
+            if new is None:
+                ds *= 0.5
+                if ds < self.ds_min:
+                    curve.end = f"step below {self.ds_min:g} ({self.tr.reason()})"
+                    return curve, None, None
+                continue
+            hits = self._events(pt, new, active)
+            if hits:
+                for hit in hits:
+                    w = self._locate(pt, new, active, hit)
+                    if w is not None:
+                        curve.end, curve.end_constraint, curve.hit = "corner", hit.name, hit
+                        corner = self.tr.point(w, pt.t, pt.det_sign, 0)
+                        curve.points.append(corner)
+                        return curve, hit, w
+                ds *= 0.5
+                if ds < self.ds_min:
+                    curve.end = "could not locate the corner with " + hits[0].name
+                    return curve, None, None
+                continue
+            if new.det_sign != pt.det_sign and new.unstable_modes == pt.unstable_modes:
+                curve.points.append(new)
+                curve.end = "branch point (det of the extended Jacobian changed sign)"
+                return curve, None, None
+            if active is self.fold:
+                self.fold.update(new.w)
+            curve.points.append(new)
+            pt = new
+            ds = min(ds * 2.0 if its <= 3 else ds, self.tr.ds_max)
+        curve.end = f"more than {self.max_points} points"
+        return curve, None, None
+
+    def walk(self, name: str, w0: np.ndarray, first, previous, max_corners: int = 16):
+        """Once around the region from the corner w0 (constraints ``previous`` and
+        ``first`` active), leaving along ``first`` into ``previous``'s admissible side."""
+        curves, active, w, closed, message = [], first, w0, False, ""
+        into = self._orient(previous)
+        for _ in range(max_corners):
+            start = self._start_point(w, active, into)
+            curve, hit, w_next = self.follow(start, active)
+            curves.append(curve)
+            if hit is None:
+                message = f"{curve.constraint}: {curve.end}"
+                break
+            if hit is first and np.linalg.norm(w_next[-2:] - w0[-2:]) < 1e-6:
+                closed = True
+                break
+            into, active, w = self._orient(active), hit, w_next
+        else:
+            message = f"more than {max_corners} corners"
+        return RegionBoundary(name, curves, closed, message)
+
+
+    def route_velocities(self, region: RegionBoundary, start_rows, tendon: int) -> np.ndarray:
+        """d x_t/d r_i (units of l per unit of l) at every node of the loop, in the
+        order of :meth:`RegionBoundary.nodes`, shape (nodes, 2 tip, 2 route).
+
+        Corners (the ends of each curve, and the start, where ``start_rows``
+        are active) move with both of their constraints; a node inside a curve
+        slides orthogonally (metric D) to the curve's tangent.  Only the normal
+        component of the tip motion matters for the area (:func:`area_gradient`)."""
+        mf, out = self.tr.mf, []
+        for k, curve in enumerate(region.curves):
+            for j, pt in enumerate(curve.points):
+                if j == 0:
+                    rows = start_rows if k == 0 else [region.curves[k - 1].active, curve.active]
+                elif j == len(curve.points) - 1 and curve.hit is not None:
+                    rows = [curve.active, curve.hit]
+                else:
+                    rows = [curve.active, mf.metric * pt.t]
+                for row in rows:
+                    if row is self.fold:
+                        self.fold.update(pt.w)
+                dw = self.tr.route_velocity(pt.w, rows, tendon)
+                out.append(np.column_stack([mf.tip_velocity(pt.w, dw[:, c]) for c in range(2)]))
+        return np.array(out)
+
+
+def union_area(poly: np.ndarray, step: float | None = None) -> float:
+    """Area of the set where the closed polygon's winding number is nonzero
+    (the region W_0 when the loop crosses itself; the shoelace area would
+    count a doubly wound part twice).  Scan lines at the midpoints of strips
+    of height ``step`` (default 1/2000 of the height): on each, the crossings
+    are sorted and the winding number accumulated."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    y0, y1 = float(np.min(poly[:, 1])), float(np.max(poly[:, 1]))
+    step = (y1 - y0) / 2000 if step is None else step
+    ys = np.arange(y0 + step / 2, y1, step)
+    lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
+    total = 0.0
+    for y in ys:
+        k = np.flatnonzero((lo <= y) & (hi > y))
+        if len(k) < 2:
+            continue
+        t = (y - a[k, 1]) / (b[k, 1] - a[k, 1])
+        x = a[k, 0] + t * (b[k, 0] - a[k, 0])
+        direction = np.where(b[k, 1] > a[k, 1], 1, -1)
+        order = np.argsort(x)
+        winding = np.cumsum(direction[order])[:-1]
+        total += float(np.sum(np.diff(x[order])[winding != 0]))
+    return total * step
+
+
+def union_area_gradient(nodes: np.ndarray, velocity: np.ndarray,
+                        subdivide: int = 8) -> np.ndarray:
+    """d(union area)/dq: the boundary integral of the outward normal velocity over
+    the edges of the node polygon that separate winding number 0 from nonzero
+    (edges inside the region, between windings 1 and 2, do not count).
+    ``velocity``: (nodes, 2, q), the motion of each node per unit of q.  Each
+    edge is cut into ``subdivide`` pieces (velocity linear along it) and each
+    piece classified on its own, so an edge crossed by another counts in part."""
+    s = np.arange(subdivide) / subdivide
+    nxt, vnxt = np.roll(nodes, -1, axis=0), np.roll(velocity, -1, axis=0)
+    poly = (nodes[:, None] + s[None, :, None] * (nxt - nodes)[:, None]).reshape(-1, 2)
+    vel = (velocity[:, None] + s[None, :, None, None] * (vnxt - velocity)[:, None])
+    vel = vel.reshape(-1, *velocity.shape[1:])
+    a, b = poly, np.roll(poly, -1, axis=0)
+    va, vb = vel, np.roll(vel, -1, axis=0)
+    edge = b - a
+    length = np.linalg.norm(edge, axis=1)
+    ok = length > 0
+    normal = np.zeros_like(edge)
+    normal[ok] = np.column_stack((edge[ok, 1], -edge[ok, 0])) / length[ok, None]   # right side
+    mid = 0.5 * (a + b)
+    offset = 1e-6 * max(float(np.ptp(nodes[:, 0])), float(np.ptp(nodes[:, 1])))
+    right = winding_number(poly, mid + offset * normal) != 0
+    left = winding_number(poly, mid - offset * normal) != 0
+    outward = np.where(right & ~left, -1.0, np.where(left & ~right, 1.0, 0.0)) * ok
+    vmid = 0.5 * (va + vb)                                               # (edges, 2, q)
+    vn = np.einsum("kc,kcq->kq", normal, vmid)                           # along the right normal
+    return np.einsum("k,k,kq->q", outward, length, vn)
+
+
+def shoelace(poly: np.ndarray) -> float:
+    """Signed area of a closed polygon (positive: counter-clockwise)."""
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def hermite_densify(tip, velocity, per_segment: int = 8) -> np.ndarray:
+    """Cubic Hermite curve through the nodes with their tip velocities d x_t/ds
+    (per unit of the curve's arclength parameter), ``per_segment`` points each."""
+    out = [tip[:1]]
+    for a in range(len(tip) - 1):
+        b = a + 1
+        chord = np.linalg.norm(tip[b] - tip[a])
+        va, vb = velocity[a], velocity[b]
+        na, nb = np.linalg.norm(va), np.linalg.norm(vb)
+        if chord == 0 or na == 0 or nb == 0:
+            out.append(tip[b:b + 1])
+            continue
+        ma, mb = va / na * chord, vb / nb * chord      # tangents scaled to the chord
+        s = np.linspace(0, 1, per_segment + 1)[1:, None]
+        h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
+        h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+        out.append(h00 * tip[a] + h10 * ma + h01 * tip[b] + h11 * mb)
+    return np.vstack(out)
+
+
+def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
+                 node_values: np.ndarray | None = None):
+    """The tip image of the loop, densified per curve by :func:`hermite_densify`,
+    in mm (closing point dropped).  With ``node_values`` (one row per node, in
+    the order of :meth:`RegionBoundary.nodes`) also returns them interpolated
+    linearly (in the Hermite parameter) at the dense points."""
+    pieces, values, start = [], [], 0
+    for curve in region.curves:
+        tip = np.array([pt.tip for pt in curve.points])
+        vel = np.array([pt.tip_velocity for pt in curve.points])
+        # corners carry the previous curve's tangent: no Hermite into a corner
+        dense = hermite_densify(tip[:-1], vel[:-1], per_segment) if len(tip) > 2 else tip[:1]
+        pieces.append(np.vstack((dense, tip[-1:])))
+        if node_values is not None:
+            nv = node_values[start:start + len(tip)]
+            s = np.linspace(0, 1, per_segment + 1)[1:]
+            rows = [nv[:1]]
+            for k in range(len(tip) - 2):
+                rows.append(nv[k][None] + np.multiply.outer(s, nv[k + 1] - nv[k]))
+            rows.append(nv[-1:])
+            values.append(np.concatenate(rows))
+        start += len(tip)
+    poly = np.vstack(pieces) * length_mm
+    keep = np.concatenate(([True], np.linalg.norm(np.diff(poly, axis=0), axis=1) > 1e-9))
+    if np.linalg.norm(poly[keep][0] - poly[keep][-1]) < 1e-9:
+        keep[np.flatnonzero(keep)[-1]] = False
+    if node_values is None:
+        return poly[keep]
+    return poly[keep], np.concatenate(values)[keep]
+
+
+def self_intersections(poly: np.ndarray) -> int:
+    """Number of crossings between non-adjacent edges of a closed polygon."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    n = len(a)
+    count = 0
+    for i in range(n):
+        j = np.arange(i + 2, n if i > 0 else n - 1)
+        if len(j) == 0:
+            continue
+        p, r = a[i], b[i] - a[i]
+        q, s = a[j], b[j] - a[j]
+        denom = r[0] * s[:, 1] - r[1] * s[:, 0]
+        qp = q - p
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (qp[:, 0] * s[:, 1] - qp[:, 1] * s[:, 0]) / denom
+            u = (qp[:, 0] * r[1] - qp[:, 1] * r[0]) / denom
+        count += int(np.sum((denom != 0) & (t > 0) & (t < 1) & (u > 0) & (u < 1)))
+    return count
+
+
+def tip_fold_points(tracer: CurveTracer, region: RegionBoundary) -> np.ndarray:
+    """Tips (units of l) where det S changes sign between nodes of the loop's
+    stable curves (not on the fold itself, where S is unbounded)."""
+    from ..solvers.sensitivity import SensitivitySolver
+    from ..solvers.equilibrium import Equilibrium
+
+    disc = tracer.mf.disc
+    out = []
+    with SensitivitySolver(disc, prefix="bsens_") as sens:
+        for curve in region.curves:
+            if curve.constraint == "fold":
+                continue
+            signs = []
+            for pt in curve.points:
+                u, p = tracer.mf.split(pt.w)
+                eq = Equilibrium(disc, p.copy(), u.copy(), True, "", 0, 0)
+                try:
+                    signs.append(np.sign(np.linalg.det(sens.compute(eq).tip_jacobian)))
+                except Exception:                               # singular tangent
+                    signs.append(0.0)
+            for a in range(len(signs) - 1):
+                if signs[a] * signs[a + 1] < 0:
+                    out.append(0.5 * (curve.points[a].tip + curve.points[a + 1].tip))
+    return np.array(out).reshape(-1, 2)
+
+
+def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, tendons,
+                   length_mm: float) -> np.ndarray:
+    """d|A|/d(r_i x, r_i y) for each tendon i in ``tendons`` [mm^2 per mm]."""
+    grads = []
+    for i in tendons:
+        velocity = walker.route_velocities(region, start_rows, i)     # (nodes, 2, 2), l per l
+        poly, dense_velocity = loop_polygon(region, length_mm, node_values=velocity)
+        grads.append(union_area_gradient(poly, dense_velocity))          # mm^2 per mm
+    return np.concatenate(grads)
+
+
+def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: bool = True,
+                   tip_folds: bool = True, route_gradients=()) -> BoundaryResult:
+    """The boundary of W_0 (and of the restricted workspace) of a two-tendon arm.
+
+    Returns polygons in mm and areas in mm^2 (module docstring for the
+    definitions).  ``solves`` counts nonlinear solves of the continuation's
+    extended system (each: a few Newton iterations, like one warm-started
+    equilibrium solve).  Raises :class:`BoundaryError` for n != 2 tendons.
+
+    ``route_gradients``: tendon indices (0-based) whose routing points'
+    derivatives of each area are wanted: ``area_gradients[name]`` holds
+    d area / d(r_x, r_y) per tendon, in mm^2 per mm, from the boundary
+    integral of the normal velocity of the loop's nodes (exact for the node
+    polygon; the area itself is that of the Hermite-densified polygon).
+    """
+    disc = Discretisation.from_arm(arm) if disc is None else disc
+    if disc.n_tendons != 2:
+        raise BoundaryError(
+            f"boundary traces curves in a 2-D tension space: it needs exactly 2 tendons, this "
+            f"arm has {disc.n_tendons} (with 3 or more the faces of the tension domain map to "
+            "2-D patches of tip positions; use `workspace` to sample)")
+    t0 = time.perf_counter()
+    regions, polygons, areas, messages, gradients = {}, {}, {}, [], {}
+    folds = np.zeros((0, 2))
+    with CurveTracer(disc) as tracer:
+        w0 = np.concatenate((disc.straight(), np.zeros(2)))
+        wanted = (("W0", False), ("restricted", True)) if restricted else (("W0", False),)
+        for name, extra in wanted:
+            cons = constraints_for(tracer, arm, extra)
+            walker = Walker(tracer, cons)
+            try:
+                region = walker.walk(name, w0, first=cons[1], previous=cons[0])
+                if route_gradients and region.closed:
+                    gradients[name] = _area_gradient(walker, region, cons[1::-1],
+                                                     route_gradients, arm.length_mm)
+            finally:
+                walker.destroy()
+            regions[name] = region
+            poly = loop_polygon(region, arm.length_mm)
+            polygons[name] = [poly]
+            areas[name] = union_area(poly)
+            if not region.closed:
+                messages.append(f"{name}: the walk around the region did not close: "
+                                f"{region.message}")
+            crossings = self_intersections(poly)
+            if crossings:
+                messages.append(f"{name}: the loop's image crosses itself {crossings} times "
+                                "(the tip map is not one-to-one on the region); the area is "
+                                "that of the set it winds around")
+            if name == "W0" and tip_folds:
+                folds = tip_fold_points(tracer, region) * arm.length_mm
+                if len(folds):
+                    messages.append(
+                        f"W0: det(d x_t/d p) changes sign at {len(folds)} points of the loop: "
+                        "fold curves of the tip map run inside the tension region there and are "
+                        "not traced, so near them the polygon may miss parts of W_0 (tips "
+                        "covered twice with opposite orientation have winding number 0)")
+        solves = tracer.solves
+    return BoundaryResult(arm, regions, polygons, areas, folds, solves,
+                          time.perf_counter() - t0, messages, gradients)
+
+
+def winding_number(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Winding number of the closed polygon around each point (Sunday's rule)."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    x, y = points[:, 0][:, None], points[:, 1][:, None]
+    cross = (b[:, 0] - a[:, 0]) * (y - a[:, 1]) - (x - a[:, 0]) * (b[:, 1] - a[:, 1])
+    up = (a[:, 1] <= y) & (b[:, 1] > y) & (cross > 0)
+    down = (a[:, 1] > y) & (b[:, 1] <= y) & (cross < 0)
+    return np.sum(up, axis=1) - np.sum(down, axis=1)
+
+
+def _inside(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
+    return winding_number(poly, points) != 0
+
+
+def _distance_to_edges(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
+    a, b = poly, np.roll(poly, -1, axis=0)
+    ab = b - a
+    out = np.full(len(points), np.inf)
+    for k in range(len(a)):
+        denom = max(float(ab[k] @ ab[k]), 1e-300)
+        t = np.clip((points - a[k]) @ ab[k] / denom, 0.0, 1.0)
+        out = np.minimum(out, np.linalg.norm(points - (a[k] + t[:, None] * ab[k]), axis=1))
+    return out
+
+
+def clip_half_plane(poly: np.ndarray, y_min: float = 0.0) -> np.ndarray:
+    """The part of a closed polygon with y >= y_min (Sutherland-Hodgman, one edge)."""
+    out = []
+    for k in range(len(poly)):
+        a, b = poly[k], poly[(k + 1) % len(poly)]
+        ina, inb = a[1] >= y_min, b[1] >= y_min
+        if ina:
+            out.append(a)
+        if ina != inb:
+            t = (y_min - a[1]) / (b[1] - a[1])
+            out.append(a + t * (b - a))
+    return np.array(out).reshape(-1, 2)
+
+
+def compare_restricted(poly_mm: np.ndarray, targets_mm: np.ndarray, masks: dict,
+                       spacing_mm: float) -> dict:
+    """Agreement of the restricted polygon with a sampled map's masks (Eqs. (18)-(22)):
+    samples in W0 ∩ WY ∩ WS ∩ WE ∩ WP outside it by more than one spacing, and
+    reached samples failing a restriction inside it by more than one spacing."""
+    admissible = masks["W0"] & masks["WY"] & masks["WS"] & masks["WE"] & masks["WP"]
+    failing = masks["W0"] & ~admissible
+    inside = _inside(poly_mm, targets_mm)
+    far = _distance_to_edges(poly_mm, targets_mm) > spacing_mm
+    return {"admissible": int(admissible.sum()),
+            "admissible_outside": int(np.sum(admissible & ~inside & far)),
+            "reached_inadmissible": int(failing.sum()),
+            "reached_inadmissible_inside": int(np.sum(failing & inside & far))}
+
+
+def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np.ndarray,
+                         spacing_mm: float) -> dict:
+    """Agreement of a W_0 polygon with a sampled target map (Fig. 4, y >= 0).
+
+    status: 1 reached, 2 needs a negative tension, 3 not converged
+    (:mod:`elastica_petsc.studies.workspace`).  Counts reached samples outside
+    the polygon by more than one spacing, needing-negative samples inside by
+    more than one spacing, and, for the map of Fig. 4 (the half-disc y >= 0
+    within reach), compares the polygon's area in y >= 0 with
+    the sample count estimate (row y = 0 counts half a cell) and its
+    sampling error, taken as half a cell per unit length of boundary.
+    """
+    inside = _inside(poly_mm, targets_mm)
+    far = _distance_to_edges(poly_mm, targets_mm) > spacing_mm
+    reached, negative = status == 1, status == 2
+    out = {
+        "reached": int(reached.sum()),
+        "reached_outside": int(np.sum(reached & ~inside & far)),
+        "needs_negative": int(negative.sum()),
+        "needs_negative_inside": int(np.sum(negative & inside & far)),
+        "not_converged_inside": int(np.sum((status == 3) & inside)),
+    }
+    reach = np.max(np.abs(targets_mm))
+    half_disc = (np.min(targets_mm[:, 1]) == 0.0
+                 and np.ptp(targets_mm[:, 0]) >= 2 * (reach - spacing_mm))
+    if not half_disc:                    # e.g. a --box map: no area comparison
+        return out
+    clipped = clip_half_plane(poly_mm)
+    weight = np.where(np.isclose(targets_mm[:, 1], 0.0), 0.5, 1.0)
+    estimate = float(np.sum(weight[reached])) * spacing_mm**2
+    perimeter = float(np.sum(np.linalg.norm(np.diff(np.vstack((clipped, clipped[:1])), axis=0),
+                                            axis=1)))
+    return out | {
+        "area_y_ge_0_mm2": union_area(clipped) if len(clipped) > 2 else 0.0,
+        "sample_area_mm2": estimate,
+        "sampling_error_mm2": 0.5 * spacing_mm * perimeter,
+    }

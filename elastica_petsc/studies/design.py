@@ -1,0 +1,217 @@
+"""Designing the arm for a task: routing points that make a path traceable (issue 13).
+
+Objective ``path``: the targets x_k (mm) of a path must all be reachable,
+i.e. lie in W_0 (tips of stable equilibria connected to the straight arm by
+quasi-static loading with all P_i >= 0).  For routing points q (mm, two per
+varied tendon) the path is traced as ``trace`` does (tip control, Eqs.
+(10)-(12), each target warm-started from the previous one), and
+
+    f(q) = sum_k E_k(q),    E_k = min_{p >= 0} |x_t(p; q) - x_k|^2 / 2   [mm^2]
+
+is zero exactly when every target is reached.  Its gradient is exact
+(Danskin's theorem: at the minimiser p_k* of each E_k, with the active bounds
+fixed, the derivative of the minimum is the partial derivative at fixed p):
+
+    dE_k/dq = (x_t - x_k) . d x_t/d q |_{p = p_k*}
+
+and d x_t/d r_i at fixed tensions is one more right-hand side of the bordered
+tangent: J du/dr_i = -dF/dr_i (:meth:`Manifold.route_derivative`, the
+border columns of tendon i of the Jacobian with the sign changed).  The
+derivative is verified by a Taylor test (tests/test_design.py).  TAO BLMVM
+minimises f within bounds: every routing point stays in a box of
++- ``reach_mm`` about its start and ``clearance_mm`` off the arm's line y = 0
+on its side (the cable never starts across the straight arm).  A margin: the
+optimisation runs on a circle-like path scaled by ``margin`` about its
+centroid (a path a little larger than the task), and stops when f = 0.
+
+Not implemented: the smallest peak tension once the path is reachable, the
+area objective (the W_0 polygon is a lower bound where the tip map folds,
+see :mod:`elastica_petsc.studies.boundary`), attachment points as design
+variables, sweeps over designs.
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from petsc4py import PETSc
+
+from ..core.errors import InputError
+from ..core.fem import Discretisation
+from ..core.model import Arm, Tendon
+from ..solvers.continuation import CurveTracer, TensionBound
+from ..solvers.control import TipController
+
+TAO_REASONS = {v: k for k, v in vars(PETSc.TAO.Reason).items() if not k.startswith("_")}
+
+
+class DesignError(InputError):
+    """A design request that cannot be carried out (one line for the user)."""
+
+
+def parse_vary(names, n_tendons: int) -> list[int]:
+    """``tendonK.route`` -> tendon index K-1 (0-based), in order, no repeats."""
+    out = []
+    for name in names:
+        head, _, what = name.partition(".")
+        if not head.startswith("tendon") or not head[6:].isdigit():
+            raise DesignError(f"--vary {name!r}: expected tendonK.route, e.g. tendon1.route")
+        k = int(head[6:])
+        if not 1 <= k <= n_tendons:
+            raise DesignError(f"--vary {name!r}: the arm has tendons 1..{n_tendons}")
+        if what == "attach":
+            raise DesignError(f"--vary {name!r}: attachment points are not design variables "
+                              "(they must sit on mesh nodes); vary routing points")
+        if what != "route":
+            raise DesignError(f"--vary {name!r}: expected tendonK.route")
+        if k - 1 in out:
+            raise DesignError(f"--vary {name!r} given twice")
+        out.append(k - 1)
+    if not out:
+        raise DesignError("--vary: name at least one routing point, e.g. tendon2.route")
+    return out
+
+
+def with_routes(arm: Arm, tendons, q_mm) -> Arm:
+    """The arm with the routing points of ``tendons`` set to q (mm, 2 per tendon)."""
+    new = list(arm.tendons)
+    for j, i in enumerate(tendons):
+        new[i] = Tendon(new[i].attach_mm, (float(q_mm[2 * j]), float(q_mm[2 * j + 1])))
+    return dataclasses.replace(arm, tendons=tuple(new))
+
+
+def route_bounds(arm: Arm, tendons, reach_mm: float, clearance_mm: float):
+    """Lower and upper bounds (mm) of the design vector (module docstring)."""
+    lo, hi = [], []
+    for i in tendons:
+        x, y = arm.tendons[i].route_mm
+        lo.append(x - reach_mm); hi.append(x + reach_mm)
+        if y < 0:
+            lo.append(y - reach_mm); hi.append(min(y + reach_mm, -clearance_mm))
+        else:
+            lo.append(max(y - reach_mm, clearance_mm)); hi.append(y + reach_mm)
+    lo, hi = np.array(lo), np.array(hi)
+    if np.any(lo > hi):
+        raise DesignError(f"a routing point lies within {clearance_mm:g} mm of the arm's line "
+                          "y = 0: move it off the arm first")
+    return lo, hi
+
+
+@dataclass
+class PathMisfit:
+    """f = sum_k E_k [mm^2] of a path for one design, its gradient [mm^2/mm] and
+    the per-target outcome."""
+
+    f: float
+    gradient: np.ndarray
+    reached: np.ndarray
+    errors_mm: np.ndarray
+    p: np.ndarray
+
+
+def path_misfit(arm: Arm, tendons, targets_mm, elements: int | None = None) -> PathMisfit:
+    """Trace the targets (warm-started tip control, from the straight arm with
+    the sampler's head guess p = 2) and differentiate f (module docstring)."""
+    disc = Discretisation.from_arm(arm, elements)
+    l_mm = arm.length_mm
+    targets = np.asarray(targets_mm, float)
+    grad = np.zeros(2 * len(tendons))
+    f, reached, errors, tensions = 0.0, [], [], []
+    with TipController(arm, n_elements=disc.n_elements) as ctl, CurveTracer(disc) as tracer:
+        start, p0 = None, np.full(disc.n_tendons, 2.0)
+        for x_d in targets:
+            res = ctl.solve_mm(x_d, p0=p0 if start is None else None, start=start)
+            start = res.equilibrium
+            reached.append(bool(res.converged))
+            errors.append(res.tip_error_mm)
+            tensions.append(res.p)
+            if res.converged:
+                continue
+            residual_mm = res.tip_mm - x_d
+            f += 0.5 * float(residual_mm @ residual_mm)
+            w = np.concatenate((res.equilibrium.u, res.p))
+            rows = [TensionBound(tracer.mf, j, res.p[j]) for j in range(2)]
+            for j, i in enumerate(tendons):
+                dw = tracer.route_velocity(w, rows, i)                 # per unit of l
+                dtip = np.column_stack([tracer.mf.tip_velocity(w, dw[:, c]) for c in range(2)])
+                grad[2 * j:2 * j + 2] += residual_mm @ dtip            # mm^2 per mm
+    return PathMisfit(f, grad, np.array(reached), np.array(errors), np.array(tensions))
+
+
+@dataclass
+class DesignResult:
+    """History and outcome of a path design (mm, mm^2)."""
+
+    arm_before: Arm
+    arm_after: Arm
+    tendons: list
+    misfit_before: PathMisfit
+    misfit_after: PathMisfit
+    history: list = field(default_factory=list)
+    reason: str = ""
+    iterations: int = 0
+    evaluations: int = 0
+    seconds: float = 0.0
+
+
+def scaled_path(targets_mm, margin: float) -> np.ndarray:
+    """The path scaled by ``margin`` about its centroid (margin 1: unchanged)."""
+    t = np.asarray(targets_mm, float)
+    c = t.mean(axis=0)
+    return c + margin * (t - c)
+
+
+def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = None,
+                    reach_mm: float = 100.0, clearance_mm: float = 10.0, margin: float = 1.1,
+                    max_iterations: int = 20, scale_mm: float = 10.0,
+                    prefix: str = "design_") -> DesignResult:
+    """Routing points (mm) of ``tendons`` (0-based) that make every target of the
+    path reachable (f = 0 on the path scaled by ``margin``), by TAO BLMVM with
+    the exact gradient of the module docstring.  Options prefix ``design_``."""
+    if margin < 1.0:
+        raise DesignError(f"--margin must be at least 1, got {margin}")
+    t0 = time.perf_counter()
+    q0 = np.concatenate([arm.tendons[i].route_mm for i in tendons]).astype(float)
+    lo, hi = route_bounds(arm, tendons, reach_mm, clearance_mm)
+    design_path = scaled_path(targets_mm, margin)
+    history, best = [], {}
+
+    def objective(tao, X, G) -> float:
+        q = q0 + scale_mm * X.getArray(readonly=True)
+        m = path_misfit(with_routes(arm, tendons, q), tendons, design_path, elements)
+        history.append({"q_mm": q.tolist(), "f_mm2": m.f, "reached": int(m.reached.sum()),
+                        "gradient": m.gradient.tolist()})
+        if not best or m.f < best["f"]:
+            best.update(f=m.f, q=q.copy())
+        G.setArray(m.gradient * scale_mm)
+        return m.f
+
+    x = PETSc.Vec().createSeq(len(q0), comm=PETSc.COMM_SELF)
+    x.set(0.0)
+    xl, xu = x.duplicate(), x.duplicate()
+    xl.setArray((lo - q0) / scale_mm)
+    xu.setArray((hi - q0) / scale_mm)
+    tao = PETSc.TAO().create(PETSc.COMM_SELF)
+    tao.setOptionsPrefix(prefix)
+    tao.setType(PETSc.TAO.Type.BLMVM)
+    tao.setObjectiveGradient(objective, None)
+    tao.setVariableBounds(xl, xu)
+    tao.setTolerances(gatol=0.0, grtol=0.0, gttol=0.0)
+    tao.setMaximumIterations(max_iterations)
+    tao.setMonitor(lambda t: t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
+                   if best and best["f"] == 0.0 else None)
+    tao.setFromOptions()
+    try:
+        tao.solve(x)
+        reason = TAO_REASONS.get(tao.getConvergedReason(), str(tao.getConvergedReason()))
+        iterations = tao.getIterationNumber()
+    finally:
+        for obj in (tao, x, xl, xu):
+            obj.destroy()
+    after = with_routes(arm, tendons, best["q"])
+    before_misfit = path_misfit(arm, tendons, targets_mm, elements)
+    after_misfit = path_misfit(after, tendons, targets_mm, elements)
+    return DesignResult(arm, after, list(tendons), before_misfit, after_misfit, history, reason,
+                        iterations, len(history), time.perf_counter() - t0)
