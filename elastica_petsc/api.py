@@ -139,20 +139,61 @@ def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None, side: str | N
     return State(arm, eq, _loading(order))
 
 
-def control(arm: Arm, target_mm, *, guess_N=None, method: str = "blmvm",
-            tol_mm: float = 1e-5, elements: int | None = None):
+def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blmvm",
+            tol_mm: float = 1e-5, global_search: bool = True, cables: str = "prefer",
+            share: str | None = None, min_tension_N: float = 0.0, animate=None,
+            elements: int | None = None):
     """Non-negative tensions that put the tip on ``target_mm`` (Eqs. (10)-(12)):
-    TAO BLMVM (``method="blmvm"``) or the paper's gradient descent
-    (``"gd"``, Algorithm 1).  Returns a ``ControlResult`` (``tensions_N``,
-    ``cable_lengths_mm``, ``tip_mm``, ``converged``, ``reachable``)."""
+    TAO BLMVM (``method="blmvm"``) or the paper's gradient descent (``"gd"``,
+    Algorithm 1), from ``guess_N`` (or ``guess`` in p = P l^2/B; default 0).
+
+    When the local solve stalls, a global search follows (other loading
+    orders, a homotopy in target space) unless ``global_search=False``;
+    ``reachable`` is True, False only with evidence about the whole
+    (``evidence``), or None when the strategies are exhausted without proof.
+    ``cables``: ``"prefer"``/``"require"``/``"ignore"`` states whose cables
+    cross the arm.  With n >= 3 tendons, ``share="min-norm"``/``"min-energy"``
+    and ``min_tension_N`` choose among the tension sets that reach the target.
+    ``animate``: a .gif/.mp4 path for the arm through the iterations.
+    Returns a ``ControlResult`` (``tensions_N``, ``cable_lengths_mm``,
+    ``tip_mm``, ``converged``, ``reachable``, ``loading``)."""
+    import dataclasses
+
     from .solvers.control import TipController
+    from .solvers.reach import Reacher, simplest_loading
 
     target = np.asarray(target_mm, dtype=float).ravel()
     if target.size != 2 or not np.all(np.isfinite(target)):
         raise InputError("target_mm must be two finite numbers [x, y] in mm")
-    p0 = None if guess_N is None else check_tensions(arm.tensions_from_N(guess_N), arm.n_tendons)
+    if guess_N is not None:
+        guess = arm.tensions_from_N(guess_N)
+    p0 = None if guess is None else check_tensions(guess, arm.n_tendons)
     with TipController(arm, n_elements=elements, method=method, tip_tol_mm=tol_mm) as ctl:
-        return ctl.solve_mm(target, p0=p0)
+        result = Reacher(ctl).reach(arm.from_mm(target), p0=p0, global_search=global_search,
+                                    cables=cables)
+        sharer = _sharer(arm, ctl, share, min_tension_N)
+        if sharer is not None and result.converged:
+            result = sharer.solve(result)
+        result = dataclasses.replace(result, loading=simplest_loading(
+            ctl.solver, result.equilibrium, result.loading))
+        if animate:
+            from .plots.animate import animate_control
+            animate_control(ctl, result, animate)
+    return result
+
+
+def _sharer(arm: Arm, controller, share: str | None, min_tension_N: float):
+    """The TensionSharer asked for (n >= 3 tendons), or None."""
+    from .solvers.share import TensionSharer
+
+    if share is None:
+        share = "min-norm" if min_tension_N > 0 else "none"
+    if share == "none":
+        if min_tension_N > 0:
+            raise InputError("a pretension floor (--min-tension-N) needs a sharing rule: "
+                             "drop --share none")
+        return None
+    return TensionSharer(controller, share, float(arm.tensions_from_N(min_tension_N)))
 
 
 def _points(points_mm) -> np.ndarray:

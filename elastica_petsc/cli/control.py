@@ -63,21 +63,6 @@ def add_share_options(parser) -> None:
                              "(every cable taut; implies --share min-norm unless given)")
 
 
-def make_sharer(args, arm, controller):
-    """The TensionSharer the options ask for, or None."""
-    from ..solvers.share import TensionSharer
-
-    share = args.share
-    if share is None:
-        share = "min-norm" if args.min_tension_N > 0 else "none"
-    if share == "none":
-        if args.min_tension_N > 0:
-            from ..core.errors import InputError
-            raise InputError("--min-tension-N needs a sharing rule: drop --share none")
-        return None
-    return TensionSharer(controller, share, float(arm.tensions_from_N(args.min_tension_N)))
-
-
 def control_summary(arm, result) -> dict:
     from ..io.summary import equilibrium_summary, rounded
 
@@ -160,12 +145,7 @@ def format_control(s: dict) -> str:
 
 
 def run(args) -> int:
-    import dataclasses
-
-    import numpy as np
-
-    from ..solvers.control import TipController
-    from ..solvers.reach import Reacher, simplest_loading
+    from .. import api
     from ..core.errors import InputError
 
     arm, disc = common.load_arm(args)
@@ -180,19 +160,10 @@ def run(args) -> int:
     if args.vtk:
         from ..io.vtk import check_directory
         check_directory(args.vtk, args.overwrite)
-    with TipController(arm, n_elements=disc.n_elements, method=args.method,
-                       tip_tol_mm=args.tol_mm) as controller:
-        result = Reacher(controller).reach(np.asarray(args.target) / arm.length_mm, p0=guess,
-                                           global_search=not args.local,
-                                           cables=args.cables)
-        sharer = make_sharer(args, arm, controller)
-        if sharer is not None and result.converged:
-            result = sharer.solve(result)
-        result = dataclasses.replace(result, loading=simplest_loading(
-            controller.solver, result.equilibrium, result.loading))
-        if args.animate:
-            from ..plots.animate import animate_control
-            animate_control(controller, result, args.animate)
+    result = api.control(arm, args.target, guess=guess, method=args.method, tol_mm=args.tol_mm,
+                         global_search=not args.local, cables=args.cables, share=args.share,
+                         min_tension_N=args.min_tension_N, animate=args.animate,
+                         elements=disc.n_elements)
     summary = control_summary(arm, result)
     if args.json:
         common.print_json(summary)
