@@ -220,23 +220,28 @@ def trace(arm: Arm, points_mm, *, step_mm: float | None = None, elements: int | 
 
 
 def schedule(arm: Arm, points_mm, *, step_mm: float = 1.0, speed_mm_s: float | None = None,
-             approach: bool = True, guess_N=None, elements: int | None = None):
+             amplitude_mm: float = 1.0, approach: bool = True, guess_N=None, guess=None,
+             on_point=None, elements: int | None = None):
     """A timed motor schedule for a path (Sec. 4.5): an approach move from the
-    straight arm (or the state at ``guess_N``) to the first point, then the
-    path traced at ``step_mm`` spacing, cable lengths turned into spool
-    revolutions and microsteps, timed at ``speed_mm_s`` (default: the safe
-    tracing speed from the lowest natural frequency, Sec. 4.5 (vi)).  Returns
-    a ``TracedSchedule``: ``.schedule`` (``write_csv(path)``, ``lengths_at(t)``),
-    ``.path`` and ``.approach`` (``TraceResult``), ``.speed``."""
+    straight arm (or the state at ``guess_N``, or ``guess`` in p) to the
+    first point, then the path traced at ``step_mm`` spacing, cable lengths
+    turned into spool revolutions and microsteps, timed at ``speed_mm_s``
+    (default: the safe speed 2 pi f_1 * ``amplitude_mm`` from the lowest
+    natural frequency, Sec. 4.5 (vi)).  ``on_point(done, total)`` reports
+    progress.  Returns a ``TracedSchedule``: ``.schedule`` (``write_csv(path)``,
+    ``lengths_at(t)``), ``.path`` and ``.approach`` (``TraceResult``), ``.speed``."""
     from .solvers.control import TipController
     from .studies import trace as paths
     from .studies.schedule import trace_schedule
 
-    p0 = None if guess_N is None else check_tensions(arm.tensions_from_N(guess_N), arm.n_tendons)
+    if guess_N is not None:
+        guess = arm.tensions_from_N(guess_N)
+    p0 = None if guess is None else check_tensions(guess, arm.n_tendons)
     points = paths.densify(_points(points_mm), step_mm)
     with TipController(arm, n_elements=elements) as ctl:
         return trace_schedule(ctl, points, step_mm=step_mm, speed_mm_s=speed_mm_s,
-                              approach=approach, p0=p0)
+                              amplitude_mm=amplitude_mm, approach=approach, p0=p0,
+                              on_point=on_point)
 
 
 def stability(state: State, *, modes: int = 4):

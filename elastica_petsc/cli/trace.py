@@ -255,20 +255,18 @@ def write_outputs(args, arm, disc, planned) -> None:
 
 
 def run(args) -> int:
+    from .. import api
     from ..core.progress import Progress
-    from ..solvers.control import TipController
-    from ..studies.schedule import trace_schedule
 
     arm, disc = common.load_arm(args)
     check_options(args)
     points = targets(args)
     guess = common.guess(args, disc)
-    with TipController(arm, n_elements=disc.n_elements) as controller, \
-            Progress(len(points), "trace") as bar:
-        planned = trace_schedule(controller, points, step_mm=args.step,
-                                 speed_mm_s=args.speed_mm_s, amplitude_mm=args.amplitude_mm,
-                                 approach=not args.no_approach, p0=guess,
-                                 on_point=lambda done, total: bar.update(done, total=total))
+    with Progress(len(points), "trace") as bar:
+        planned = api.schedule(arm, points, step_mm=args.step, speed_mm_s=args.speed_mm_s,
+                               amplitude_mm=args.amplitude_mm, approach=not args.no_approach,
+                               guess=guess, elements=disc.n_elements,
+                               on_point=lambda done, total: bar.update(done, total=total))
     result = planned.path
     summary = trace_summary(arm, result, planned.schedule)
     summary.update({k: v for k, v in planned.speed.items() if k not in ("speed_mm_s",
