@@ -68,7 +68,7 @@ def plot_samples(data: dict, ax, paths=None) -> None:
     where = target if data["mode"] == "targets" else tip
     for code, colour, marker, label in (
             (REACHED, "tab:green", "o", "reached, P >= 0 (W_0)"),
-            (NEEDS_NEGATIVE, "tab:red", "o", "needs a negative tension"),
+            (NEEDS_NEGATIVE, "tab:red", "o", "ended on P_i = 0 (local verdict)"),
             (NOT_CONVERGED, "0.6", "x", "not converged")):
         sel = status == code
         if sel.any():

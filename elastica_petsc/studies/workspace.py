@@ -71,7 +71,7 @@ STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the other ranks' l
 # status codes of a sample
 NOT_DONE, REACHED, NEEDS_NEGATIVE, NOT_CONVERGED = 0, 1, 2, 3
 STATUS_NAMES = {NOT_DONE: "not computed", REACHED: "reached with P >= 0",
-                NEEDS_NEGATIVE: "needs a negative tension (outside W_0)",
+                NEEDS_NEGATIVE: "tip control ended on P_i = 0 (would need a negative tension locally; not a proof of outside W_0)",
                 NOT_CONVERGED: "not converged"}
 
 
@@ -710,7 +710,10 @@ class WorkspaceMap:
 
     @property
     def status(self) -> np.ndarray:
-        """Per sample: REACHED, NEEDS_NEGATIVE (outside W_0), NOT_CONVERGED or NOT_COMPUTED."""
+        """Per sample: REACHED, NEEDS_NEGATIVE (the local tip-control solve ended on a
+        bound P_i = 0: a local verdict, not a proof that the target is outside W_0;
+        `elastica-petsc boundary` gives the edge by continuation), NOT_CONVERGED or
+        NOT_COMPUTED."""
         return np.array([STATUS_KEYS[int(k)] for k in self.samples["status"]])
 
     @property
