@@ -84,6 +84,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from petsc4py import PETSc
 
+from .options import set_from_options
 from .equilibrium import COLLAPSE_LENGTH, Equilibrium, EquilibriumSolver, check_tensions
 from ..core.errors import InputError
 from ..core.fem import Discretisation
@@ -338,24 +339,8 @@ class TipController:
         if self.lmvm_history is not None:
             defaults["tao_blmvm_mat_lmvm_hist_size"] = str(int(self.lmvm_history))
         defaults.update(options)
-        self._with_options(prefix, defaults, tao.setFromOptions)
+        set_from_options(tao, prefix, defaults)
         self.tao = tao
-
-    # --- options (pushed for setFromOptions only, command line wins) ---------
-    @staticmethod
-    def _with_options(prefix: str, values: dict, action) -> None:
-        opts = PETSc.Options()
-        pushed = []
-        for key, value in values.items():
-            name = prefix + key
-            if not opts.hasName(name):
-                opts[name] = value
-                pushed.append(name)
-        try:
-            action()
-        finally:
-            for name in pushed:
-                opts.delValue(name)
 
     # --- evaluations ----------------------------------------------------------
     def _remember(self, ev: Evaluation) -> None:

@@ -30,6 +30,7 @@ import dataclasses
 import numpy as np
 from petsc4py import PETSc
 
+from .options import set_from_options
 from ..core.errors import InputError
 from .control import ControlResult, Evaluation, TipController
 
@@ -164,6 +165,5 @@ class TensionSharer:
         tao.setMaximumIterations(self.max_it)
         # the subsolver (BQNLS) otherwise stalls at a gradient ~1e-8 of the scaled
         # problem for thousands of iterations (measured on a traced circle)
-        TipController._with_options("share_", {"tao_almm_subsolver_tao_max_it": "100"},
-                                    tao.setFromOptions)
+        set_from_options(tao, "share_", {"tao_almm_subsolver_tao_max_it": "100"})
         return tao, (x, lb, ub, ce, J)
