@@ -10,7 +10,7 @@ nothing else exists.  Non-dimensional (lengths / l, p = P l^2 / B).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import itertools
 
 import numpy as np
@@ -116,6 +116,7 @@ class SearchResult:
     failures: int                 # attempts that did not converge
     duplicates: int               # converged attempts that re-found a known state
     log: tuple = ()               # (start, method, outcome) per attempt
+    curves: dict = field(default_factory=dict)   # the curve search's coverage (length control)
 
     def __len__(self) -> int:
         return len(self.states)
@@ -269,18 +270,29 @@ class _Collector:
         self.log.append((start, method, f"new {len(self.found)}"))
         return True
 
-    def result(self, control, target, starts) -> SearchResult:
+    def result(self, control, target, starts, curves=None) -> SearchResult:
         """The search's result; its starts are ``starts`` and every other start
-        of an attempt (the straight arm of each homotopy path)."""
+        of an attempt (the straight arm of each homotopy path).  With ``curves``
+        (a :class:`~elastica_petsc.studies.preimage.CurveSearch`) only the
+        states in its tension box are kept (the others are counted) and the
+        curves are summarised in ``coverage``."""
         starts = list(starts)
         for label, _, _ in self.log:
             if label not in starts:
                 starts.append(label)
-        numbers = state_numbers([e[0] for e in self.found])
-        found = sorted((FoundState(*e, number=k) for e, k in zip(self.found, numbers)),
+        kept, coverage = self.found, {}
+        if curves is not None:
+            kept = [e for e in self.found if np.all(e[0].p <= curves.p_max)]
+            coverage = {"p_max": float(curves.p_max), "directions": int(curves.directions),
+                        "curves_followed": len(curves.traces), "curve_ends": curves.ends(),
+                        "corrector_solves": int(curves.solves),
+                        "outside_the_box": len(self.found) - len(kept)}
+        numbers = state_numbers([e[0] for e in kept])
+        found = sorted((FoundState(*e, number=k) for e, k in zip(kept, numbers)),
                        key=lambda f: f.number)
         return SearchResult(control, np.asarray(target, float), tuple(found), tuple(starts),
-                            self.attempts, self.failures, self.duplicates, tuple(self.log))
+                            self.attempts, self.failures, self.duplicates, tuple(self.log),
+                            coverage)
 
 
 def homotopy_paths(start, end, steps: int, orders="all") -> list[tuple[str, np.ndarray]]:
@@ -398,34 +410,77 @@ def _deflation_of(found: "_Collector", deflation: Deflation) -> Deflation:
     return deflation
 
 
+# Tension box of a complete length search when the arm has no motor limit (p = P l^2/B).
+DEFAULT_P_MAX = 200.0
+# Directions of the lines through each equilibrium (studies.preimage) at effort 1.
+DEFAULT_DIRECTIONS = 4
+
+
+def search_box(disc_or_arm) -> float:
+    """p_max of the tension box 0 <= p_i <= p_max a length search covers: the
+    motor limit P_crit of Eq. (22) if the arm has one, else DEFAULT_P_MAX."""
+    limit = getattr(disc_or_arm, "max_tension", None)
+    return float(limit) if limit is not None else DEFAULT_P_MAX
+
+
+def _curve_states(solver: LengthSolver, search, found: "_Collector", start: int) -> None:
+    """Offer the crossings ``search.states[start:]`` inside the tension box to
+    ``found``, each polished by one VI Newton solve of the length equations
+    (which also judges its stability under load and length control)."""
+    box = {id(w) for w, _ in search.in_box}
+    for w, label in search.states[start:]:
+        if id(w) not in box:
+            continue
+        u, p = search.mf.split(w)
+        state = solver.solve(search.L, (u, np.maximum(p, 0.0)), label=label)
+        found.offer(state, label, "curve continuation")
+
+
 def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
                       eq_solver: EquilibriumSolver | None = None, continuation: bool = True,
                       effort: int = 1, levels=None, deflation_rounds: int | None = None,
                       passes: int = 2, steps: int | None = None,
-                      tol: float = SAME_SHAPE_TOL) -> SearchResult:
-    """Distinct equilibria with cable lengths ``lengths`` (units of l).
+                      tol: float = SAME_SHAPE_TOL, curves: bool | None = None,
+                      p_max: float = DEFAULT_P_MAX) -> SearchResult:
+    """Distinct equilibria with cable lengths ``lengths`` (units of l) and
+    tensions 0 <= p_i <= ``p_max``.
 
-    In phases k = 1..``effort`` (:func:`effort_settings`, a higher effort
+    (0) With two tendons (``curves``, default on): the systematic search of
+    :class:`~elastica_petsc.studies.preimage.CurveSearch`: pseudo-arclength
+    continuation, through every fold, of curves of the equilibrium manifold
+    whose cable lengths move on a line through L* (from the straight arm,
+    along each loading order, on the faces p_i = 0, then through every
+    equilibrium found in 4 ``effort`` directions); every crossing of L* is an
+    equilibrium.  Its result does not depend on a step count.
+    Then in phases k = 1..``effort`` (:func:`effort_settings`, a higher effort
     repeats the lower ones first, so it never finds fewer states): (1)
     :func:`deflated_continuation` in the cable lengths from the straight arm
-    along every loading order (``steps`` points per segment, default 12 k);
-    (2) from every new start (phase 1: ``starts`` or :func:`tension_starts`
-    at ``levels``, default 5, 10, 20; later phases add doubled levels):
-    continuation in the cable lengths from the start's own lengths
-    (:meth:`LengthSolver.follow`, unstable states allowed), then up to
-    ``deflation_rounds`` (default 2 k) deflated VI Newton solves from the
+    along every loading order (``steps`` points per segment; by default only
+    without ``curves``, 12 k); (2) from every new start (phase 1: ``starts``
+    or :func:`tension_starts` at ``levels``, default 5, 10, 20; later phases
+    add doubled levels): continuation in the cable lengths from the start's
+    own lengths (:meth:`LengthSolver.follow`, unstable states allowed), then up
+    to ``deflation_rounds`` (default 2 k) deflated VI Newton solves from the
     start, each deflating every state found so far (Farrell et al. 2015, l2
     line search, :data:`DEFLATION_OPTIONS`), repeated over the phase's starts
-    while a sweep finds new states (at most ``passes`` sweeps).  States are
-    distinct if some nodal angle differs by more than ``tol`` rad.  Each
-    state reports its stability under load and length control.  What is
+    while a sweep finds new states (at most ``passes`` sweeps).  (3) With
+    ``curves``: the curves through every state (1)-(2) found that (0) had not.
+    States are distinct if some nodal angle differs by more than ``tol`` rad.
+    Each state reports its stability under load and length control.  What is
     returned is what these methods reached, never a claim that no other
     equilibrium exists.
     """
+    from .preimage import CurveSearch, SearchTracer
+
     L = check_lengths(lengths, solver.disc.n_tendons)
     disc = solver.disc
     found = _Collector(tol)
     deflation = Deflation(disc.h)
+    curves = disc.n_tendons == 2 if curves is None else bool(curves)
+    if curves and disc.n_tendons != 2:
+        raise InputError("the curve search of length control needs exactly two tendons")
+    if steps is None and curves:
+        steps = 0                         # the curves replace the deflated continuation
 
     def continue_paths(k_steps: int) -> list:
         straight = solver.solve(solver.lengths_of(disc.straight()))
@@ -453,14 +508,30 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
 
     own = eq_solver is None
     eq_solver = EquilibriumSolver(disc) if own else eq_solver
+    tracer = SearchTracer(disc) if curves else None
     try:
+        search = None
+        if curves:
+            search = CurveSearch(tracer, L, directions=DEFAULT_DIRECTIONS * int(effort),
+                                 p_max=p_max).run()
+            _curve_states(solver, search, found, 0)
+        before = len(found.found)
         used = _phased_search(found, _phases(effort, levels, steps, deflation_rounds), starts,
                               lambda lv: tension_starts(eq_solver, levels=lv), continue_paths,
                               multistart)
+        if curves:
+            start = len(search.states)
+            for entry in found.found[before:]:
+                state = entry[0]
+                if np.all(state.p <= p_max):
+                    search.add(np.concatenate((state.u, state.p)), f"{entry[1]} ({entry[2]})")
+            _curve_states(solver, search.close(), found, start)
     finally:
         if own:
             eq_solver.destroy()
-    return found.result("length", L, used)
+        if tracer is not None:
+            tracer.destroy()
+    return found.result("length", L, used, curves=search)
 
 
 class LoadSolves:
@@ -576,11 +647,14 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
 
 # --- one call each, from an arm (for the command line and the Python API) -------------
 def search_lengths(arm, lengths_mm, *, elements: int | None = None, effort: int = 1,
-                   levels=None, deflation_rounds: int | None = None) -> SearchResult:
+                   levels=None, deflation_rounds: int | None = None,
+                   steps: int | None = None) -> SearchResult:
     """Every equilibrium this search finds with the cable lengths ``lengths_mm``
-    (mm, one per tendon) under length control (Sec. 4.6, Eq. (23)):
-    :func:`length_equilibria` on ``arm`` (``elements``: mesh, default the
-    arm's).  States are non-dimensional (``*_mm`` properties in mm)."""
+    (mm, one per tendon) under length control (Sec. 4.6, Eq. (23)) and
+    tensions 0 <= P_i <= the motor limit P_crit of Eq. (22) (p <= 200 without
+    one, :func:`search_box`): :func:`length_equilibria` on ``arm``
+    (``elements``: mesh, default the arm's).  States are non-dimensional
+    (``*_mm`` properties in mm)."""
     from ..core.fem import Discretisation
 
     disc = Discretisation.from_arm(arm, elements)
@@ -588,7 +662,8 @@ def search_lengths(arm, lengths_mm, *, elements: int | None = None, effort: int 
     with LengthSolver(disc, length_mm=arm.length_mm) as solver, \
             EquilibriumSolver(disc) as eq_solver:
         return length_equilibria(solver, L, eq_solver=eq_solver, effort=effort, levels=levels,
-                                 deflation_rounds=deflation_rounds)
+                                 deflation_rounds=deflation_rounds, steps=steps,
+                                 p_max=search_box(arm))
 
 
 def search_tensions(arm, p, *, elements: int | None = None, effort: int = 1, levels=None,
