@@ -75,6 +75,9 @@ class LengthLine(Constraint):
         self.vector = d if along else np.array([-d[1], d[0]])
         self.name = "along" if along else "line"
 
+    def quantity(self, w) -> np.ndarray:
+        return self._chords(w)[0]
+
     def _chords(self, w):
         disc = self.mf.disc
         y = disc.split(self.mf.split(w)[0])[1]
@@ -90,6 +93,22 @@ class LengthLine(Constraint):
         g = np.zeros(self.mf.m)
         for i in range(disc.n_tendons):
             g[disc.n_elements + 2 * i: disc.n_elements + 2 * i + 2] = -self.vector[i] * d[i]
+        return g
+
+
+class TensionLine(LengthLine):
+    """The same for a line through p* in tension space (load control): c(w) =
+    nu . (p - p*), linear in w; its curves are load paths followed through folds."""
+
+    def quantity(self, w) -> np.ndarray:
+        return self.mf.split(w)[1]
+
+    def value(self, w):
+        return float(self.vector @ (self.quantity(w) - self.target))
+
+    def gradient(self, w):
+        g = np.zeros(self.mf.m)
+        g[self.mf.size:] = self.vector
         return g
 
 
@@ -220,10 +239,13 @@ class CurveSearch:
     that a piece of a curve that leaves the box of reported states (0 <= p_i
     <= p_max) and comes back into it is not lost."""
 
-    def __init__(self, tracer: CurveTracer, target, *, directions: int = 4,
-                 p_max: float = 200.0, margin: float = 1.5, tol: float = 1e-4,
-                 ds0: float = 0.1, max_points: int = 400):
-        self.tracer, self.mf = tracer, tracer.mf
+    def __init__(self, tracer: CurveTracer, target, *, control: str = "length",
+                 directions: int = 4, p_max: float = 200.0, margin: float = 1.5,
+                 tol: float = 1e-4, ds0: float = 0.1, max_points: int = 400):
+        if control not in ("length", "load"):
+            raise ValueError(f"control must be 'length' or 'load', got {control!r}")
+        self.tracer, self.mf, self.control = tracer, tracer.mf, control
+        self.Line = LengthLine if control == "length" else TensionLine
         self.L = np.asarray(target, float)
         self.directions, self.p_max, self.margin, self.tol = directions, p_max, margin, tol
         self.ds0, self.max_points = ds0, max_points
@@ -248,6 +270,10 @@ class CurveSearch:
     def _chords(self, w):
         disc = self.mf.disc
         return disc.cables(disc.split(self.mf.split(w)[0])[1])[0]
+
+    def _quantity(self, w):
+        """The controlled quantity of w: cable chords (length) or tensions (load)."""
+        return self._chords(w) if self.control == "length" else self.mf.split(w)[1]
 
     def add(self, w, label: str, slack: int | None = None) -> bool:
         """Keep a new equilibrium; ``slack``: the cable on a face p = 0 (its
@@ -283,10 +309,10 @@ class CurveSearch:
         ``through``."""
         through = self.L if through is None else through
         d = np.asarray(direction, float) / np.linalg.norm(direction)
-        events = [LengthLine(self.mf, through, d, along=True)]
-        axis = [j for j in range(2) if abs(abs(d[j]) - 1.0) < 1e-12]
+        events = [self.Line(self.mf, through, d, along=True)]
+        axis = [j for j in range(2) if abs(abs(d[j]) - 1.0) < 1e-12 and self.control == "length"]
         events += [TensionBound(self.mf, j, 0.0) for j in axis]   # slack cable j
-        out = self._follow(w, LengthLine(self.mf, through, d), events, label)
+        out = self._follow(w, self.Line(self.mf, through, d), events, label)
         for x, k, how in out if offered else ():
             self.add(x, how, slack=None if k == 0 else axis[0])
         return [x for x, k, _ in out if k == 0]
@@ -300,7 +326,7 @@ class CurveSearch:
         chords and L*.  Then :meth:`close`."""
         disc, L = self.mf.disc, self.L
         straight = np.concatenate((disc.straight(), np.zeros(disc.n_tendons)))
-        L0 = self._chords(straight)
+        L0 = self._quantity(straight)
         self.line(straight, L - L0, "line from the straight arm")
         for i, j in ((0, 1), (1, 0)):
             corner = L0.copy()
@@ -308,14 +334,14 @@ class CurveSearch:
             for w in self.line(straight, np.eye(2)[i], f"cable {i + 1} first", through=corner,
                                offered=False):
                 self.line(w, np.eye(2)[j], f"cable {i + 1} then cable {j + 1}")
-        for i in range(2):
+        for i in range(2 if self.control == "length" else 0):
             for x, _, how in self._follow(straight, TensionBound(self.mf, i, 0.0),
                                           [FaceChord(self.mf, L, 1 - i)],
                                           f"face P{i + 1}=0 from the straight arm"):
                 self.add(x, how, slack=i)
         for w, label in seeds:
-            if np.linalg.norm(L - self._chords(w)) > 1e-9:
-                self.line(w, L - self._chords(w), f"line from {label}")
+            if np.linalg.norm(L - self._quantity(w)) > 1e-9:
+                self.line(w, L - self._quantity(w), f"line from {label}")
         return self.close()
 
     def close(self) -> "CurveSearch":

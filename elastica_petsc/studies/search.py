@@ -423,17 +423,38 @@ def search_box(disc_or_arm) -> float:
     return float(limit) if limit is not None else DEFAULT_P_MAX
 
 
-def _curve_states(solver: LengthSolver, search, found: "_Collector", start: int) -> None:
+def _offer_crossings(search, found: "_Collector", polish, start: int) -> None:
     """Offer the crossings ``search.states[start:]`` inside the tension box to
-    ``found``, each polished by one VI Newton solve of the length equations
-    (which also judges its stability under load and length control)."""
+    ``found``, each polished by ``polish(u, p, label)`` (one Newton solve,
+    which also judges its stability under load and length control)."""
     box = {id(w) for w, _ in search.in_box}
     for w, label in search.states[start:]:
-        if id(w) not in box:
-            continue
-        u, p = search.mf.split(w)
-        state = solver.solve(search.L, (u, np.maximum(p, 0.0)), label=label)
-        found.offer(state, label, "curve continuation")
+        if id(w) in box:
+            u, p = search.mf.split(w)
+            found.offer(polish(u, np.maximum(p, 0.0), label), label, "curve continuation")
+
+
+def _with_curves(disc, target, control: str, p_max: float, effort: int,
+                 found: "_Collector", polish, rest):
+    """The curve search (:class:`~elastica_petsc.studies.preimage.CurveSearch`)
+    around the other methods ``rest()``: first the curves from the straight
+    arm and through every equilibrium they meet, then ``rest()``, then the
+    curves through every state ``rest`` added.  Returns (the CurveSearch,
+    what ``rest`` returned)."""
+    from .preimage import CurveSearch, SearchTracer
+
+    with SearchTracer(disc) as tracer:
+        search = CurveSearch(tracer, target, control=control, p_max=p_max,
+                             directions=DEFAULT_DIRECTIONS * int(effort)).run()
+        _offer_crossings(search, found, polish, 0)
+        before = len(found.found)
+        out = rest()
+        start = len(search.states)
+        for state, label, method, _ in found.found[before:]:
+            if np.all(state.p <= p_max):
+                search.add(np.concatenate((state.u, state.p)), f"{label} ({method})")
+        _offer_crossings(search.close(), found, polish, start)
+    return search, out
 
 
 def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
@@ -455,8 +476,7 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
     Then in phases k = 1..``effort`` (:func:`effort_settings`, a higher effort
     repeats the lower ones first, so it never finds fewer states): (1)
     :func:`deflated_continuation` in the cable lengths from the straight arm
-    along every loading order (``steps`` points per segment; by default only
-    without ``curves``, 12 k); (2) from every new start (phase 1: ``starts``
+    along every loading order (``steps`` points per segment, default 12 k); (2) from every new start (phase 1: ``starts``
     or :func:`tension_starts` at ``levels``, default 5, 10, 20; later phases
     add doubled levels): continuation in the cable lengths from the start's
     own lengths (:meth:`LengthSolver.follow`, unstable states allowed), then up
@@ -470,8 +490,6 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
     returned is what these methods reached, never a claim that no other
     equilibrium exists.
     """
-    from .preimage import CurveSearch, SearchTracer
-
     L = check_lengths(lengths, solver.disc.n_tendons)
     disc = solver.disc
     found = _Collector(tol)
@@ -479,8 +497,6 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
     curves = disc.n_tendons == 2 if curves is None else bool(curves)
     if curves and disc.n_tendons != 2:
         raise InputError("the curve search of length control needs exactly two tendons")
-    if steps is None and curves:
-        steps = 0                         # the curves replace the deflated continuation
 
     def continue_paths(k_steps: int) -> list:
         straight = solver.solve(solver.lengths_of(disc.straight()))
@@ -508,29 +524,23 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
 
     own = eq_solver is None
     eq_solver = EquilibriumSolver(disc) if own else eq_solver
-    tracer = SearchTracer(disc) if curves else None
+
+    def rest():
+        return _phased_search(found, _phases(effort, levels, steps, deflation_rounds), starts,
+                              lambda lv: tension_starts(eq_solver, levels=lv), continue_paths,
+                              multistart)
+
     try:
         search = None
         if curves:
-            search = CurveSearch(tracer, L, directions=DEFAULT_DIRECTIONS * int(effort),
-                                 p_max=p_max).run()
-            _curve_states(solver, search, found, 0)
-        before = len(found.found)
-        used = _phased_search(found, _phases(effort, levels, steps, deflation_rounds), starts,
-                              lambda lv: tension_starts(eq_solver, levels=lv), continue_paths,
-                              multistart)
-        if curves:
-            start = len(search.states)
-            for entry in found.found[before:]:
-                state = entry[0]
-                if np.all(state.p <= p_max):
-                    search.add(np.concatenate((state.u, state.p)), f"{entry[1]} ({entry[2]})")
-            _curve_states(solver, search.close(), found, start)
+            search, used = _with_curves(
+                disc, L, "length", p_max, effort, found,
+                lambda u, p, label: solver.solve(L, (u, p), label=label), rest)
+        else:
+            used = rest()
     finally:
         if own:
             eq_solver.destroy()
-        if tracer is not None:
-            tracer.destroy()
     return found.result("length", L, used, curves=search)
 
 
@@ -584,12 +594,18 @@ class LoadSolves:
 def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1, levels=None,
                deflation_rounds: int | None = None, passes: int = 2, steps: int | None = None,
                tol: float = SAME_SHAPE_TOL, prefix: str = "defl_",
-               length_mm: float | None = None) -> SearchResult:
+               length_mm: float | None = None, curves: bool | None = None,
+               p_max: float = DEFAULT_P_MAX) -> SearchResult:
     """Distinct load-controlled equilibria at fixed tensions ``p``.
 
     (0) Loading paths from the straight arm: proportional and every order
     (:meth:`EquilibriumSolver.solve`, both sides of every bifurcation
-    crossed, :func:`loading_paths`); then in phases k = 1..``effort`` as in
+    crossed, :func:`loading_paths`); with two tendons (``curves``, default
+    on) the curve search of :class:`~elastica_petsc.studies.preimage.CurveSearch`
+    in tension space: load paths followed through their folds by
+    pseudo-arclength continuation (the line from p = 0 to ``p``, each loading
+    order, then lines through ``p`` in 4 ``effort`` directions through every
+    state found, tensions within |p_i| <= 1.5 max(p_max, max p)); then in phases k = 1..``effort`` as in
     :func:`length_equilibria`: (1) :func:`deflated_continuation` in the
     tensions from the straight arm (the only equilibrium at p = 0) along
     every loading order, unstable branches included (``steps`` points per
@@ -601,7 +617,8 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
     sweeps).  Each state is a :class:`LengthEquilibrium` whose prescribed
     lengths are its own cable chords, with ``unstable_modes`` (load control)
     and ``length_unstable_modes`` (the same state held at its cable
-    lengths).  Not a proof of completeness.
+    lengths).  After (1)-(2) the curves through every state they added.  Not
+    a proof of completeness.
     """
     disc = eq_solver.disc
     p = check_tensions(p, disc.n_tendons)
@@ -631,18 +648,30 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
             if len(found.found) == before:
                 break
 
+    def rest():
+        return _phased_search(found, _phases(effort, levels, steps, deflation_rounds), starts,
+                              lambda lv: tension_starts(eq_solver, levels=lv), continue_paths,
+                              multistart)
+
+    curves = n == 2 if curves is None else bool(curves)
+    if curves and n != 2:
+        raise InputError("the curve search needs exactly two tendons")
+    search = None
     try:
         for order in [None] + list(itertools.permutations(range(1, n + 1))):
             how = "proportional" if order is None else "order " + ",".join(map(str, order))
             for eq, side in loading_paths(eq_solver, p, order=order):
                 label = f"straight arm, {how}{side}"
                 found.offer(solves.examined(eq, label), label, "loading path")
-        used = _phased_search(found, _phases(effort, levels, steps, deflation_rounds), starts,
-                              lambda lv: tension_starts(eq_solver, levels=lv), continue_paths,
-                              multistart)
+        if curves:
+            search, used = _with_curves(
+                disc, p, "load", max(p_max, float(np.max(p))), effort, found,
+                lambda u, q, label: solves.solve(p, (u, p), label=label), rest)
+        else:
+            used = rest()
     finally:
         solves.destroy()
-    return found.result("load", p, used)
+    return found.result("load", p, used, curves=search)
 
 
 # --- one call each, from an arm (for the command line and the Python API) -------------
@@ -676,4 +705,5 @@ def search_tensions(arm, p, *, elements: int | None = None, effort: int = 1, lev
     disc = Discretisation.from_arm(arm, elements)
     with EquilibriumSolver(disc) as eq_solver:
         return equilibria(eq_solver, p, effort=effort, levels=levels,
-                          deflation_rounds=deflation_rounds, length_mm=arm.length_mm)
+                          deflation_rounds=deflation_rounds, length_mm=arm.length_mm,
+                          p_max=search_box(arm))
