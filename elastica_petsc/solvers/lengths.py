@@ -539,7 +539,8 @@ class LengthSolver:
 
     # --- continuation in the cable lengths -------------------------------------------------
     def follow(self, lengths, start=None, *, keep_stable: bool = True,
-               min_fraction: float = 1e-4, label: str = "") -> LengthEquilibrium:
+               min_fraction: float = 1e-4, label: str = "",
+               post_critical=None) -> LengthEquilibrium:
         """Continuation from ``start`` (an equilibrium; its own cable chords are
         the initial lengths, or for a slack cable of a LengthEquilibrium its
         prescribed length) to ``lengths`` (units of l) along the straight
@@ -555,9 +556,14 @@ class LengthSolver:
         a stable state found by perturbing the last state along +- its
         constrained buckling mode (:meth:`branches`), or to the distant state
         Newton found if that one is stable; the lengths are recorded in
-        ``jumps``.  If no stable state is found the result has
-        ``converged=False`` and a message.  Without ``keep_stable`` unstable
-        states are followed like stable ones (used by searches).
+        ``jumps``.  If the mode finds none and ``post_critical`` is given,
+        ``post_critical(lengths, u, p)`` (a global search at the critical
+        lengths, e.g. :func:`elastica_petsc.studies.search.snap_targets`)
+        returns stable states (u, p) there, nearest shape first, and the path
+        jumps to the first.  If no stable state is found the result has
+        ``converged=False`` and a message that says it was not found (not that
+        none exists).  Without ``keep_stable`` unstable states are followed
+        like stable ones (used by searches).
         """
         L_end = check_lengths(lengths, self.disc.n_tendons)
         u, p = self._start(start)
@@ -606,6 +612,10 @@ class LengthSolver:
                 instabilities.append(L_t.copy())
                 kinds.append(instability_kind(sys, z, L_end - L_start))
             candidates = self._post_critical(z_new if ok else z, where, lam, step, full)
+            if not candidates and post_critical is not None:
+                u_c, p_c = z[: sys.nu], z[sys.ip:sys.imu]
+                candidates = [(lam, sys.augment(u, q, 1.0))
+                              for u, q in post_critical(where(lam), u_c, p_c)[:1]]
             if ok and jumped and (not lost or not keep):
                 candidates.append((lam + step, z_new))
             if candidates:
@@ -710,10 +720,3 @@ class LengthSolver:
     def __exit__(self, *exc) -> None:
         self.destroy()
 
-
-def follow_lengths(arm, lengths_mm, *, elements: int | None = None) -> LengthEquilibrium:
-    """The equilibrium with cable lengths ``lengths_mm`` (mm) reached from the
-    straight arm by length continuation (:meth:`LengthSolver.follow`: a stable
-    path, snaps and buckling recorded), with a solver made for it."""
-    with LengthSolver.from_arm(arm, elements) as solver:
-        return solver.follow(solver.to_l(lengths_mm))

@@ -317,13 +317,13 @@ class CurveSearch:
             self.add(x, how, slack=None if k == 0 else axis[0])
         return [x for x, k, _ in out if k == 0]
 
-    def run(self, seeds=()) -> "CurveSearch":
+    def run(self, seeds=(), close: bool = True) -> "CurveSearch":
         """From the straight arm (p = 0): the line through its chords L0 and
         L*; each loading order (cable i first: the line L_j = L0_j to its
         crossings with L_i = L*_i, then from each of those the line L_i = L*_i
         through L*); the faces p_i = 0 (slack states: crossings of L_j =
         L*_j).  For every ``seeds`` state (w, label): the line through its
-        chords and L*.  Then :meth:`close`."""
+        chords and L*.  Then (with ``close``) :meth:`close`."""
         disc, L = self.mf.disc, self.L
         straight = np.concatenate((disc.straight(), np.zeros(disc.n_tendons)))
         L0 = self._quantity(straight)
@@ -342,7 +342,7 @@ class CurveSearch:
         for w, label in seeds:
             if np.linalg.norm(L - self._quantity(w)) > 1e-9:
                 self.line(w, L - self._quantity(w), f"line from {label}")
-        return self.close()
+        return self.close() if close else self
 
     def close(self) -> "CurveSearch":
         """Follow the lines through L* in every direction from every queued

@@ -146,13 +146,32 @@ class SearchResult:
             (lambda f: np.max(np.abs(f.state.cable_lengths - ref)))
         return min(self.states, key=key)
 
+    def curve_method(self) -> str:
+        """One sentence on the curve search and its box ('' without one)."""
+        c = self.curves
+        if not c:
+            return ""
+        what = "cable lengths" if self.control == "length" else "tensions"
+        return (f"curve search: equilibrium curves whose {what} move on a line through the "
+                f"target, followed by pseudo-arclength continuation through every fold, from "
+                f"the straight arm (its line and every loading order"
+                + (", the faces P_i = 0" if self.control == "length" else "")
+                + f") and through every state found ({c['directions']} directions); "
+                f"{c['curves_followed']} curves, {c['corrector_solves']} corrector solves; "
+                f"states with 0 <= p_i <= p_max = {c['p_max']:.6g} (the motor limit P_crit "
+                f"of Eq. (22) if the arm sets one, else {DEFAULT_P_MAX:g})"
+                + ("" if not c["outside_the_box"] else
+                   f", {c['outside_the_box']} found beyond it not listed"))
+
     def summary(self) -> str:
         what = "cable lengths L/l" if self.control == "length" else "tensions p"
         lines = [f"{len(self.states)} distinct equilibria at {what} = "
                  + ", ".join(f"{v:.6g}" for v in self.target)
                  + f" from {len(self.starts)} starts ({self.attempts} attempts, "
                  f"{self.failures} failed, {self.duplicates} re-found a known state); "
-                 "not a proof that there are no others"]
+                 "a list, not a proof that there are no others"]
+        if self.curves:
+            lines.append("  " + self.curve_method())
         for f in self.states:
             s = f.state
             lm = getattr(s, "length_unstable_modes", -1)
@@ -707,3 +726,39 @@ def search_tensions(arm, p, *, elements: int | None = None, effort: int = 1, lev
         return equilibria(eq_solver, p, effort=effort, levels=levels,
                           deflation_rounds=deflation_rounds, length_mm=arm.length_mm,
                           p_max=search_box(arm))
+
+
+# --- length continuation with a global search at its critical points ------------------
+def snap_targets(solver: LengthSolver, p_max: float = DEFAULT_P_MAX):
+    """A ``post_critical`` callback for :meth:`LengthSolver.follow` (two
+    tendons): at the critical lengths, every equilibrium the curve search of
+    :class:`~elastica_petsc.studies.preimage.CurveSearch` reaches from the
+    straight arm (0 <= p_i <= ``p_max``), the stable ones under length
+    control (Sec. 4.6), nearest in shape (max nodal angle difference) to the
+    critical state first: where the arm can snap to when the mode
+    perturbation finds no stable state nearby."""
+    from .preimage import CurveSearch, SearchTracer
+
+    def targets(lengths, u_c, p_c) -> list:
+        with SearchTracer(solver.disc) as tracer:
+            search = CurveSearch(tracer, lengths, p_max=p_max).run()
+            crossings = [search.mf.split(w) for w, _ in search.in_box]
+        states = [solver.solve(lengths, (u, np.maximum(p, 0.0))) for u, p in crossings]
+        stable = [s for s in states if s.converged and s.length_unstable_modes == 0]
+        theta_c = solver.disc.split(np.asarray(u_c))[0]
+        stable.sort(key=lambda s: float(np.max(np.abs(s.theta - theta_c))))
+        return [(s.u, s.p) for s in stable]
+
+    return targets
+
+
+def follow_lengths(arm, lengths_mm, *, elements: int | None = None):
+    """The equilibrium with cable lengths ``lengths_mm`` (mm) reached from the
+    straight arm by length continuation (Sec. 4.6; :meth:`LengthSolver.follow`:
+    a stable path, snaps and buckling recorded).  With two tendons, where the
+    buckling mode finds no stable state past a critical point, the arm snaps
+    to the nearest stable state the curve search finds there
+    (:func:`snap_targets`, tensions up to the motor limit of Eq. (22))."""
+    with LengthSolver.from_arm(arm, elements) as solver:
+        post = snap_targets(solver, search_box(arm)) if solver.disc.n_tendons == 2 else None
+        return solver.follow(solver.to_l(lengths_mm), post_critical=post)
