@@ -4,6 +4,13 @@ deliberately brute-force multi-start, independent of the search it checks.
     .venv/bin/python scripts/equilibria_reference.py [--elements 180] [--grid-max 160]
         [--grid-step 10] [--random 400] [--pairs L1 L2 [L1 L2 ...]] [--json out.json]
     .venv/bin/python scripts/equilibria_reference.py --tensions 25.2 10.8
+    .venv/bin/python scripts/equilibria_reference.py --compare ref.json
+
+``--compare`` runs the default search (studies.search.search_lengths /
+search_tensions) on every case of a reference JSON file written by ``--json``
+and prints, per case, the states of the reference inside the search's box
+0 <= p_i <= P_crit l^2/B that the search missed, and those it found beyond
+the reference.
 
 Length control (default; the paper's arm, cable lengths in mm): starts are
 
@@ -80,6 +87,37 @@ def length_reference(solver, grid, rand, L) -> list:
     return [s for s in states if np.all(s.p >= 0.0)]
 
 
+def compare(path: str) -> None:
+    from elastica_petsc.studies.search import search_box, search_lengths, search_tensions
+
+    arm = load_config()
+    with open(path) as fh:
+        ref = json.load(fh)
+    box = search_box(arm)
+    print("| case | reference in the box | default search | missed | found beyond the "
+          "reference | time |")
+    print("|---|---|---|---|---|---|")
+    for case in ref["cases"]:
+        t0 = time.process_time()
+        if "lengths_mm" in case:
+            res = search_lengths(arm, case["lengths_mm"], elements=ref["elements"])
+            name = "L = " + str(tuple(case["lengths_mm"])) + " mm"
+        else:
+            res = search_tensions(arm, case["tensions"], elements=ref["elements"])
+            name = "p = " + str(tuple(case["tensions"]))
+        seconds = time.process_time() - t0
+        ours = [np.asarray(f.state.p) for f in res.states]
+        refs = [np.asarray(r["p"]) for r in case["states"] if max(r["p"]) <= box]
+        tips = [np.asarray(r["tip_mm"]) for r in case["states"] if max(r["p"]) <= box]
+        our_tips = [f.state.tip * arm.length_mm for f in res.states]
+        missed = [tuple(p) for p, t in zip(refs, tips)
+                  if not any(np.max(np.abs(t - q)) < 0.5 for q in our_tips)]
+        extra = [tuple(np.round(p, 2)) for p, t in zip(ours, our_tips)
+                 if not any(np.max(np.abs(t - q)) < 0.5 for q in tips)]
+        print(f"| {name} | {len(refs)} | {len(ours)} | {missed or '-'} | {extra or '-'} "
+              f"| {seconds:.1f} s |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--elements", type=int, default=180)
@@ -90,7 +128,10 @@ def main() -> None:
     ap.add_argument("--pairs", type=float, nargs="+", default=None)
     ap.add_argument("--tensions", type=float, nargs="+", default=None)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--compare", default=None, metavar="REF_JSON")
     args = ap.parse_args()
+    if args.compare:
+        return compare(args.compare)
     arm = load_config()
     disc = Discretisation.from_arm(arm, args.elements)
     levels = np.arange(args.grid_step, args.grid_max + 0.5 * args.grid_step, args.grid_step)
