@@ -128,11 +128,12 @@ def main() -> None:
     ap.add_argument("--pairs", type=float, nargs="+", default=None)
     ap.add_argument("--tensions", type=float, nargs="+", default=None)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--config", default=None, help="an arm TOML file (default: the paper's)")
     ap.add_argument("--compare", default=None, metavar="REF_JSON")
     args = ap.parse_args()
     if args.compare:
         return compare(args.compare)
-    arm = load_config()
+    arm = load_config(args.config) if args.config else load_config()
     disc = Discretisation.from_arm(arm, args.elements)
     levels = np.arange(args.grid_step, args.grid_max + 0.5 * args.grid_step, args.grid_step)
     out = {"elements": args.elements, "grid": [args.grid_step, args.grid_max],

@@ -34,7 +34,7 @@ L_STATE3_MM = np.array([96.2, 454.3])
 
 def cli(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "elastica_petsc.cli", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=120)
+                          capture_output=True, text=True, cwd=cwd, timeout=300)
 
 
 def cli_json(*args):

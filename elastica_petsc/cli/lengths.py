@@ -36,7 +36,8 @@ NOT_COMPLETE = ("These are the equilibria that the listed starts and methods rea
 
 def add_search_options(parser) -> None:
     parser.add_argument("--effort", type=int, default=1, metavar="K",
-                        help="spend about K times the default work: K x 12 deflated "
+                        help="spend about K times the default work: curves through every "
+                             "state in K x 4 directions (two tendons), K x 12 deflated "
                              "continuation points per path segment, K x 2 deflated solves per "
                              "start, and the start tension levels doubled K-1 more times "
                              "(default 1)")

@@ -16,15 +16,23 @@ around every fold of the length path, so every equilibrium on the connected
 piece of C_d through a seed is found, whatever the step sizes: that is what
 makes the search systematic rather than a matter of lucky Newton starts.
 
-Seeds: the straight arm (the only state at p = 0) on the line through its own
-chords L0 and L*, and every equilibrium found, on lines through L* in several
-directions (a found equilibrium lies on every such line; the piece through it
-may carry others).  Repeated until no new equilibrium appears.  A curve ends
-when it closes, leaves the tension box |p_i| <= p_max, when a cable collapses
-onto its routing point, or after ``max_points``; tensions may be negative on
-the way (the manifold does not stop at p = 0), only crossings with p >= 0 count.
-Slack states (a cable with p_i = 0 shorter than L*_i) lie on the faces p_i = 0
-of M: those faces are followed from the straight arm in the same way.
+Seeds (:meth:`CurveSearch.run`): the straight arm (the only state at p = 0) on
+the line through its own chords L0 and L*; each loading order (cable i first:
+the line L_j = L0_j from the straight arm to its crossings of L_i = L*_i, then
+the line L_i = L*_i through L*); the faces p_i = 0 of M from the straight arm
+(slack states: a cable with p_i = 0 no longer than L*_i); then every
+equilibrium found, on lines through L* in several directions (a found
+equilibrium lies on every such line; the piece through it may carry others;
+on a line L_i = L*_i a crossing of p_j = 0 is a slack state too), until no new
+equilibrium appears (:meth:`CurveSearch.close`).  A curve ends when it closes,
+leaves the tension box |p_i| <= margin p_max (wider than the box of reported
+states, 0 <= p_i <= p_max, so that a piece that leaves it and comes back is
+not lost), when a cable collapses onto its routing point, or after
+``max_points``; tensions may be negative on the way (the manifold does not
+stop at p = 0), only crossings with p >= 0 count.
+
+Load control (``control="load"``) uses the same machinery with lines through
+p* in tension space: the curves are load paths followed through their folds.
 
 What this proves: nothing about pieces of M that no seed touches (isolas).
 It is a list, not a proof, but it no longer depends on a continuation step count.
@@ -252,6 +260,8 @@ class CurveSearch:
         self.states: list[tuple[np.ndarray, str]] = []
         self.traces: list[Trace] = []
         self.queue: list[int] = []              # indices into states, to be followed
+        self.done: set = set()                  # (index, direction) curves already followed
+        self.whole = True
         self.solves = 0
 
     @property
@@ -271,33 +281,40 @@ class CurveSearch:
         disc = self.mf.disc
         return disc.cables(disc.split(self.mf.split(w)[0])[1])[0]
 
-    def _quantity(self, w):
+    def quantity(self, w):
         """The controlled quantity of w: cable chords (length) or tensions (load)."""
         return self._chords(w) if self.control == "length" else self.mf.split(w)[1]
 
-    def add(self, w, label: str, slack: int | None = None) -> bool:
+    def add(self, w, label: str, slack: int | None = None) -> int | None:
         """Keep a new equilibrium; ``slack``: the cable on a face p = 0 (its
         chord must not exceed its length).  Taut ones in the box are queued
-        for :meth:`close`.  True if it was new."""
+        for :meth:`close`.  Returns its index in ``states`` (new or already
+        known), None if rejected."""
         w = np.asarray(w, float)
         if slack is not None and self._chords(w)[slack] > self.L[slack] + 1e-12:
-            return False
+            return None
         n_ang = self.mf.disc.n_elements
-        if any(np.max(np.abs(w[:n_ang] - f[0][:n_ang])) <= self.tol for f in self.states):
-            return False
+        for k, f in enumerate(self.states):
+            if np.max(np.abs(w[:n_ang] - f[0][:n_ang])) <= self.tol:
+                return k
         self.states.append((w.copy(), label))
         p = self.mf.split(w)[1]
         if slack is None and np.all(p >= -1e-9) and np.all(p <= self.p_max):
             self.queue.append(len(self.states) - 1)
-        return True
+        return len(self.states) - 1
 
     def _follow(self, w, constraint, events, label) -> list:
+        """Crossings (w, event, label) of the curve through w; ``self.whole``
+        says whether the curve was followed to its ends both ways (closed,
+        box, collapse) rather than given up ("lost", "max_points")."""
         out = []
         before = self.tracer.solves
+        self.whole = True
         for tr in follow_curve(self.tracer, w, constraint, events, label,
                                p_max=self.margin * self.p_max, ds0=self.ds0,
                                max_points=self.max_points):
             self.traces.append(tr)
+            self.whole &= tr.end in ("closed", "p_max", "collapse")
             out += [(x, k, f"{label} ({tr.end})") for x, k in tr.crossings]
         self.solves += self.tracer.solves - before
         return out
@@ -306,7 +323,9 @@ class CurveSearch:
         """Follow the line through ``through`` (default L*) with ``direction``
         from w; its crossings of L* (and, on a line L_i = L*_i, of p_j = 0)
         are added unless ``offered`` is False; returns the crossings of
-        ``through``."""
+        ``through``.  A curve followed to its ends both ways through L* is the
+        same curve from each of its crossings: (crossing, direction) is
+        recorded as done, so :meth:`close` does not follow it again."""
         through = self.L if through is None else through
         d = np.asarray(direction, float) / np.linalg.norm(direction)
         events = [self.Line(self.mf, through, d, along=True)]
@@ -314,7 +333,9 @@ class CurveSearch:
         events += [TensionBound(self.mf, j, 0.0) for j in axis]   # slack cable j
         out = self._follow(w, self.Line(self.mf, through, d), events, label)
         for x, k, how in out if offered else ():
-            self.add(x, how, slack=None if k == 0 else axis[0])
+            index = self.add(x, how, slack=None if k == 0 else axis[0])
+            if index is not None and k == 0 and self.whole and through is self.L:
+                self.done.add((index, tuple(np.round(d, 12))))
         return [x for x, k, _ in out if k == 0]
 
     def run(self, seeds=(), close: bool = True) -> "CurveSearch":
@@ -326,7 +347,7 @@ class CurveSearch:
         chords and L*.  Then (with ``close``) :meth:`close`."""
         disc, L = self.mf.disc, self.L
         straight = np.concatenate((disc.straight(), np.zeros(disc.n_tendons)))
-        L0 = self._quantity(straight)
+        L0 = self.quantity(straight)
         self.line(straight, L - L0, "line from the straight arm")
         for i, j in ((0, 1), (1, 0)):
             corner = L0.copy()
@@ -340,8 +361,8 @@ class CurveSearch:
                                           f"face P{i + 1}=0 from the straight arm"):
                 self.add(x, how, slack=i)
         for w, label in seeds:
-            if np.linalg.norm(L - self._quantity(w)) > 1e-9:
-                self.line(w, L - self._quantity(w), f"line from {label}")
+            if np.linalg.norm(L - self.quantity(w)) > 1e-9:
+                self.line(w, L - self.quantity(w), f"line from {label}")
         return self.close() if close else self
 
     def close(self) -> "CurveSearch":
@@ -350,6 +371,8 @@ class CurveSearch:
         while self.queue:
             k = self.queue.pop(0)
             for d in line_directions(self.directions):
+                if (k, tuple(np.round(d, 12))) in self.done:
+                    continue
                 self.line(self.states[k][0], d,
                           f"line ({d[0]:.3g}, {d[1]:.3g}) through crossing {k + 1}")
         return self

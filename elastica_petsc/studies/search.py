@@ -470,8 +470,10 @@ def _with_curves(disc, target, control: str, p_max: float, effort: int,
         out = rest()
         start = len(search.states)
         for state, label, method, _ in found.found[before:]:
-            if np.all(state.p <= p_max):
-                search.add(np.concatenate((state.u, state.p)), f"{label} ({method})")
+            w = np.concatenate((state.u, state.p))
+            # only states on the lines through the target (a slack cable's chord is short)
+            if np.all(state.p <= p_max) and np.allclose(search.quantity(w), target, atol=1e-8):
+                search.add(w, f"{label} ({method})")
         _offer_crossings(search.close(), found, polish, start)
     return search, out
 
