@@ -497,8 +497,8 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
     Then in phases k = 1..``effort`` (:func:`effort_settings`, a higher effort
     repeats the lower ones first, so it never finds fewer states): (1)
     :func:`deflated_continuation` in the cable lengths from the straight arm
-    along every loading order (``steps`` points per segment, default 12 k); (2) from every new start (phase 1: ``starts``
-    or :func:`tension_starts` at ``levels``, default 5, 10, 20; later phases
+    along every loading order (``steps`` points per segment, default 12 k);
+    (2) from every new start (phase 1: ``starts`` or :func:`tension_starts` at ``levels``, default 5, 10, 20; later phases
     add doubled levels): continuation in the cable lengths from the start's
     own lengths (:meth:`LengthSolver.follow`, unstable states allowed), then up
     to ``deflation_rounds`` (default 2 k) deflated VI Newton solves from the
@@ -626,7 +626,8 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
     in tension space: load paths followed through their folds by
     pseudo-arclength continuation (the line from p = 0 to ``p``, each loading
     order, then lines through ``p`` in 4 ``effort`` directions through every
-    state found, tensions within |p_i| <= 1.5 max(p_max, max p)); then in phases k = 1..``effort`` as in
+    state found, tensions within |p_i| <= 1.5 max(p_max, max p)); then in
+    phases k = 1..``effort`` as in
     :func:`length_equilibria`: (1) :func:`deflated_continuation` in the
     tensions from the straight arm (the only equilibrium at p = 0) along
     every loading order, unstable branches included (``steps`` points per
