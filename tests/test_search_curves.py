@@ -175,3 +175,20 @@ def test_length_limit_point_snaps_to_a_stable_state(arm):
     np.testing.assert_allclose(state.p, [80.71, 1.48], atol=0.01)
     np.testing.assert_allclose(state.tip * 600.0, [-103.5, -495.9], atol=0.1)
     assert np.linalg.norm(state.tip - local.tip) * 600.0 > 250.0          # 293 mm
+
+
+@pytest.mark.parametrize("steps", [8, 16])
+def test_length_search_count_independent_of_continuation_steps(disc, arm, steps):
+    """Issue 12: with 8 or 16 deflated-continuation steps (the default is 12;
+    before the curve search 8 or 16 found three states, 12 five) the search
+    (curves + deflated continuation, no multi-start starts) lists the same
+    six states."""
+    from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+    from elastica_petsc.studies.search import length_equilibria
+
+    with LengthSolver(disc) as ls, EquilibriumSolver(disc) as eq:
+        res = length_equilibria(ls, L_FIG8, [], eq_solver=eq, steps=steps,
+                                p_max=arm.max_tension)
+    found = np.array(sorted(tuple(f.state.p) for f in res.states))
+    assert found.shape == P_SIX.shape, res.summary()
+    np.testing.assert_allclose(found, P_SIX, atol=0.01)

@@ -99,6 +99,8 @@ TAUT_TOL = 1e-8
 # |q . dL| / (|(v, q)| |dL|) below this: a loss of stability under length control is a
 # bifurcation, not a limit point (instability_kind; calibrated on Fig. 7 only, 0.005).
 LENGTH_BIFURCATION_TOL = 0.05
+# Global searches for a state to snap to (``post_critical`` of LengthSolver.follow) per path.
+MAX_SNAP_SEARCHES = 3
 # Two states are the same equilibrium if no nodal angle differs by more (rad).
 SAME_SHAPE_TOL = 1e-4
 # PETSc options (under the solver's prefix) for deflated solves, unless the
@@ -560,7 +562,8 @@ class LengthSolver:
         ``post_critical(lengths, u, p)`` (a global search at the critical
         lengths, e.g. :func:`elastica_petsc.studies.search.snap_targets`)
         returns stable states (u, p) there, nearest shape first, and the path
-        jumps to the first.  If no stable state is found the result has
+        jumps to the first that differs from the critical state by more than
+        ``jump_tol`` (at most :data:`MAX_SNAP_SEARCHES` searches per path).  If no stable state is found the result has
         ``converged=False`` and a message that says it was not found (not that
         none exists).  Without ``keep_stable`` unstable states are followed
         like stable ones (used by searches).
@@ -580,6 +583,7 @@ class LengthSolver:
         lam, dlam, its_total, steps = 0.0, full, 0, 0
         z_prev = dlam_prev = None
         jumps, instabilities, kinds = [], [], []
+        searches = 0
         reason = "CONVERGED_ITERATING"
         n_ang = self.disc.n_elements
 
@@ -612,10 +616,11 @@ class LengthSolver:
                 instabilities.append(L_t.copy())
                 kinds.append(instability_kind(sys, z, L_end - L_start))
             candidates = self._post_critical(z_new if ok else z, where, lam, step, full)
-            if not candidates and post_critical is not None:
-                u_c, p_c = z[: sys.nu], z[sys.ip:sys.imu]
-                candidates = [(lam, sys.augment(u, q, 1.0))
-                              for u, q in post_critical(where(lam), u_c, p_c)[:1]]
+            if not candidates and post_critical is not None and searches < MAX_SNAP_SEARCHES:
+                searches += 1           # a distant state only: never back onto this branch
+                candidates = [(lam, sys.augment(u, q, 1.0)) for u, q in post_critical(
+                    where(lam), z[: sys.nu], z[sys.ip:sys.imu])
+                    if np.max(np.abs(u[:n_ang] - z[:n_ang])) > self.jump_tol][:1]
             if ok and jumped and (not lost or not keep):
                 candidates.append((lam + step, z_new))
             if candidates:

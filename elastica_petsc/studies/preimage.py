@@ -348,7 +348,10 @@ class CurveSearch:
         disc, L = self.mf.disc, self.L
         straight = np.concatenate((disc.straight(), np.zeros(disc.n_tendons)))
         L0 = self.quantity(straight)
-        self.line(straight, L - L0, "line from the straight arm")
+        if np.linalg.norm(L - L0) > 1e-12:       # else the straight arm is the target's state
+            self.line(straight, L - L0, "line from the straight arm")
+        else:
+            self.add(straight, "the straight arm")
         for i, j in ((0, 1), (1, 0)):
             corner = L0.copy()
             corner[i] = L[i]
