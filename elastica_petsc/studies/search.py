@@ -5,8 +5,12 @@ Starts come from loading paths (:func:`tension_starts`); from each start a
 search continues (in the cable lengths) or loads (in the tensions) to the
 target, then runs deflated Newton solves (Farrell et al. 2015,
 :mod:`elastica_petsc.core.deflation`) that cannot return to the states
-already found.  A search reports what it found and from where, never that
-nothing else exists.  Non-dimensional (lengths / l, p = P l^2 / B).
+already found.  With two tendons the searches are built around the curve
+search of :mod:`elastica_petsc.studies.preimage` (curves of equilibria whose
+cable lengths or tensions move on lines through the target, followed through
+folds), which does not depend on a step count.  A search reports what it
+found and from where, never that nothing else exists.  Non-dimensional
+(lengths / l, p = P l^2 / B).
 """
 from __future__ import annotations
 
@@ -116,7 +120,7 @@ class SearchResult:
     failures: int                 # attempts that did not converge
     duplicates: int               # converged attempts that re-found a known state
     log: tuple = ()               # (start, method, outcome) per attempt
-    curves: dict = field(default_factory=dict)   # the curve search's coverage (length control)
+    curves: dict = field(default_factory=dict)   # the curve search's coverage ({}: none)
 
     def __len__(self) -> int:
         return len(self.states)
