@@ -47,10 +47,11 @@ def main(argv: list[str]) -> int:
     from .workspace import run_map
 
     spec = json.loads(Path(argv[1]).read_text())
+    spec["kwargs"].setdefault("progress", False)      # None: progress lines on stderr
     arm = arm_from_dict(spec["arm"])
     try:
         result = run_map(arm, Discretisation.from_arm(arm, spec["elements"]),
-                         progress=False, **spec["kwargs"])
+                         **spec["kwargs"])
     except InputError as err:
         print(f"elastica-petsc: error: {err}", file=sys.stderr)
         return 2
