@@ -15,7 +15,8 @@
   in its ``unit``, and the elapsed time, never a percentage or a time left:
   ``label: 37 search steps  12 s  <note>`` redrawn on a terminal, and in
   logs one line every ``open_log_seconds`` (default 10 s) while work is
-  being done.  ``note`` says what is being done (a phase, a curve).
+  being done (and a last one at the end; runs shorter than that print
+  nothing).  ``note`` says what is being done (a phase, a curve).
 * A Progress is also a callback, ``progress(done, note)``: the library's
   long studies take ``progress=`` (None: silent) and call it.
 * :func:`configure` (``quiet=True``, the command line's ``--quiet``)
@@ -142,7 +143,7 @@ class Progress:
                 self.stream.write("\n")
                 self.stream.flush()
         elif self.mode == "log" and self.total is None:
-            if self.done > self.already and time.monotonic() - self.start >= self.log_seconds:
+            if self._logged_step and self.done != self._logged_step:   # closes a run it logged
                 self._log_open(force=True)
         elif self.mode == "log":
             final = int(100.0 * self.done / max(self.total, 1) // self.log_percent)
