@@ -231,3 +231,18 @@ def test_api_progress_callback_counts_the_boundary_solves():
     counts = [c for c, _ in calls]
     assert counts == sorted(counts) and counts[-1] == result.solves
     assert any(note.startswith("along P") for _, note in calls)
+
+
+def test_a_long_note_is_cut_to_the_terminal_width(monkeypatch):
+    """A redrawn line that wrapped would no longer be redrawn in place."""
+    monkeypatch.setenv("COLUMNS", "40")
+    out = FakeTerminal()
+    with Progress(None, "equilibria", stream=out, interval=0.05, unit="search steps") as bar:
+        bar(12, "continuation in cable lengths, order 2,1: 14/24")
+        time.sleep(0.12)
+        bar(13, "x")
+        time.sleep(0.12)
+    draws = out.getvalue().rstrip("\n").split("\r")[1:]
+    assert max(len(d) for d in draws) <= 39
+    assert "equilibria: 12 search steps  0 s  co..." in draws
+    assert any(d.startswith("equilibria: 13 search steps  0 s  x ") for d in draws)

@@ -204,13 +204,13 @@ class Progress:
 
     def _draw(self) -> None:
         text = self._line()
-        columns = shutil.get_terminal_size((100, 24)).columns - 1
-        if len(text) > columns > 20:
-            text = text[:columns - 3] + "..."
+        width = max(shutil.get_terminal_size((100, 24)).columns - 1, 20)   # never wrap
+        if len(text) > width:
+            text = text[:width - 3] + "..."
         with self._lock:
             if self._halt.is_set() and self.mode != "bar":
                 return
-            pad = max(self._drawn - len(text), 0) + 3      # wipe what a longer line left
+            pad = min(max(self._drawn - len(text), 0) + 3, width - len(text))  # wipe the rest
             self.stream.write(f"\r{text}{' ' * pad}")
             self.stream.flush()
             self._drawn = len(text)
