@@ -230,7 +230,7 @@ def workspace(ctx: Context) -> Path:
                   provenance={"command_line": ctx.command})
     if ctx.comm.size == 1 and ctx.jobs > 1:
         from .studies.workspace_job import spawn
-        # the job's progress: lines on stderr (its mpiexec writes stdout nowhere)
+        # the job's progress: a bar if our stdout is a terminal, else lines on stderr
         status = spawn(ctx.arm, ctx.arm.elements, ctx.jobs, progress=False if quiet() else None,
                        **kwargs)
         if status == 130:
