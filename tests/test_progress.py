@@ -246,3 +246,20 @@ def test_a_long_note_is_cut_to_the_terminal_width(monkeypatch):
     assert max(len(d) for d in draws) <= 39
     assert "equilibria: 12 search steps  0 s  co..." in draws
     assert any(d.startswith("equilibria: 13 search steps  0 s  x ") for d in draws)
+
+
+def test_replay_shows_its_points_in_a_terminal(tmp_path):
+    """`replay` knows its number of points: a bar with the time left, ending at K/K."""
+    made = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "trace", "--shape", "line",
+                           "--center", "400", "200", "--end", "430", "230", "--step", "2",
+                           "--elements", "30", "--out", "t.h5", "--quiet"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=120)
+    assert made.returncode == 0, made.stderr
+    status, events = run_in_pty([sys.executable, "-m", "elastica_petsc.cli", "replay", "t.h5"],
+                                cwd=tmp_path)
+    text = "".join(d for _, d in events)
+    assert status == 0, text
+    draws = [(t, int(m.group(1)), int(m.group(2))) for t, d in events
+             for m in re.finditer(r"replay \[[#.]+\] (\d+)/(\d+)", d)]
+    assert_timely([t for t, _, _ in draws])
+    assert draws[-1][1] == draws[-1][2] == 23                    # 22 steps of 2 mm: 23 points
