@@ -263,3 +263,16 @@ def test_replay_shows_its_points_in_a_terminal(tmp_path):
              for m in re.finditer(r"replay \[[#.]+\] (\d+)/(\d+)", d)]
     assert_timely([t for t, _, _ in draws])
     assert draws[-1][1] == draws[-1][2] == 23                    # 22 steps of 2 mm: 23 points
+
+
+def test_only_rank_0_reports(monkeypatch):
+    monkeypatch.setattr(sys, "stderr", io.StringIO())
+    monkeypatch.setenv("OMPI_COMM_WORLD_RANK", "1")
+    bar = Progress(None, "boundary", unit="solves", log_seconds=0.0, open_log_seconds=0.0)
+    bar(5, "curve")
+    bar.close()
+    assert bar.mode == "off" and sys.stderr.getvalue() == ""
+    monkeypatch.setenv("OMPI_COMM_WORLD_RANK", "0")
+    bar = Progress(None, "boundary", unit="solves", log_seconds=0.0, open_log_seconds=0.0)
+    bar(5, "curve")
+    assert sys.stderr.getvalue() == "boundary: 5 solves, 0 s elapsed; curve\n"

@@ -19,6 +19,8 @@
   nothing).  ``note`` says what is being done (a phase, a curve).
 * A Progress is also a callback, ``progress(done, note)``: the library's
   long studies take ``progress=`` (None: silent) and call it.
+* Under ``mpiexec`` only rank 0 reports (a command that every rank runs
+  alike would otherwise draw one bar per rank).
 * :func:`configure` (``quiet=True``, the command line's ``--quiet``)
   silences every bar and line of the process.
 """
@@ -65,6 +67,15 @@ def _launcher_on_terminal() -> bool:
     return target.startswith(("/dev/pts/", "/dev/tty", "/dev/console"))
 
 
+def _rank() -> int:
+    """This process's MPI rank as its launcher tells it (0 outside mpiexec): a
+    serial command run on several ranks draws one bar, not one per rank."""
+    for name in MPI_RANK_VARIABLES:
+        if os.environ.get(name, "").isdigit():
+            return int(os.environ[name])
+    return 0
+
+
 def _terminal():
     """The stream to draw a bar on, or None: stderr or stdout if a terminal;
     under an MPI launcher, stdout only if the launcher itself writes to one."""
@@ -95,7 +106,7 @@ class Progress:
         self.already = self.done = already
         self.start = time.monotonic()
         self.mode = "off"
-        if not _SETTINGS["quiet"]:
+        if not _SETTINGS["quiet"] and (stream is not None or _rank() == 0):
             if stream is not None:
                 self.stream, self.mode = stream, ("bar" if stream.isatty() else "log")
             else:
