@@ -127,8 +127,8 @@ class Walker:
     """The wall follower around D of the module docstring."""
 
     def __init__(self, tracer: CurveTracer, constraints: list, *, ds0: float = 0.3,
-                 ds_min: float = 1e-5, max_points: int = 400):
-        self.tr = tracer
+                 ds_min: float = 1e-5, max_points: int = 400, progress=None):
+        self.tr, self.progress = tracer, progress        # progress(solves, note) per step
         self.constraints = constraints
         self.fold_system = FoldSystem(tracer.mf)
         self.fold = Fold(self.fold_system)
@@ -178,6 +178,8 @@ class Walker:
         pt, ds = start, self.ds0
         while len(curve.points) < self.max_points:
             new, its = self.tr.step(pt, active, ds)
+            if self.progress is not None:
+                self.progress(self.tr.solves, f"along {active.name}, point {len(curve.points)}")
             if new is None:
                 ds *= 0.5
                 if ds < self.ds_min:
@@ -426,7 +428,7 @@ def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, tendons,
 
 
 def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: bool = True,
-                   tip_folds: bool = True, route_gradients=()) -> BoundaryResult:
+                   tip_folds: bool = True, route_gradients=(), progress=None) -> BoundaryResult:
     """The boundary of W_0 (and of the restricted workspace) of a two-tendon arm.
 
     Returns polygons in mm and areas in mm^2 (module docstring for the
@@ -439,6 +441,8 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
     d area / d(r_x, r_y) per tendon, in mm^2 per mm, from the boundary
     integral of the normal velocity of the loop's nodes (exact for the node
     polygon; the area itself is that of the Hermite-densified polygon).
+    ``progress(solves, note)``, if given, is called after every continuation
+    step (the number of solves is not known in advance).
     """
     disc = Discretisation.from_arm(arm) if disc is None else disc
     if disc.n_tendons != 2:
@@ -454,7 +458,7 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
         wanted = (("W0", False), ("restricted", True)) if restricted else (("W0", False),)
         for name, extra in wanted:
             cons = constraints_for(tracer, arm, extra)
-            walker = Walker(tracer, cons)
+            walker = Walker(tracer, cons, progress=progress)
             try:
                 region = walker.walk(name, w0, first=cons[1], previous=cons[0])
                 if route_gradients and region.closed:
@@ -483,6 +487,8 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
                         "not traced, so near them the polygon may miss parts of W_0 (tips "
                         "covered twice with opposite orientation have winding number 0)")
         solves = tracer.solves
+    if progress is not None:
+        progress(solves, "traced")
     return BoundaryResult(arm, regions, polygons, areas, folds, solves,
                           time.perf_counter() - t0, messages, gradients)
 
