@@ -178,11 +178,14 @@ def test_solve_and_lengths_cli_vtk(tmp_path):
     assert mesh.point_data["theta_rad"][0] == 0.0 and mesh.point_data["s_mm"][ELEMENTS] == 600.0
     # the same cable lengths prescribed (length control) give the same state
     run = _cli("lengths", "--lengths", *map(str, state["cable_lengths_mm"]), "--elements",
-               str(ELEMENTS), "--vtk", str(tmp_path / "L"), "--json")
+               str(ELEMENTS), "--vtk", str(tmp_path / "L"), "--out", str(tmp_path / "L.h5"),
+               "--json")
     assert run.returncode == 0, run.stderr
     sets = ET.parse(tmp_path / "L" / "states.pvd").getroot().findall("./Collection/DataSet")
     assert [(d.get("timestep"), d.get("file")) for d in sets] == [("1", "state_1.vtu")]
     back = meshio.read(tmp_path / "L" / "state_1.vtu")
+    with h5py.File(tmp_path / "L.h5", "r") as fh:                 # --out beside --vtk
+        assert list(fh["equilibria"]) == ["state_1"]
     np.testing.assert_allclose(back.points[:ELEMENTS + 1], mesh.points[:ELEMENTS + 1], atol=1e-3)
     again = _cli("solve", "--tensions", "1", "1", "--vtk", str(tmp_path / "s"))
     assert again.returncode == 2 and "folder is not empty" in again.stderr

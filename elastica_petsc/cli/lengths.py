@@ -311,8 +311,8 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
     if args.plot and states:
         plot(arm, data, states, args.plot, title)
     if args.vtk and states:
-        from ..io.vtk import write_states
-        write_states(args.vtk, arm, states, numbers=[s["number"] for s in data["equilibria"]])
+        from ..io.vtk import write_states as write_vtk       # write_states: the HDF5 above
+        write_vtk(args.vtk, arm, states, numbers=[s["number"] for s in data["equilibria"]])
     if not states:
         msg = data.get("message") or "no equilibrium converged"
         print(f"elastica-petsc: {msg}", file=sys.stderr)
