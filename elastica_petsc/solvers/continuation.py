@@ -183,6 +183,39 @@ class Manifold:
     def norm(self, t: np.ndarray) -> float:
         return float(np.sqrt(np.sum(self.metric * t * t)))
 
+    def tip_gradient(self, w: np.ndarray) -> np.ndarray:
+        """T = d x_t/du, (2, size): x_t = h sum_e (cos phi_e, sin phi_e) with the
+        element midpoint angles phi_e = (theta_e + theta_e+1)/2 (Eq. (2)), so
+        d x_t/d theta_k = (g_k-1 + g_k)/2, g_e = h (-sin phi_e, cos phi_e), g_N = 0."""
+        disc = self.disc
+        phi = disc.element_angles(disc.split(self.split(w)[0])[0])
+        g = disc.h * np.vstack((-np.sin(phi), np.cos(phi)))            # (2, N)
+        out = np.zeros((2, self.size))
+        out[:, : disc.n_elements] = 0.5 * g
+        out[:, : disc.n_elements - 1] += 0.5 * g[:, 1:]
+        return out
+
+    def tip_curvature_term(self, w: np.ndarray, a: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+        """grad_u (a . T(u) alpha) at fixed a (2,) and alpha (size,), padded to (m,):
+        the second derivative of the tip (Eq. (2)) contracted with a and alpha."""
+        disc = self.disc
+        N = disc.n_elements
+        phi = disc.element_angles(disc.split(self.split(w)[0])[0])
+        dphi = disc.element_angles(np.concatenate(([0.0], alpha[:N])))
+        q = disc.h * (-a[0] * np.cos(phi) - a[1] * np.sin(phi)) * dphi   # d/dphi_e
+        out = np.zeros(self.m)
+        out[:N] = 0.5 * q
+        out[:N - 1] += 0.5 * q[1:]
+        return out
+
+    def tip_jacobian(self, w: np.ndarray, lu=None) -> tuple[np.ndarray, np.ndarray, object]:
+        """S = d x_t/dp on M at w (Eq. (13)), alpha = du/dp (size, n) from
+        J alpha = -dF/dp (Eq. (14)) and the LU of J (scipy), for reuse."""
+        from scipy.sparse.linalg import splu
+        lu = splu(self.jacobian(w).tocsc()) if lu is None else lu
+        alpha = -lu.solve(self.load_columns(w))
+        return self.tip_gradient(w) @ alpha, alpha, lu
+
 
 # --- constraints c(w) = 0 cutting curves out of M ----------------------------------
 class Constraint:
@@ -399,6 +432,70 @@ class Fold(Constraint):
         return -(a - b) / (2 * eps)
 
 
+class TipFold(Constraint):
+    """A fold of the tip map on M: det S = 0, S = d x_t/dp (Eq. (13)), inside
+    the stable region (K nonsingular).  The gradient is exact up to one
+    central difference: with A = adj S, a_j its rows, alpha_j = du/dp_j and
+    lambda_j solving J^T lambda_j = T^T a_j,
+
+        d det S = sum_j a_j . (dT alpha_j) - lambda_j . (dJ alpha_j + dF/dp_j),
+
+    where the last bracket is the derivative in the direction d_j = (alpha_j, e_j)
+    of grad_w (lambda_j . F) = (J^T lambda_j, (dF/dp)^T lambda_j), taken as a
+    central difference (F is linear in p)."""
+
+    name = "tip fold"
+
+    def __init__(self, manifold: Manifold):
+        self.mf = manifold
+        self._cache = (None, None)
+
+    def _data(self, w):
+        key = w.tobytes()
+        if self._cache[0] != key:
+            self._cache = (key, self.mf.tip_jacobian(w))
+        return self._cache[1]
+
+    def value(self, w):
+        return float(np.linalg.det(self._data(w)[0]))
+
+    def gradient(self, w):
+        mf = self.mf
+        S, alpha, lu = self._data(w)
+        adj = np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]])
+        T = mf.tip_gradient(w)
+        u, p = mf.split(w)
+        out = np.zeros(mf.m)
+
+        def grad_lambda_F(ww, lam):
+            uu = ww[: mf.size]
+            J = mf.jacobian(ww)
+            return np.concatenate((J.T @ lam, mf.disc.load_derivative(uu) @ lam))
+
+        for j in range(mf.n):
+            out += mf.tip_curvature_term(w, adj[j], alpha[:, j])
+            lam = lu.solve(T.T @ adj[j], trans="T")
+            d = np.concatenate((alpha[:, j], np.eye(mf.n)[j]))
+            eps = 1e-6 / max(np.linalg.norm(d), 1e-300)
+            out -= (grad_lambda_F(w + eps * d, lam) - grad_lambda_F(w - eps * d, lam)) / (2 * eps)
+        return out
+
+
+def _permutation_sign(perm: np.ndarray) -> float:
+    """+1 for an even permutation, -1 for an odd one (cycle decomposition)."""
+    seen = np.zeros(len(perm), bool)
+    sign = 1.0
+    for k in range(len(perm)):
+        if not seen[k]:
+            j, length = k, 0
+            while not seen[j]:
+                seen[j] = True
+                j = perm[j]
+                length += 1
+            sign *= -1.0 if length % 2 == 0 else 1.0
+    return sign
+
+
 @dataclass
 class CurvePoint:
     """An accepted point on a curve: state, tangent and test functions."""
@@ -410,6 +507,7 @@ class CurvePoint:
     unstable_modes: int
     det_sign: float                   # sign of det [dG/dw; t^T] (branch points)
     iterations: int
+    tip_det: float = np.nan           # intrinsic tip-map test (CurveTracer.tangent)
 
 
 @dataclass
@@ -491,28 +589,43 @@ class CurveTracer:
     # --- tangents and test functions --------------------------------------------
     def tangent(self, w: np.ndarray, constraint: Constraint, orient: np.ndarray) -> tuple:
         """Unit tangent (metric D) of the curve {F = 0, c = 0} at w, oriented so
-        that t . D orient > 0, and the sign of det of the bordered matrix."""
-        row = self.mf.metric * orient
-        self._fill(w, np.array([constraint.gradient(w), row]))
-        self.ksp.setOperators(self.A.mat)
-        rhs = self.x.duplicate()
-        rhs.set(0.0)
-        rhs.setValue(self.mf.m - 1, 1.0)
-        rhs.assemble()
-        sol = rhs.duplicate()
-        self.ksp.solve(rhs, sol)
-        t = sol.getArray().copy()
-        rhs.destroy(); sol.destroy()
-        sign, _ = np.linalg.slogdet(self.A.dense())
-        return t / self.mf.norm(t), float(sign)
+        that t . D orient > 0; the sign of det B of the bordered matrix
+        B = [dF/dw; dc/dw; orient^T D]; and the intrinsic tip-map test
 
-    def point(self, w, t, det_sign, iterations) -> CurvePoint:
+            tip_det = sign(det B) det [T tau, T t],   B tau = e_(m-1),
+
+        (tau: the direction in M leaving the curve with dc = 1), which does not
+        depend on the two bordering rows (changing them scales det [T tau, T t]
+        and det B by reciprocal factors).  In the stable region, with the rows
+        picking p, it is det S det J: its sign changes exactly across a fold of
+        the tip map (det S = 0), and it stays finite across the fold of M.
+        One sparse LU (scipy SuperLU, partial pivoting) gives all three."""
+        from scipy.sparse.linalg import splu
+        mf = self.mf
+        self._fill(w, np.array([constraint.gradient(w), mf.metric * orient]))
+        indptr, indices = self.A.csr
+        B = sp.csr_matrix((self.A.values, indices, indptr), shape=(mf.m, mf.m)).tocsc()
+        lu = splu(B)
+        rhs = np.zeros((mf.m, 2))
+        rhs[-1, 0] = rhs[-2, 1] = 1.0
+        sol = lu.solve(rhs)
+        diag = lu.U.diagonal()
+        sign = float(np.prod(np.sign(diag)) * _permutation_sign(lu.perm_r)
+                     * _permutation_sign(lu.perm_c))
+        scale = mf.norm(sol[:, 0])
+        t, tau = sol[:, 0] / scale, sol[:, 1]
+        T = mf.tip_gradient(w)
+        n = mf.size
+        tip_det = sign * float(np.linalg.det(np.column_stack((T @ tau[:n], T @ t[:n]))))
+        return t, sign, tip_det
+
+    def point(self, w, t, det_sign, iterations, tip_det: float = np.nan) -> CurvePoint:
         u, p = self.mf.split(w)
         return CurvePoint(w=w.copy(), t=t.copy(), tip=self.mf.tip(w),
                           tip_velocity=self.mf.tip_velocity(w, t),
                           # on a face p_i = 0 a round-off -1e-17 must not reach sqrt(p)
                           unstable_modes=self.inertia.negative_eigenvalues(u, np.maximum(p, 0)),
-                          det_sign=det_sign, iterations=iterations)
+                          det_sign=det_sign, iterations=iterations, tip_det=tip_det)
 
     def correct(self, w_guess: np.ndarray, constraints) -> tuple[np.ndarray, bool]:
         """Solve F = 0 with two scalar constraints (a corner of two curves)."""
@@ -560,8 +673,8 @@ class CurveTracer:
             return None, its
         if np.linalg.norm(self.mf.tip(w) - pt.tip) > self.max_tip_step:
             return None, its
-        t, det_sign = self.tangent(w, constraint, pt.t)
-        return self.point(w, t, det_sign, its), its
+        t, det_sign, tip_det = self.tangent(w, constraint, pt.t)
+        return self.point(w, t, det_sign, its, tip_det), its
 
     def destroy(self) -> None:
         self.inertia.destroy()

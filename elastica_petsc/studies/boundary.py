@@ -59,7 +59,7 @@ from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm
 from ..solvers.continuation import (CableCollapse, Curve, CurveTracer, Fold, FoldSystem,
-                                    StateLevel, TensionBound)
+                                    StateLevel, TensionBound, TipFold)
 from ..solvers.equilibrium import COLLAPSE_LENGTH
 
 
@@ -93,7 +93,12 @@ class RegionBoundary:
 
 @dataclass
 class BoundaryResult:
-    """W_0 and restricted boundaries of one arm (units: mm and mm^2)."""
+    """W_0 and restricted boundaries of one arm (units: mm and mm^2).
+
+    fold_curves: fold curves of the tip map inside D (:class:`FoldTracer`),
+    fold_polylines_mm their tip images; crossings: where the intrinsic tip-map
+    test changes sign on the W0 loop (each traced or with a note why not).
+    """
 
     arm: Arm
     regions: dict                       # name -> RegionBoundary ("W0", "restricted")
@@ -104,10 +109,55 @@ class BoundaryResult:
     seconds: float
     messages: list = field(default_factory=list)
     area_gradients: dict = field(default_factory=dict)   # name -> d area/d routes [mm^2/mm]
+    fold_curves: list = field(default_factory=list)
+    fold_polylines_mm: list = field(default_factory=list)
+    crossings: list = field(default_factory=list)
+    cell_mm: float = 0.0
+    _outside: object = field(default=None, repr=False)
 
     @property
     def area_mm2(self) -> float:
         return self.areas_mm2["W0"]
+
+    @property
+    def untraced_folds(self) -> list[str]:
+        """Why each loop crossing of a tip-map fold was not traced, and curves
+        that did not end on the region's boundary ([] when all are traced)."""
+        out = [f"crossing at ({x.tip[0] * self.arm.length_mm:.1f}, "
+               f"{x.tip[1] * self.arm.length_mm:.1f}) mm: {x.note or 'not traced'}"
+               for x in self.crossings if not x.traced]
+        out += [f"fold curve from ({c.points[0].tip[0] * self.arm.length_mm:.1f}, "
+                f"{c.points[0].tip[1] * self.arm.length_mm:.1f}) mm ended: {c.end}"
+                for c in self.fold_curves if c.end != "corner"]
+        return out
+
+    @property
+    def outside_map(self) -> "OutsideMap":
+        """The unbounded component of the plane minus the W0 loop's image and
+        the fold images (:class:`OutsideMap`, built on first use)."""
+        if self._outside is None:
+            lines = self.polygons_mm["W0"] + self.fold_polylines_mm
+            self._outside = OutsideMap(lines, self.cell_mm, closed=(0,))
+        return self._outside
+
+    def outside(self, target_mm, margin_mm: float | None = None) -> tuple[str, float]:
+        """(evidence, distance in mm): evidence is '' unless ``target_mm`` is
+        proven outside W_0 by docs/model.md §9: the loop is closed, every fold
+        of the tip map meeting it is traced to the region's boundary, and the
+        target lies in the unbounded component of the plane minus the loop's
+        and the folds' images, farther than ``margin_mm`` (default 3 cells)
+        from them.  The distance is to the nearest traced curve."""
+        target = np.asarray(target_mm, float).reshape(1, 2)
+        margin = 3 * self.cell_mm if margin_mm is None else margin_mm
+        dist = float(self.outside_map.distance(target)[0])
+        if not self.regions["W0"].closed or self.untraced_folds:
+            return "", dist
+        if not self.outside_map.outside(target)[0] or dist <= margin:
+            return "", dist
+        return (f"OUTSIDE_BOUNDARY: the target lies outside the traced boundary of W_0 "
+                f"(loop of {len(self.regions['W0'].curves)} curves and "
+                f"{len(self.fold_curves)} tip-map fold curves), {dist:.3g} mm from it "
+                "(docs/model.md §9)"), dist
 
 
 def constraints_for(tracer: CurveTracer, arm: Arm, restricted: bool) -> list:
@@ -143,8 +193,8 @@ class Walker:
         return lambda w: constraint.side * constraint.gradient(w) / self.tr.mf.metric
 
     def _start_point(self, w, active, into):
-        t, det_sign = self.tr.tangent(w, active, into(w))
-        return self.tr.point(w, t, det_sign, 0)
+        t, det_sign, tip_det = self.tr.tangent(w, active, into(w))
+        return self.tr.point(w, t, det_sign, 0, tip_det)
 
     def _locate(self, a, b, active, hit) -> np.ndarray | None:
         """Corner where ``hit`` becomes active between accepted points a and b."""
@@ -254,6 +304,167 @@ class Walker:
                 dw = self.tr.route_velocity(pt.w, rows, tendon)
                 out.append(np.column_stack([mf.tip_velocity(pt.w, dw[:, c]) for c in range(2)]))
         return np.array(out)
+
+
+@dataclass
+class Crossing:
+    """Where the intrinsic tip-map test changes sign on the loop: between nodes
+    ``a`` and ``b`` of curve ``curve`` (b = -1: across the corner at its end)."""
+
+    curve: int
+    a: int
+    b: int
+    tip: np.ndarray                    # midpoint of the two nodes' tips (units of l)
+    p: np.ndarray                      # midpoint of their tensions
+    traced: bool = False
+    note: str = ""
+
+
+def tip_fold_crossings(region: RegionBoundary) -> list[Crossing]:
+    """Sign changes of the intrinsic tip-map test (:meth:`CurveTracer.tangent`)
+    between consecutive nodes of the loop, corners included (the corner nodes
+    carry no test value: the comparison is between the last node before and
+    the first node after).  Each is where a fold curve of the tip map inside
+    D meets the loop (or, for a pair of changes within one step, two that
+    meet it close together: a step hides an even number)."""
+    nodes = [(k, j, pt) for k, c in enumerate(region.curves) for j, pt in enumerate(c.points)
+             if np.isfinite(pt.tip_det) and pt.tip_det != 0.0]
+    out = []
+    for (k0, j0, a), (k1, j1, b) in zip(nodes, nodes[1:] + nodes[:1]):
+        if np.sign(a.tip_det) == np.sign(b.tip_det):
+            continue
+        same = k0 == k1 and j1 == j0 + 1
+        out.append(Crossing(k0, j0, j1 if same else -1, 0.5 * (a.tip + b.tip),
+                            0.5 * (a.w[-2:] + b.w[-2:])))
+    return out
+
+
+class FoldTracer:
+    """Fold curves of the tip map inside D (det S = 0, :class:`TipFold`), each
+    followed by :meth:`Walker.follow` from a loop crossing into D until it
+    leaves D (another constraint becomes active, or stability is lost)."""
+
+    def __init__(self, walker: Walker):
+        self.walker = walker
+        self.tipfold = TipFold(walker.tr.mf)
+
+    def _start(self, region: RegionBoundary, x: Crossing):
+        """Corner of the loop curve and det S = 0 near crossing ``x``, and the
+        direction into D; None where the loop curve is the fold of M (det S
+        is unbounded there) or the corrector fails."""
+        walker, curves = self.walker, region.curves
+        curve = curves[x.curve]
+        if x.b == -1:                                 # across a corner: start at the corner
+            nxt = curves[(x.curve + 1) % len(curves)]
+            corner = curve.points[-1].w
+            if abs(self.tipfold.value(corner)) > 1e-8 * _scale(self.tipfold, corner):
+                return None, "sign change across a corner away from det S = 0"
+            into = [walker._orient(curve.active), walker._orient(nxt.active)]
+            return corner, (lambda w: into[0](w) + into[1](w))
+        if curve.active is walker.fold:
+            return None, "on the fold of M (det S unbounded there)"
+        a, b = curve.points[x.a], curve.points[x.b]
+        frac = a.tip_det / (a.tip_det - b.tip_det)
+        w, ok = walker.tr.correct(a.w + frac * (b.w - a.w), [curve.active, self.tipfold])
+        if not ok:
+            return None, f"corrector failed ({walker.tr.reason()})"
+        return w, walker._orient(curve.active)
+
+    def trace(self, region: RegionBoundary, crossings: list[Crossing]) -> list[Curve]:
+        """Trace a fold curve from every crossing not yet reached by an earlier
+        one (a curve ending within 1e-6 l (tip) of a crossing marks it traced)."""
+        curves = []
+        for x in crossings:
+            if x.traced:
+                continue
+            w, into = self._start(region, x)
+            if w is None:
+                x.note = into
+                continue
+            start = self.walker._start_point(w, self.tipfold, into)
+            curve, _, _ = self.walker.follow(start, self.tipfold)
+            curves.append(curve)
+            x.traced = True
+            end = curve.points[-1]
+            for y in crossings:
+                if not y.traced and curve.end == "corner" and _near(end, y):
+                    y.traced = True
+        return curves
+
+
+def _near(point, crossing: Crossing, tol: float = 0.05) -> bool:
+    """A traced curve's end is at a crossing: tips within ``tol`` l and the
+    crossing between nodes on either side (its midpoint estimate)."""
+    return (np.linalg.norm(point.tip - crossing.tip) < tol
+            and np.linalg.norm(point.w[-2:] - crossing.p) < 10 * tol * (1 + np.abs(crossing.p).max()))
+
+
+def _scale(constraint, w) -> float:
+    return max(float(np.linalg.norm(constraint.gradient(w))), 1e-300)
+
+
+class OutsideMap:
+    """The unbounded component of the plane minus a set of polylines (mm), on
+    a grid: every cell that a polyline touches is a wall (segments sampled at
+    half a cell, each sample walling its 3 x 3 block of cells, so no touched
+    cell is missed), and the free cells 4-connected to the grid's border are
+    outside.  A point whose cell is outside can be joined to infinity by a
+    path of closed free cells, which meets no polyline: it lies in the
+    unbounded component (sound up to the polylines standing for the curves)."""
+
+    def __init__(self, polylines: list, cell_mm: float, closed: tuple = ()):
+        from scipy import ndimage
+
+        pts = np.vstack(polylines)
+        self.cell = float(cell_mm)
+        self.origin = pts.min(axis=0) - 4 * self.cell
+        shape = np.ceil((pts.max(axis=0) + 4 * self.cell - self.origin) / self.cell).astype(int)
+        wall = np.zeros(shape, bool)
+        self.segments = []
+        for k, line in enumerate(polylines):
+            line = np.vstack((line, line[:1])) if k in closed else line
+            a, b = line[:-1], line[1:]
+            self.segments.append((a, b))
+            n = np.maximum(np.ceil(np.linalg.norm(b - a, axis=1) / (0.5 * self.cell)), 1)
+            for i, j in self._samples(a, b, n.astype(int)):
+                wall[np.clip(i, 0, shape[0] - 1), np.clip(j, 0, shape[1] - 1)] = True
+        labels, _ = ndimage.label(~wall)
+        border = np.unique(np.concatenate((labels[0], labels[-1], labels[:, 0], labels[:, -1])))
+        self.outside_cells = np.isin(labels, border[border > 0])
+        self.shape = shape
+
+    def _samples(self, a, b, n):
+        for k in range(len(a)):
+            s = np.linspace(0.0, 1.0, n[k] + 1)[:, None]
+            ij = np.floor((a[k] + s * (b[k] - a[k]) - self.origin) / self.cell).astype(int)
+            for di in (-1, 0, 1):
+                for dj in (-1, 0, 1):
+                    yield ij[:, 0] + di, ij[:, 1] + dj
+
+    def outside(self, points_mm: np.ndarray) -> np.ndarray:
+        """True where the point's cell is outside (off the grid: outside)."""
+        ij = np.floor((np.atleast_2d(points_mm) - self.origin) / self.cell).astype(int)
+        on = np.all((ij >= 0) & (ij < self.shape), axis=1)
+        out = np.ones(len(ij), bool)
+        out[on] = self.outside_cells[ij[on, 0], ij[on, 1]]
+        return out
+
+    def distance(self, points_mm: np.ndarray) -> np.ndarray:
+        """Distance (mm) from each point to the nearest polyline."""
+        pts = np.atleast_2d(points_mm)
+        out = np.full(len(pts), np.inf)
+        for a, b in self.segments:
+            ab = b - a
+            denom = np.maximum(np.einsum("kc,kc->k", ab, ab), 1e-300)
+            t = np.clip(((pts[:, None, :] - a[None]) * ab[None]).sum(-1) / denom, 0.0, 1.0)
+            near = a[None] + t[..., None] * ab[None]
+            out = np.minimum(out, np.linalg.norm(pts[:, None, :] - near, axis=-1).min(axis=1))
+        return out
+
+    def hull_area(self) -> float:
+        """Area (mm^2) of the cells not outside (walls included): an upper
+        bound of the area enclosed, within a wall's width of the curves."""
+        return float(np.sum(~self.outside_cells)) * self.cell**2
 
 
 def union_area(poly: np.ndarray, step: float | None = None) -> float:
@@ -388,32 +599,6 @@ def self_intersections(poly: np.ndarray) -> int:
     return count
 
 
-def tip_fold_points(tracer: CurveTracer, region: RegionBoundary) -> np.ndarray:
-    """Tips (units of l) where det S changes sign between nodes of the loop's
-    stable curves (not on the fold itself, where S is unbounded)."""
-    from ..solvers.sensitivity import SensitivitySolver
-    from ..solvers.equilibrium import Equilibrium
-
-    disc = tracer.mf.disc
-    out = []
-    with SensitivitySolver(disc, prefix="bsens_") as sens:
-        for curve in region.curves:
-            if curve.constraint == "fold":
-                continue
-            signs = []
-            for pt in curve.points:
-                u, p = tracer.mf.split(pt.w)
-                eq = Equilibrium(disc, p.copy(), u.copy(), True, "", 0, 0)
-                try:
-                    signs.append(np.sign(np.linalg.det(sens.compute(eq).tip_jacobian)))
-                except Exception:                               # singular tangent
-                    signs.append(0.0)
-            for a in range(len(signs) - 1):
-                if signs[a] * signs[a + 1] < 0:
-                    out.append(0.5 * (curve.points[a].tip + curve.points[a + 1].tip))
-    return np.array(out).reshape(-1, 2)
-
-
 def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, tendons,
                    length_mm: float) -> np.ndarray:
     """d|A|/d(r_i x, r_i y) for each tendon i in ``tendons`` [mm^2 per mm]."""
@@ -448,7 +633,7 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
             "2-D patches of tip positions; use `workspace` to sample)")
     t0 = time.perf_counter()
     regions, polygons, areas, messages, gradients = {}, {}, {}, [], {}
-    folds = np.zeros((0, 2))
+    fold_crossings, fold_curves = [], []
     with CurveTracer(disc) as tracer:
         w0 = np.concatenate((disc.straight(), np.zeros(2)))
         wanted = (("W0", False), ("restricted", True)) if restricted else (("W0", False),)
@@ -457,6 +642,9 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
             walker = Walker(tracer, cons)
             try:
                 region = walker.walk(name, w0, first=cons[1], previous=cons[0])
+                if name == "W0" and tip_folds:
+                    fold_crossings = tip_fold_crossings(region)
+                    fold_curves = FoldTracer(walker).trace(region, fold_crossings)
                 if route_gradients and region.closed:
                     gradients[name] = _area_gradient(walker, region, cons[1::-1],
                                                      route_gradients, arm.length_mm)
@@ -474,17 +662,24 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
                 messages.append(f"{name}: the loop's image crosses itself {crossings} times "
                                 "(the tip map is not one-to-one on the region); the area is "
                                 "that of the set it winds around")
-            if name == "W0" and tip_folds:
-                folds = tip_fold_points(tracer, region) * arm.length_mm
-                if len(folds):
-                    messages.append(
-                        f"W0: det(d x_t/d p) changes sign at {len(folds)} points of the loop: "
-                        "fold curves of the tip map run inside the tension region there and are "
-                        "not traced, so near them the polygon may miss parts of W_0 (tips "
-                        "covered twice with opposite orientation have winding number 0)")
         solves = tracer.solves
-    return BoundaryResult(arm, regions, polygons, areas, folds, solves,
-                          time.perf_counter() - t0, messages, gradients)
+    folds = np.array([x.tip for x in fold_crossings]).reshape(-1, 2) * arm.length_mm
+    result = BoundaryResult(arm, regions, polygons, areas, folds, solves,
+                            time.perf_counter() - t0, messages, gradients, fold_curves,
+                            [curve_polyline(c, arm.length_mm) for c in fold_curves], fold_crossings,
+                            cell_mm=arm.length_mm / 1000)
+    messages += [f"W0: tip-map fold not traced: {why} (no OUTSIDE_BOUNDARY verdicts)"
+                 for why in result.untraced_folds]
+    return result
+
+
+def curve_polyline(curve: Curve, length_mm: float) -> np.ndarray:
+    """Tip image of one curve in mm, Hermite-densified (:func:`hermite_densify`)."""
+    tip = np.array([pt.tip for pt in curve.points])
+    vel = np.array([pt.tip_velocity for pt in curve.points])
+    if len(tip) < 3:
+        return tip * length_mm
+    return np.vstack((hermite_densify(tip[:-1], vel[:-1]), tip[-1:])) * length_mm
 
 
 def winding_number(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
