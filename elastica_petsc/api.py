@@ -150,7 +150,10 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
     When the local solve stalls, a global search follows (other loading
     orders, a homotopy in target space) unless ``global_search=False``;
     ``reachable`` is True, False only with evidence about the whole
-    (``evidence``), or None when the strategies are exhausted without proof.
+    (``evidence``: ``BEYOND_REACH``, |x_d| > l; ``OUTSIDE_BOUNDARY``, outside
+    the traced boundary of W_0, docs/model.md §9, traced once per arm in the
+    process when the search is exhausted), or None when the strategies are
+    exhausted without proof.
     ``cables``: ``"prefer"``/``"require"``/``"ignore"`` states whose cables
     cross the arm.  With n >= 3 tendons, ``share="min-norm"``/``"min-energy"``
     and ``min_tension_N`` choose among the tension sets that reach the target.
@@ -161,6 +164,7 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
 
     from .solvers.control import TipController
     from .solvers.reach import Reacher, simplest_loading
+    from .studies.boundary import boundary_proof
 
     target = np.asarray(target_mm, dtype=float).ravel()
     if target.size != 2 or not np.all(np.isfinite(target)):
@@ -169,8 +173,9 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
         guess = arm.tensions_from_N(guess_N)
     p0 = None if guess is None else check_tensions(guess, arm.n_tendons)
     with TipController(arm, n_elements=elements, method=method, tip_tol_mm=tol_mm) as ctl:
-        result = Reacher(ctl).reach(arm.from_mm(target), p0=p0, global_search=global_search,
-                                    cables=cables)
+        reacher = Reacher(ctl, boundary=boundary_proof(arm, ctl.disc))
+        result = reacher.reach(arm.from_mm(target), p0=p0, global_search=global_search,
+                               cables=cables)
         sharer = _sharer(arm, ctl, share, min_tension_N)
         if sharer is not None and result.converged:
             result = sharer.solve(result)

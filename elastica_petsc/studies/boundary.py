@@ -773,3 +773,27 @@ def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np
         "sample_area_mm2": estimate,
         "sampling_error_mm2": 0.5 * spacing_mm * perimeter,
     }
+
+
+_PROOFS: dict = {}          # boundary per arm and mesh, in-process (boundary_proof)
+
+
+def boundary_proof(arm: Arm, disc: Discretisation | None = None):
+    """A callable for :class:`~elastica_petsc.solvers.reach.Reacher`'s ``boundary``:
+    target (units of l) -> (evidence, distance in units of l), from
+    :meth:`BoundaryResult.outside`.  The boundary is traced on the first
+    call (W_0 only, folds traced) and kept per arm and mesh for the process;
+    arms with other than two tendons give no evidence ('')."""
+    disc = Discretisation.from_arm(arm) if disc is None else disc
+    key = (arm.length_mm, disc.n_elements, disc.attach_nodes, np.asarray(disc.routes).tobytes(),
+           arm.max_tension)
+
+    def outside(target: np.ndarray) -> tuple[str, float]:
+        if disc.n_tendons != 2:
+            return "", float("nan")
+        if key not in _PROOFS:
+            _PROOFS[key] = trace_boundary(arm, disc, restricted=False)
+        evidence, dist = _PROOFS[key].outside(np.asarray(target, float) * arm.length_mm)
+        return evidence, dist / arm.length_mm
+
+    return outside
