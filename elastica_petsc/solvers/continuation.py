@@ -433,27 +433,59 @@ class Fold(Constraint):
 
 
 class TipFold(Constraint):
-    """A fold of the tip map on M: det S = 0, S = d x_t/dp (Eq. (13)), inside
-    the stable region (K nonsingular).  The gradient is exact up to one
-    central difference: with A = adj S, a_j its rows, alpha_j = du/dp_j and
-    lambda_j solving J^T lambda_j = T^T a_j,
+    """A fold of the tip map on M: rank [d x_t along M] < 2, Eq. (13).
 
-        d det S = sum_j a_j . (dT alpha_j) - lambda_j . (dJ alpha_j + dF/dp_j),
+    With R (2 x m) rows transverse to the tangent plane of M, the bordered
+    matrix B = [dF/dw; R] and tau = B^-1 [0; I] (two vectors spanning the
+    tangent plane), c = det (T tau), T = d x_t/du.  Its zero set does not
+    depend on R (another R multiplies c by a nonzero factor), and with
+    R = [0 I] (the tension rows) it is det S = 0, S = d x_t/dp; a frame R
+    from the tangent plane itself keeps B regular across the fold of M (where
+    det S is unbounded).  The frame is fixed within a corrector solve and
+    moved to the current tangent plane at accepted points (:meth:`update`).
+    Gradient, with A = adj(T tau), a_j its rows, mu_j = B^-T [T^T a_j; 0]:
 
-    where the last bracket is the derivative in the direction d_j = (alpha_j, e_j)
-    of grad_w (lambda_j . F) = (J^T lambda_j, (dF/dp)^T lambda_j), taken as a
-    central difference (F is linear in p)."""
+        dc = sum_j a_j . (dT tau_j) - mu_j . (dG tau_j),   G = dF/dw,
+
+    the last term as the forward difference, in the direction tau_j, of
+    grad_w (mu_j . F) = (J^T mu_j, (dF/dp)^T mu_j)."""
 
     name = "tip fold"
 
     def __init__(self, manifold: Manifold):
         self.mf = manifold
+        self.R = None
+        self._cache = (None, None)
+
+    def reset(self, w) -> None:
+        """Frame R = [0 I] (tension rows: regular where K is), then moved to w."""
+        self.R = np.zeros((self.mf.n, self.mf.m))
+        self.R[:, self.mf.size:] = np.eye(self.mf.n)
+        self._cache = (None, None)
+        self.update(w)
+
+    def update(self, w) -> None:
+        """Frame from the tangent plane at w (D-orthonormalised, orientation kept)."""
+        tau = self._data(w)[1]
+        metric = self.mf.metric
+        q = tau / np.sqrt(np.sum(metric[:, None] * tau * tau, axis=0))[None]
+        second = q[:, 1] - (metric * q[:, 0]) @ q[:, 1] * q[:, 0]
+        q[:, 1] = second / self.mf.norm(second)
+        self.R = (metric[:, None] * q).T
         self._cache = (None, None)
 
     def _data(self, w):
+        from scipy.sparse.linalg import splu
         key = w.tobytes()
         if self._cache[0] != key:
-            self._cache = (key, self.mf.tip_jacobian(w))
+            mf = self.mf
+            G = sp.hstack((mf.jacobian(w), sp.csr_matrix(mf.load_columns(w))))
+            lu = splu(sp.vstack((G, sp.csr_matrix(self.R))).tocsc())
+            rhs = np.zeros((mf.m, mf.n))
+            rhs[mf.size:] = np.eye(mf.n)
+            tau = lu.solve(rhs)
+            T = mf.tip_gradient(w)
+            self._cache = (key, (T @ tau[: mf.size], tau, lu, T))
         return self._cache[1]
 
     def value(self, w):
@@ -461,23 +493,22 @@ class TipFold(Constraint):
 
     def gradient(self, w):
         mf = self.mf
-        S, alpha, lu = self._data(w)
+        S, tau, lu, T = self._data(w)
         adj = np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]])
-        T = mf.tip_gradient(w)
-        u, p = mf.split(w)
-        out = np.zeros(mf.m)
 
-        def grad_lambda_F(ww, lam):
-            uu = ww[: mf.size]
+        def grad_mu_F(ww, mu):
             J = mf.jacobian(ww)
-            return np.concatenate((J.T @ lam, mf.disc.load_derivative(uu) @ lam))
+            return np.concatenate((J.T @ mu, mf.disc.load_derivative(ww[: mf.size]) @ mu))
 
+        out = np.zeros(mf.m)
         for j in range(mf.n):
-            out += mf.tip_curvature_term(w, adj[j], alpha[:, j])
-            lam = lu.solve(T.T @ adj[j], trans="T")
-            d = np.concatenate((alpha[:, j], np.eye(mf.n)[j]))
-            eps = 1e-6 / max(np.linalg.norm(d), 1e-300)
-            out -= (grad_lambda_F(w + eps * d, lam) - grad_lambda_F(w - eps * d, lam)) / (2 * eps)
+            out += mf.tip_curvature_term(w, adj[j], tau[: mf.size, j])
+            rhs = np.zeros(mf.m)
+            rhs[: mf.size] = T.T @ adj[j]
+            mu = lu.solve(rhs, trans="T")[: mf.size]
+            d = tau[:, j]
+            eps = 1e-7 / max(mf.norm(d), 1e-300)
+            out -= (grad_mu_F(w + eps * d, mu) - grad_mu_F(w, mu)) / eps
         return out
 
 

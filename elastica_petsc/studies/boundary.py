@@ -252,8 +252,8 @@ class Walker:
                 curve.points.append(new)
                 curve.end = "branch point (det of the extended Jacobian changed sign)"
                 return curve, None, None
-            if active is self.fold:
-                self.fold.update(new.w)
+            if active is self.fold or isinstance(active, TipFold):
+                active.update(new.w)
             curve.points.append(new)
             pt = new
             ds = min(ds * 2.0 if its <= 3 else ds, self.tr.ds_max)
@@ -357,13 +357,15 @@ class FoldTracer:
         if x.b == -1:                                 # across a corner: start at the corner
             nxt = curves[(x.curve + 1) % len(curves)]
             corner = curve.points[-1].w
+            self.tipfold.reset(corner)
             if abs(self.tipfold.value(corner)) > 1e-8 * _scale(self.tipfold, corner):
                 return None, "sign change across a corner away from det S = 0"
             into = [walker._orient(curve.active), walker._orient(nxt.active)]
             return corner, (lambda w: into[0](w) + into[1](w))
         if curve.active is walker.fold:
-            return None, "on the fold of M (det S unbounded there)"
+            return None, "on the fold of M (the frame of TipFold.reset is singular there)"
         a, b = curve.points[x.a], curve.points[x.b]
+        self.tipfold.reset(a.w)
         frac = a.tip_det / (a.tip_det - b.tip_det)
         w, ok = walker.tr.correct(a.w + frac * (b.w - a.w), [curve.active, self.tipfold])
         if not ok:
