@@ -45,9 +45,9 @@ bordering vectors b, c (approximate right and left null vectors of J),
 
 sigma vanishes exactly where J (hence K, its Schur complement) is singular,
 and d sigma/dw = -psi^T (dJ/dw) v.  The last term is a directional second
-derivative of F; it is computed as the central difference, in the direction
-v, of the gradient of psi^T F (one Jacobian evaluation on each side: error
-O(eps^2) ~ 1e-10 relative).
+derivative of F; it is computed as the forward difference, in the direction
+v, of the gradient of psi^T F (one more Jacobian evaluation; relative error
+~1e-7, far below what the Newton corrector notices).
 """
 from __future__ import annotations
 
@@ -85,10 +85,9 @@ class ContinuationError(RuntimeError):
     """The curve could not be followed (step too small, singular system)."""
 
 
-class BorderedAIJ:
-    """A PETSc AIJ matrix [[A, C], [R]]: the sparse pattern A (size x size) of
-    fem's Jacobian bordered by k dense columns C and k dense rows R
-    (k x (size + k)); the pattern is fixed, values are reset in one call."""
+class BorderedPattern:
+    """CSR structure of [[A, C], [R]]: the sparse pattern A (size x size) of
+    fem's Jacobian bordered by k dense columns C and k dense rows R."""
 
     def __init__(self, indptr, indices, size: int, k: int):
         nnz_rows = np.diff(indptr)
@@ -103,15 +102,45 @@ class BorderedAIJ:
         new_idx[self.col_pos] = size + np.arange(k)
         new_idx[self.row_pos] = np.arange(size + k)
         self.csr = (new_ptr, new_idx)
-        self.size, self.k = size, k
-        self.values = np.zeros(new_ptr[-1])
-        self.mat = PETSc.Mat().createAIJ(size=(size + k, size + k), csr=(new_ptr, new_idx,
+        self.n = size + k
+
+    def values(self, base_values, columns, rows) -> np.ndarray:
+        out = np.empty(self.csr[0][-1])
+        out[self.base_pos] = base_values
+        out[self.col_pos] = columns
+        out[self.row_pos] = rows
+        return out
+
+    def lu_of_transpose(self, values):
+        """SuperLU (scipy, partial pivoting) of B^T, B the CSR matrix with these
+        values (its CSR arrays are the CSC arrays of B^T): B x = b is
+        ``lu.solve(b, trans="T")``, B^T y = c is ``lu.solve(c)``."""
+        from scipy.sparse.linalg import splu
+        Bt = sp.csc_matrix((values, self.csr[1], self.csr[0]), shape=(self.n, self.n))
+        # natural order: the dense border is last, so its fill stays in the border
+        return splu(Bt, permc_spec="NATURAL")
+
+
+def lu_determinant_sign(lu) -> float:
+    """Sign of det of the matrix factored by a scipy SuperLU object."""
+    return float(np.prod(np.sign(lu.U.diagonal())) * _permutation_sign(lu.perm_r)
+                 * _permutation_sign(lu.perm_c))
+
+
+class BorderedAIJ:
+    """A PETSc AIJ matrix [[A, C], [R]]: the sparse pattern A (size x size) of
+    fem's Jacobian bordered by k dense columns C and k dense rows R
+    (k x (size + k)); the pattern is fixed, values are reset in one call."""
+
+    def __init__(self, indptr, indices, size: int, k: int):
+        self.pattern = BorderedPattern(indptr, indices, size, k)
+        self.csr, self.size, self.k = self.pattern.csr, size, k
+        self.values = np.zeros(self.csr[0][-1])
+        self.mat = PETSc.Mat().createAIJ(size=(size + k, size + k), csr=(*self.csr,
                                          self.values), comm=PETSc.COMM_SELF)
 
     def fill(self, base_values, columns, rows, mat: PETSc.Mat | None = None) -> None:
-        self.values[self.base_pos] = base_values
-        self.values[self.col_pos] = columns
-        self.values[self.row_pos] = rows
+        self.values[:] = self.pattern.values(base_values, columns, rows)
         target = self.mat if mat is None else mat
         target.setValuesCSR(*self.csr, self.values)
         target.assemble()
@@ -151,6 +180,14 @@ class Manifold:
         u, p = self.split(w)
         return sp.csr_matrix((self.disc.jacobian_values(u, p), self.csr[1], self.csr[0]),
                              shape=(self.size, self.size))
+
+    def residual_gradient(self, w: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """grad_w (v . F) = (J^T v, (dF/dp)^T v), (m,), without building a matrix."""
+        u, p = self.split(w)
+        rows = np.repeat(np.arange(self.size), np.diff(self.csr[0]))
+        jt_v = np.bincount(self.csr[1], weights=self.disc.jacobian_values(u, p) * v[rows],
+                           minlength=self.size)
+        return np.concatenate((jt_v, self.disc.load_derivative(u) @ v))
 
     def load_columns(self, w: np.ndarray) -> np.ndarray:
         """dF/dp, (size, n): the tensions' columns (Eq. (14)); F is linear in p."""
@@ -383,14 +420,10 @@ class FoldSystem:
         v, s = self._solve(w, False)
         # transpose of [J b; c^T 0] is [J^T c; b^T 0]: its solution is (psi, s)
         psi, _ = self._solve(w, True)
-        eps = 1e-6 / max(np.linalg.norm(v), 1e-300)
-        u, p = self.mf.split(w)
-
-        def grad_psi_F(uu):
-            J = self.mf.jacobian(np.concatenate((uu, p)))
-            return np.concatenate((J.T @ psi, self.mf.disc.load_derivative(uu) @ psi))
-
-        dJv = (grad_psi_F(u + eps * v) - grad_psi_F(u - eps * v)) / (2 * eps)
+        eps = 1e-7 / max(np.linalg.norm(v), 1e-300)
+        step = np.concatenate((eps * v, np.zeros(self.mf.n)))
+        # forward difference in the direction v of grad_w (psi . F)
+        dJv = (self.mf.residual_gradient(w + step, psi) - self.mf.residual_gradient(w, psi)) / eps
         return s, -dJv, v / np.linalg.norm(v)
 
     def destroy(self) -> None:
@@ -456,6 +489,7 @@ class TipFold(Constraint):
         self.mf = manifold
         self.R = None
         self._cache = (None, None)
+        self.pattern = BorderedPattern(*manifold.csr, manifold.size, manifold.n)
 
     def reset(self, w) -> None:
         """Frame R = [0 I] (tension rows: regular where K is), then moved to w."""
@@ -475,15 +509,15 @@ class TipFold(Constraint):
         self._cache = (None, None)
 
     def _data(self, w):
-        from scipy.sparse.linalg import splu
         key = w.tobytes()
         if self._cache[0] != key:
             mf = self.mf
-            G = sp.hstack((mf.jacobian(w), sp.csr_matrix(mf.load_columns(w))))
-            lu = splu(sp.vstack((G, sp.csr_matrix(self.R))).tocsc())
+            u, p = mf.split(w)
+            values = self.pattern.values(mf.disc.jacobian_values(u, p), mf.load_columns(w), self.R)
+            lu = self.pattern.lu_of_transpose(values)                  # of B^T
             rhs = np.zeros((mf.m, mf.n))
             rhs[mf.size:] = np.eye(mf.n)
-            tau = lu.solve(rhs)
+            tau = lu.solve(rhs, trans="T")
             T = mf.tip_gradient(w)
             self._cache = (key, (T @ tau[: mf.size], tau, lu, T))
         return self._cache[1]
@@ -496,19 +530,15 @@ class TipFold(Constraint):
         S, tau, lu, T = self._data(w)
         adj = np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]])
 
-        def grad_mu_F(ww, mu):
-            J = mf.jacobian(ww)
-            return np.concatenate((J.T @ mu, mf.disc.load_derivative(ww[: mf.size]) @ mu))
-
         out = np.zeros(mf.m)
         for j in range(mf.n):
             out += mf.tip_curvature_term(w, adj[j], tau[: mf.size, j])
             rhs = np.zeros(mf.m)
             rhs[: mf.size] = T.T @ adj[j]
-            mu = lu.solve(rhs, trans="T")[: mf.size]
+            mu = lu.solve(rhs)[: mf.size]                              # B^T mu = rhs
             d = tau[:, j]
             eps = 1e-7 / max(mf.norm(d), 1e-300)
-            out -= (grad_mu_F(w + eps * d, mu) - grad_mu_F(w, mu)) / eps
+            out -= (mf.residual_gradient(w + eps * d, mu) - mf.residual_gradient(w, mu)) / eps
         return out
 
 
@@ -563,6 +593,7 @@ class CurveTracer:
         self.mf = Manifold(disc)
         mf = self.mf
         self.jump_tol, self.max_tip_step, self.ds_max = jump_tol, max_tip_step, ds_max
+        self.step_max_it = 6
         self.A = BorderedAIJ(*mf.csr, mf.size, mf.n)
         self.x = PETSc.Vec().createSeq(mf.m, comm=PETSc.COMM_SELF)
         self.f = self.x.duplicate()
@@ -597,9 +628,10 @@ class CurveTracer:
         w = X.getArray(readonly=True)
         self._fill(w, np.array([gradient(w) for _, gradient in self._rows]))
 
-    def _solve(self, w0: np.ndarray, rows) -> tuple[np.ndarray, bool, int]:
+    def _solve(self, w0: np.ndarray, rows, max_it: int = 12) -> tuple[np.ndarray, bool, int]:
         self._rows = rows
         self.x.setArray(w0)
+        self.snes.setTolerances(max_it=max_it)
         self.snes.solve(None, self.x)
         self.solves += 1
         reason = self.snes.getConvergedReason()
@@ -631,18 +663,15 @@ class CurveTracer:
         picking p, it is det S det J: its sign changes exactly across a fold of
         the tip map (det S = 0), and it stays finite across the fold of M.
         One sparse LU (scipy SuperLU, partial pivoting) gives all three."""
-        from scipy.sparse.linalg import splu
         mf = self.mf
-        self._fill(w, np.array([constraint.gradient(w), mf.metric * orient]))
-        indptr, indices = self.A.csr
-        B = sp.csr_matrix((self.A.values, indices, indptr), shape=(mf.m, mf.m)).tocsc()
-        lu = splu(B)
+        u, p = mf.split(w)
+        values = self.A.pattern.values(mf.disc.jacobian_values(u, p), mf.load_columns(w),
+                                       np.array([constraint.gradient(w), mf.metric * orient]))
+        lu = self.A.pattern.lu_of_transpose(values)                    # of B^T
         rhs = np.zeros((mf.m, 2))
         rhs[-1, 0] = rhs[-2, 1] = 1.0
-        sol = lu.solve(rhs)
-        diag = lu.U.diagonal()
-        sign = float(np.prod(np.sign(diag)) * _permutation_sign(lu.perm_r)
-                     * _permutation_sign(lu.perm_c))
+        sol = lu.solve(rhs, trans="T")
+        sign = lu_determinant_sign(lu)                                 # det B^T = det B
         scale = mf.norm(sol[:, 0])
         t, tau = sol[:, 0] / scale, sol[:, 1]
         T = mf.tip_gradient(w)
@@ -693,10 +722,19 @@ class CurveTracer:
         rv.destroy(); sol.destroy()
         return out
 
+    def step_limit(self, pt: CurvePoint) -> float:
+        """The step length whose predicted tip step is 0.8 max_tip_step (a
+        longer one would be rejected after its corrector)."""
+        speed = float(np.linalg.norm(pt.tip_velocity))
+        return 0.8 * self.max_tip_step / speed if speed > 0 else self.ds_max
+
     def step(self, pt: CurvePoint, constraint: Constraint, ds: float):
-        """One predictor-corrector step of length ds: (point | None, iterations)."""
+        """One predictor-corrector step of length ds: (point | None, iterations).
+        The corrector gets ``step_max_it`` Newton iterations: from the tangent
+        predictor a step that needs more is too long (it is halved)."""
         w_pred = pt.w + ds * pt.t
-        w, ok, its = self._solve(w_pred, [self._row(constraint), self._arclength_row(pt.t, w_pred)])
+        w, ok, its = self._solve(w_pred, [self._row(constraint), self._arclength_row(pt.t, w_pred)],
+                                 max_it=self.step_max_it)
         if not ok:
             return None, its
         n_angles = self.mf.disc.n_elements

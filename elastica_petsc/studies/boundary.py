@@ -227,6 +227,7 @@ class Walker:
         curve = Curve(active.name, [start], active=active)
         pt, ds = start, self.ds0
         while len(curve.points) < self.max_points:
+            ds = min(ds, self.tr.step_limit(pt))
             new, its = self.tr.step(pt, active, ds)
             if new is None:
                 ds *= 0.5
@@ -474,23 +475,24 @@ def union_area(poly: np.ndarray, step: float | None = None) -> float:
     (the region W_0 when the loop crosses itself; the shoelace area would
     count a doubly wound part twice).  Scan lines at the midpoints of strips
     of height ``step`` (default 1/2000 of the height): on each, the crossings
-    are sorted and the winding number accumulated."""
+    are sorted and the winding number accumulated (all lines at once)."""
     a, b = poly, np.roll(poly, -1, axis=0)
     y0, y1 = float(np.min(poly[:, 1])), float(np.max(poly[:, 1]))
     step = (y1 - y0) / 2000 if step is None else step
-    ys = np.arange(y0 + step / 2, y1, step)
-    lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
     total = 0.0
-    for y in ys:
-        k = np.flatnonzero((lo <= y) & (hi > y))
-        if len(k) < 2:
-            continue
-        t = (y - a[k, 1]) / (b[k, 1] - a[k, 1])
-        x = a[k, 0] + t * (b[k, 0] - a[k, 0])
-        direction = np.where(b[k, 1] > a[k, 1], 1, -1)
-        order = np.argsort(x)
-        winding = np.cumsum(direction[order])[:-1]
-        total += float(np.sum(np.diff(x[order])[winding != 0]))
+    lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
+    dy = np.where(b[:, 1] != a[:, 1], b[:, 1] - a[:, 1], 1.0)
+    direction = np.where(b[:, 1] > a[:, 1], 1, -1)
+    for ys in np.array_split(np.arange(y0 + step / 2, y1, step), 8):
+        y = ys[:, None]
+        hit = (lo <= y) & (hi > y)                                   # (lines, edges)
+        x = np.where(hit, a[:, 0] + (y - a[:, 1]) / dy * (b[:, 0] - a[:, 0]), 1e300)
+        order = np.argsort(x, axis=1)
+        xs = np.take_along_axis(x, order, axis=1)
+        winding = np.cumsum(np.take_along_axis(np.where(hit, direction, 0), order, axis=1),
+                            axis=1)[:, :-1]
+        gaps = np.diff(xs, axis=1)
+        total += float(np.sum(np.where(winding != 0, gaps, 0.0)))
     return total * step
 
 
@@ -585,20 +587,17 @@ def self_intersections(poly: np.ndarray) -> int:
     """Number of crossings between non-adjacent edges of a closed polygon."""
     a, b = poly, np.roll(poly, -1, axis=0)
     n = len(a)
-    count = 0
-    for i in range(n):
-        j = np.arange(i + 2, n if i > 0 else n - 1)
-        if len(j) == 0:
-            continue
-        p, r = a[i], b[i] - a[i]
-        q, s = a[j], b[j] - a[j]
-        denom = r[0] * s[:, 1] - r[1] * s[:, 0]
-        qp = q - p
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = (qp[:, 0] * s[:, 1] - qp[:, 1] * s[:, 0]) / denom
-            u = (qp[:, 0] * r[1] - qp[:, 1] * r[0]) / denom
-        count += int(np.sum((denom != 0) & (t > 0) & (t < 1) & (u > 0) & (u < 1)))
-    return count
+    i, j = np.triu_indices(n, k=2)
+    keep = ~((i == 0) & (j == n - 1))                      # the closing edge meets edge 0
+    i, j = i[keep], j[keep]
+    p, r = a[i], b[i] - a[i]
+    q, s = a[j], b[j] - a[j]
+    denom = r[:, 0] * s[:, 1] - r[:, 1] * s[:, 0]
+    qp = q - p
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qp[:, 0] * s[:, 1] - qp[:, 1] * s[:, 0]) / denom
+        u = (qp[:, 0] * r[:, 1] - qp[:, 1] * r[:, 0]) / denom
+    return int(np.sum((denom != 0) & (t > 0) & (t < 1) & (u > 0) & (u < 1)))
 
 
 def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, tendons,
