@@ -45,9 +45,9 @@ bordering vectors b, c (approximate right and left null vectors of J),
 
 sigma vanishes exactly where J (hence K, its Schur complement) is singular,
 and d sigma/dw = -psi^T (dJ/dw) v.  The last term is a directional second
-derivative of F; it is computed as the forward difference, in the direction
-v, of the gradient of psi^T F (one more Jacobian evaluation; relative error
-~1e-7, far below what the Newton corrector notices).
+derivative of F; it is computed as the central difference, in the direction
+v, of the gradient of psi^T F (one Jacobian evaluation on each side: error
+O(eps^2) ~ 1e-10 relative).
 """
 from __future__ import annotations
 
@@ -420,10 +420,13 @@ class FoldSystem:
         v, s = self._solve(w, False)
         # transpose of [J b; c^T 0] is [J^T c; b^T 0]: its solution is (psi, s)
         psi, _ = self._solve(w, True)
-        eps = 1e-7 / max(np.linalg.norm(v), 1e-300)
+        eps = 1e-6 / max(np.linalg.norm(v), 1e-300)
         step = np.concatenate((eps * v, np.zeros(self.mf.n)))
-        # forward difference in the direction v of grad_w (psi . F)
-        dJv = (self.mf.residual_gradient(w + step, psi) - self.mf.residual_gradient(w, psi)) / eps
+        # central difference in the direction v of grad_w (psi . F): the design
+        # gradients (route_velocity) need it accurate, and consistent with
+        # Fold.route_gradient
+        dJv = (self.mf.residual_gradient(w + step, psi)
+               - self.mf.residual_gradient(w - step, psi)) / (2 * eps)
         return s, -dJv, v / np.linalg.norm(v)
 
     def destroy(self) -> None:
