@@ -572,6 +572,8 @@ class CurvePoint:
     det_sign: float                   # sign of det [dG/dw; t^T] (branch points)
     iterations: int
     tip_det: float = np.nan           # intrinsic tip-map test (CurveTracer.tangent)
+    tip_inward: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
+    #                                   tip motion into the admissible side
 
 
 @dataclass
@@ -665,6 +667,8 @@ class CurveTracer:
         and det B by reciprocal factors).  In the stable region, with the rows
         picking p, it is det S det J: its sign changes exactly across a fold of
         the tip map (det S = 0), and it stays finite across the fold of M.
+        Also sets ``last_inward`` = side * T tau, the tip's motion as the
+        state leaves the curve into the constraint's admissible side.
         One sparse LU (scipy SuperLU, partial pivoting) gives all three."""
         mf = self.mf
         u, p = mf.split(w)
@@ -680,15 +684,19 @@ class CurveTracer:
         T = mf.tip_gradient(w)
         n = mf.size
         tip_det = sign * float(np.linalg.det(np.column_stack((T @ tau[:n], T @ t[:n]))))
+        self.last_inward = constraint.side * (T @ tau[:n])
         return t, sign, tip_det
 
-    def point(self, w, t, det_sign, iterations, tip_det: float = np.nan) -> CurvePoint:
+    def point(self, w, t, det_sign, iterations, tip_det: float = np.nan,
+              tip_inward=None) -> CurvePoint:
         u, p = self.mf.split(w)
         return CurvePoint(w=w.copy(), t=t.copy(), tip=self.mf.tip(w),
                           tip_velocity=self.mf.tip_velocity(w, t),
                           # on a face p_i = 0 a round-off -1e-17 must not reach sqrt(p)
                           unstable_modes=self.inertia.negative_eigenvalues(u, np.maximum(p, 0)),
-                          det_sign=det_sign, iterations=iterations, tip_det=tip_det)
+                          det_sign=det_sign, iterations=iterations, tip_det=tip_det,
+                          tip_inward=(np.full(2, np.nan) if tip_inward is None
+                                      else np.array(tip_inward, float)))
 
     def correct(self, w_guess: np.ndarray, constraints) -> tuple[np.ndarray, bool]:
         """Solve F = 0 with two scalar constraints (a corner of two curves)."""
@@ -746,7 +754,7 @@ class CurveTracer:
         if np.linalg.norm(self.mf.tip(w) - pt.tip) > self.max_tip_step:
             return None, its
         t, det_sign, tip_det = self.tangent(w, constraint, pt.t)
-        return self.point(w, t, det_sign, its, tip_det), its
+        return self.point(w, t, det_sign, its, tip_det, self.last_inward), its
 
     def destroy(self) -> None:
         self.inertia.destroy()

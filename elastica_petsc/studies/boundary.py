@@ -113,6 +113,8 @@ class BoundaryResult:
     fold_polylines_mm: list = field(default_factory=list)
     crossings: list = field(default_factory=list)
     cell_mm: float = 0.0
+    faces: list = field(default_factory=list)            # classify_faces (W0)
+    area_bounds_mm2: tuple = (np.nan, np.nan)            # W0: (proven in, not proven out)
     _outside: object = field(default=None, repr=False)
 
     @property
@@ -194,7 +196,7 @@ class Walker:
 
     def _start_point(self, w, active, into):
         t, det_sign, tip_det = self.tr.tangent(w, active, into(w))
-        return self.tr.point(w, t, det_sign, 0, tip_det)
+        return self.tr.point(w, t, det_sign, 0, tip_det, self.tr.last_inward)
 
     def _locate(self, a, b, active, hit) -> np.ndarray | None:
         """Corner where ``hit`` becomes active between accepted points a and b."""
@@ -317,6 +319,9 @@ class Crossing:
     b: int
     tip: np.ndarray                    # midpoint of the two nodes' tips (units of l)
     p: np.ndarray                      # midpoint of their tensions
+    w_a: np.ndarray = field(default=None, repr=False)    # the states of the two nodes
+    w_b: np.ndarray = field(default=None, repr=False)
+    constraint: str = ""               # the loop curve's constraint (b = -1: the next one's)
     traced: bool = False
     note: str = ""
 
@@ -335,8 +340,9 @@ def tip_fold_crossings(region: RegionBoundary) -> list[Crossing]:
         if np.sign(a.tip_det) == np.sign(b.tip_det):
             continue
         same = k0 == k1 and j1 == j0 + 1
+        name = region.curves[k0].constraint
         out.append(Crossing(k0, j0, j1 if same else -1, 0.5 * (a.tip + b.tip),
-                            0.5 * (a.w[-2:] + b.w[-2:])))
+                            0.5 * (a.w[-2:] + b.w[-2:]), a.w, b.w, name))
     return out
 
 
@@ -388,18 +394,23 @@ class FoldTracer:
             curve, _, _ = self.walker.follow(start, self.tipfold)
             curves.append(curve)
             x.traced = True
-            end = curve.points[-1]
             for y in crossings:
-                if not y.traced and curve.end == "corner" and _near(end, y):
+                if not y.traced and curve.end == "corner" and self._ends_at(curve, y):
                     y.traced = True
         return curves
 
-
-def _near(point, crossing: Crossing, tol: float = 0.05) -> bool:
-    """A traced curve's end is at a crossing: tips within ``tol`` l and the
-    crossing between nodes on either side (its midpoint estimate)."""
-    return (np.linalg.norm(point.tip - crossing.tip) < tol
-            and np.linalg.norm(point.w[-2:] - crossing.p) < 10 * tol * (1 + np.abs(crossing.p).max()))
+    def _ends_at(self, curve: Curve, x: Crossing) -> bool:
+        """The traced curve ends on the loop curve of crossing ``x``, between its
+        two nodes (inside the ellipse with foci at their states, metric D, whose
+        axis is 1.5 times their distance); for a crossing across a corner, on
+        either curve at the corner."""
+        norm = self.walker.tr.mf.norm
+        end = curve.points[-1].w
+        if x.b == -1:
+            return norm(end - x.w_a) < 0.5 * norm(x.w_b - x.w_a)
+        if curve.end_constraint != x.constraint:
+            return False
+        return norm(end - x.w_a) + norm(end - x.w_b) <= 1.5 * norm(x.w_b - x.w_a)
 
 
 def _scale(constraint, w) -> float:
@@ -429,20 +440,33 @@ class OutsideMap:
             a, b = line[:-1], line[1:]
             self.segments.append((a, b))
             n = np.maximum(np.ceil(np.linalg.norm(b - a, axis=1) / (0.5 * self.cell)), 1)
-            for i, j in self._samples(a, b, n.astype(int)):
-                wall[np.clip(i, 0, shape[0] - 1), np.clip(j, 0, shape[1] - 1)] = True
-        labels, _ = ndimage.label(~wall)
-        border = np.unique(np.concatenate((labels[0], labels[-1], labels[:, 0], labels[:, -1])))
-        self.outside_cells = np.isin(labels, border[border > 0])
-        self.shape = shape
-
-    def _samples(self, a, b, n):
-        for k in range(len(a)):
-            s = np.linspace(0.0, 1.0, n[k] + 1)[:, None]
-            ij = np.floor((a[k] + s * (b[k] - a[k]) - self.origin) / self.cell).astype(int)
+            seg = np.repeat(np.arange(len(a)), n.astype(int) + 1)
+            frac = np.concatenate([np.linspace(0.0, 1.0, m + 1) for m in n.astype(int)])
+            ij = np.floor((a[seg] + frac[:, None] * (b - a)[seg] - self.origin)
+                          / self.cell).astype(int)
             for di in (-1, 0, 1):
                 for dj in (-1, 0, 1):
-                    yield ij[:, 0] + di, ij[:, 1] + dj
+                    wall[np.clip(ij[:, 0] + di, 0, shape[0] - 1),
+                         np.clip(ij[:, 1] + dj, 0, shape[1] - 1)] = True
+        labels, self.n_labels = ndimage.label(~wall)
+        border = np.unique(np.concatenate((labels[0], labels[-1], labels[:, 0], labels[:, -1])))
+        self.outside_cells = np.isin(labels, border[border > 0])
+        self.labels, self.border_labels, self.shape = labels, border[border > 0], shape
+
+    def bounded_faces(self) -> list[tuple[np.ndarray, float]]:
+        """Each bounded face (free cells not outside, 4-connected): a point of it
+        farthest from the walls (mm) and its area (mm^2, cells only)."""
+        from scipy import ndimage
+
+        free = (self.labels > 0) & ~self.outside_cells
+        if not free.any():
+            return []
+        depth = ndimage.distance_transform_edt(free)
+        ids = [k for k in range(1, self.n_labels + 1) if k not in set(self.border_labels)]
+        where = ndimage.maximum_position(depth, self.labels, ids)
+        sizes = ndimage.sum(free, self.labels, ids)
+        return [(self.origin + (np.array(ij) + 0.5) * self.cell, float(n) * self.cell**2)
+                for ij, n in zip(where, sizes)]
 
     def outside(self, points_mm: np.ndarray) -> np.ndarray:
         """True where the point's cell is outside (off the grid: outside)."""
@@ -468,6 +492,97 @@ class OutsideMap:
         """Area (mm^2) of the cells not outside (walls included): an upper
         bound of the area enclosed, within a wall's width of the curves."""
         return float(np.sum(~self.outside_cells)) * self.cell**2
+
+
+def preimage_counts(poly: np.ndarray, inward_left: np.ndarray, folds: list, points: np.ndarray,
+                    n_directions: int = 24) -> np.ndarray:
+    """N(y), the number of states of D whose tip is y, for each point y (NaN:
+    undecided).  N = 0 far away; walking in from infinity along a ray, N
+    changes by +-1 at each crossing of the loop's image (+1 when stepping to
+    the side the image of D's interior lies on next to that edge) and by +-2
+    at a fold image.  Rays that cross a fold image are not used (their +-2
+    needs the fold's side): the first of ``n_directions`` that crosses none
+    decides; if all do, NaN.  ``inward_left``: per vertex of the closed
+    polygon ``poly``, +1 if D's interior maps to the left of the direction of
+    travel along the edge starting there, -1 if to the right
+    (:func:`inward_sides`)."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    edge = b - a
+    normal = np.column_stack((-edge[:, 1], edge[:, 0]))                 # left normal
+    side = np.sign(inward_left)
+    fa = np.vstack([f[:-1] for f in folds]) if folds else np.zeros((0, 2))
+    fb = np.vstack([f[1:] for f in folds]) if folds else np.zeros((0, 2))
+    out = np.full(len(points), np.nan)
+    for angle in np.linspace(0, 2 * np.pi, n_directions, endpoint=False) + 0.1234:
+        d = np.array([np.cos(angle), np.sin(angle)])
+        todo = np.isnan(out)
+        if not todo.any():
+            break
+        y = points[todo]
+        if len(fa) and _ray_hits(y, d, fa, fb).any(axis=1).all():
+            continue
+        blocked = _ray_hits(y, d, fa, fb).any(axis=1) if len(fa) else np.zeros(len(y), bool)
+        hits = _ray_hits(y, d, a, b)                                 # (points, edges)
+        # walking in from infinity the motion is -d: +1 entering the interior's side
+        step = np.sign(-normal @ d) * side
+        counts = np.where(hits, step[None, :], 0.0).sum(axis=1)
+        idx = np.flatnonzero(todo)[~blocked]
+        out[idx] = counts[~blocked]
+    return out
+
+
+def inward_sides(region: RegionBoundary) -> np.ndarray:
+    """Per node of the loop (order of :meth:`RegionBoundary.nodes`): +1 if the
+    interior of D maps to the left of the loop's image (travelled along the
+    curves' tangents t), -1 if to the right.  The side of inward = side * T tau
+    relative to T t is sign det [T t, inward] = -side sign(tip_det) sign(det B)
+    (:meth:`CurveTracer.tangent`): a sign, exact at the nodes even where T tau
+    is nearly parallel to T t (near folds).  Corners take the previous node's."""
+    out = []
+    for curve in region.curves:
+        for pt in curve.points:
+            if np.isfinite(pt.tip_det) and pt.tip_det != 0.0:
+                out.append(-curve.active.side * np.sign(pt.tip_det) * pt.det_sign)
+            else:
+                out.append(out[-1] if out else np.nan)
+    out = np.array(out, float)
+    if np.isnan(out[0]):
+        out[0] = out[np.flatnonzero(np.isfinite(out))[-1]]
+    # a lone node against both neighbours (a near-singular B at one node) follows them
+    lone = (out != np.roll(out, 1)) & (np.roll(out, 1) == np.roll(out, -1))
+    out[lone] = np.roll(out, 1)[lone]
+    return out
+
+
+def classify_faces(result: "BoundaryResult") -> list[dict]:
+    """The bounded faces of the plane minus the W0 loop's and the folds' images
+    (:meth:`OutsideMap.bounded_faces`), each with the loop's winding number and
+    the preimage count N (:func:`preimage_counts`) at its deepest point: a face
+    lies in W_0 iff N > 0 (N is constant on a face: its points are no tip of
+    a boundary or fold state).  Areas in mm^2 (grid cells)."""
+    region = result.regions["W0"]
+    poly, left = loop_polygon(region, result.arm.length_mm,
+                              node_values=inward_sides(region)[:, None])
+    faces = result.outside_map.bounded_faces()
+    if not faces:
+        return []
+    points = np.array([f[0] for f in faces])
+    counts = preimage_counts(poly, left[:, 0], result.fold_polylines_mm, points)
+    winding = winding_number(poly, points)
+    return [{"point_mm": p.tolist(), "area_mm2": a, "winding": int(w),
+             "preimages": None if np.isnan(n) else int(n)}
+            for p, (_, a), w, n in zip(points, faces, winding, counts)]
+
+
+def _ray_hits(points: np.ndarray, d: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(points, segments): the ray y + t d, t > 0, meets the segment [a, b)."""
+    e = b - a
+    denom = d[0] * e[:, 1] - d[1] * e[:, 0]                         # cross(d, e)
+    ay = a[None, :, :] - points[:, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (ay[..., 0] * e[:, 1] - ay[..., 1] * e[:, 0]) / denom
+        u = (ay[..., 0] * d[1] - ay[..., 1] * d[0]) / denom
+    return (denom != 0) & (t > 0) & (u >= 0) & (u < 1)
 
 
 def union_area(poly: np.ndarray, step: float | None = None) -> float:
@@ -668,10 +783,35 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
     result = BoundaryResult(arm, regions, polygons, areas, folds, solves,
                             time.perf_counter() - t0, messages, gradients, fold_curves,
                             [curve_polyline(c, arm.length_mm) for c in fold_curves], fold_crossings,
-                            cell_mm=arm.length_mm / 1000)
+                            cell_mm=arm.length_mm / 500)
     messages += [f"W0: tip-map fold not traced: {why} (no OUTSIDE_BOUNDARY verdicts)"
                  for why in result.untraced_folds]
+    if tip_folds and regions["W0"].closed and not result.untraced_folds:
+        _assemble_w0(result)
+    result.seconds = time.perf_counter() - t0
     return result
+
+
+def _assemble_w0(result: BoundaryResult) -> None:
+    """W_0's area from the faces (docs/model.md §9): the set the loop winds
+    around, plus the faces of winding number 0 covered twice (N > 0);
+    faces whose N is undecided widen ``area_bounds_mm2``."""
+    result.faces = classify_faces(result)
+    extra = sum(f["area_mm2"] for f in result.faces
+                if f["winding"] == 0 and (f["preimages"] or 0) > 0)
+    undecided = sum(f["area_mm2"] for f in result.faces
+                    if f["winding"] == 0 and f["preimages"] is None)
+    bad = [f for f in result.faces if f["preimages"] is not None
+           and (f["preimages"] < abs(f["winding"]) or (f["preimages"] - f["winding"]) % 2)]
+    lower = result.areas_mm2["W0"] + extra
+    result.areas_mm2["W0"] = lower
+    result.area_bounds_mm2 = (lower, lower + undecided)
+    if undecided:
+        result.messages.append(f"W0: {undecided:.0f} mm^2 of faces with winding number 0 are "
+                               "undecided (every ray from them crosses a fold image)")
+    if bad:
+        result.messages.append(f"W0: {len(bad)} faces with a preimage count inconsistent with "
+                               "their winding number (N >= |w|, N = w mod 2): check the loop")
 
 
 def curve_polyline(curve: Curve, length_mm: float) -> np.ndarray:
