@@ -53,6 +53,8 @@ def run(args) -> int:
     if args.json:
         summary["polygons"] = {k: [p.tolist() for p in v] for k, v in result.polygons_mm.items()}
         summary["tip_folds_mm"] = result.tip_folds_mm.tolist()
+        summary["fold_curves_mm"] = [line.tolist() for line in result.fold_polylines_mm]
+        summary["faces"] = result.faces
         common.print_json(summary)
     else:
         print(_format(summary))
@@ -78,7 +80,8 @@ def _as_data(result) -> dict:
         nodes = region.nodes()
         regions[name] = {"polygon": result.polygons_mm[name][0],
                          "area_mm2": result.areas_mm2[name],
-                         "tip": nodes["tip"] * result.arm.length_mm}
+                         "tip": nodes["tip"] * result.arm.length_mm,
+                         "folds": result.fold_polylines_mm if name == "W0" else []}
     return {"regions": regions, "tip_folds": result.tip_folds_mm}
 
 
@@ -88,6 +91,9 @@ def _summary(result) -> dict:
         "restricted_area_mm2": result.areas_mm2.get("restricted"),
         "solves": result.solves,
         "seconds": result.seconds,
+        "area_bounds_mm2": list(result.area_bounds_mm2),
+        "fold_curves": len(result.fold_curves),
+        "untraced_folds": result.untraced_folds,
         "closed": {k: r.closed for k, r in result.regions.items()},
         "curves": {k: [c.constraint for c in r.curves] for k, r in result.regions.items()},
         "messages": result.messages,
@@ -99,6 +105,10 @@ def _summary(result) -> dict:
 def _format(s: dict) -> str:
     lines = [f"W_0 area: {s['area_mm2']:.0f} mm^2 ({s['solves']} continuation solves, "
              f"{s['seconds']:.2f} s)"]
+    lo, hi = s["area_bounds_mm2"]
+    if lo == lo:                                            # not NaN: faces classified
+        lines.append(f"  tip-map fold curves traced: {s['fold_curves']}; W_0 area "
+                     + (f"exact (faces decided)" if lo == hi else f"between {lo:.0f} and {hi:.0f} mm^2"))
     if s["restricted_area_mm2"] is not None:
         lines.append(f"restricted workspace area: {s['restricted_area_mm2']:.0f} mm^2")
     for name, curves in s["curves"].items():
