@@ -61,6 +61,7 @@ from ..core.fem import Discretisation
 from .equilibrium import SNES_REASONS
 from .inertia import InertiaCounter
 from .linalg import use_bordered_lu
+from .options import set_from_options
 
 # LU with partial pivoting for the extended systems: their leading block J is
 # singular on the fold and their last rows have no diagonal entry, so the
@@ -168,6 +169,8 @@ class Manifold:
         weights[: disc.n_elements] = disc.h
         weights[self.size:] = 1.0 / p_ref**2
         self.metric = weights                      # D of the module docstring
+        self._jac_cache, self._load_cache = {}, {}
+        self._rows_of_entries = np.repeat(np.arange(self.size), np.diff(indptr))
 
     def split(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return w[: self.size], w[self.size:]
@@ -176,22 +179,38 @@ class Manifold:
         u, p = self.split(w)
         return self.disc.residual(u, p)
 
+    def jacobian_values(self, w: np.ndarray) -> np.ndarray:
+        """Entries of J = dF/du at w (pattern ``csr``); the last few w are cached
+        (the corrector, the tangent and the fold test functions ask at the same w)."""
+        key = w.tobytes()
+        if key not in self._jac_cache:
+            if len(self._jac_cache) >= 4:
+                self._jac_cache.pop(next(iter(self._jac_cache)))
+            u, p = self.split(w)
+            self._jac_cache[key] = self.disc.jacobian_values(u, p)
+        return self._jac_cache[key]
+
     def jacobian(self, w: np.ndarray) -> sp.csr_matrix:
-        u, p = self.split(w)
-        return sp.csr_matrix((self.disc.jacobian_values(u, p), self.csr[1], self.csr[0]),
+        return sp.csr_matrix((self.jacobian_values(w), self.csr[1], self.csr[0]),
                              shape=(self.size, self.size))
 
     def residual_gradient(self, w: np.ndarray, v: np.ndarray) -> np.ndarray:
         """grad_w (v . F) = (J^T v, (dF/dp)^T v), (m,), without building a matrix."""
-        u, p = self.split(w)
-        rows = np.repeat(np.arange(self.size), np.diff(self.csr[0]))
-        jt_v = np.bincount(self.csr[1], weights=self.disc.jacobian_values(u, p) * v[rows],
+        rows = self._rows_of_entries
+        jt_v = np.bincount(self.csr[1], weights=self.jacobian_values(w) * v[rows],
                            minlength=self.size)
-        return np.concatenate((jt_v, self.disc.load_derivative(u) @ v))
+        return np.concatenate((jt_v, self.load_columns(w).T @ v))
 
     def load_columns(self, w: np.ndarray) -> np.ndarray:
-        """dF/dp, (size, n): the tensions' columns (Eq. (14)); F is linear in p."""
-        return self.disc.load_derivative(self.split(w)[0]).T
+        """dF/dp, (size, n): the tensions' columns (Eq. (14)); F is linear in p.
+        Depends on u only; the last few are cached like :meth:`jacobian_values`."""
+        u = self.split(w)[0]
+        key = u.tobytes()
+        if key not in self._load_cache:
+            if len(self._load_cache) >= 4:
+                self._load_cache.pop(next(iter(self._load_cache)))
+            self._load_cache[key] = self.disc.load_derivative(u).T
+        return self._load_cache[key]
 
     def route_derivative(self, w: np.ndarray, i: int) -> np.ndarray:
         """dF/dr_i, (size, 2), at fixed u and p: F_theta depends on r_i only through
@@ -398,8 +417,7 @@ class FoldSystem:
         filled (and factored) once per w and bordering, results are cached."""
         key = w.tobytes()
         if self._cache.get("w") != key:
-            u, p = self.mf.split(w)
-            self.mat.fill(self.mf.disc.jacobian_values(u, p), self.b[:, None],
+            self.mat.fill(self.mf.jacobian_values(w), self.b[:, None],
                           np.append(self.c, 0.0)[None, :])
             self.ksp.setOperators(self.mat.mat)
             self._cache = {"w": key}
@@ -515,8 +533,7 @@ class TipFold(Constraint):
         key = w.tobytes()
         if self._cache[0] != key:
             mf = self.mf
-            u, p = mf.split(w)
-            values = self.pattern.values(mf.disc.jacobian_values(u, p), mf.load_columns(w), self.R)
+            values = self.pattern.values(mf.jacobian_values(w), mf.load_columns(w), self.R)
             lu = self.pattern.lu_of_transpose(values)                  # of B^T
             rhs = np.zeros((mf.m, mf.n))
             rhs[mf.size:] = np.eye(mf.n)
@@ -610,7 +627,9 @@ class CurveTracer:
         atol = max(1e-10, 1e-14 * disc.n_elements ** 1.5)
         snes.setTolerances(rtol=1e-10, atol=atol, stol=1e-14, max_it=12)
         use_pivoting_lu(snes.getKSP())
-        snes.setFromOptions()
+        # full Newton steps by default: the predictor is close, and a corrector
+        # that would need damping is a step to halve (one residual per iteration)
+        set_from_options(snes, prefix, {"snes_linesearch_type": "basic"})
         self.snes = snes
         self.ksp = PETSc.KSP().create(PETSc.COMM_SELF)
         self.ksp.setOptionsPrefix(prefix + "tangent_")
@@ -626,8 +645,7 @@ class CurveTracer:
         Fv.setArray(np.concatenate((self.mf.residual(w), [value(w) for value, _ in self._rows])))
 
     def _fill(self, w, rows) -> None:
-        u, p = self.mf.split(w)
-        self.A.fill(self.mf.disc.jacobian_values(u, p), self.mf.load_columns(w), rows)
+        self.A.fill(self.mf.jacobian_values(w), self.mf.load_columns(w), rows)
 
     def _form_jacobian(self, snes, X, J, P) -> None:
         w = X.getArray(readonly=True)
@@ -671,8 +689,7 @@ class CurveTracer:
         state leaves the curve into the constraint's admissible side.
         One sparse LU (scipy SuperLU, partial pivoting) gives all three."""
         mf = self.mf
-        u, p = mf.split(w)
-        values = self.A.pattern.values(mf.disc.jacobian_values(u, p), mf.load_columns(w),
+        values = self.A.pattern.values(mf.jacobian_values(w), mf.load_columns(w),
                                        np.array([constraint.gradient(w), mf.metric * orient]))
         lu = self.A.pattern.lu_of_transpose(values)                    # of B^T
         rhs = np.zeros((mf.m, 2))
