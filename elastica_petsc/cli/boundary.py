@@ -26,7 +26,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..studies.boundary import compare_restricted, compare_with_samples, trace_boundary
+    from ..studies.boundary import compare_map, compare_restricted, trace_boundary
 
     common.check_outputs(args)
     arm, disc = common.load_arm(args)
@@ -34,8 +34,8 @@ def run(args) -> int:
     result = trace_boundary(arm, disc, restricted=not args.no_restricted)
     summary = _summary(result)
     if samples is not None:
-        summary["agreement"] = compare_with_samples(
-            result.polygons_mm["W0"][0], samples["target"], samples["status"], samples["spacing"])
+        summary["agreement"] = compare_map(result, samples["target"], samples["status"],
+                                           samples["spacing"])
         if "restricted" in result.polygons_mm:
             summary["agreement_restricted"] = compare_restricted(
                 result.polygons_mm["restricted"][0], samples["target"], samples["masks"],

@@ -142,6 +142,17 @@ class BoundaryResult:
             self._outside = OutsideMap(lines, self.cell_mm, closed=(0,))
         return self._outside
 
+    def contains(self, points_mm) -> np.ndarray:
+        """True where a point is in W_0 as assembled (:func:`_assemble_w0`): the
+        W0 loop winds around it, or it lies in a face of winding number 0
+        covered twice (N > 0).  Points on the walls count by the winding rule."""
+        pts = np.atleast_2d(np.asarray(points_mm, float))
+        inside = winding_number(self.polygons_mm["W0"][0], pts) != 0
+        twice = [f["label"] for f in self.faces if f["winding"] == 0 and (f["preimages"] or 0) > 0]
+        if twice:
+            inside |= np.isin(self.outside_map.label(pts), twice)
+        return inside
+
     def outside(self, target_mm, margin_mm: float | None = None) -> tuple[str, float]:
         """(evidence, distance in mm): evidence is '' unless ``target_mm`` is
         proven outside W_0 by docs/model.md §9: the loop is closed, every fold
@@ -465,8 +476,16 @@ class OutsideMap:
         ids = [k for k in range(1, self.n_labels + 1) if k not in set(self.border_labels)]
         where = ndimage.maximum_position(depth, self.labels, ids)
         sizes = ndimage.sum(free, self.labels, ids)
-        return [(self.origin + (np.array(ij) + 0.5) * self.cell, float(n) * self.cell**2)
-                for ij, n in zip(where, sizes)]
+        return [(self.origin + (np.array(ij) + 0.5) * self.cell, float(n) * self.cell**2, k)
+                for ij, n, k in zip(where, sizes, ids)]
+
+    def label(self, points_mm: np.ndarray) -> np.ndarray:
+        """The face label of each point's cell (0: a wall; off the grid: -1)."""
+        ij = np.floor((np.atleast_2d(points_mm) - self.origin) / self.cell).astype(int)
+        on = np.all((ij >= 0) & (ij < self.shape), axis=1)
+        out = np.full(len(ij), -1)
+        out[on] = self.labels[ij[on, 0], ij[on, 1]]
+        return out
 
     def outside(self, points_mm: np.ndarray) -> np.ndarray:
         """True where the point's cell is outside (off the grid: outside)."""
@@ -570,8 +589,8 @@ def classify_faces(result: "BoundaryResult") -> list[dict]:
     counts = preimage_counts(poly, left[:, 0], result.fold_polylines_mm, points)
     winding = winding_number(poly, points)
     return [{"point_mm": p.tolist(), "area_mm2": a, "winding": int(w),
-             "preimages": None if np.isnan(n) else int(n)}
-            for p, (_, a), w, n in zip(points, faces, winding, counts)]
+             "preimages": None if np.isnan(n) else int(n), "label": int(k)}
+            for p, (_, a, k), w, n in zip(points, faces, winding, counts)]
 
 
 def _ray_hits(points: np.ndarray, d: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -878,7 +897,8 @@ def compare_restricted(poly_mm: np.ndarray, targets_mm: np.ndarray, masks: dict,
 
 
 def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np.ndarray,
-                         spacing_mm: float) -> dict:
+                         spacing_mm: float, inside: np.ndarray | None = None,
+                         distance: np.ndarray | None = None) -> dict:
     """Agreement of a W_0 polygon with a sampled target map (Fig. 4, y >= 0).
 
     status: 1 reached, 2 needs a negative tension, 3 not converged
@@ -888,9 +908,13 @@ def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np
     within reach), compares the polygon's area in y >= 0 with
     the sample count estimate (row y = 0 counts half a cell) and its
     sampling error, taken as half a cell per unit length of boundary.
+    ``inside``: membership of the targets in W_0 if not the polygon's winding
+    rule (:meth:`BoundaryResult.contains`); ``distance``: their distance (mm)
+    to the boundary if not to the polygon's edges (e.g. folds included).
     """
-    inside = _inside(poly_mm, targets_mm)
-    far = _distance_to_edges(poly_mm, targets_mm) > spacing_mm
+    inside = _inside(poly_mm, targets_mm) if inside is None else inside
+    distance = _distance_to_edges(poly_mm, targets_mm) if distance is None else distance
+    far = distance > spacing_mm
     reached, negative = status == 1, status == 2
     out = {
         "reached": int(reached.sum()),
@@ -938,3 +962,14 @@ def boundary_proof(arm: Arm, disc: Discretisation | None = None):
         return evidence, dist / arm.length_mm
 
     return outside
+
+
+def compare_map(result: BoundaryResult, targets_mm: np.ndarray, status: np.ndarray,
+                spacing_mm: float) -> dict:
+    """:func:`compare_with_samples` for W_0 as assembled (faces and folds):
+    membership by :meth:`BoundaryResult.contains`, distances to the loop's and
+    the fold curves' images."""
+    inside = result.contains(targets_mm) if result.faces else None
+    distance = (result.outside_map.distance(targets_mm) if result.fold_polylines_mm else None)
+    return compare_with_samples(result.polygons_mm["W0"][0], targets_mm, status, spacing_mm,
+                                inside=inside, distance=distance)
