@@ -630,6 +630,10 @@ class CurveTracer:
         # full Newton steps by default: the predictor is close, and a corrector
         # that would need damping is a step to halve (one residual per iteration)
         set_from_options(snes, prefix, {"snes_linesearch_type": "basic"})
+        self.rtol, self.atol, self.stol, _ = snes.getTolerances()
+        self.contraction = 0.5
+        self._fnorms = []
+        snes.setConvergenceTest(self._converged)
         self.snes = snes
         self.ksp = PETSc.KSP().create(PETSc.COMM_SELF)
         self.ksp.setOptionsPrefix(prefix + "tangent_")
@@ -663,6 +667,28 @@ class CurveTracer:
 
     def reason(self) -> str:
         return SNES_REASONS.get(self.snes.getConvergedReason(), "UNKNOWN")
+
+    def _converged(self, snes, it, norms):
+        """PETSc's tests (atol, rtol, stol, max_it) plus one for Newton from a
+        close predictor: from the second iteration on, a residual that does not
+        shrink by ``contraction`` per iteration is not converging quadratically
+        (the step is too long or the curve jumped): stop, the step is halved."""
+        xnorm, snorm, fnorm = norms
+        R = PETSc.SNES.ConvergedReason
+        self._fnorms = [fnorm] if it == 0 else self._fnorms + [fnorm]
+        if not np.isfinite(fnorm):
+            return R.DIVERGED_FNORM_NAN
+        if fnorm < self.atol:
+            return R.CONVERGED_FNORM_ABS
+        if it > 0 and fnorm < self.rtol * self._fnorms[0]:
+            return R.CONVERGED_FNORM_RELATIVE
+        if it > 0 and snorm < self.stol * xnorm:
+            return R.CONVERGED_SNORM_RELATIVE
+        if it >= snes.getTolerances()[3]:
+            return R.DIVERGED_MAX_IT
+        if it >= 2 and fnorm > self.contraction * self._fnorms[-2]:
+            return R.DIVERGED_DTOL
+        return R.ITERATING
 
     @staticmethod
     def _row(constraint: Constraint):
