@@ -90,6 +90,9 @@ def _summary(result) -> dict:
         "area_mm2": result.areas_mm2["W0"],
         "restricted_area_mm2": result.areas_mm2.get("restricted"),
         "solves": result.solves,
+        "scan_solves": result.scan_solves,
+        "scan": [{"ray": ray, "sign_changes": n, "unexplained": bad}
+                 for ray, n, bad in result.scan],
         "seconds": result.seconds,
         "area_bounds_mm2": list(result.area_bounds_mm2),
         "fold_curves": len(result.fold_curves),
@@ -107,7 +110,9 @@ def _format(s: dict) -> str:
              f"{s['seconds']:.2f} s)"]
     lo, hi = s["area_bounds_mm2"]
     if lo == lo:                                            # not NaN: faces classified
-        lines.append(f"  tip-map fold curves traced: {s['fold_curves']}; W_0 area "
+        lines.append(f"  tip-map fold curves traced: {s['fold_curves']} (scan: "
+                     + ", ".join(f"{r['ray']} {r['sign_changes']} sign changes" for r in s["scan"])
+                     + f", {s['scan_solves']} of the solves); W_0 area "
                      + (f"exact (faces decided)" if lo == hi else f"between {lo:.0f} and {hi:.0f} mm^2"))
     if s["restricted_area_mm2"] is not None:
         lines.append(f"restricted workspace area: {s['restricted_area_mm2']:.0f} mm^2")

@@ -312,6 +312,25 @@ class TensionBound(Constraint):
         return g
 
 
+class TensionRay(Constraint):
+    """The ray p = s (cos a, sin a), s >= 0, of the tension plane: c = n . p with
+    n = (-sin a, cos a) (proportional loading in a fixed ratio; a scan line)."""
+
+    def __init__(self, manifold: Manifold, angle: float):
+        self.mf = manifold
+        self.normal = np.array([-np.sin(angle), np.cos(angle)])
+        self.direction = np.array([np.cos(angle), np.sin(angle)])
+        self.name = f"ray {np.degrees(angle):.0f} deg"
+
+    def value(self, w):
+        return float(self.normal @ w[self.mf.size:])
+
+    def gradient(self, w):
+        g = np.zeros(self.mf.m)
+        g[self.mf.size:] = self.normal
+        return g
+
+
 class CableCollapse(Constraint):
     """L_i = eps: the attachment point of tendon i within eps (units of l) of its
     routing point; beyond it the cable direction of Eq. (3) is undefined."""

@@ -59,7 +59,7 @@ from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm
 from ..solvers.continuation import (CableCollapse, Curve, CurveTracer, Fold, FoldSystem,
-                                    StateLevel, TensionBound, TipFold)
+                                    StateLevel, TensionBound, TensionRay, TipFold)
 from ..solvers.equilibrium import COLLAPSE_LENGTH
 
 
@@ -114,6 +114,8 @@ class BoundaryResult:
     crossings: list = field(default_factory=list)
     cell_mm: float = 0.0
     faces: list = field(default_factory=list)            # classify_faces (W0)
+    scan: list = field(default_factory=list)             # scan_rays: (ray, changes, unexplained)
+    scan_solves: int = 0                                 # of ``solves``, spent on the scan
     area_bounds_mm2: tuple = (np.nan, np.nan)            # W0: (proven in, not proven out)
     _outside: object = field(default=None, repr=False)
 
@@ -131,6 +133,8 @@ class BoundaryResult:
         out += [f"fold curve from ({c.points[0].tip[0] * self.arm.length_mm:.1f}, "
                 f"{c.points[0].tip[1] * self.arm.length_mm:.1f}) mm ended: {c.end}"
                 for c in self.fold_curves if c.end != "corner"]
+        out += [f"{ray}: {bad} sign change(s) of the tip-map test on no traced fold curve"
+                for ray, _, bad in self.scan if bad]
         return out
 
     @property
@@ -422,6 +426,67 @@ class FoldTracer:
         if curve.end_constraint != x.constraint:
             return False
         return norm(end - x.w_a) + norm(end - x.w_b) <= 1.5 * norm(x.w_b - x.w_a)
+
+
+SCAN_ANGLES = (np.radians(20.0), np.radians(45.0), np.radians(70.0))
+
+
+def scan_rays(walker: Walker, w0: np.ndarray, fold_curves: list, angles=SCAN_ANGLES,
+              max_tip_step: float = 0.5) -> list[tuple[str, int, int]]:
+    """A coarse scan of D for folds of the tip map that do not meet the loop:
+    proportional loading rays p = s (cos a, sin a) followed by continuation
+    from the straight arm until they leave D, the intrinsic test evaluated at
+    every node.  A sign change between two nodes must be a traced fold curve
+    crossing the ray there (the fold curve's tension polyline crosses the
+    ray's segment); (ray, changes, unexplained) per ray.  The rays draw no
+    polygon: their steps may move the tip up to ``max_tip_step`` (units of l)."""
+    out = []
+    folds_p = [np.array([pt.w[-2:] for pt in c.points]) for c in fold_curves]
+    tracer = walker.tr
+    cap, tracer.max_tip_step = tracer.max_tip_step, max_tip_step
+    ds_max, tracer.ds_max = tracer.ds_max, 4 * tracer.ds_max
+    try:
+        for angle in angles:
+            ray = TensionRay(tracer.mf, angle)
+            start = walker._start_point(w0, ray, lambda w, r=ray: _p_direction(walker, r.direction))
+            out.append(_scan_one(walker, start, ray, folds_p))
+    finally:
+        tracer.max_tip_step, tracer.ds_max = cap, ds_max
+    return out
+
+
+def _scan_one(walker: Walker, start, ray: TensionRay, folds_p: list) -> tuple[str, int, int]:
+    """One scan ray of :func:`scan_rays`."""
+    curve, _, _ = walker.follow(start, ray)
+    nodes = [pt for pt in curve.points if np.isfinite(pt.tip_det) and pt.tip_det != 0.0]
+    changes = unexplained = 0
+    for a, b in zip(nodes, nodes[1:]):
+        if np.sign(a.tip_det) != np.sign(b.tip_det):
+            changes += 1
+            crossed = any(_segments_cross(a.w[-2:], b.w[-2:], f) for f in folds_p)
+            unexplained += not crossed
+    return ray.name, changes, unexplained
+
+
+def _p_direction(walker: Walker, direction: np.ndarray) -> np.ndarray:
+    """D^-1 (0, ..., direction): an orientation vector pointing along +direction in p."""
+    v = np.zeros(walker.tr.mf.m)
+    v[-2:] = direction
+    return v / walker.tr.mf.metric
+
+
+def _segments_cross(a: np.ndarray, b: np.ndarray, polyline: np.ndarray) -> bool:
+    """The segment [a, b] crosses the polyline (or touches it at a vertex)."""
+    if len(polyline) < 2:
+        return False
+    p, q = polyline[:-1], polyline[1:]
+
+    def orient(u, v, w):
+        return np.sign((v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1])
+                       - (v[..., 1] - u[..., 1]) * (w[..., 0] - u[..., 0]))
+
+    return bool(np.any((orient(a, b, p) * orient(a, b, q) <= 0)
+                       & (orient(p, q, a) * orient(p, q, b) <= 0)))
 
 
 def _scale(constraint, w) -> float:
@@ -768,7 +833,7 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
             "2-D patches of tip positions; use `workspace` to sample)")
     t0 = time.perf_counter()
     regions, polygons, areas, messages, gradients = {}, {}, {}, [], {}
-    fold_crossings, fold_curves = [], []
+    fold_crossings, fold_curves, scan, scan_solves = [], [], [], 0
     with CurveTracer(disc) as tracer:
         w0 = np.concatenate((disc.straight(), np.zeros(2)))
         wanted = (("W0", False), ("restricted", True)) if restricted else (("W0", False),)
@@ -780,6 +845,9 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
                 if name == "W0" and tip_folds:
                     fold_crossings = tip_fold_crossings(region)
                     fold_curves = FoldTracer(walker).trace(region, fold_crossings)
+                    before = tracer.solves
+                    scan = scan_rays(walker, w0, fold_curves)
+                    scan_solves = tracer.solves - before
                 if route_gradients and region.closed:
                     gradients[name] = _area_gradient(walker, region, cons[1::-1],
                                                      route_gradients, arm.length_mm)
@@ -802,7 +870,7 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
     result = BoundaryResult(arm, regions, polygons, areas, folds, solves,
                             time.perf_counter() - t0, messages, gradients, fold_curves,
                             [curve_polyline(c, arm.length_mm) for c in fold_curves], fold_crossings,
-                            cell_mm=arm.length_mm / 500)
+                            cell_mm=arm.length_mm / 500, scan=scan, scan_solves=scan_solves)
     messages += [f"W0: tip-map fold not traced: {why} (no OUTSIDE_BOUNDARY verdicts)"
                  for why in result.untraced_folds]
     if tip_folds and regions["W0"].closed and not result.untraced_folds:
