@@ -56,6 +56,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
+from scipy.linalg import lu_factor
 
 from ..core.fem import Discretisation
 from .equilibrium import SNES_REASONS
@@ -104,6 +105,7 @@ class BorderedPattern:
         new_idx[self.row_pos] = np.arange(size + k)
         self.csr = (new_ptr, new_idx)
         self.n = size + k
+        self._rows = np.repeat(np.arange(self.n), np.diff(new_ptr))
 
     def values(self, base_values, columns, rows) -> np.ndarray:
         out = np.empty(self.csr[0][-1])
@@ -111,6 +113,15 @@ class BorderedPattern:
         out[self.col_pos] = columns
         out[self.row_pos] = rows
         return out
+
+    def determinant_sign(self, values) -> float:
+        """Sign of det of the matrix with these values, from a dense LAPACK LU
+        (m ~ 200: cheaper than extracting U from a sparse factorisation)."""
+        dense = np.zeros((self.n, self.n))
+        dense[self._rows, self.csr[1]] = values
+        lu, piv = lu_factor(dense, check_finite=False)
+        swaps = np.count_nonzero(piv != np.arange(len(piv)))
+        return float(np.prod(np.sign(np.diag(lu)))) * (-1.0) ** swaps
 
     def lu_of_transpose(self, values):
         """SuperLU (scipy, partial pivoting) of B^T, B the CSR matrix with these
@@ -120,12 +131,6 @@ class BorderedPattern:
         Bt = sp.csc_matrix((values, self.csr[1], self.csr[0]), shape=(self.n, self.n))
         # natural order: the dense border is last, so its fill stays in the border
         return splu(Bt, permc_spec="NATURAL")
-
-
-def lu_determinant_sign(lu) -> float:
-    """Sign of det of the matrix factored by a scipy SuperLU object."""
-    return float(np.prod(np.sign(lu.U.diagonal())) * _permutation_sign(lu.perm_r)
-                 * _permutation_sign(lu.perm_c))
 
 
 class BorderedAIJ:
@@ -581,21 +586,6 @@ class TipFold(Constraint):
         return out
 
 
-def _permutation_sign(perm: np.ndarray) -> float:
-    """+1 for an even permutation, -1 for an odd one (cycle decomposition)."""
-    seen = np.zeros(len(perm), bool)
-    sign = 1.0
-    for k in range(len(perm)):
-        if not seen[k]:
-            j, length = k, 0
-            while not seen[j]:
-                seen[j] = True
-                j = perm[j]
-                length += 1
-            sign *= -1.0 if length % 2 == 0 else 1.0
-    return sign
-
-
 @dataclass
 class CurvePoint:
     """An accepted point on a curve: state, tangent and test functions."""
@@ -740,7 +730,7 @@ class CurveTracer:
         rhs = np.zeros((mf.m, 2))
         rhs[-1, 0] = rhs[-2, 1] = 1.0
         sol = lu.solve(rhs, trans="T")
-        sign = lu_determinant_sign(lu)                                 # det B^T = det B
+        sign = self.A.pattern.determinant_sign(values)
         scale = mf.norm(sol[:, 0])
         t, tau = sol[:, 0] / scale, sol[:, 1]
         T = mf.tip_gradient(w)
