@@ -19,27 +19,30 @@ follows one of these curves by pseudo-arclength continuation
 (:class:`~elastica_petsc.solvers.continuation.CurveTracer`) with D on its
 left in tension space until another constraint becomes active (a bound is
 crossed or stability is lost), solves for that corner, and turns onto the
-new curve, until it is back at the straight arm.  The tip image of this
-closed loop is the W_0 polygon (mm, oriented as the tip map orients it);
-the region is the set the loop winds around (nonzero winding number) and
-its area is computed by scan lines (:func:`union_area`).  This is W_0
-exactly when the tip map has no fold inside D: a fold curve of the tip map
-(det S = 0, S = d x_t / d p, Eq. (13)) adds envelope pieces to the boundary,
-and tips covered twice with opposite orientation have winding number 0.
-Where such a curve meets the loop, det S changes sign along it; those points
-are reported (``tip_folds``) with a warning.  Fold curves of the tip map are
-*not* traced.  On the paper's arm they meet the loop at five points: three
-in y < 0 and two within 1 mm of the routing point r_2 (on the L2 = 0 curves,
-whose tip image is that point); the half-plane y >= 0 of Fig. 4 agrees with
-the sampled map.
+new curve, until it is back at the straight arm.
+
+The tip map can fold inside D (det S = 0, S = d x_t / d p, Eq. (13)); the
+boundary of W_0 = f(D) lies in the image of the loop and of these fold
+curves (docs/model.md §9.1).  Each loop node carries an intrinsic tip-map
+test (:meth:`CurveTracer.tangent`); its sign changes (:func:`tip_fold_crossings`)
+are where fold curves meet the loop, and each is traced into D until it
+leaves it (:class:`FoldTracer`); three proportional-loading rays scan D for
+sign changes that no traced fold explains (:func:`scan_rays`).  W_0 is then
+assembled from the faces of the plane minus these images
+(:func:`classify_faces`: the preimage count along rays avoiding fold
+images); :meth:`BoundaryResult.outside` proves a target outside W_0 when it
+lies in the unbounded face (the verdict OUTSIDE_BOUNDARY of tip control).
+On the paper's arm: six sign changes, the ends of three fold curves (one
+from the straight arm, where det S = 0), all traced; the face of winding
+number 0 around r_1 has no preimage (a hole), so the area is exact.
 
 Limits found (issue 13): at a corner where a cable collapses (the tip on
 r_2) several equilibria with P_1 = 0 can share the corner, and which one the
 walk continues from can depend on the step sizes and the mesh; with a
 routing point moved (r_1 = (-53.7, -21.6), r_2 = (81.8, 10.0) mm) the walk
-took different loops at 60 and 180 elements, and at 180 elements 877
-samples that tip control reached lie outside the polygon (tip-map folds
-inside D).  Treat a polygon with a fold warning as a lower bound.
+took different loops at 60 and 180 elements.  A fold curve that is a closed
+loop inside D missing the scan rays, and states reached only by snapping
+onto another sheet, are not covered (docs/model.md §9.1).
 
 The restricted workspace W_0 ∩ W_Y ∩ W_E ∩ W_P (Eqs. (19), (21), (22); W_S
 is W_0 itself under this definition, since D holds only stable states) is
