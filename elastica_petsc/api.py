@@ -322,8 +322,12 @@ def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None):
     restricted workspace, Eqs. (18)-(22)) traced by pseudo-arclength
     continuation in tension space instead of sampling.  Returns a
     ``BoundaryResult``: ``polygons_mm`` and ``areas_mm2`` per set
-    (``"W0"``, ``"restricted"``), ``solves``, ``messages`` (where the method
-    stops, e.g. fold curves of the tip map it does not trace)."""
+    (``"W0"``, ``"restricted"``; mm, mm^2), ``solves``, ``messages`` (where
+    the method stops); for W_0 also the fold curves of the tip map
+    (det d x_t/dp = 0, Eq. (13): ``fold_polylines_mm``), the faces they and
+    the loop cut the plane into (``faces``: winding number, preimage count),
+    ``area_bounds_mm2``, ``contains(points_mm)`` and ``outside(target_mm)``
+    (the OUTSIDE_BOUNDARY evidence of tip control; docs/model.md §9.1)."""
     from .studies.boundary import trace_boundary
 
     return trace_boundary(arm, _mesh(arm, elements), restricted=restricted)
