@@ -151,11 +151,6 @@ class BorderedAIJ:
         target.setValuesCSR(*self.csr, self.values)
         target.assemble()
 
-    def dense(self) -> np.ndarray:
-        """The current matrix as a dense array (for determinant signs)."""
-        n = self.size + self.k
-        return sp.csr_matrix((self.values, self.csr[1], self.csr[0]), shape=(n, n)).toarray()
-
     def destroy(self) -> None:
         self.mat.destroy()
 
