@@ -26,12 +26,14 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    from ..core.progress import Progress
     from ..studies.boundary import compare_map, compare_restricted, trace_boundary
 
     common.check_outputs(args)
     arm, disc = common.load_arm(args)
     samples = _read_samples(args.overlay) if args.overlay else None
-    result = trace_boundary(arm, disc, restricted=not args.no_restricted)
+    with Progress(None, "boundary", unit="continuation solves") as bar:
+        result = trace_boundary(arm, disc, restricted=not args.no_restricted, progress=bar)
     summary = _summary(result)
     if samples is not None:
         summary["agreement"] = compare_map(result, samples["target"], samples["status"],

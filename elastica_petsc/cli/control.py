@@ -158,9 +158,6 @@ def run(args) -> int:
     if args.animate:
         from ..plots.animate import check_animation_path
         check_animation_path(args.animate, args.overwrite)
-    if args.vtk:
-        from ..io.vtk import check_directory
-        check_directory(args.vtk, args.overwrite)
     result = api.control(arm, args.target, guess=guess, method=args.method, tol_mm=args.tol_mm,
                          global_search=not args.local, cables=args.cables, share=args.share,
                          min_tension_N=args.min_tension_N, animate=args.animate,
@@ -179,11 +176,8 @@ def run(args) -> int:
         from ..plots.control import plot_descent
         plot_descent(arm, result, args.plot)
     if args.vtk:
-        from pathlib import Path
-
-        from ..io.vtk import write_state
-        Path(args.vtk).mkdir(exist_ok=True)
-        write_state(Path(args.vtk) / "control.vtu", arm, result.equilibrium)
+        from ..io.vtk import write_states
+        write_states(args.vtk, arm, [result.equilibrium], name="control")
     if result.converged:
         return 0
     print(f"elastica-petsc: {unreachable_message(summary)}", file=sys.stderr)

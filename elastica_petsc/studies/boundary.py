@@ -197,8 +197,8 @@ class Walker:
     """The wall follower around D of the module docstring."""
 
     def __init__(self, tracer: CurveTracer, constraints: list, *, ds0: float = 0.3,
-                 ds_min: float = 1e-5, max_points: int = 400):
-        self.tr = tracer
+                 ds_min: float = 1e-5, max_points: int = 400, progress=None):
+        self.tr, self.progress = tracer, progress        # progress(solves, note) per step
         self.constraints = constraints
         self.fold_system = FoldSystem(tracer.mf)
         self.fold = Fold(self.fold_system)
@@ -249,6 +249,8 @@ class Walker:
         while len(curve.points) < self.max_points:
             ds = min(ds, self.tr.step_limit(pt))
             new, its = self.tr.step(pt, active, ds)
+            if self.progress is not None:
+                self.progress(self.tr.solves, f"along {active.name}, point {len(curve.points)}")
             if new is None:
                 ds *= 0.5
                 if ds < self.ds_min:
@@ -814,7 +816,7 @@ def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, tendons,
 
 
 def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: bool = True,
-                   tip_folds: bool = True, route_gradients=()) -> BoundaryResult:
+                   tip_folds: bool = True, route_gradients=(), progress=None) -> BoundaryResult:
     """The boundary of W_0 (and of the restricted workspace) of a two-tendon arm.
 
     Returns polygons in mm and areas in mm^2 (module docstring for the
@@ -827,6 +829,8 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
     d area / d(r_x, r_y) per tendon, in mm^2 per mm, from the boundary
     integral of the normal velocity of the loop's nodes (exact for the node
     polygon; the area itself is that of the Hermite-densified polygon).
+    ``progress(solves, note)``, if given, is called after every continuation
+    step (the number of solves is not known in advance).
     """
     disc = Discretisation.from_arm(arm) if disc is None else disc
     if disc.n_tendons != 2:
@@ -842,7 +846,7 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
         wanted = (("W0", False), ("restricted", True)) if restricted else (("W0", False),)
         for name, extra in wanted:
             cons = constraints_for(tracer, arm, extra)
-            walker = Walker(tracer, cons)
+            walker = Walker(tracer, cons, progress=progress)
             try:
                 region = walker.walk(name, w0, first=cons[1], previous=cons[0])
                 if name == "W0" and tip_folds:
@@ -879,6 +883,8 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
     if tip_folds and regions["W0"].closed and not result.untraced_folds:
         _assemble_w0(result)
     result.seconds = time.perf_counter() - t0
+    if progress is not None:
+        progress(solves, "traced")
     return result
 
 
