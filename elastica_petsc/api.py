@@ -163,7 +163,10 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
     When the local solve stalls, a global search follows (other loading
     orders, a homotopy in target space) unless ``global_search=False``;
     ``reachable`` is True, False only with evidence about the whole
-    (``evidence``), or None when the strategies are exhausted without proof.
+    (``evidence``: ``BEYOND_REACH``, |x_d| > l; ``OUTSIDE_BOUNDARY``, outside
+    the traced boundary of W_0, docs/model.md §9, traced once per arm in the
+    process when the search is exhausted), or None when the strategies are
+    exhausted without proof.
     ``cables``: ``"prefer"``/``"require"``/``"ignore"`` states whose cables
     cross the arm.  With n >= 3 tendons, ``share="min-norm"``/``"min-energy"``
     and ``min_tension_N`` choose among the tension sets that reach the target.
@@ -174,6 +177,7 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
 
     from .solvers.control import TipController
     from .solvers.reach import Reacher, simplest_loading
+    from .studies.boundary import boundary_proof
 
     target = np.asarray(target_mm, dtype=float).ravel()
     if target.size != 2 or not np.all(np.isfinite(target)):
@@ -182,8 +186,9 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
         guess = arm.tensions_from_N(guess_N)
     p0 = None if guess is None else check_tensions(guess, arm.n_tendons)
     with TipController(arm, n_elements=elements, method=method, tip_tol_mm=tol_mm) as ctl:
-        result = Reacher(ctl).reach(arm.from_mm(target), p0=p0, global_search=global_search,
-                                    cables=cables)
+        reacher = Reacher(ctl, boundary=boundary_proof(arm, ctl.disc))
+        result = reacher.reach(arm.from_mm(target), p0=p0, global_search=global_search,
+                               cables=cables)
         sharer = _sharer(arm, ctl, share, min_tension_N)
         if sharer is not None and result.converged:
             result = sharer.solve(result)
@@ -339,10 +344,14 @@ def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None,
     restricted workspace, Eqs. (18)-(22)) traced by pseudo-arclength
     continuation in tension space instead of sampling.  Returns a
     ``BoundaryResult``: ``polygons_mm`` and ``areas_mm2`` per set
-    (``"W0"``, ``"restricted"``), ``solves``, ``messages`` (where the method
-    stops, e.g. fold curves of the tip map it does not trace).  ``progress``
-    (True: a bar, or a callable ``progress(solves, note)``) reports the
-    continuation solves."""
+    (``"W0"``, ``"restricted"``; mm, mm^2), ``solves``, ``messages`` (where
+    the method stops); for W_0 also the fold curves of the tip map
+    (det d x_t/dp = 0, Eq. (13): ``fold_polylines_mm``), the faces they and
+    the loop cut the plane into (``faces``: winding number, preimage count),
+    ``area_bounds_mm2``, ``contains(points_mm)`` and ``outside(target_mm)``
+    (the OUTSIDE_BOUNDARY evidence of tip control; docs/model.md §9.1).
+    ``progress`` (True: a bar, or a callable ``progress(solves, note)``)
+    reports the continuation solves."""
     from .studies.boundary import trace_boundary
 
     with _progress(progress, "boundary", "continuation solves") as bar:

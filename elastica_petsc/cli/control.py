@@ -20,7 +20,8 @@ def add_parser(sub) -> None:
                     "reaches the state from the straight arm (reproduce it with `solve --from`). "
                     "When the local iteration stalls, a global search follows (homotopy in "
                     "target space, restarts from other loading orders). Exit status 0: reached; "
-                    "3: proven unreachable (|target| > l); 4: not reached and not proven "
+                    "3: proven unreachable (|target| > l, or outside the traced boundary of W_0 "
+                    "with two tendons: evidence OUTSIDE_BOUNDARY); 4: not reached and not proven "
                     "unreachable (the closest tip found is printed).")
     parser.add_argument("--target", type=float, nargs=2, required=True, metavar=("X", "Y"),
                         help="desired tip position in mm")
