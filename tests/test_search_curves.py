@@ -123,7 +123,7 @@ def _fold_by_arclength(disc, L_end, ds: float = 0.02) -> np.ndarray:
         L0 = disc.cables(disc.split(disc.straight())[1])[0]
         d = L_end - L0
         line, along = LengthLine(mf, L_end, d), LengthLine(mf, L_end, d, along=True)
-        t, sign = tr.tangent(w, line, along.gradient(w) / mf.metric)
+        t, sign = tr.tangent(w, line, along.gradient(w) / mf.metric)[:2]
         pt = tr.point(w, t, sign, 0)
         prev = (along.gradient(pt.w) @ pt.t, pt.w)
         for _ in range(2000):

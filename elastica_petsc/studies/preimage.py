@@ -65,10 +65,12 @@ class SearchTracer(CurveTracer):
     def __init__(self, disc, **kw):
         super().__init__(disc, prefix="curve_", **kw)
         set_from_options(self.snes, "curve_", CURVE_OPTIONS)
-        self.A.dense = lambda: np.ones((1, 1))            # det sign unused: skip slogdet
+        self.A.pattern.determinant_sign = lambda values: 1.0   # det sign unused: no dense LU
 
-    def point(self, w, t, det_sign, iterations) -> CurvePoint:
-        return CurvePoint(w=w.copy(), t=t.copy(), tip=self.mf.tip(w), tip_velocity=np.zeros(2),
+    def point(self, w, t, det_sign, iterations, tip_det: float = np.nan,
+              tip_inward=None) -> CurvePoint:
+        return CurvePoint(w=w.copy(), t=t.copy(), tip=self.mf.tip(w),
+                          tip_velocity=self.mf.tip_velocity(w, t),
                           unstable_modes=-1, det_sign=det_sign, iterations=iterations)
 
 
@@ -173,10 +175,10 @@ def follow_curve(tracer: CurveTracer, w0, constraint: Constraint, events, name: 
     or after ``max_points`` points."""
     mf = tracer.mf
     out = []
-    t0, _ = tracer.tangent(w0, constraint, np.ones(mf.m))
+    t0 = tracer.tangent(w0, constraint, np.ones(mf.m))[0]
     for orient in (t0, -t0):
         trace = Trace(name)
-        t, sign = tracer.tangent(w0, constraint, orient)
+        t, sign = tracer.tangent(w0, constraint, orient)[:2]
         pt = tracer.point(w0, t, sign, 0)
         ds = ds0
         while True:
@@ -249,7 +251,8 @@ class CurveSearch:
 
     def __init__(self, tracer: CurveTracer, target, *, control: str = "length",
                  directions: int = 4, p_max: float = 200.0, margin: float = 1.5,
-                 tol: float = 1e-4, ds0: float = 0.1, max_points: int = 400):
+                 tol: float = 1e-4, ds0: float = 0.1, max_points: int = 400,
+                 on_curve=None):
         if control not in ("length", "load"):
             raise ValueError(f"control must be 'length' or 'load', got {control!r}")
         self.tracer, self.mf, self.control = tracer, tracer.mf, control
@@ -257,6 +260,7 @@ class CurveSearch:
         self.L = np.asarray(target, float)
         self.directions, self.p_max, self.margin, self.tol = directions, p_max, margin, tol
         self.ds0, self.max_points = ds0, max_points
+        self.on_curve = on_curve                # called with each curve's label (progress)
         self.states: list[tuple[np.ndarray, str]] = []
         self.traces: list[Trace] = []
         self.queue: list[int] = []              # indices into states, to be followed
@@ -314,6 +318,8 @@ class CurveSearch:
                                p_max=self.margin * self.p_max, ds0=self.ds0,
                                max_points=self.max_points):
             self.traces.append(tr)
+            if self.on_curve is not None:
+                self.on_curve(label)
             self.whole &= tr.end in ("closed", "p_max", "collapse")
             out += [(x, k, f"{label} ({tr.end})") for x, k in tr.crossings]
         self.solves += self.tracer.solves - before

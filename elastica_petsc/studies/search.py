@@ -268,16 +268,24 @@ def tension_starts(eq_solver: EquilibriumSolver, levels=(5.0, 10.0, 20.0), order
 class _Collector:
     """Distinct states in order of discovery, compared by shape, and a log of
     every attempt: (start, method, outcome) with outcome "new k", "again k"
-    (k: 1-based state number) or PETSc's reason of the failure."""
+    (k: 1-based state number) or PETSc's reason of the failure.  ``progress``
+    (optional) is called as ``progress(steps, note)`` after every search step
+    (:meth:`step`: a continuation point or an attempt from a start)."""
 
-    def __init__(self, tol: float):
-        self.tol = tol
+    def __init__(self, tol: float, progress=None):
+        self.tol, self.progress, self.steps = tol, progress, 0
         self.found: list[list] = []          # [state, start, method, hits]
         self.log: list[tuple[str, str, str]] = []
         self.attempts = self.failures = self.duplicates = 0
 
+    def step(self, what: str) -> None:
+        self.steps += 1
+        if self.progress is not None:
+            self.progress(self.steps, f"{len(self.found)} found; {what}")
+
     def offer(self, state, start: str, method: str) -> bool:
         self.attempts += 1
+        self.step(f"{method} from {start}")
         if state is None or not state.converged:
             self.failures += 1
             self.log.append((start, method, "failed" if state is None else
@@ -359,6 +367,7 @@ def deflated_continuation(solve, paths, start, found: "_Collector", what: str, *
     for how, points in paths:
         branches, current = [start], [start]
         for k, target in enumerate(points):
+            found.step(f"continuation in {what}, {how}: {k + 1}/{len(points)}")
             current = []
             for previous in branches:
                 state = solve(target, previous)
@@ -468,7 +477,8 @@ def _with_curves(disc, target, control: str, p_max: float, effort: int,
 
     with SearchTracer(disc) as tracer:
         search = CurveSearch(tracer, target, control=control, p_max=p_max,
-                             directions=DEFAULT_DIRECTIONS * int(effort)).run()
+                             directions=DEFAULT_DIRECTIONS * int(effort),
+                             on_curve=lambda label: found.step(f"curve {label}")).run()
         _offer_crossings(search, found, polish, 0)
         before = len(found.found)
         out = rest()
@@ -487,7 +497,7 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
                       effort: int = 1, levels=None, deflation_rounds: int | None = None,
                       passes: int = 2, steps: int | None = None,
                       tol: float = SAME_SHAPE_TOL, curves: bool | None = None,
-                      p_max: float = DEFAULT_P_MAX) -> SearchResult:
+                      p_max: float = DEFAULT_P_MAX, progress=None) -> SearchResult:
     """Distinct equilibria with cable lengths ``lengths`` (units of l) and
     tensions 0 <= p_i <= ``p_max``.
 
@@ -502,10 +512,11 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
     repeats the lower ones first, so it never finds fewer states): (1)
     :func:`deflated_continuation` in the cable lengths from the straight arm
     along every loading order (``steps`` points per segment, default 12 k);
-    (2) from every new start (phase 1: ``starts`` or :func:`tension_starts` at ``levels``, default 5, 10, 20; later phases
-    add doubled levels): continuation in the cable lengths from the start's
-    own lengths (:meth:`LengthSolver.follow`, unstable states allowed), then up
-    to ``deflation_rounds`` (default 2 k) deflated VI Newton solves from the
+    (2) from every new start (phase 1: ``starts`` or :func:`tension_starts`
+    at ``levels``, default 5, 10, 20; later phases add doubled levels):
+    continuation in the cable lengths from the start's own lengths
+    (:meth:`LengthSolver.follow`, unstable states allowed), then up to
+    ``deflation_rounds`` (default 2 k) deflated VI Newton solves from the
     start, each deflating every state found so far (Farrell et al. 2015, l2
     line search, :data:`DEFLATION_OPTIONS`), repeated over the phase's starts
     while a sweep finds new states (at most ``passes`` sweeps).  (3) With
@@ -513,11 +524,13 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
     States are distinct if some nodal angle differs by more than ``tol`` rad.
     Each state reports its stability under load and length control.  What is
     returned is what these methods reached, never a claim that no other
-    equilibrium exists.
+    equilibrium exists.  ``progress(steps, note)``, if given, is called after
+    every search step (a continuation point or an attempt from a start; the
+    number of steps is not known in advance).
     """
     L = check_lengths(lengths, solver.disc.n_tendons)
     disc = solver.disc
-    found = _Collector(tol)
+    found = _Collector(tol, progress)
     deflation = Deflation(disc.h)
     curves = disc.n_tendons == 2 if curves is None else bool(curves)
     if curves and disc.n_tendons != 2:
@@ -620,7 +633,7 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
                deflation_rounds: int | None = None, passes: int = 2, steps: int | None = None,
                tol: float = SAME_SHAPE_TOL, prefix: str = "defl_",
                length_mm: float | None = None, curves: bool | None = None,
-               p_max: float = DEFAULT_P_MAX) -> SearchResult:
+               p_max: float = DEFAULT_P_MAX, progress=None) -> SearchResult:
     """Distinct load-controlled equilibria at fixed tensions ``p``.
 
     (0) Loading paths from the straight arm: proportional and every order
@@ -644,12 +657,12 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
     lengths are its own cable chords, with ``unstable_modes`` (load control)
     and ``length_unstable_modes`` (the same state held at its cable
     lengths).  After (1)-(2) the curves through every state they added.  Not
-    a proof of completeness.
+    a proof of completeness.  ``progress``: as for :func:`length_equilibria`.
     """
     disc = eq_solver.disc
     p = check_tensions(p, disc.n_tendons)
     n = disc.n_tendons
-    found = _Collector(tol)
+    found = _Collector(tol, progress)
     deflation = Deflation(disc.h)
     solves = LoadSolves(eq_solver, prefix, length_mm)
 
@@ -703,13 +716,14 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
 # --- one call each, from an arm (for the command line and the Python API) -------------
 def search_lengths(arm, lengths_mm, *, elements: int | None = None, effort: int = 1,
                    levels=None, deflation_rounds: int | None = None,
-                   steps: int | None = None) -> SearchResult:
+                   steps: int | None = None, progress=None) -> SearchResult:
     """Every equilibrium this search finds with the cable lengths ``lengths_mm``
     (mm, one per tendon) under length control (Sec. 4.6, Eq. (23)) and
     tensions 0 <= P_i <= the motor limit P_crit of Eq. (22) (p <= 200 without
     one, :func:`search_box`): :func:`length_equilibria` on ``arm``
     (``elements``: mesh, default the arm's).  States are non-dimensional
-    (``*_mm`` properties in mm)."""
+    (``*_mm`` properties in mm).  ``progress(steps, note)``: see
+    :func:`length_equilibria`."""
     from ..core.fem import Discretisation
 
     disc = Discretisation.from_arm(arm, elements)
@@ -718,21 +732,22 @@ def search_lengths(arm, lengths_mm, *, elements: int | None = None, effort: int 
             EquilibriumSolver(disc) as eq_solver:
         return length_equilibria(solver, L, eq_solver=eq_solver, effort=effort, levels=levels,
                                  deflation_rounds=deflation_rounds, steps=steps,
-                                 p_max=search_box(arm))
+                                 p_max=search_box(arm), progress=progress)
 
 
 def search_tensions(arm, p, *, elements: int | None = None, effort: int = 1, levels=None,
-                    deflation_rounds: int | None = None) -> SearchResult:
+                    deflation_rounds: int | None = None, progress=None) -> SearchResult:
     """Every equilibrium this search finds at the tensions ``p`` (non-dimensional,
     p = P l^2/B; ``arm.tensions_from_N`` converts newtons) under load control
-    (Eq. (9)): :func:`equilibria` on ``arm``."""
+    (Eq. (9)): :func:`equilibria` on ``arm``.  ``progress(steps, note)``: see
+    :func:`length_equilibria`."""
     from ..core.fem import Discretisation
 
     disc = Discretisation.from_arm(arm, elements)
     with EquilibriumSolver(disc) as eq_solver:
         return equilibria(eq_solver, p, effort=effort, levels=levels,
                           deflation_rounds=deflation_rounds, length_mm=arm.length_mm,
-                          p_max=search_box(arm))
+                          p_max=search_box(arm), progress=progress)
 
 
 # --- length continuation with a global search at its critical points ------------------
