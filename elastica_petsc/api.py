@@ -290,37 +290,36 @@ def frequencies(state: State, *, control: str = "load", modes: int = 3):
 
 def lengths(arm: Arm, lengths_mm, *, all: bool = False, elements: int | None = None,
             progress=None):
-    """Length control (Sec. 4.6): the equilibrium, with its tensions, that
-    prescribed cable lengths impose (slack cables carry no tension).  With
-    ``all=True``, a deflated multi-start search for several equilibria
-    (a ``SearchResult``: the list found, not a proof that there are no more);
-    ``progress`` (True: a bar, or a callable ``progress(steps, note)``) reports
-    its search steps (continuation points and attempts from starts)."""
-    from .solvers.lengths import LengthSolver
-    from .studies.search import length_equilibria, tension_starts
+    """Length control (Sec. 4.6, Eq. (23)): the equilibrium, with its tensions,
+    that prescribed cable lengths (mm) impose (slack cables carry no tension).
+    With ``all=True``, the search for every equilibrium with 0 <= P_i <= P_crit
+    (Eq. (22)) of :func:`~elastica_petsc.studies.search.search_lengths` (curve
+    search and multi-start; a ``SearchResult``: the list found, not a proof
+    that there are no more); ``progress`` (True: a bar, or a callable
+    ``progress(steps, note)``) reports its search steps (curves, continuation
+    points and attempts from starts)."""
+    from .studies.search import follow_lengths, search_lengths
 
     disc = _mesh(arm, elements)
-    with LengthSolver(disc, length_mm=arm.length_mm) as solver:
-        if not all:
-            return solver.follow_mm(lengths_mm)
-        with EquilibriumSolver(disc) as eqs:
-            starts = tension_starts(eqs)
-        with _progress(progress, "lengths search", "search steps") as bar:
-            return length_equilibria(solver, solver.to_l(lengths_mm), starts, progress=bar)
+    if not all:
+        return follow_lengths(arm, lengths_mm, elements=disc.n_elements)
+    with _progress(progress, "lengths search", "search steps") as bar:
+        return search_lengths(arm, lengths_mm, elements=disc.n_elements, progress=bar)
 
 
 def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None = None,
                progress=None):
-    """Equilibria that share the given tensions (load control, Eq. (9), Fig. 8),
-    by a deflated multi-start search; a ``SearchResult`` (not a proof that there
-    are no more).  ``progress``: as for :func:`lengths`."""
-    from .studies.search import equilibria as search, tension_starts
+    """Equilibria that share the given tensions (N, or non-dimensional
+    ``tensions`` p = P l^2/B; load control, Eq. (9), Fig. 8), by the search of
+    :func:`~elastica_petsc.studies.search.search_tensions` (loading paths,
+    curve search, multi-start); a ``SearchResult``: a list, not a proof that
+    there are no more.  ``progress``: as for :func:`lengths`."""
+    from .studies.search import search_tensions
 
     p = _tensions(arm, tensions_N, tensions)
-    with EquilibriumSolver(_mesh(arm, elements)) as eqs:
-        starts = tension_starts(eqs)
-        with _progress(progress, "equilibria", "search steps") as bar:
-            return search(eqs, p, starts, length_mm=arm.length_mm, progress=bar)
+    with _progress(progress, "equilibria", "search steps") as bar:
+        return search_tensions(arm, p, elements=_mesh(arm, elements).n_elements,
+                               progress=bar)
 
 
 def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",

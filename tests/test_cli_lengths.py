@@ -34,7 +34,7 @@ L_STATE3_MM = np.array([96.2, 454.3])
 
 def cli(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "elastica_petsc.cli", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=120)
+                          capture_output=True, text=True, cwd=cwd, timeout=300)
 
 
 def cli_json(*args):
@@ -196,11 +196,15 @@ def test_fig8_lengths_finds_states_1_and_2(fig8_lengths, fig8_load, disc, ls):
 
     assert data["control"] == "length" and data["lengths_mm"] == [147.1, 472.5]
     states = data["equilibria"]
-    assert len(states) >= 5                   # issue 12: five with p >= 0, three unstable
+    # issue 12: the reference (scripts/equilibria_reference.py) finds six states with
+    # 0 <= p_i <= P_crit l^2/B = 203.22, four unstable; the curve search finds all six
+    assert len(states) == 6
     assert all(min(s["tensions"]) >= 0 for s in states)
     assert [s["stable"] for s in states].count(True) == 2
     cov = data["search"]["coverage"]
-    assert cov["by_method"]["deflated continuation"]["new_states"] >= 4
+    assert cov["by_method"]["curve continuation"]["new_states"] == 6
+    assert cov["curves"]["p_max"] == pytest.approx(203.22, abs=0.01)
+    assert cov["curves"]["curves_followed"] > 0 and "curve search" in data["search"]["method"]
     assert 0 < cov["last_new_state_at_attempt"] <= data["search"]["attempts"]
     assert data["search"]["effort"]["steps"] == 12 and data["search"]["effort"]["effort"] == 1
     for s in states:

@@ -191,16 +191,17 @@ def test_fig8_length_control_finds_states_1_and_2(eqs, ls, starts):
     dp/dL is symmetric (p_i = -dU/dL_i: tensions are the gradient of the
     constrained strain energy), which is checked as well."""
     L = L_FIG8_MM / L_MM
-    res = length_equilibria(ls, L, starts)
-    # issue 12: an independent multi-start found five states with p >= 0, three of
-    # them unstable; the default search (deflated continuation + multi-start) finds
-    # (25.25, 10.80), (9.62, 12.58), (6.49, 53.62), (58.66, 46.80), (105.25, 109.01)
-    assert len(res) >= 5, res.summary()
+    res = length_equilibria(ls, L, starts, p_max=load_config().max_tension)
+    # issue 12: the reference (scripts/equilibria_reference.py) finds six states with
+    # 0 <= p_i <= P_crit l^2/B = 203.22, four of them unstable; the default search finds
+    # all six, first by the curve search (studies.preimage)
+    assert len(res) == 6, res.summary()
     assert [f.state.stable_under_length_control for f in res.states].count(True) == 2
     assert all(f.state.length_unstable_modes >= 0 and f.state.unstable_modes >= 0
                for f in res.states)
     methods = res.methods()
-    assert methods["deflated continuation"][1] >= 4, methods       # new states by DC
+    assert methods["curve continuation"][1] == 6, methods
+    assert res.curves["p_max"] == pytest.approx(203.22, abs=0.01)
     assert 0 < res.last_new_attempt <= res.attempts
     eq1 = eqs.solve(P_FIG8, order=(2, 1))
     dL_model = np.abs(eq1.cable_lengths * L_MM - L_FIG8_MM)        # (0.11, 0.02) mm

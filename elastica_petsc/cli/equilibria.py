@@ -18,8 +18,10 @@ def add_parser(sub) -> None:
         "equilibria", help="several equilibria for given tensions (load control, Fig. 8)",
         description="Search for several equilibria of the arm at fixed cable tensions (load "
                     "control): loading paths from the straight arm in every order (both sides "
-                    "of every bifurcation), deflated continuation in the tensions, loading "
-                    "paths from a spread of load-controlled starts, and deflated Newton solves "
+                    "of every bifurcation), a curve search (two tendons: load paths on lines "
+                    "through the tensions followed through their folds, from the straight arm "
+                    "and through every state found), deflated continuation in the tensions, "
+                    "loading paths from a spread of load-controlled starts, and deflated Newton solves "
                     "(Fig. 8: states 1 and 3 share p = (25.2, 10.8)). Each state is reported "
                     "with tip, cable lengths and its stability under load control and, held "
                     "at its own cable lengths, under length control. What the search finds is "

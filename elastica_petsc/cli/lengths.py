@@ -36,7 +36,8 @@ NOT_COMPLETE = ("These are the equilibria that the listed starts and methods rea
 
 def add_search_options(parser) -> None:
     parser.add_argument("--effort", type=int, default=1, metavar="K",
-                        help="spend about K times the default work: K x 12 deflated "
+                        help="spend about K times the default work: curves through every "
+                             "state in K x 4 directions (two tendons), K x 12 deflated "
                              "continuation points per path segment, K x 2 deflated solves per "
                              "start, and the start tension levels doubled K-1 more times "
                              "(default 1)")
@@ -164,10 +165,14 @@ def search_summary(result, settings: dict) -> dict:
     if settings["effort"] > 1:
         method += (f"; effort {settings['effort']}: the searches of every lower effort first, "
                    "then this one (the numbers above are its own)")
+    if result.curves:
+        method = result.curve_method() + "; around it (its curves also followed from the "\
+            "states these add): " + method
     return {"method": method, "effort": settings,
             "coverage": {"by_method": {m: {"attempts": a, "new_states": k}
                                        for m, (a, k) in result.methods().items()},
-                         "last_new_state_at_attempt": result.last_new_attempt},
+                         "last_new_state_at_attempt": result.last_new_attempt,
+                         "curves": dict(result.curves)},
             "starts": len(result.starts), "attempts": int(result.attempts),
             "failed": int(result.failures), "refound": int(result.duplicates),
             "start_labels": list(result.starts),
@@ -323,8 +328,7 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
 # --- the command -----------------------------------------------------------------------
 def run(args) -> int:
     from ..core.progress import Progress
-    from ..solvers.lengths import follow_lengths
-    from ..studies.search import search_lengths
+    from ..studies.search import follow_lengths, search_lengths
     from ..io.summary import rounded
 
     arm, disc = common.load_arm(args)
@@ -348,7 +352,9 @@ def run(args) -> int:
         data["equilibria"] = [state_summary(arm, s, "length") for s in states]
         data["search"] = {
             "method": "length continuation from the straight arm (stable path; snaps "
-                      "and buckling recorded)",
+                      "and buckling recorded; past a critical point where the buckling "
+                      "mode gives no stable state, the nearest stable state the curve "
+                      "search finds there)",
             "starts": 1, "attempts": 1, "failed": 0 if state.converged else 1,
             "refound": 0, "start_labels": ["straight arm"],
             "found_from": [{"state": 1, "start": "straight arm",

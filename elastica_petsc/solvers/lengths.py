@@ -99,6 +99,8 @@ TAUT_TOL = 1e-8
 # |q . dL| / (|(v, q)| |dL|) below this: a loss of stability under length control is a
 # bifurcation, not a limit point (instability_kind; calibrated on Fig. 7 only, 0.005).
 LENGTH_BIFURCATION_TOL = 0.05
+# Global searches for a state to snap to (``post_critical`` of LengthSolver.follow) per path.
+MAX_SNAP_SEARCHES = 3
 # Two states are the same equilibrium if no nodal angle differs by more (rad).
 SAME_SHAPE_TOL = 1e-4
 # PETSc options (under the solver's prefix) for deflated solves, unless the
@@ -539,7 +541,8 @@ class LengthSolver:
 
     # --- continuation in the cable lengths -------------------------------------------------
     def follow(self, lengths, start=None, *, keep_stable: bool = True,
-               min_fraction: float = 1e-4, label: str = "") -> LengthEquilibrium:
+               min_fraction: float = 1e-4, label: str = "",
+               post_critical=None) -> LengthEquilibrium:
         """Continuation from ``start`` (an equilibrium; its own cable chords are
         the initial lengths, or for a slack cable of a LengthEquilibrium its
         prescribed length) to ``lengths`` (units of l) along the straight
@@ -555,9 +558,15 @@ class LengthSolver:
         a stable state found by perturbing the last state along +- its
         constrained buckling mode (:meth:`branches`), or to the distant state
         Newton found if that one is stable; the lengths are recorded in
-        ``jumps``.  If no stable state is found the result has
-        ``converged=False`` and a message.  Without ``keep_stable`` unstable
-        states are followed like stable ones (used by searches).
+        ``jumps``.  If the mode finds none and ``post_critical`` is given,
+        ``post_critical(lengths, u, p)`` (a global search at the critical
+        lengths, e.g. :func:`elastica_petsc.studies.search.snap_targets`)
+        returns stable states (u, p) there, nearest shape first, and the path
+        jumps to the first that differs from the critical state by more than
+        ``jump_tol`` (at most :data:`MAX_SNAP_SEARCHES` searches per path).  If no stable state is found the result has
+        ``converged=False`` and a message that says it was not found (not that
+        none exists).  Without ``keep_stable`` unstable states are followed
+        like stable ones (used by searches).
         """
         L_end = check_lengths(lengths, self.disc.n_tendons)
         u, p = self._start(start)
@@ -574,6 +583,7 @@ class LengthSolver:
         lam, dlam, its_total, steps = 0.0, full, 0, 0
         z_prev = dlam_prev = None
         jumps, instabilities, kinds = [], [], []
+        searches = 0
         reason = "CONVERGED_ITERATING"
         n_ang = self.disc.n_elements
 
@@ -606,6 +616,11 @@ class LengthSolver:
                 instabilities.append(L_t.copy())
                 kinds.append(instability_kind(sys, z, L_end - L_start))
             candidates = self._post_critical(z_new if ok else z, where, lam, step, full)
+            if not candidates and post_critical is not None and searches < MAX_SNAP_SEARCHES:
+                searches += 1           # a distant state only: never back onto this branch
+                candidates = [(lam, sys.augment(u, q, 1.0)) for u, q in post_critical(
+                    where(lam), z[: sys.nu], z[sys.ip:sys.imu])
+                    if np.max(np.abs(u[:n_ang] - z[:n_ang])) > self.jump_tol][:1]
             if ok and jumped and (not lost or not keep):
                 candidates.append((lam + step, z_new))
             if candidates:
@@ -710,10 +725,3 @@ class LengthSolver:
     def __exit__(self, *exc) -> None:
         self.destroy()
 
-
-def follow_lengths(arm, lengths_mm, *, elements: int | None = None) -> LengthEquilibrium:
-    """The equilibrium with cable lengths ``lengths_mm`` (mm) reached from the
-    straight arm by length continuation (:meth:`LengthSolver.follow`: a stable
-    path, snaps and buckling recorded), with a solver made for it."""
-    with LengthSolver.from_arm(arm, elements) as solver:
-        return solver.follow(solver.to_l(lengths_mm))

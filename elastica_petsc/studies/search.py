@@ -5,12 +5,16 @@ Starts come from loading paths (:func:`tension_starts`); from each start a
 search continues (in the cable lengths) or loads (in the tensions) to the
 target, then runs deflated Newton solves (Farrell et al. 2015,
 :mod:`elastica_petsc.core.deflation`) that cannot return to the states
-already found.  A search reports what it found and from where, never that
-nothing else exists.  Non-dimensional (lengths / l, p = P l^2 / B).
+already found.  With two tendons the searches are built around the curve
+search of :mod:`elastica_petsc.studies.preimage` (curves of equilibria whose
+cable lengths or tensions move on lines through the target, followed through
+folds), which does not depend on a step count.  A search reports what it
+found and from where, never that nothing else exists.  Non-dimensional
+(lengths / l, p = P l^2 / B).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import itertools
 
 import numpy as np
@@ -116,6 +120,7 @@ class SearchResult:
     failures: int                 # attempts that did not converge
     duplicates: int               # converged attempts that re-found a known state
     log: tuple = ()               # (start, method, outcome) per attempt
+    curves: dict = field(default_factory=dict)   # the curve search's coverage ({}: none)
 
     def __len__(self) -> int:
         return len(self.states)
@@ -145,13 +150,32 @@ class SearchResult:
             (lambda f: np.max(np.abs(f.state.cable_lengths - ref)))
         return min(self.states, key=key)
 
+    def curve_method(self) -> str:
+        """One sentence on the curve search and its box ('' without one)."""
+        c = self.curves
+        if not c:
+            return ""
+        what = "cable lengths" if self.control == "length" else "tensions"
+        return (f"curve search: equilibrium curves whose {what} move on a line through the "
+                f"target, followed by pseudo-arclength continuation through every fold, from "
+                f"the straight arm (its line and every loading order"
+                + (", the faces P_i = 0" if self.control == "length" else "")
+                + f") and through every state found ({c['directions']} directions); "
+                f"{c['curves_followed']} curves, {c['corrector_solves']} corrector solves; "
+                f"states with 0 <= p_i <= p_max = {c['p_max']:.6g} (the motor limit P_crit "
+                f"of Eq. (22) if the arm sets one, else {DEFAULT_P_MAX:g})"
+                + ("" if not c["outside_the_box"] else
+                   f", {c['outside_the_box']} found beyond it not listed"))
+
     def summary(self) -> str:
         what = "cable lengths L/l" if self.control == "length" else "tensions p"
         lines = [f"{len(self.states)} distinct equilibria at {what} = "
                  + ", ".join(f"{v:.6g}" for v in self.target)
                  + f" from {len(self.starts)} starts ({self.attempts} attempts, "
                  f"{self.failures} failed, {self.duplicates} re-found a known state); "
-                 "not a proof that there are no others"]
+                 "a list, not a proof that there are no others"]
+        if self.curves:
+            lines.append("  " + self.curve_method())
         for f in self.states:
             s = f.state
             lm = getattr(s, "length_unstable_modes", -1)
@@ -277,18 +301,29 @@ class _Collector:
         self.log.append((start, method, f"new {len(self.found)}"))
         return True
 
-    def result(self, control, target, starts) -> SearchResult:
+    def result(self, control, target, starts, curves=None) -> SearchResult:
         """The search's result; its starts are ``starts`` and every other start
-        of an attempt (the straight arm of each homotopy path)."""
+        of an attempt (the straight arm of each homotopy path).  With ``curves``
+        (a :class:`~elastica_petsc.studies.preimage.CurveSearch`) only the
+        states in its tension box are kept (the others are counted) and the
+        curves are summarised in ``coverage``."""
         starts = list(starts)
         for label, _, _ in self.log:
             if label not in starts:
                 starts.append(label)
-        numbers = state_numbers([e[0] for e in self.found])
-        found = sorted((FoundState(*e, number=k) for e, k in zip(self.found, numbers)),
+        kept, coverage = self.found, {}
+        if curves is not None:
+            kept = [e for e in self.found if np.all(e[0].p <= curves.p_max)]
+            coverage = {"p_max": float(curves.p_max), "directions": int(curves.directions),
+                        "curves_followed": len(curves.traces), "curve_ends": curves.ends(),
+                        "corrector_solves": int(curves.solves),
+                        "outside_the_box": len(self.found) - len(kept)}
+        numbers = state_numbers([e[0] for e in kept])
+        found = sorted((FoundState(*e, number=k) for e, k in zip(kept, numbers)),
                        key=lambda f: f.number)
         return SearchResult(control, np.asarray(target, float), tuple(found), tuple(starts),
-                            self.attempts, self.failures, self.duplicates, tuple(self.log))
+                            self.attempts, self.failures, self.duplicates, tuple(self.log),
+                            coverage)
 
 
 def homotopy_paths(start, end, steps: int, orders="all") -> list[tuple[str, np.ndarray]]:
@@ -407,14 +442,73 @@ def _deflation_of(found: "_Collector", deflation: Deflation) -> Deflation:
     return deflation
 
 
+# Tension box of a complete length search when the arm has no motor limit (p = P l^2/B).
+DEFAULT_P_MAX = 200.0
+# Directions of the lines through each equilibrium (studies.preimage) at effort 1.
+DEFAULT_DIRECTIONS = 4
+
+
+def search_box(disc_or_arm) -> float:
+    """p_max of the tension box 0 <= p_i <= p_max a length search covers: the
+    motor limit P_crit of Eq. (22) if the arm has one, else DEFAULT_P_MAX."""
+    limit = getattr(disc_or_arm, "max_tension", None)
+    return float(limit) if limit is not None else DEFAULT_P_MAX
+
+
+def _offer_crossings(search, found: "_Collector", polish, start: int) -> None:
+    """Offer the crossings ``search.states[start:]`` inside the tension box to
+    ``found``, each polished by ``polish(u, p, label)`` (one Newton solve,
+    which also judges its stability under load and length control)."""
+    box = {id(w) for w, _ in search.in_box}
+    for w, label in search.states[start:]:
+        if id(w) in box:
+            u, p = search.mf.split(w)
+            found.offer(polish(u, np.maximum(p, 0.0), label), label, "curve continuation")
+
+
+def _with_curves(disc, target, control: str, p_max: float, effort: int,
+                 found: "_Collector", polish, rest):
+    """The curve search (:class:`~elastica_petsc.studies.preimage.CurveSearch`)
+    around the other methods ``rest()``: first the curves from the straight
+    arm and through every equilibrium they meet, then ``rest()``, then the
+    curves through every state ``rest`` added.  Returns (the CurveSearch,
+    what ``rest`` returned)."""
+    from .preimage import CurveSearch, SearchTracer
+
+    with SearchTracer(disc) as tracer:
+        search = CurveSearch(tracer, target, control=control, p_max=p_max,
+                             directions=DEFAULT_DIRECTIONS * int(effort),
+                             on_curve=lambda label: found.step(f"curve {label}")).run()
+        _offer_crossings(search, found, polish, 0)
+        before = len(found.found)
+        out = rest()
+        start = len(search.states)
+        for state, label, method, _ in found.found[before:]:
+            w = np.concatenate((state.u, state.p))
+            # only states on the lines through the target (a slack cable's chord is short)
+            if np.all(state.p <= p_max) and np.allclose(search.quantity(w), target, atol=1e-8):
+                search.add(w, f"{label} ({method})")
+        _offer_crossings(search.close(), found, polish, start)
+    return search, out
+
+
 def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
                       eq_solver: EquilibriumSolver | None = None, continuation: bool = True,
                       effort: int = 1, levels=None, deflation_rounds: int | None = None,
                       passes: int = 2, steps: int | None = None,
-                      tol: float = SAME_SHAPE_TOL, progress=None) -> SearchResult:
-    """Distinct equilibria with cable lengths ``lengths`` (units of l).
+                      tol: float = SAME_SHAPE_TOL, curves: bool | None = None,
+                      p_max: float = DEFAULT_P_MAX, progress=None) -> SearchResult:
+    """Distinct equilibria with cable lengths ``lengths`` (units of l) and
+    tensions 0 <= p_i <= ``p_max``.
 
-    In phases k = 1..``effort`` (:func:`effort_settings`, a higher effort
+    (0) With two tendons (``curves``, default on): the systematic search of
+    :class:`~elastica_petsc.studies.preimage.CurveSearch`: pseudo-arclength
+    continuation, through every fold, of curves of the equilibrium manifold
+    whose cable lengths move on a line through L* (from the straight arm,
+    along each loading order, on the faces p_i = 0, then through every
+    equilibrium found in 4 ``effort`` directions); every crossing of L* is an
+    equilibrium.  Its result does not depend on a step count.
+    Then in phases k = 1..``effort`` (:func:`effort_settings`, a higher effort
     repeats the lower ones first, so it never finds fewer states): (1)
     :func:`deflated_continuation` in the cable lengths from the straight arm
     along every loading order (``steps`` points per segment, default 12 k);
@@ -425,9 +519,10 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
     ``deflation_rounds`` (default 2 k) deflated VI Newton solves from the
     start, each deflating every state found so far (Farrell et al. 2015, l2
     line search, :data:`DEFLATION_OPTIONS`), repeated over the phase's starts
-    while a sweep finds new states (at most ``passes`` sweeps).  States are
-    distinct if some nodal angle differs by more than ``tol`` rad.  Each
-    state reports its stability under load and length control.  What is
+    while a sweep finds new states (at most ``passes`` sweeps).  (3) With
+    ``curves``: the curves through every state (1)-(2) found that (0) had not.
+    States are distinct if some nodal angle differs by more than ``tol`` rad.
+    Each state reports its stability under load and length control.  What is
     returned is what these methods reached, never a claim that no other
     equilibrium exists.  ``progress(steps, note)``, if given, is called after
     every search step (a continuation point or an attempt from a start; the
@@ -437,6 +532,9 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
     disc = solver.disc
     found = _Collector(tol, progress)
     deflation = Deflation(disc.h)
+    curves = disc.n_tendons == 2 if curves is None else bool(curves)
+    if curves and disc.n_tendons != 2:
+        raise InputError("the curve search of length control needs exactly two tendons")
 
     def continue_paths(k_steps: int) -> list:
         straight = solver.solve(solver.lengths_of(disc.straight()))
@@ -464,14 +562,24 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
 
     own = eq_solver is None
     eq_solver = EquilibriumSolver(disc) if own else eq_solver
-    try:
-        used = _phased_search(found, _phases(effort, levels, steps, deflation_rounds), starts,
+
+    def rest():
+        return _phased_search(found, _phases(effort, levels, steps, deflation_rounds), starts,
                               lambda lv: tension_starts(eq_solver, levels=lv), continue_paths,
                               multistart)
+
+    try:
+        search = None
+        if curves:
+            search, used = _with_curves(
+                disc, L, "length", p_max, effort, found,
+                lambda u, p, label: solver.solve(L, (u, p), label=label), rest)
+        else:
+            used = rest()
     finally:
         if own:
             eq_solver.destroy()
-    return found.result("length", L, used)
+    return found.result("length", L, used, curves=search)
 
 
 class LoadSolves:
@@ -524,12 +632,19 @@ class LoadSolves:
 def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1, levels=None,
                deflation_rounds: int | None = None, passes: int = 2, steps: int | None = None,
                tol: float = SAME_SHAPE_TOL, prefix: str = "defl_",
-               length_mm: float | None = None, progress=None) -> SearchResult:
+               length_mm: float | None = None, curves: bool | None = None,
+               p_max: float = DEFAULT_P_MAX, progress=None) -> SearchResult:
     """Distinct load-controlled equilibria at fixed tensions ``p``.
 
     (0) Loading paths from the straight arm: proportional and every order
     (:meth:`EquilibriumSolver.solve`, both sides of every bifurcation
-    crossed, :func:`loading_paths`); then in phases k = 1..``effort`` as in
+    crossed, :func:`loading_paths`); with two tendons (``curves``, default
+    on) the curve search of :class:`~elastica_petsc.studies.preimage.CurveSearch`
+    in tension space: load paths followed through their folds by
+    pseudo-arclength continuation (the line from p = 0 to ``p``, each loading
+    order, then lines through ``p`` in 4 ``effort`` directions through every
+    state found, tensions within |p_i| <= 1.5 max(p_max, max p)); then in
+    phases k = 1..``effort`` as in
     :func:`length_equilibria`: (1) :func:`deflated_continuation` in the
     tensions from the straight arm (the only equilibrium at p = 0) along
     every loading order, unstable branches included (``steps`` points per
@@ -541,8 +656,8 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
     sweeps).  Each state is a :class:`LengthEquilibrium` whose prescribed
     lengths are its own cable chords, with ``unstable_modes`` (load control)
     and ``length_unstable_modes`` (the same state held at its cable
-    lengths).  Not a proof of completeness.  ``progress``: as for
-    :func:`length_equilibria`.
+    lengths).  After (1)-(2) the curves through every state they added.  Not
+    a proof of completeness.  ``progress``: as for :func:`length_equilibria`.
     """
     disc = eq_solver.disc
     p = check_tensions(p, disc.n_tendons)
@@ -572,29 +687,43 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
             if len(found.found) == before:
                 break
 
+    def rest():
+        return _phased_search(found, _phases(effort, levels, steps, deflation_rounds), starts,
+                              lambda lv: tension_starts(eq_solver, levels=lv), continue_paths,
+                              multistart)
+
+    curves = n == 2 if curves is None else bool(curves)
+    if curves and n != 2:
+        raise InputError("the curve search needs exactly two tendons")
+    search = None
     try:
         for order in [None] + list(itertools.permutations(range(1, n + 1))):
             how = "proportional" if order is None else "order " + ",".join(map(str, order))
             for eq, side in loading_paths(eq_solver, p, order=order):
                 label = f"straight arm, {how}{side}"
                 found.offer(solves.examined(eq, label), label, "loading path")
-        used = _phased_search(found, _phases(effort, levels, steps, deflation_rounds), starts,
-                              lambda lv: tension_starts(eq_solver, levels=lv), continue_paths,
-                              multistart)
+        if curves:
+            search, used = _with_curves(
+                disc, p, "load", max(p_max, float(np.max(p))), effort, found,
+                lambda u, q, label: solves.solve(p, (u, p), label=label), rest)
+        else:
+            used = rest()
     finally:
         solves.destroy()
-    return found.result("load", p, used)
+    return found.result("load", p, used, curves=search)
 
 
 # --- one call each, from an arm (for the command line and the Python API) -------------
 def search_lengths(arm, lengths_mm, *, elements: int | None = None, effort: int = 1,
                    levels=None, deflation_rounds: int | None = None,
-                   progress=None) -> SearchResult:
+                   steps: int | None = None, progress=None) -> SearchResult:
     """Every equilibrium this search finds with the cable lengths ``lengths_mm``
-    (mm, one per tendon) under length control (Sec. 4.6, Eq. (23)):
-    :func:`length_equilibria` on ``arm`` (``elements``: mesh, default the
-    arm's).  States are non-dimensional (``*_mm`` properties in mm).
-    ``progress(steps, note)``: see :func:`length_equilibria`."""
+    (mm, one per tendon) under length control (Sec. 4.6, Eq. (23)) and
+    tensions 0 <= P_i <= the motor limit P_crit of Eq. (22) (p <= 200 without
+    one, :func:`search_box`): :func:`length_equilibria` on ``arm``
+    (``elements``: mesh, default the arm's).  States are non-dimensional
+    (``*_mm`` properties in mm).  ``progress(steps, note)``: see
+    :func:`length_equilibria`."""
     from ..core.fem import Discretisation
 
     disc = Discretisation.from_arm(arm, elements)
@@ -602,7 +731,8 @@ def search_lengths(arm, lengths_mm, *, elements: int | None = None, effort: int 
     with LengthSolver(disc, length_mm=arm.length_mm) as solver, \
             EquilibriumSolver(disc) as eq_solver:
         return length_equilibria(solver, L, eq_solver=eq_solver, effort=effort, levels=levels,
-                                 deflation_rounds=deflation_rounds, progress=progress)
+                                 deflation_rounds=deflation_rounds, steps=steps,
+                                 p_max=search_box(arm), progress=progress)
 
 
 def search_tensions(arm, p, *, elements: int | None = None, effort: int = 1, levels=None,
@@ -617,4 +747,40 @@ def search_tensions(arm, p, *, elements: int | None = None, effort: int = 1, lev
     with EquilibriumSolver(disc) as eq_solver:
         return equilibria(eq_solver, p, effort=effort, levels=levels,
                           deflation_rounds=deflation_rounds, length_mm=arm.length_mm,
-                          progress=progress)
+                          p_max=search_box(arm), progress=progress)
+
+
+# --- length continuation with a global search at its critical points ------------------
+def snap_targets(solver: LengthSolver, p_max: float = DEFAULT_P_MAX):
+    """A ``post_critical`` callback for :meth:`LengthSolver.follow` (two
+    tendons): at the critical lengths, every equilibrium the curve search of
+    :class:`~elastica_petsc.studies.preimage.CurveSearch` reaches from the
+    straight arm (0 <= p_i <= ``p_max``), the stable ones under length
+    control (Sec. 4.6), nearest in shape (max nodal angle difference) to the
+    critical state first: where the arm can snap to when the mode
+    perturbation finds no stable state nearby."""
+    from .preimage import CurveSearch, SearchTracer
+
+    def targets(lengths, u_c, p_c) -> list:
+        with SearchTracer(solver.disc) as tracer:
+            search = CurveSearch(tracer, lengths, p_max=p_max).run()
+            crossings = [search.mf.split(w) for w, _ in search.in_box]
+        states = [solver.solve(lengths, (u, np.maximum(p, 0.0))) for u, p in crossings]
+        stable = [s for s in states if s.converged and s.length_unstable_modes == 0]
+        theta_c = solver.disc.split(np.asarray(u_c))[0]
+        stable.sort(key=lambda s: float(np.max(np.abs(s.theta - theta_c))))
+        return [(s.u, s.p) for s in stable]
+
+    return targets
+
+
+def follow_lengths(arm, lengths_mm, *, elements: int | None = None):
+    """The equilibrium with cable lengths ``lengths_mm`` (mm) reached from the
+    straight arm by length continuation (Sec. 4.6; :meth:`LengthSolver.follow`:
+    a stable path, snaps and buckling recorded).  With two tendons, where the
+    buckling mode finds no stable state past a critical point, the arm snaps
+    to the nearest stable state the curve search finds there
+    (:func:`snap_targets`, tensions up to the motor limit of Eq. (22))."""
+    with LengthSolver.from_arm(arm, elements) as solver:
+        post = snap_targets(solver, search_box(arm)) if solver.disc.n_tendons == 2 else None
+        return solver.follow(solver.to_l(lengths_mm), post_critical=post)
