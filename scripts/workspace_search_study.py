@@ -18,13 +18,18 @@ Prints markdown:
 3. the reached region against the tension-grid map: the fraction of stable
    tension-grid tips (lambda_min > 0) in the sampled half-disc that fall in the
    lattice cell (side = spacing, centred on a sample) of a reached sample, and the
-   fraction of reached samples whose cell holds a tension-grid tip (also with a
+   fraction of reached samples with tensions inside the tension grid's range
+   (every p_i <= its largest p) whose cell holds a tension-grid tip (also with a
    one-cell tolerance: the cell or one of its 8 neighbours);
 4. the area of W_0 in y >= 0 from the sample count (row y = 0 counts half a cell),
    with its sampling error (half a cell per unit length of the boundary polygon,
    :func:`elastica_petsc.studies.boundary.compare_with_samples`), beside the polygon's.
 
-Usage: workspace_search_study.py OLD.h5 NEW.h5 TENS.h5 [--no-boundary]
+With ``--figure PNG``: Fig. 4 of the new map with the paths of Figs. 3a and 3b
+drawn on it (as ``reproduce`` draws it; docs/fig4.png), and ``PNG``'s stem
+``_restrictions.png`` (Fig. 5).
+
+Usage: workspace_search_study.py OLD.h5 NEW.h5 TENS.h5 [--no-boundary] [--figure PNG]
 """
 from __future__ import annotations
 
@@ -74,23 +79,27 @@ def against_tension_grid(maps, tens, h: float, length_mm: float) -> None:
     tips = tips[inside]
     print(f"\nstable tension-grid tips in the half-disc: {len(tips)} "
           f"(of {int(ok.sum())} stable, {len(ok)} grid points)\n")
+    p_top = float(tens.points.max())
     print("| map | reached samples | tension tips on a reached cell | (one-cell tolerance) "
-          "| reached cells holding a tension tip | (one-cell tolerance) |\n|---|---|---|---|---|---|")
+          f"| reached samples, all p_i <= {p_top:g} | their cells holding a tension tip "
+          "| (one-cell tolerance) |\n|---|---|---|---|---|---|---|")
     for label, ws in maps:
         origin = ws.points.min(axis=0)
         reached = ws.samples["status"] == 1
         cells = {tuple(c) for c in cell_index(ws.points[reached], origin, h)}
+        covered = reached & np.all(ws.tensions <= p_top, axis=1)
+        own = [tuple(c) for c in cell_index(ws.points[covered], origin, h)]
         tip_cells = [tuple(c) for c in cell_index(tips, origin, h)]
         tip_set = set(tip_cells)
         near = [(dx, dy) for dx in (-1, 0, 1) for dy in (-1, 0, 1)]
         on = np.mean([c in cells for c in tip_cells])
         on1 = np.mean([any((c[0] + dx, c[1] + dy) in cells for dx, dy in near)
                        for c in tip_cells])
-        held = np.mean([c in tip_set for c in cells])
+        held = np.mean([c in tip_set for c in own])
         held1 = np.mean([any((c[0] + dx, c[1] + dy) in tip_set for dx, dy in near)
-                         for c in cells])
-        print(f"| {label} | {int(reached.sum())} | {on:.1%} | {on1:.1%} | {held:.1%} | "
-              f"{held1:.1%} |")
+                         for c in own])
+        print(f"| {label} | {int(reached.sum())} | {on:.1%} | {on1:.1%} | {len(own)} | "
+              f"{held:.1%} | {held1:.1%} |")
 
 
 def against_boundary(old, new, h: float, elements: int) -> None:
@@ -132,6 +141,7 @@ def main(argv=None) -> None:
     ap.add_argument("new")
     ap.add_argument("tensions")
     ap.add_argument("--no-boundary", action="store_true")
+    ap.add_argument("--figure", help="draw Fig. 4 of NEW with the Fig. 3 paths into this PNG")
     args = ap.parse_args(argv)
     import petsc4py
     petsc4py.init([])
@@ -147,6 +157,13 @@ def main(argv=None) -> None:
                          length_mm)
     if not args.no_boundary:
         against_boundary(old, new, h, elements)
+    if args.figure:
+        from elastica_petsc.plots.workspace import plot_workspace
+        from elastica_petsc.reproduce import CURVE_CENTER_MM, TRIANGLE_CENTER_MM
+        from elastica_petsc.studies.trace import convoluted_curve, paper_triangle
+        paths = [("fig3a", paper_triangle(TRIANGLE_CENTER_MM)),
+                 ("fig3b", convoluted_curve(CURVE_CENTER_MM))]
+        plot_workspace(args.new, args.figure, paths=paths)
 
 
 if __name__ == "__main__":
