@@ -127,6 +127,9 @@ class TargetSampler(_Sampler):
     still not reached, whether tip control stalled, ended on a bound P_i = 0
     or hit a cable collapse, is solved again (:meth:`_search`):
 
+    * by local tip control from its reached chunk neighbours (the samples
+      just before and after it; the forward pass tried only the one before,
+      the backward sweep only for targets not converged);
     * by local tip control from each of the ``search_seeds`` equilibria of
       the seed library (forward solves over a coarse tension grid reached by
       every loading order and by proportional loading, Fig. 8; built once per
@@ -139,6 +142,14 @@ class TargetSampler(_Sampler):
     * once one is reached, its state is carried to its not-reached chunk
       neighbours on both sides by local solves (:meth:`_spread`), as the
       forward pass would have done.
+
+    A start in the same state as one already solved for the target (the
+    forward pass's, or another seed's track that slid onto the same edge)
+    is not solved again (:meth:`_seek`).  Neighbours in other rows, homotopies
+    in target space and the other strategies of
+    :class:`~elastica_petsc.solvers.reach.Reacher` are not used: rows are
+    solved independently (results may not depend on the rank count), and
+    the homotopies cost about 1 s per target outside W_0.
 
     The samples still not reached are classed ``UNDECIDED``; a target beyond
     reach, |x_d| > l, is ``BEYOND_REACH`` without any solve (a proof: the
@@ -267,7 +278,9 @@ class TargetSampler(_Sampler):
             if stop():
                 return False
             t0 = time.perf_counter()
-            result, label = self._seek(points[k] / self.arm.length_mm, tracks, runs[k])
+            result, label = self._neighbours(points[k] / self.arm.length_mm, k, states, runs[k])
+            if result is None:
+                result, label = self._seek(points[k] / self.arm.length_mm, tracks, runs[k])
             seconds = out["seconds_control"][k] + time.perf_counter() - t0
             if result is None:
                 out["seconds_control"][k] = seconds
@@ -278,6 +291,16 @@ class TargetSampler(_Sampler):
             if not self._spread(points, out, states, k, stop):
                 return False
         return True
+
+    def _neighbours(self, target: np.ndarray, k: int, states: dict, runs: list):
+        """(result, label) of a local solve to ``target`` (units of l) from a reached
+        chunk neighbour of sample ``k`` that reaches it, else (None, '')."""
+        for j in (k - 1, k + 1):
+            if j in states:
+                result = self._search_solve(target, states[j], runs)
+                if result.converged:
+                    return result, f"neighbour of sample {j} (global search)"
+        return None, ""
 
     def _seek(self, target: np.ndarray, tracks: dict, runs: list):
         """(result, label) of the first seed start that reaches ``target``
