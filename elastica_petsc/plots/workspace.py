@@ -47,7 +47,7 @@ def read_overlays(files) -> list[tuple[str, np.ndarray]]:
     return paths
 
 
-PATH_COLOURS = ("k", "tab:orange", "tab:purple", "tab:cyan", "tab:brown")
+PATH_COLOURS = ("k", "tab:purple", "tab:cyan", "tab:brown", "tab:blue")   # not orange: undecided samples
 
 
 def _paths_overlay(ax, paths) -> None:
