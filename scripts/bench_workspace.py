@@ -92,13 +92,23 @@ def main(argv=None) -> None:
     parser.add_argument("--repeat", type=int, default=5, help="runs per rank count (median)")
     parser.add_argument("--dir", help="keep the HDF5 files here (default: a temporary folder)")
     parser.add_argument("--samplers", nargs="+", choices=("global", "local"), default=["global"])
+    parser.add_argument("--report-only", action="store_true",
+                        help="no runs: the tables of the files kept in --dir by an earlier run "
+                             "(wall times: the files' sampling times, seconds_wall)")
     args = parser.parse_args(argv)
+    if args.report_only and not args.dir:
+        sys.exit("--report-only needs --dir")
 
     folder = Path(args.dir) if args.dir else Path(tempfile.mkdtemp(prefix="bench_ws_"))
     folder.mkdir(parents=True, exist_ok=True)
     keys = [(m, r) for m in args.samplers for r in args.ranks]
     walls, summaries = {k: [] for k in keys}, {}
-    for _ in range(max(1, args.repeat)):        # interleaved, so load drifts hit all alike
+    if args.report_only:
+        for sampler, ranks in keys:
+            path = folder / f"ws_{sampler}_{ranks}.h5"
+            walls[sampler, ranks].append(read(path)[2]["seconds_wall"])
+            summaries[sampler, ranks] = None
+    for _ in range(0 if args.report_only else max(1, args.repeat)):   # interleaved
         for sampler, ranks in keys:
             wall, summaries[sampler, ranks] = run(ranks, args, folder / f"ws_{sampler}_{ranks}.h5",
                                                   sampler)
@@ -143,8 +153,12 @@ def report(args, runs: dict, walls: dict) -> bool:
     print("| part | samples | total | mean | median | max |")
     print("|---|---|---|---|---|---|")
     control, eigen, status = s["seconds_control"], s["seconds_eigen"], s["status"]
-    for code, name in STATUS.items():
-        sel = status == code
+    local = s["strategy"] == b"local" if "strategy" in s else np.ones(n, bool)
+    parts = [(status == code, name) for code, name in STATUS.items()]
+    if "strategy" in s:                 # reached: by the local passes / by the global search
+        parts[0:1] = [((status == 1) & local, "reached by local tip control"),
+                      ((status == 1) & ~local, "reached by the global search")]
+    for sel, name in parts:
         if sel.any():
             t = control[sel]
             print(f"| tip control, {name} | {sel.sum()} | {t.sum():.1f} s | {1e3 * t.mean():.1f} ms "
