@@ -324,17 +324,21 @@ def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None
 
 def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",
               out: str | Path | None = None, overwrite: bool = False, comm=None,
-              elements: int | None = None):
+              elements: int | None = None, global_search: bool = True):
     """Sample the workspace W_0 and its restrictions (Eqs. (18)-(22), Figs. 4-5)
     on a grid of targets (``mode="targets"``: tip control to each) or of
     tensions (``"tensions"``).  Runs serially, or on every rank of ``comm``
     (default ``MPI.COMM_WORLD``) when launched with ``mpiexec``; writes HDF5
     only when ``out`` is given.  Returns a ``WorkspaceMap`` of per-sample
-    arrays (``status``, masks ``W0``... , ``tip_mm``, ``tensions_N``)."""
+    arrays (``status``, masks ``W0``... , ``tip_mm``, ``tensions_N``).
+    Targets (mm) that local tip control does not reach go through the global
+    search (seeds over every loading order, reached neighbours) and are
+    classed REACHED, UNDECIDED (no proof either way) or BEYOND_REACH
+    (|x| > l, proven); ``global_search=False`` keeps the local verdicts."""
     from .studies.workspace import run_map
 
     return run_map(arm, _mesh(arm, elements), mode=mode, spacing_mm=spacing_mm, box_mm=box_mm,
-                   comm=comm, out=out, overwrite=overwrite)
+                   comm=comm, out=out, overwrite=overwrite, global_search=global_search)
 
 
 def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None,

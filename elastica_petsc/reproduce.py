@@ -247,7 +247,8 @@ def workspace(ctx: Context) -> Path:
 
 def fig4_5(ctx: Context, out: Path) -> None:
     from .plots.workspace import plot_workspace, read_workspace
-    from .studies.workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, reason_counts
+    from .studies.workspace import (NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, UNDECIDED,
+                                    reason_counts)
 
     ctx.files.setdefault("Figs. 4-5", []).append(out.name)
     data = read_workspace(out)
@@ -255,13 +256,13 @@ def fig4_5(ctx: Context, out: Path) -> None:
     region = f"spacing {ctx.spacing_mm:g} mm over the half-disc y >= 0 within reach l"
     ctx.add("Fig. 4", "sampled targets in y >= 0 / reached with P >= 0 (W_0)", "4201 green points",
             f"{len(reached)} targets / {int(reached.sum())} reached", "",
-            f"{region}; {int(np.sum(data['status'] == NEEDS_NEGATIVE))} need a negative "
-            "tension (red)")
-    red = data["target"][data["status"] == NEEDS_NEGATIVE]
+            f"{region}; {int(np.sum(np.isin(data['status'], (NEEDS_NEGATIVE, UNDECIDED))))} "
+            "not reached after the global search (orange; no proof either way)")
+    red = data["target"][np.isin(data["status"], (NEEDS_NEGATIVE, UNDECIDED))]
     side = "left of / above" if len(red) and np.median(red[:, 0]) < np.median(
         data["tip"][reached, 0]) else "elsewhere relative to"
     ctx.add("Fig. 4", "points needing P_1 < 0 bound the workspace on one side", "yes",
-            f"red points lie {side} the reached region", "")
+            f"points not reached lie {side} the reached region", "")
     failed = data["status"] == NOT_CONVERGED
     if failed.any():
         where = data["target"][failed]

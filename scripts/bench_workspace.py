@@ -17,8 +17,13 @@ Wall times are medians over ``--repeat`` runs per rank count, the rank
 counts interleaved (min and max shown); the cost split is read from the last
 1-rank file.
 
+``--samplers global local`` times the map with the global search (the default
+sampler: targets local tip control does not reach are searched from the seed
+library before they are classed) and without it (``--local-only``, the local
+verdicts), all runs interleaved, and prints the tables for each.
+
 Usage: bench_workspace.py [--spacing MM] [--elements N] [--ranks 1 2] [--chunk K]
-                          [--repeat R] [--dir DIR]
+                          [--repeat R] [--dir DIR] [--samplers global local]
 (about 4 minutes with the default 5 repeats on 2 shared cores; as root, Open
 MPI's run-as-root variables are set for mpiexec).
 """
@@ -39,13 +44,14 @@ import h5py
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-STATUS = {1: "reached (W_0)", 2: "needs a negative tension", 3: "not converged"}
+STATUS = {1: "reached (W_0)", 2: "ended on P_i = 0 (local verdict)", 3: "not converged",
+          4: "undecided after the global search", 5: "beyond reach |x| > l"}
 
 
-def run(ranks: int, args, out: Path) -> tuple[float, dict]:
+def run(ranks: int, args, out: Path, sampler: str = "global") -> tuple[float, dict]:
     cli = [sys.executable, "-m", "elastica_petsc.cli", "workspace", "--spacing", str(args.spacing),
            "--elements", str(args.elements), "--chunk", str(args.chunk), "--out", str(out),
-           "--overwrite", "--json"]
+           "--overwrite", "--json", *(["--local-only"] if sampler == "local" else [])]
     if ranks > 1:
         cli = [shutil.which("mpiexec") or "mpiexec", "-n", str(ranks), "--oversubscribe", *cli]
     env = dict(os.environ)
@@ -85,18 +91,42 @@ def main(argv=None) -> None:
     parser.add_argument("--chunk", type=int, default=24)
     parser.add_argument("--repeat", type=int, default=5, help="runs per rank count (median)")
     parser.add_argument("--dir", help="keep the HDF5 files here (default: a temporary folder)")
+    parser.add_argument("--samplers", nargs="+", choices=("global", "local"), default=["global"])
+    parser.add_argument("--report-only", action="store_true",
+                        help="no runs: the tables of the files kept in --dir by an earlier run "
+                             "(wall times: the files' sampling times, seconds_wall)")
     args = parser.parse_args(argv)
+    if args.report_only and not args.dir:
+        sys.exit("--report-only needs --dir")
 
     folder = Path(args.dir) if args.dir else Path(tempfile.mkdtemp(prefix="bench_ws_"))
     folder.mkdir(parents=True, exist_ok=True)
-    walls, summaries = {r: [] for r in args.ranks}, {}
-    for _ in range(max(1, args.repeat)):        # interleaved, so load drifts hit all alike
-        for ranks in args.ranks:
-            wall, summaries[ranks] = run(ranks, args, folder / f"ws_{ranks}.h5")
-            walls[ranks].append(wall)
-            print(f"# {ranks} rank(s): {wall:.1f} s", file=sys.stderr)
-    runs = {r: (statistics.median(walls[r]), summaries[r], *read(folder / f"ws_{r}.h5"))
-            for r in args.ranks}
+    keys = [(m, r) for m in args.samplers for r in args.ranks]
+    walls, summaries = {k: [] for k in keys}, {}
+    if args.report_only:
+        for sampler, ranks in keys:
+            path = folder / f"ws_{sampler}_{ranks}.h5"
+            walls[sampler, ranks].append(read(path)[2]["seconds_wall"])
+            summaries[sampler, ranks] = None
+    for _ in range(0 if args.report_only else max(1, args.repeat)):   # interleaved
+        for sampler, ranks in keys:
+            wall, summaries[sampler, ranks] = run(ranks, args, folder / f"ws_{sampler}_{ranks}.h5",
+                                                  sampler)
+            walls[sampler, ranks].append(wall)
+            print(f"# {sampler}, {ranks} rank(s): {wall:.1f} s (load average "
+                  f"{os.getloadavg()[0]:.1f})", file=sys.stderr)
+    ok = True
+    for sampler in args.samplers:
+        print(f"\n### Sampler: {sampler}\n")
+        runs = {r: (statistics.median(walls[sampler, r]), summaries[sampler, r],
+                    *read(folder / f"ws_{sampler}_{r}.h5")) for r in args.ranks}
+        ok &= report(args, runs, {r: walls[sampler, r] for r in args.ranks})
+    if not ok:
+        sys.exit("the rank counts gave different samples")
+
+
+def report(args, runs: dict, walls: dict) -> bool:
+    """The tables of one sampler; True if every rank count gave the same samples."""
 
     first = args.ranks[0]
     s, masks, _, attrs = runs[first][2:]
@@ -123,8 +153,12 @@ def main(argv=None) -> None:
     print("| part | samples | total | mean | median | max |")
     print("|---|---|---|---|---|---|")
     control, eigen, status = s["seconds_control"], s["seconds_eigen"], s["status"]
-    for code, name in STATUS.items():
-        sel = status == code
+    local = s["strategy"] == b"local" if "strategy" in s else np.ones(n, bool)
+    parts = [(status == code, name) for code, name in STATUS.items()]
+    if "strategy" in s:                 # reached: by the local passes / by the global search
+        parts[0:1] = [((status == 1) & local, "reached by local tip control"),
+                      ((status == 1) & ~local, "reached by the global search")]
+    for sel, name in parts:
         if sel.any():
             t = control[sel]
             print(f"| tip control, {name} | {sel.sum()} | {t.sum():.1f} s | {1e3 * t.mean():.1f} ms "
@@ -167,8 +201,7 @@ def main(argv=None) -> None:
     green_spacing = args.spacing * np.sqrt(reached.sum() / 4201)
     print(f"({reached.sum()} reached targets; about 4201 reached targets, the paper's green "
           f"count, would need a spacing of ~{green_spacing:.2f} mm)")
-    if not identical:
-        sys.exit("the rank counts gave different samples")
+    return identical
 
 
 if __name__ == "__main__":

@@ -36,8 +36,10 @@ TARGETS = ["--box", "-120", "480", "60", "420", "--spacing", "60",
 # after mpiexec receives it, so the run must last well beyond that (1581 targets: 5.5 s on
 # 2 ranks; 30 mm spacing, 273 targets, took 1.6 s once tip control got faster, and the
 # ranks could finish before the signal reached them)
+# (--local-only: the interruption machinery is the same for both samplers, and the
+# global search would make the uninterrupted reference run several times longer)
 SLOW_TARGETS = ["--box", "-120", "480", "60", "420", "--spacing", "12",
-                "--elements", str(ELEMENTS), "--chunk", "4"]
+                "--elements", str(ELEMENTS), "--chunk", "4", "--local-only"]
 TENSIONS = ["--mode", "tensions", "--tension-spacing", "5", "--tension-max", "20",
             "--elements", "30", "--chunk", "4"]
 TIMEOUT = 120
@@ -88,6 +90,14 @@ def targets_1(tmp_path_factory):
     """The target grid on one rank, with --plot (Fig. 4 and Fig. 5)."""
     d = tmp_path_factory.mktemp("targets_1")
     ok(workspace(*TARGETS, "--out", d / "ws.h5", "--plot", d / "ws.png", "--json"))
+    return d / "ws.h5"
+
+
+@pytest.fixture(scope="module")
+def local_1(tmp_path_factory):
+    """The target grid on one rank without the global search (the local verdicts)."""
+    d = tmp_path_factory.mktemp("local_1")
+    ok(workspace(*TARGETS, "--local-only", "--out", d / "ws.h5"))
     return d / "ws.h5"
 
 
@@ -316,8 +326,10 @@ def test_tensions_mode_fields(tensions_1):
 
 
 # --- d. physics sanity (Fig. 4) ---------------------------------------------------------------
-def test_physics_of_the_target_map(targets_1):
-    s = samples(targets_1)
+def test_physics_of_the_target_map(local_1):
+    """The local sampler's picture (``--local-only``): reached targets and the red
+    ones where tip control ended on P_1 = 0, one on each side of the P_1 = 0 locus."""
+    s = samples(local_1)
     status, target, tip, p = s["status"], s["target"], s["tip"], s["tensions"]
     reached, outside = status == 1, status == 2
     assert reached.sum() >= 30 and outside.sum() >= 20 and not np.any(status == 0)
@@ -355,15 +367,19 @@ def test_physics_of_the_target_map(targets_1):
             assert target[k, 0] < target[row, 0].min()
 
 
-def test_outside_tips_lie_on_the_p1_zero_locus(targets_1):
-    """The tip recorded for a red target is the equilibrium at p = (0, p_2) (a forward
-    solve from the straight arm reproduces it): the boundary of Fig. 4 is x_t(0, P_2)."""
+@pytest.mark.parametrize("fixture, code", [("local_1", 2), ("targets_1", 4)])
+def test_outside_tips_lie_on_the_p1_zero_locus(fixture, code, request):
+    """The tip recorded for a red target (local sampler), or for an undecided one whose
+    local solve ended on P_1 = 0 (global search), is the equilibrium at p = (0, p_2) (a
+    forward solve from the straight arm reproduces it): the edge of the local picture is
+    x_t(0, P_2)."""
     from elastica_petsc.core.config import load_config
     from elastica_petsc.solvers.equilibrium import EquilibriumSolver
     from elastica_petsc.core.fem import Discretisation
 
-    s = samples(targets_1)
-    outside = np.flatnonzero(s["status"] == 2)
+    s = samples(request.getfixturevalue(fixture))
+    outside = np.flatnonzero((s["status"] == code) & (s["reason"] == b"STATIONARY"))
+    assert len(outside) >= 20
     arm = load_config(ROOT / "configs" / "paper.toml")
     solver = EquilibriumSolver(Discretisation.from_arm(arm, ELEMENTS))
     try:
@@ -387,7 +403,7 @@ def test_backward_sweep_reaches_targets_behind_a_collapse():
     from elastica_petsc.studies.workspace import NOT_CONVERGED, REACHED
 
     arm = load_config(ROOT / "configs" / "paper.toml")
-    sampler = TargetSampler(arm, Discretisation.from_arm(arm, 60))
+    sampler = TargetSampler(arm, Discretisation.from_arm(arm, 60), global_search=False)
     try:
         points = np.column_stack([11.67 * np.arange(2, 11), np.full(9, 46.68)])
         forward = sampler.controller.solve_mm(points[3], p0=[2.0, 2.0])
@@ -454,11 +470,11 @@ def test_plot_files(targets_1):
         image = mpimg.imread(path)
         assert image.shape[0] > 400 and image.shape[1] > 800, (path, image.shape)
         assert image[..., :3].std() > 0.05                    # not blank
-    # Fig. 4 shows green (reached) and red (outside) points
+    # Fig. 4 shows green (reached) and orange (not reached after the global search) points
     rgb = mpimg.imread(fig4)[..., :3]
     green = (rgb[..., 1] > 0.5) & (rgb[..., 0] < 0.3) & (rgb[..., 2] < 0.3)
-    red = (rgb[..., 0] > 0.7) & (rgb[..., 1] < 0.3) & (rgb[..., 2] < 0.3)
-    assert green.sum() > 200 and red.sum() > 200
+    orange = (rgb[..., 0] > 0.8) & (rgb[..., 1] > 0.35) & (rgb[..., 1] < 0.65) & (rgb[..., 2] < 0.2)
+    assert green.sum() > 200 and orange.sum() > 200
 
 
 def test_fig4_legend_names_routing_points_and_reasons(targets_1):
@@ -506,7 +522,8 @@ def test_run_map_returns_the_arrays_without_a_file(targets_1, tmp_path, monkeypa
         for name in ("W0", "WY", "WS", "WE", "WP"):
             assert ws.masks[name].dtype == bool
             assert np.array_equal(ws.masks[name], fh["masks"][name][()]), name
-    assert set(ws.status) == {"REACHED", "NEEDS_NEGATIVE"}
+    assert set(ws.status) == {"REACHED", "UNDECIDED", "BEYOND_REACH"}
+    assert ws.sampler == "global-search"
     assert np.array_equal(ws.status == "REACHED", ws.masks["W0"])
     assert ws.reason[ws.masks["W0"]][0] == "TARGET_REACHED"
     w0 = ws.masks["W0"]
@@ -529,3 +546,68 @@ def test_read_map_gives_back_the_file(targets_1):
         for name, mask in ws.masks.items():
             assert np.array_equal(mask, fh["masks"][name][()]), name
     assert ws.summary()["masks"]["W0"] == int(ws.masks["W0"].sum()) > 0
+
+
+# --- h. the global search in the sampler (issue 11) ------------------------------------------
+def test_global_search_changes_only_what_local_control_did_not_reach(targets_1, local_1):
+    """The same grid with and without the global search: the local passes are the same,
+    so every target reached locally is reached alike (bitwise); a target the local sampler
+    left red (ended on P_1 = 0) is now reached or undecided, never given a global verdict
+    from a local run; (480, 420) mm, |x| = 638 mm > l, is proven beyond reach without a
+    solve."""
+    g, loc = samples(targets_1), samples(local_1)
+    assert attrs_of(targets_1)["sampler"] == "global-search"
+    assert attrs_of(local_1)["sampler"] == "local"
+    before = loc["status"] == 1
+    assert np.all(g["status"][before] == 1) and np.all(g["strategy"][before] == b"local")
+    np.testing.assert_array_equal(g["tensions"][before], loc["tensions"][before])
+    assert set(np.unique(g["status"])) == {1, 4, 5}
+    beyond = np.linalg.norm(g["target"], axis=1) > 600.0
+    np.testing.assert_array_equal(g["status"] == 5, beyond)
+    assert beyond.sum() == 1 and np.all(np.isnan(g["tip"][beyond]))
+    assert g["reason"][beyond][0] == b"BEYOND_REACH" and g["iterations"][beyond][0] == 0
+    found = (g["status"] == 1) & ~before
+    assert found.sum() >= 3 and np.all(loc["status"][found] == 2)
+    assert any(s.startswith(b"seed") for s in g["strategy"][found])
+    assert all(s.startswith((b"seed", b"neighbour")) for s in g["strategy"][found])
+    assert np.all(g["tip_error"][found] < 1e-5) and np.all(g["tensions"][found] >= 0)
+    assert np.all(g["lambda_min"][found] > 0)                        # stable (Eq. (20))
+    undecided = g["status"] == 4
+    assert np.all(g["strategy"][undecided] == b"global search: not reached")
+
+
+def test_targets_found_by_the_search_are_in_w0(targets_1):
+    """Independent check: each target reached by the global search is the tip of the
+    equilibrium at its tensions loaded from the straight arm (P >= 0 throughout) in some
+    loading order (Fig. 8), i.e. it lies in W_0; the local sampler had said P_1 < 0."""
+    import elastica_petsc as ep
+    from elastica_petsc.core.config import load_config
+
+    arm = load_config(ROOT / "configs" / "paper.toml")
+    g = samples(targets_1)
+    found = np.flatnonzero((g["status"] == 1) & (g["strategy"] != b"local"))
+    assert len(found) >= 3
+    for k in found:
+        tips = [ep.solve(arm, tensions=g["tensions"][k], order=order, elements=ELEMENTS).tip_mm
+                for order in (None, [1, 2], [2, 1])]
+        miss = min(float(np.linalg.norm(t - g["target"][k])) for t in tips)
+        assert miss < 1e-6, (g["target"][k], tips)
+
+
+def test_resume_needs_the_same_sampler_and_old_files_still_read(local_1, tmp_path):
+    """A local-only file is not resumed by the global sampler (one line, exit 2); a file
+    written before the sampler attribute and the strategy field existed reads back as a
+    local map (``ep.read``) and resumes with --local-only."""
+    import elastica_petsc as ep
+
+    out = tmp_path / "ws.h5"
+    shutil.copy(local_1, out)
+    run = workspace(*TARGETS, "--out", out, "--resume")
+    one_error_line(run, "cannot resume", "'local' sampler", "--local-only")
+    assert_same_samples(local_1, out)
+    with h5py.File(out, "r+") as fh:                         # as written before this issue
+        del fh.attrs["sampler"], fh["samples/strategy"]
+    old = ep.read(out)
+    assert old.sampler == "local" and old.complete
+    assert set(old.status) == {"REACHED", "NEEDS_NEGATIVE"} and set(old.strategy) == {""}
+    ok(workspace(*TARGETS, "--local-only", "--out", out, "--resume"))

@@ -27,6 +27,10 @@ def add_parser(sub) -> None:
                               help="tension grid spacing in mode tensions")
     common.add_tension_option(parser, "--tension-max", default=40.0,
                               help="largest tension on the grid in mode tensions")
+    parser.add_argument("--local-only", action="store_true",
+                        help="mode targets: no global search for the targets local tip control "
+                             "does not reach; they keep its local verdicts (ended on P_i = 0, "
+                             "not converged), as before the global search; faster")
     parser.add_argument("--chunk", type=int, default=24, metavar="K",
                         help="samples per work unit (warm-started in a row; default 24)")
     parser.add_argument("--resume", action="store_true",
@@ -79,7 +83,8 @@ def _run(args, comm) -> int:
     result = workspace.run_map(
         arm, disc, mode=args.mode, spacing_mm=args.spacing, box_mm=args.box,
         tension_spacing=args.tension_spacing, tension_max=args.tension_max, chunk=args.chunk,
-        comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite)
+        comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
+        global_search=not args.local_only)
     if comm.rank != 0:
         return 0
     summary = result.summary()

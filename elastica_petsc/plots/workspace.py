@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from .common import figure, save
-from ..studies.workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, reason_counts
+from ..studies.workspace import (BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED, REACHED,
+                                 UNDECIDED, reason_counts)
 
 
 def read_workspace(path) -> dict:
@@ -46,7 +47,7 @@ def read_overlays(files) -> list[tuple[str, np.ndarray]]:
     return paths
 
 
-PATH_COLOURS = ("k", "tab:orange", "tab:purple", "tab:cyan", "tab:brown")
+PATH_COLOURS = ("k", "tab:purple", "tab:cyan", "tab:brown", "tab:blue")   # not orange: undecided samples
 
 
 def _paths_overlay(ax, paths) -> None:
@@ -61,20 +62,35 @@ def _rigid_link(ax, length_mm: float) -> None:
             label=f"rigid link of length l = {length_mm:g} mm")
 
 
+def _classes(data: dict) -> list[tuple[np.ndarray, str, str, str]]:
+    """(selection, colour, marker, label) of each class of sample drawn in Fig. 4:
+    reached locally (green) or by the global search (dark green), not reached
+    after the global search (orange: undecided), beyond reach (black), and the
+    local sampler's classes (red: ended on P_i = 0; grey: not converged)."""
+    status = data["status"]
+    strategy = data.get("strategy", np.full(status.shape, b""))
+    found = np.array([s.startswith((b"seed", b"neighbour")) for s in strategy], bool)
+    reached = status == REACHED
+    return [(reached & ~found, "tab:green", "o", "reached, P >= 0 (W_0)"),
+            (reached & found, "darkgreen", "D", "reached, P >= 0 (W_0), by the global search"),
+            (status == UNDECIDED, "tab:orange", "o",
+             "not reached after the global search (undecided)"),
+            (status == BEYOND_REACH, "k", ".", "beyond reach |x| > l (proven)"),
+            (status == NEEDS_NEGATIVE, "tab:red", "o", "ended on P_i = 0 (local verdict)"),
+            (status == NOT_CONVERGED, "0.6", "x", "not converged")]
+
+
 def plot_samples(data: dict, ax, paths=None) -> None:
-    """Fig. 4: reached samples (green), needing P_i < 0 (red), not converged (grey,
-    with their stopping reasons), and the tendons' routing points."""
-    status, tip, target = data["status"], data["tip"], data["target"]
+    """Fig. 4: the classes of :func:`_classes` (reached samples at their tips, the
+    others at their targets; not converged with their stopping reasons), and the
+    tendons' routing points."""
+    tip, target = data["tip"], data["target"]
     where = target if data["mode"] == "targets" else tip
-    for code, colour, marker, label in (
-            (REACHED, "tab:green", "o", "reached, P >= 0 (W_0)"),
-            (NEEDS_NEGATIVE, "tab:red", "o", "ended on P_i = 0 (local verdict)"),
-            (NOT_CONVERGED, "0.6", "x", "not converged")):
-        sel = status == code
+    for sel, colour, marker, label in _classes(data):
         if sel.any():
-            pts = tip[sel] if code == REACHED else where[sel]
+            pts = tip[sel] if data["status"][sel][0] == REACHED else where[sel]
             count = f"{int(sel.sum())}"
-            if code == NOT_CONVERGED:
+            if colour == "0.6":
                 count += f": {reason_counts(data['reason'][sel])}"
             ax.plot(pts[:, 0], pts[:, 1], marker, color=colour, ms=2.5, ls="none",
                     label=f"{label} ({count})")

@@ -1,9 +1,14 @@
 """What one workspace sample computes (paper Sec. 4.3, Figs. 4-5).
 
 ``TargetSampler`` (mode ``targets``, Fig. 4): tip control to each target,
-warm-started from the previous sample of the chunk; classified as reached
-(P >= 0, E < eps), needing a negative tension (the optimiser stops on the
-bound P_i = 0 with E > eps: the paper's red points), or not converged.
+warm-started from the previous sample of the chunk; a target that local tip
+control does not reach then goes through the global search (seeds over every
+loading order, :class:`~elastica_petsc.solvers.reach.SeedLibrary`, and the
+chunk's reached neighbours) before it is classed: reached (P >= 0, E < eps),
+not reached after the global search (undecided: no proof either way), or
+beyond reach |x_d| > l (proven).  With ``global_search=False`` the old local
+classes are kept: reached, tip control ended on P_i = 0 (a local verdict), or
+not converged.
 ``TensionSampler`` (mode ``tensions``): the forward solve on a grid of
 tensions, each warm-started (continued) from the previous one.
 Both fill the same fields (:func:`elastica_petsc.studies.workspace.fields`) and add
@@ -20,7 +25,8 @@ from ..solvers.equilibrium import Equilibrium, EquilibriumSolver
 from ..core.fem import Discretisation
 from ..core.model import Arm
 from ..solvers.stability import StabilityError, StabilitySolver
-from .workspace import NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, empty_fields, fields
+from .workspace import (BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, UNDECIDED,
+                        empty_fields, fields)
 
 
 class _Sampler:
@@ -115,18 +121,67 @@ class TargetSampler(_Sampler):
     the closest boundary point to 1e-7 cost ~8 more iterations per outside
     target and changed no classification (measured on a 30 mm grid, 649
     targets).  Reached targets are unaffected (they stop on E < eps).
+
+    Global search (``global_search=True``, the default; the theme: a local run
+    gives no global verdict).  After both passes, every target of the chunk
+    still not reached, whether tip control stalled, ended on a bound P_i = 0
+    or hit a cable collapse, is solved again (:meth:`_search`):
+
+    * by local tip control from its reached chunk neighbours (the samples
+      just before and after it; the forward pass tried only the one before,
+      the backward sweep only for targets not converged);
+    * by local tip control from each of the ``search_seeds`` equilibria of
+      the seed library (forward solves over a coarse tension grid reached by
+      every loading order and by proportional loading, Fig. 8; built once per
+      process, on first need) whose tips lie nearest the target.  A seed
+      already tried in this chunk starts from where its last try ended (the
+      closest tip of its branch to the previous target, slid along like the
+      forward pass's outside targets), and from the seed itself only if that
+      start ends neither reached nor on a local end (on a bound, or a cable
+      collapse);
+    * once one is reached, its state is carried to its not-reached chunk
+      neighbours on both sides by local solves (:meth:`_spread`), as the
+      forward pass would have done.
+
+    A start in the same state as one already solved for the target (the
+    forward pass's, or another seed's track that slid onto the same edge)
+    is not solved again (:meth:`_seek`).  Neighbours in other rows, homotopies
+    in target space and the other strategies of
+    :class:`~elastica_petsc.solvers.reach.Reacher` are not used: rows are
+    solved independently (results may not depend on the rank count), and
+    the homotopies cost about 1 s per target outside W_0.
+
+    The samples still not reached are classed ``UNDECIDED``; a target beyond
+    reach, |x_d| > l, is ``BEYOND_REACH`` without any solve (a proof: the
+    inextensible arm's tip is never farther than l from the clamp, Eq. (2)).
+    Every result still depends on the chunk alone (the seeds are a fixed
+    function of the arm), so maps stay equal on any number of ranks.  The
+    extra cost is paid only by samples that local control did not reach.
     """
 
     head_guess = 2.0
     stationary_rtol = 1e-5
     retry_failures = 1
+    search_seeds = 3           # seeds tried per not-reached target (nearest tips first)
+    search_its = 15            # iteration limit of a search solve (a reached one needs < 10)
+    search_failures = 3        # failure budget of a search solve
 
-    def __init__(self, arm: Arm, disc: Discretisation):
+    def __init__(self, arm: Arm, disc: Discretisation, global_search: bool = True):
         from ..solvers.control import TipController
 
         super().__init__(arm, disc)
         self.controller = TipController(arm, solver=self.solver,
                                         stationary_rtol=self.stationary_rtol)
+        self.global_search = global_search
+        self._library = None
+
+    @property
+    def library(self):
+        """The seed library of :mod:`~elastica_petsc.solvers.reach` (built on first use)."""
+        if self._library is None:
+            from ..solvers.reach import SeedLibrary
+            self._library = SeedLibrary(self.controller)
+        return self._library
 
     def _classify(self, result) -> int:
         if result.converged:
@@ -134,36 +189,62 @@ class TargetSampler(_Sampler):
         # local evidence only (a stationary point of E with a tension on P = 0 and the
         # gradient pushing through it): the class is 'needs a negative tension from
         # here', not a proof about W_0 (solvers/reach.py: reachable stays None)
-        lower = any(side == "lower" for _, side in result.on_bound)
-        local_end = result.reason in ("STATIONARY", "STALLED")
-        return NEEDS_NEGATIVE if (local_end and lower) else NOT_CONVERGED
+        return NEEDS_NEGATIVE if _on_lower_bound(result) else NOT_CONVERGED
 
     def solve_chunk(self, points: np.ndarray, stop) -> dict | None:
         out = self._empty(len(points))
         out["target"][:] = points
+        states = {}                        # sample -> equilibrium, reached samples
+        runs = {}                          # sample -> [(start, result)] of its local solves
+        if self.global_search:
+            from ..solvers.reach import beyond_reach
+            for k, target in enumerate(points):
+                if beyond_reach(target / self.arm.length_mm):
+                    out["status"][k] = BEYOND_REACH
+                    out["reason"][k] = b"BEYOND_REACH"
+        if not (self._forward(points, out, states, runs, stop)
+                and self._backward(points, out, states, runs, stop)):
+            return None
+        if self.global_search:
+            if not self._search(points, out, states, runs, stop):
+                return None
+            out["status"][(out["status"] == NEEDS_NEGATIVE)
+                          | (out["status"] == NOT_CONVERGED)] = UNDECIDED
+        return out
+
+    def _forward(self, points, out: dict, states: dict, runs: dict, stop) -> bool:
+        """The forward pass (class doc); False if stopped.  ``runs[k]``: the
+        (start, result) pairs of sample k's local solves (start None: head guess)."""
         head = np.full(self.disc.n_tendons, self.head_guess)
         reached = boundary = None          # last reached state; state after an outside target
-        states = {}                        # sample -> equilibrium, reached samples
         for k, target in enumerate(points):
+            if out["status"][k] == BEYOND_REACH:
+                continue
             if stop():
-                return None
+                return False
             t0 = time.perf_counter()
             result = status = None
+            runs[k] = []
             if boundary is not None:
                 result = self.controller.solve_mm(target, start=boundary)
+                runs[k].append((boundary, result))
                 status = self._classify(result)
                 if status == NOT_CONVERGED:
                     result = None
             if result is None:
                 result = self.controller.solve_mm(
                     target, p0=None if reached is not None else head, start=reached)
+                runs[k].append((reached, result))
                 status = self._classify(result)
             self._store(out, k, result, status, time.perf_counter() - t0)
             boundary = result.equilibrium if status == NEEDS_NEGATIVE else None
             if status == REACHED:
                 reached = states[k] = result.equilibrium
-        # backward sweep: a target not converged before a reached one is solved
-        # again from its reached neighbour on the other side
+        return True
+
+    def _backward(self, points, out: dict, states: dict, runs: dict, stop) -> bool:
+        """Backward sweep: a target not converged before a reached one is solved
+        again from its reached neighbour on the other side; False if stopped."""
         reached = None
         for k in reversed(range(len(points))):
             if k in states:
@@ -172,10 +253,11 @@ class TargetSampler(_Sampler):
             if out["status"][k] != NOT_CONVERGED or reached is None:
                 continue
             if stop():
-                return None
+                return False
             t0 = time.perf_counter()
             result = self.controller.solve_mm(points[k], start=reached,
                                               max_failures=self.retry_failures)
+            runs[k].append((reached, result))
             status = self._classify(result)
             seconds = out["seconds_control"][k] + time.perf_counter() - t0
             if status == NOT_CONVERGED:
@@ -183,11 +265,107 @@ class TargetSampler(_Sampler):
                 continue
             self._store(out, k, result, status, seconds)
             if status == REACHED:
-                reached = result.equilibrium
-        return out
+                reached = states[k] = result.equilibrium
+        return True
 
-    def _store(self, out: dict, k: int, result, status: int, seconds: float) -> None:
+    def _search(self, points, out: dict, states: dict, runs: dict, stop) -> bool:
+        """The global search of the class doc over the chunk's not-reached
+        samples, in chunk order; False if stopped."""
+        tracks = {}                        # seed index -> where its last try ended
+        for k in range(len(points)):
+            if out["status"][k] in (REACHED, BEYOND_REACH):
+                continue
+            if stop():
+                return False
+            t0 = time.perf_counter()
+            result, label = self._neighbours(points[k] / self.arm.length_mm, k, states, runs[k])
+            if result is None:
+                result, label = self._seek(points[k] / self.arm.length_mm, tracks, runs[k])
+            seconds = out["seconds_control"][k] + time.perf_counter() - t0
+            if result is None:
+                out["seconds_control"][k] = seconds
+                out["strategy"][k] = b"global search: not reached"
+                continue
+            self._store(out, k, result, REACHED, seconds, label)
+            states[k] = result.equilibrium
+            if not self._spread(points, out, states, k, stop):
+                return False
+        return True
+
+    def _neighbours(self, target: np.ndarray, k: int, states: dict, runs: list):
+        """(result, label) of a local solve to ``target`` (units of l) from a reached
+        chunk neighbour of sample ``k`` that reaches it, else (None, '')."""
+        for j in (k - 1, k + 1):
+            if j in states:
+                result = self._search_solve(target, states[j], runs)
+                if result.converged:
+                    return result, f"neighbour of sample {j} (global search)"
+        return None, ""
+
+    def _seek(self, target: np.ndarray, tracks: dict, runs: list):
+        """(result, label) of the first seed start that reaches ``target``
+        (units of l), else (None, '').  ``runs``: the (start, result) pairs
+        already solved for this target; a start in the same state as one of
+        them (same tensions and tip to 1e-9) is not solved again (the same
+        start gives the same local solve: in a region outside the local
+        picture the seeds' tracks and the forward pass soon slide along the
+        same edge, and each costs one solve per target instead of one per seed)."""
+        seeds = self.library.seeds()
+        if not seeds:
+            return None, ""
+        tips = np.array([s.equilibrium.tip for s in seeds])
+        order = np.argsort(np.linalg.norm(tips - target, axis=1), kind="stable")
+        for i in order[:self.search_seeds]:
+            result = None
+            if i in tracks:
+                result = self._search_solve(target, tracks[i], runs)
+                if not (result.converged or _local_end(result)):
+                    result = None
+            if result is None:
+                result = self._search_solve(target, seeds[i].equilibrium, runs)
+            if result.converged:
+                return result, f"seed {seeds[i].label}"
+            if _local_end(result):
+                tracks[i] = result.equilibrium
+        return None, ""
+
+    def _search_solve(self, target: np.ndarray, start, runs: list):
+        """Local tip control to ``target`` from ``start``, or the result of a run
+        from the same state (:meth:`_seek`)."""
+        for done, result in runs:
+            if done is not None and _same_state(done, start):
+                return result
+        result = self.controller.solve(target, start=start, max_failures=self.search_failures,
+                                       max_it=self.search_its)
+        runs.append((start, result))
+        return result
+
+    def _spread(self, points, out: dict, states: dict, k: int, stop) -> bool:
+        """Carry the state reached at sample ``k`` by the search to its
+        not-reached neighbours on both sides (local solves, each from the last
+        one reached) until one is not reached; False if stopped."""
+        for step in (1, -1):
+            j, start = k + step, states[k]
+            while 0 <= j < len(points) and out["status"][j] not in (REACHED, BEYOND_REACH):
+                if stop():
+                    return False
+                t0 = time.perf_counter()
+                result = self.controller.solve_mm(points[j], start=start,
+                                                  max_failures=self.retry_failures)
+                seconds = out["seconds_control"][j] + time.perf_counter() - t0
+                if not result.converged:
+                    out["seconds_control"][j] = seconds
+                    break
+                self._store(out, j, result, REACHED, seconds, f"neighbour of sample {k} "
+                            "(global search)")
+                start = states[j] = result.equilibrium
+                j += step
+        return True
+
+    def _store(self, out: dict, k: int, result, status: int, seconds: float,
+               strategy: str = "local") -> None:
         out["seconds_control"][k] = seconds
+        out["strategy"][k] = strategy.encode()[:48] if status == REACHED else b""
         out["iterations"][k] = result.iterations
         out["reason"][k] = result.reason.encode()[:48]
         out["tip_error"][k] = result.tip_error_mm
@@ -202,3 +380,22 @@ class TargetSampler(_Sampler):
     def destroy(self) -> None:
         self.controller.destroy()
         super().destroy()
+
+
+def _on_lower_bound(result) -> bool:
+    """A local end (STATIONARY or STALLED) with a tension on its lower bound P_i = 0
+    and the gradient pushing through it: local evidence only."""
+    return (result.reason in ("STATIONARY", "STALLED")
+            and any(side == "lower" for _, side in result.on_bound))
+
+
+def _local_end(result) -> bool:
+    """Ended on a bound P_i = 0 or on a cable collapse: a state worth sliding from."""
+    return _on_lower_bound(result) or result.reason == "CABLE_COLLAPSE"
+
+
+def _same_state(a, b, tol: float = 1e-9) -> bool:
+    """Two equilibria with the same tensions and tip (to ``tol``, units of l and
+    p = P l^2/B): for a local solve, the same start."""
+    return a is b or (np.allclose(a.p, b.p, rtol=tol, atol=tol)
+                      and np.allclose(a.tip, b.tip, rtol=0.0, atol=tol))

@@ -68,11 +68,21 @@ TAG_RESULT, TAG_FINISHED = 11, 12
 CHECKPOINT_ENV = "ELASTICA_PETSC_CHECKPOINT_SECONDS"
 STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the other ranks' last samples
 
-# status codes of a sample
-NOT_DONE, REACHED, NEEDS_NEGATIVE, NOT_CONVERGED = 0, 1, 2, 3
+# status codes of a sample.  With the global search (the default, sampler
+# "global-search"), a target is REACHED, UNDECIDED (not reached after the global
+# search: no proof either way) or BEYOND_REACH (|x_d| > l: proven).  NEEDS_NEGATIVE
+# and NOT_CONVERGED are the local verdicts of sampler "local" (``global_search=False``
+# and files written before the global search).
+NOT_DONE, REACHED, NEEDS_NEGATIVE, NOT_CONVERGED, UNDECIDED, BEYOND_REACH = 0, 1, 2, 3, 4, 5
 STATUS_NAMES = {NOT_DONE: "not computed", REACHED: "reached with P >= 0",
                 NEEDS_NEGATIVE: "tip control ended on P_i = 0 (would need a negative tension locally; not a proof of outside W_0)",
-                NOT_CONVERGED: "not converged"}
+                NOT_CONVERGED: "not converged",
+                UNDECIDED: "not reached after the global search (undecided: not proven outside W_0)",
+                BEYOND_REACH: "beyond reach |x| > l (proven unreachable)"}
+# the sampler attribute of a file (part of what a resume must match); files
+# written before it existed were made by the local sampler (targets) or by
+# forward solves (tensions)
+SAMPLERS = {"targets": ("global-search", "local"), "tensions": ("forward",)}
 
 
 def reason_counts(reasons: np.ndarray) -> str:
@@ -127,8 +137,12 @@ def fields(n_tendons: int) -> dict[str, tuple[tuple, str, str, str]]:
         "iterations": ((), "i4", "1", "optimiser iterations (targets) or Newton iterations"),
         "status": ((), "i1", "1", "; ".join(f"{k}: {v}" for k, v in STATUS_NAMES.items())),
         "reason": ((), "S48", "1", "why the solve stopped: TARGET_REACHED, STATIONARY, STALLED, "
-                   "CABLE_COLLAPSE, ... (tip control, control.py) or PETSc's SNES reason "
-                   "(mode tensions)"),
+                   "CABLE_COLLAPSE, ... (tip control, control.py; for a sample not reached, "
+                   "how its local solve ended), BEYOND_REACH (no solve), or PETSc's SNES "
+                   "reason (mode tensions)"),
+        "strategy": ((), "S48", "1", "what reached the target: 'local' (warm-started tip "
+                     "control along the chunk), 'seed ...' or 'neighbour of sample K (global "
+                     "search)'; 'global search: not reached'; '' otherwise"),
         "seconds_control": ((), "f8", "s", "wall time of tip control / forward solve"),
         "seconds_eigen": ((), "f8", "s", "wall time of the eigenvalue solve"),
         "cable_clear": (n, "?", "1", "reached state: the straight cable [x_i, r_i] does not "
@@ -278,7 +292,26 @@ class Results:
 
 # what must be equal for a resume: everything that changes a sample's result
 GRID_ATTRS = ("mode", "config_json", "elements", "grid_json", "petsc_options",
-              "elastica_petsc_version")
+              "elastica_petsc_version", "sampler")
+OPTIONAL_FIELDS = ("strategy",)     # absent from files written before the global search
+
+
+def sampler_of(attrs, mode: str) -> str:
+    """The ``sampler`` attribute of a file's root ``attrs`` (:data:`SAMPLERS`);
+    files written before it existed: the local sampler (the only one then)."""
+    stored = attrs.get("sampler")
+    if isinstance(stored, bytes):
+        stored = stored.decode()
+    return str(stored) if stored else SAMPLERS[mode][-1]
+
+
+def _read_samples(fh, results: "Results") -> None:
+    """Every per-sample field of ``results`` from an open file; the optional ones
+    an older file lacks keep their empty values."""
+    for name in results.schema:
+        if name in OPTIONAL_FIELDS and name not in fh["samples"]:
+            continue
+        results.data[name][...] = fh["samples"][name][()]
 
 
 def lattice_index(grid: Grid) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -347,12 +380,13 @@ def read_results(path: Path, grid: Grid, n_tendons: int, attrs: dict) -> Results
                 stored = fh.attrs.get(key)
                 if isinstance(stored, bytes):
                     stored = stored.decode()
+                if key == "sampler":
+                    stored = sampler_of(fh.attrs, attrs["mode"])
                 if stored != attrs[key]:
                     raise InputError(f"{path}: cannot resume: it was made with "
                                      f"{_difference(key, stored, attrs[key])}")
             results.chunk_done[:] = fh["grid/chunk_done"][()]
-            for name in results.schema:
-                results.data[name][...] = fh["samples"][name][()]
+            _read_samples(fh, results)
     except OSError as err:
         raise InputError(f"{path}: cannot resume from this file: {err}") from None
     except (KeyError, ValueError, TypeError) as err:
@@ -373,6 +407,11 @@ def _difference(key: str, stored, now) -> str:
             pass
     if key == "config_json":
         return "another arm configuration (--config/--elements)"
+    if key == "sampler":
+        return (f"the {stored!r} sampler (now {now!r}): its unreached samples are "
+                + ("local verdicts" if stored == "local" else "searched globally")
+                + "; start a new file, or resume it with the same sampler"
+                + (" (--local-only)" if stored == "local" else ""))
     if key == "petsc_options":
         return f"other PETSc options: {stored or '(none)'} (now {now or '(none)'})"
     return f"another {key}: {stored!r} (now {now!r})"
@@ -647,7 +686,8 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
 
 # --- the library entry point ------------------------------------------------------------------
 STATUS_KEYS = {NOT_DONE: "NOT_COMPUTED", REACHED: "REACHED", NEEDS_NEGATIVE: "NEEDS_NEGATIVE",
-               NOT_CONVERGED: "NOT_CONVERGED"}
+               NOT_CONVERGED: "NOT_CONVERGED", UNDECIDED: "UNDECIDED",
+               BEYOND_REACH: "BEYOND_REACH"}
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
@@ -681,15 +721,17 @@ class WorkspaceMap:
     ranks: int
     file: Path | None = None
     stranded: bool = False
+    sampler: str = ""
 
     @classmethod
-    def from_results(cls, results: "Results", limits: dict, ranks: int, file=None):
+    def from_results(cls, results: "Results", limits: dict, ranks: int, file=None,
+                     sampler: str = ""):
         samples = {name: _frozen(values) for name, values in results.data.items()}
         masks = {name: _frozen(mask) for name, mask in results.masks(limits).items()}
         return cls(results.grid.mode, _frozen(results.grid.points),
                    _frozen(results.chunk_done), samples, masks, dict(limits),
                    dict(results.grid.meta), ranks, None if file is None else Path(file),
-                   results.stranded)
+                   results.stranded, sampler)
 
     @property
     def complete(self) -> bool:
@@ -710,16 +752,25 @@ class WorkspaceMap:
 
     @property
     def status(self) -> np.ndarray:
-        """Per sample: REACHED, NEEDS_NEGATIVE (the local tip-control solve ended on a
-        bound P_i = 0: a local verdict, not a proof that the target is outside W_0;
-        `elastica-petsc boundary` gives the edge by continuation), NOT_CONVERGED or
-        NOT_COMPUTED."""
+        """Per sample: REACHED; UNDECIDED (not reached after the global search:
+        not proven outside W_0) or BEYOND_REACH (|x_d| > l, proven) with the
+        global search (``sampler`` "global-search"); NEEDS_NEGATIVE (the local
+        tip-control solve ended on a bound P_i = 0: a local verdict, not a proof
+        that the target is outside W_0) or NOT_CONVERGED with the local sampler
+        ("local"); NOT_COMPUTED.  `elastica-petsc boundary` gives the edge of
+        W_0 by continuation."""
         return np.array([STATUS_KEYS[int(k)] for k in self.samples["status"]])
 
     @property
     def reason(self) -> np.ndarray:
         """Per sample: why its solve stopped (TARGET_REACHED, CABLE_COLLAPSE, ...; '' if not done)."""
         return np.array([r.decode() for r in self.samples["reason"]])
+
+    @property
+    def strategy(self) -> np.ndarray:
+        """Per sample: what reached it ('local', 'seed ...', 'neighbour of sample K
+        (global search)'), 'global search: not reached', or ''."""
+        return np.array([r.decode() for r in self.samples["strategy"]])
 
     @property
     def target_mm(self) -> np.ndarray:
@@ -751,8 +802,9 @@ class WorkspaceMap:
             "complete": self.complete,
             "samples_total": self.samples_total,
             "samples_done": self.samples_done,
+            "sampler": self.sampler,
             "status_counts": {STATUS_NAMES[k]: int(np.sum(status == k)) for k in STATUS_NAMES
-                              if k != NOT_DONE},
+                              if k == REACHED or (k != NOT_DONE and np.any(status == k))},
             "masks": {name: int(m.sum()) for name, m in self.masks.items()},
             "lambda_min_raw_min": float(np.nanmin(self.samples["lambda_min_raw"])) if w0 else None,
             "kappa_max_max": float(np.nanmax(self.samples["kappa_max"])) if w0 else None,
@@ -774,8 +826,8 @@ def read_map(path) -> WorkspaceMap:
                         json.loads(fh.attrs.get("grid_json", "{}")))
             results = Results(grid, int(fh.attrs["n_tendons"]))
             results.chunk_done[:] = fh["grid/chunk_done"][()]
-            for name in results.schema:
-                results.data[name][...] = fh["samples"][name][()]
+            _read_samples(fh, results)
+            sampler = sampler_of(fh.attrs, mode)
             limits = {key: fh["masks"].attrs.get(key) for key in
                       ("kappa_limit", "strain_energy_max", "max_tension")}
             ranks = int(fh["timing"].attrs.get("ranks", 1))
@@ -783,7 +835,7 @@ def read_map(path) -> WorkspaceMap:
         raise InputError(f"{path}: cannot read it as HDF5: {err}") from None
     except (KeyError, ValueError) as err:
         raise InputError(f"{path}: not a workspace file (missing or malformed {err})") from None
-    return WorkspaceMap.from_results(results, limits, ranks, path)
+    return WorkspaceMap.from_results(results, limits, ranks, path, sampler)
 
 
 def limits_of(arm) -> dict:
@@ -813,7 +865,7 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
             tension_spacing: float = 2.0, tension_max: float = 40.0, chunk: int = 24,
             comm=None, out=None, resume: bool = False, overwrite: bool = False,
             progress=None, checkpoint_seconds: float | None = None,
-            provenance: dict | None = None) -> WorkspaceMap:
+            provenance: dict | None = None, global_search: bool = True) -> WorkspaceMap:
     """Sample the workspace W_0 of ``arm`` (Eq. (18), Fig. 4) and its restrictions
     W_Y, W_S, W_E, W_P (Eqs. (19)-(22), Fig. 5) on ``disc``.
 
@@ -824,6 +876,13 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
     step ``tension_spacing`` (non-dimensional p = P l^2/B).  W_0 means: tips
     of stable equilibria connected to the straight arm by quasi-static loading
     with all P_i >= 0.
+
+    ``global_search`` (mode targets): a target local tip control does not
+    reach goes through the global search (seeds over every loading order,
+    reached chunk neighbours; :class:`~elastica_petsc.studies.sampling.TargetSampler`)
+    and is classed REACHED, UNDECIDED (no proof either way) or BEYOND_REACH
+    (|x_d| > l, proven); False keeps the local classes NEEDS_NEGATIVE (ended
+    on P_i = 0, a local verdict) and NOT_CONVERGED, at the old cost.
 
     Collective over ``comm`` (default ``MPI.COMM_WORLD``; one rank runs
     serially).  With ``out`` (an ``.h5`` path) the results are checkpointed
@@ -862,15 +921,16 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
             except InputError as err:
                 error = str(err)
             agree(comm, error)
+            sampler = SAMPLERS[grid.mode][0 if global_search else -1]
             results = _sample(arm, disc, grid, path, comm, resume, checkpoint_seconds,
-                              progress, provenance, stop)
+                              progress, dict(provenance or {}, sampler=sampler), stop)
         finally:
             if lock is not None:
                 lock.release()
     limits = limits_of(arm)
     ws = None
     if comm.rank == 0:
-        ws = WorkspaceMap.from_results(results, limits, comm.size, path)
+        ws = WorkspaceMap.from_results(results, limits, comm.size, path, sampler)
         if ws.stranded:
             return ws                                # no collective: a peer is still busy
     ws, error = comm.bcast((ws, None if comm.rank else results.write_error), root=0)
@@ -885,7 +945,8 @@ def _sample(arm, disc, grid: Grid, path, comm, resume: bool, checkpoint_seconds:
     from .sampling import TargetSampler, TensionSampler
 
     attrs = _attrs(arm, disc, grid, provenance)
-    sampler = (TargetSampler if grid.mode == "targets" else TensionSampler)(arm, disc)
+    sampler = (TargetSampler(arm, disc, global_search=attrs["sampler"] == "global-search")
+               if grid.mode == "targets" else TensionSampler(arm, disc))
     try:
         return run(grid, sampler, path, attrs, limits_of(arm), comm=comm, resume=resume,
                    checkpoint_seconds=checkpoint_seconds, progress=progress,
