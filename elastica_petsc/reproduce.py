@@ -247,8 +247,8 @@ def workspace(ctx: Context) -> Path:
 
 def fig4_5(ctx: Context, out: Path) -> None:
     from .plots.workspace import plot_workspace, read_workspace
-    from .studies.workspace import (NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, UNDECIDED,
-                                    reason_counts)
+    from .studies.workspace import (NEEDS_NEGATIVE, NOT_CONVERGED, OUTSIDE_BOUNDARY, REACHED,
+                                    UNDECIDED, reason_counts)
 
     ctx.files.setdefault("Figs. 4-5", []).append(out.name)
     data = read_workspace(out)
@@ -256,9 +256,11 @@ def fig4_5(ctx: Context, out: Path) -> None:
     region = f"spacing {ctx.spacing_mm:g} mm over the half-disc y >= 0 within reach l"
     ctx.add("Fig. 4", "sampled targets in y >= 0 / reached with P >= 0 (W_0)", "4201 green points",
             f"{len(reached)} targets / {int(reached.sum())} reached", "",
-            f"{region}; {int(np.sum(np.isin(data['status'], (NEEDS_NEGATIVE, UNDECIDED))))} "
+            f"{region}; {int(np.sum(data['status'] == OUTSIDE_BOUNDARY))} proven outside the "
+            "traced W_0 boundary (purple); "
+            f"{int(np.sum(np.isin(data['status'], (NEEDS_NEGATIVE, UNDECIDED))))} "
             "not reached after the global search (orange; no proof either way)")
-    red = data["target"][np.isin(data["status"], (NEEDS_NEGATIVE, UNDECIDED))]
+    red = data["target"][np.isin(data["status"], (NEEDS_NEGATIVE, UNDECIDED, OUTSIDE_BOUNDARY))]
     side = "left of / above" if len(red) and np.median(red[:, 0]) < np.median(
         data["tip"][reached, 0]) else "elsewhere relative to"
     ctx.add("Fig. 4", "points needing P_1 < 0 bound the workspace on one side", "yes",

@@ -367,10 +367,10 @@ def test_physics_of_the_target_map(local_1):
             assert target[k, 0] < target[row, 0].min()
 
 
-@pytest.mark.parametrize("fixture, code", [("local_1", 2), ("targets_1", 4)])
-def test_outside_tips_lie_on_the_p1_zero_locus(fixture, code, request):
-    """The tip recorded for a red target (local sampler), or for an undecided one whose
-    local solve ended on P_1 = 0 (global search), is the equilibrium at p = (0, p_2) (a
+@pytest.mark.parametrize("fixture, codes", [("local_1", (2,)), ("targets_1", (4, 6))])
+def test_outside_tips_lie_on_the_p1_zero_locus(fixture, codes, request):
+    """The tip recorded for a red target (local sampler), or for an undecided or
+    proven-outside one whose local solve ended on P_1 = 0 (global search), is the equilibrium at p = (0, p_2) (a
     forward solve from the straight arm reproduces it): the edge of the local picture is
     x_t(0, P_2)."""
     from elastica_petsc.core.config import load_config
@@ -378,7 +378,7 @@ def test_outside_tips_lie_on_the_p1_zero_locus(fixture, code, request):
     from elastica_petsc.core.fem import Discretisation
 
     s = samples(request.getfixturevalue(fixture))
-    outside = np.flatnonzero((s["status"] == code) & (s["reason"] == b"STATIONARY"))
+    outside = np.flatnonzero(np.isin(s["status"], codes) & (s["reason"] == b"STATIONARY"))
     assert len(outside) >= 20
     arm = load_config(ROOT / "configs" / "paper.toml")
     solver = EquilibriumSolver(Discretisation.from_arm(arm, ELEMENTS))
@@ -470,11 +470,14 @@ def test_plot_files(targets_1):
         image = mpimg.imread(path)
         assert image.shape[0] > 400 and image.shape[1] > 800, (path, image.shape)
         assert image[..., :3].std() > 0.05                    # not blank
-    # Fig. 4 shows green (reached) and orange (not reached after the global search) points
+    # Fig. 4 shows green (reached), orange (not reached after the global search) and
+    # purple (proven outside the traced boundary) points
     rgb = mpimg.imread(fig4)[..., :3]
     green = (rgb[..., 1] > 0.5) & (rgb[..., 0] < 0.3) & (rgb[..., 2] < 0.3)
     orange = (rgb[..., 0] > 0.8) & (rgb[..., 1] > 0.35) & (rgb[..., 1] < 0.65) & (rgb[..., 2] < 0.2)
-    assert green.sum() > 200 and orange.sum() > 200
+    purple = ((rgb[..., 0] > 0.45) & (rgb[..., 0] < 0.7) & (rgb[..., 1] > 0.3) & (rgb[..., 1] < 0.5)
+              & (rgb[..., 2] > 0.6))
+    assert green.sum() > 200 and orange.sum() > 50 and purple.sum() > 200
 
 
 def test_fig4_legend_names_routing_points_and_reasons(targets_1):
@@ -522,7 +525,7 @@ def test_run_map_returns_the_arrays_without_a_file(targets_1, tmp_path, monkeypa
         for name in ("W0", "WY", "WS", "WE", "WP"):
             assert ws.masks[name].dtype == bool
             assert np.array_equal(ws.masks[name], fh["masks"][name][()]), name
-    assert set(ws.status) == {"REACHED", "UNDECIDED", "BEYOND_REACH"}
+    assert set(ws.status) == {"REACHED", "UNDECIDED", "BEYOND_REACH", "OUTSIDE_BOUNDARY"}
     assert ws.sampler == "global-search"
     assert np.array_equal(ws.status == "REACHED", ws.masks["W0"])
     assert ws.reason[ws.masks["W0"]][0] == "TARGET_REACHED"
@@ -552,8 +555,8 @@ def test_read_map_gives_back_the_file(targets_1):
 def test_global_search_changes_only_what_local_control_did_not_reach(targets_1, local_1):
     """The same grid with and without the global search: the local passes are the same,
     so every target reached locally is reached alike (bitwise); a target the local sampler
-    left red (ended on P_1 = 0) is now reached or undecided, never given a global verdict
-    from a local run; (480, 420) mm, |x| = 638 mm > l, is proven beyond reach without a
+    left red (ended on P_1 = 0) is now reached, proven outside the traced boundary or
+    undecided, never given a global verdict from a local run; (480, 420) mm, |x| = 638 mm > l, is proven beyond reach without a
     solve."""
     g, loc = samples(targets_1), samples(local_1)
     assert attrs_of(targets_1)["sampler"] == "global-search"
@@ -561,7 +564,7 @@ def test_global_search_changes_only_what_local_control_did_not_reach(targets_1, 
     before = loc["status"] == 1
     assert np.all(g["status"][before] == 1) and np.all(g["strategy"][before] == b"local")
     np.testing.assert_array_equal(g["tensions"][before], loc["tensions"][before])
-    assert set(np.unique(g["status"])) == {1, 4, 5}
+    assert set(np.unique(g["status"])) == {1, 4, 5, 6}
     beyond = np.linalg.norm(g["target"], axis=1) > 600.0
     np.testing.assert_array_equal(g["status"] == 5, beyond)
     assert beyond.sum() == 1 and np.all(np.isnan(g["tip"][beyond]))
@@ -574,6 +577,26 @@ def test_global_search_changes_only_what_local_control_did_not_reach(targets_1, 
     assert np.all(g["lambda_min"][found] > 0)                        # stable (Eq. (20))
     undecided = g["status"] == 4
     assert np.all(g["strategy"][undecided] == b"global search: not reached")
+
+
+def test_samples_proven_outside_are_outside_the_traced_boundary(targets_1, local_1):
+    """OUTSIDE_BOUNDARY (status 6) is given only to samples no local pass reached, each
+    with the boundary's own proof (docs/model.md §9.1: unbounded face, farther than 3
+    cells from every traced curve), and no reached tip of the map lies in that outside
+    region: the sampled map and the traced boundary do not contradict each other."""
+    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.fem import Discretisation
+    from elastica_petsc.studies.boundary import trace_boundary
+
+    arm = load_config(ROOT / "configs" / "paper.toml")
+    g, loc = samples(targets_1), samples(local_1)
+    outside = g["status"] == 6
+    assert outside.sum() >= 3 and np.all(loc["status"][outside] != 1)
+    result = trace_boundary(arm, Discretisation.from_arm(arm, ELEMENTS), restricted=False)
+    assert all(result.outside(t)[0].startswith("OUTSIDE_BOUNDARY") for t in g["target"][outside])
+    assert not any(result.outside(t)[0] for t in g["target"][g["status"] == 4])
+    reached = g["tip"][g["status"] == 1]
+    assert not result.outside_map.outside(reached).any()
 
 
 def test_targets_found_by_the_search_are_in_w0(targets_1):

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from .common import figure, save
-from ..studies.workspace import (BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED, REACHED,
-                                 UNDECIDED, reason_counts)
+from ..studies.workspace import (BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED, OUTSIDE_BOUNDARY,
+                                 REACHED, UNDECIDED, reason_counts)
 
 
 def read_workspace(path) -> dict:
@@ -65,7 +65,8 @@ def _rigid_link(ax, length_mm: float) -> None:
 def _classes(data: dict) -> list[tuple[np.ndarray, str, str, str]]:
     """(selection, colour, marker, label) of each class of sample drawn in Fig. 4:
     reached locally (green) or by the global search (dark green), not reached
-    after the global search (orange: undecided), beyond reach (black), and the
+    after the global search (orange: undecided), outside the traced W_0
+    boundary (purple: proven), beyond reach (black), and the
     local sampler's classes (red: ended on P_i = 0; grey: not converged)."""
     status = data["status"]
     strategy = data.get("strategy", np.full(status.shape, b""))
@@ -75,6 +76,8 @@ def _classes(data: dict) -> list[tuple[np.ndarray, str, str, str]]:
             (reached & found, "darkgreen", "D", "reached, P >= 0 (W_0), by the global search"),
             (status == UNDECIDED, "tab:orange", "o",
              "not reached after the global search (undecided)"),
+            (status == OUTSIDE_BOUNDARY, "tab:purple", ".",
+             "outside the traced W_0 boundary (proven)"),
             (status == BEYOND_REACH, "k", ".", "beyond reach |x| > l (proven)"),
             (status == NEEDS_NEGATIVE, "tab:red", "o", "ended on P_i = 0 (local verdict)"),
             (status == NOT_CONVERGED, "0.6", "x", "not converged")]

@@ -5,8 +5,9 @@ warm-started from the previous sample of the chunk; a target that local tip
 control does not reach then goes through the global search (seeds over every
 loading order, :class:`~elastica_petsc.solvers.reach.SeedLibrary`, and the
 chunk's reached neighbours) before it is classed: reached (P >= 0, E < eps),
-not reached after the global search (undecided: no proof either way), or
-beyond reach |x_d| > l (proven).  With ``global_search=False`` the old local
+not reached after the global search (undecided: no proof either way),
+beyond reach |x_d| > l (proven), or outside the traced boundary of W_0
+(proven, docs/model.md §9.1).  With ``global_search=False`` the old local
 classes are kept: reached, tip control ended on P_i = 0 (a local verdict), or
 not converged.
 ``TensionSampler`` (mode ``tensions``): the forward solve on a grid of
@@ -25,8 +26,8 @@ from ..solvers.equilibrium import Equilibrium, EquilibriumSolver
 from ..core.fem import Discretisation
 from ..core.model import Arm
 from ..solvers.stability import StabilityError, StabilitySolver
-from .workspace import (BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED, REACHED, UNDECIDED,
-                        empty_fields, fields)
+from .workspace import (BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED, OUTSIDE_BOUNDARY, REACHED,
+                        UNDECIDED, empty_fields, fields)
 
 
 class _Sampler:
@@ -151,6 +152,14 @@ class TargetSampler(_Sampler):
     solved independently (results may not depend on the rank count), and
     the homotopies cost about 1 s per target outside W_0.
 
+    Before the search, a target not reached by the passes that lies outside
+    the traced boundary of W_0 (:func:`~elastica_petsc.studies.boundary.boundary_proof`:
+    the unbounded component of the plane minus the images of the tension
+    region's boundary and of the tip map's folds, farther than 3 cells from
+    them; docs/model.md §9.1) is classed ``OUTSIDE_BOUNDARY`` and not
+    searched: a proof, paid once per process (one boundary trace, about 2 s
+    on the paper's arm), which spares the search its most expensive
+    samples.  Arms with other than two tendons give no such proof.
     The samples still not reached are classed ``UNDECIDED``; a target beyond
     reach, |x_d| > l, is ``BEYOND_REACH`` without any solve (a proof: the
     inextensible arm's tip is never farther than l from the clamp, Eq. (2)).
@@ -174,6 +183,7 @@ class TargetSampler(_Sampler):
                                         stationary_rtol=self.stationary_rtol)
         self.global_search = global_search
         self._library = None
+        self._outside = None
 
     @property
     def library(self):
@@ -206,6 +216,7 @@ class TargetSampler(_Sampler):
                 and self._backward(points, out, states, runs, stop)):
             return None
         if self.global_search:
+            self._prove_outside(points, out)
             if not self._search(points, out, states, runs, stop):
                 return None
             out["status"][(out["status"] == NEEDS_NEGATIVE)
@@ -268,12 +279,24 @@ class TargetSampler(_Sampler):
                 reached = states[k] = result.equilibrium
         return True
 
+    def _prove_outside(self, points, out: dict) -> None:
+        """Class ``OUTSIDE_BOUNDARY`` the not-reached samples the traced boundary
+        of W_0 proves outside (class doc); the boundary is traced on first need."""
+        for k, target in enumerate(points):
+            if out["status"][k] in (REACHED, BEYOND_REACH):
+                continue
+            if self._outside is None:
+                from .boundary import boundary_proof
+                self._outside = boundary_proof(self.arm, self.disc)
+            if self._outside(target / self.arm.length_mm)[0]:
+                out["status"][k] = OUTSIDE_BOUNDARY     # reason: how its local solve ended
+
     def _search(self, points, out: dict, states: dict, runs: dict, stop) -> bool:
         """The global search of the class doc over the chunk's not-reached
         samples, in chunk order; False if stopped."""
         tracks = {}                        # seed index -> where its last try ended
         for k in range(len(points)):
-            if out["status"][k] in (REACHED, BEYOND_REACH):
+            if out["status"][k] in (REACHED, BEYOND_REACH, OUTSIDE_BOUNDARY):
                 continue
             if stop():
                 return False
@@ -346,7 +369,8 @@ class TargetSampler(_Sampler):
         one reached) until one is not reached; False if stopped."""
         for step in (1, -1):
             j, start = k + step, states[k]
-            while 0 <= j < len(points) and out["status"][j] not in (REACHED, BEYOND_REACH):
+            while 0 <= j < len(points) and out["status"][j] not in (REACHED, BEYOND_REACH,
+                                                                     OUTSIDE_BOUNDARY):
                 if stop():
                     return False
                 t0 = time.perf_counter()

@@ -70,15 +70,19 @@ STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the other ranks' l
 
 # status codes of a sample.  With the global search (the default, sampler
 # "global-search"), a target is REACHED, UNDECIDED (not reached after the global
-# search: no proof either way) or BEYOND_REACH (|x_d| > l: proven).  NEEDS_NEGATIVE
+# search: no proof either way), BEYOND_REACH (|x_d| > l: proven) or OUTSIDE_BOUNDARY
+# (outside the traced boundary of W_0, docs/model.md §9.1: proven).  NEEDS_NEGATIVE
 # and NOT_CONVERGED are the local verdicts of sampler "local" (``global_search=False``
 # and files written before the global search).
-NOT_DONE, REACHED, NEEDS_NEGATIVE, NOT_CONVERGED, UNDECIDED, BEYOND_REACH = 0, 1, 2, 3, 4, 5
+(NOT_DONE, REACHED, NEEDS_NEGATIVE, NOT_CONVERGED, UNDECIDED, BEYOND_REACH,
+ OUTSIDE_BOUNDARY) = 0, 1, 2, 3, 4, 5, 6
 STATUS_NAMES = {NOT_DONE: "not computed", REACHED: "reached with P >= 0",
                 NEEDS_NEGATIVE: "tip control ended on P_i = 0 (would need a negative tension locally; not a proof of outside W_0)",
                 NOT_CONVERGED: "not converged",
                 UNDECIDED: "not reached after the global search (undecided: not proven outside W_0)",
-                BEYOND_REACH: "beyond reach |x| > l (proven unreachable)"}
+                BEYOND_REACH: "beyond reach |x| > l (proven unreachable)",
+                OUTSIDE_BOUNDARY: "outside the traced W_0 boundary (proven unreachable, "
+                                  "docs/model.md §9.1)"}
 # the sampler attribute of a file (part of what a resume must match); files
 # written before it existed were made by the local sampler (targets) or by
 # forward solves (tensions)
@@ -687,7 +691,7 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
 # --- the library entry point ------------------------------------------------------------------
 STATUS_KEYS = {NOT_DONE: "NOT_COMPUTED", REACHED: "REACHED", NEEDS_NEGATIVE: "NEEDS_NEGATIVE",
                NOT_CONVERGED: "NOT_CONVERGED", UNDECIDED: "UNDECIDED",
-               BEYOND_REACH: "BEYOND_REACH"}
+               BEYOND_REACH: "BEYOND_REACH", OUTSIDE_BOUNDARY: "OUTSIDE_BOUNDARY"}
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
@@ -753,8 +757,9 @@ class WorkspaceMap:
     @property
     def status(self) -> np.ndarray:
         """Per sample: REACHED; UNDECIDED (not reached after the global search:
-        not proven outside W_0) or BEYOND_REACH (|x_d| > l, proven) with the
-        global search (``sampler`` "global-search"); NEEDS_NEGATIVE (the local
+        not proven outside W_0), BEYOND_REACH (|x_d| > l, proven) or
+        OUTSIDE_BOUNDARY (outside the traced boundary of W_0, proven: docs/model.md
+        §9.1) with the global search (``sampler`` "global-search"); NEEDS_NEGATIVE (the local
         tip-control solve ended on a bound P_i = 0: a local verdict, not a proof
         that the target is outside W_0) or NOT_CONVERGED with the local sampler
         ("local"); NOT_COMPUTED.  `elastica-petsc boundary` gives the edge of
