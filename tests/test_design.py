@@ -65,7 +65,7 @@ def test_design_task_example(tmp_path):
 
 @pytest.mark.parametrize("args, message", [
     (["--vary", "tendon1.attach", "--objective", "path:x.csv"], "attachment points"),
-    (["--vary", "tendon1.route", "--objective", "area"], "expected path:FILE.csv"),
+    (["--vary", "tendon1.route", "--objective", "path"], "expected area or path:FILE.csv"),
     (["--vary", "tendon1.route", "--objective", "path:missing.csv"], "no such path file"),
 ])
 def test_cli_errors_one_line(tmp_path, args, message):

@@ -62,8 +62,9 @@ def parse_vary(names, n_tendons: int) -> list[int]:
         if not 1 <= k <= n_tendons:
             raise DesignError(f"--vary {name!r}: the arm has tendons 1..{n_tendons}")
         if what == "attach":
-            raise DesignError(f"--vary {name!r}: attachment points are not design variables "
-                              "(they must sit on mesh nodes); vary routing points")
+            raise DesignError(f"--vary {name!r}: attachment points sit on mesh nodes, so the "
+                              f"gradient optimiser does not vary them; sweep them instead "
+                              f"(--sweep tendon{k}.attach=START:STOP:STEP)")
         if what != "route":
             raise DesignError(f"--vary {name!r}: expected tendonK.route")
         if k - 1 in out:
@@ -163,6 +164,48 @@ def scaled_path(targets_mm, margin: float) -> np.ndarray:
     return c + margin * (t - c)
 
 
+def minimise_bounded(objective, q0, lo, hi, *, scale_mm: float, max_iterations: int,
+                     prefix: str, done=lambda: False, line_search: str | None = None
+                     ) -> tuple[str, int]:
+    """TAO BLMVM on q = q0 + scale_mm * X within lo <= q <= hi (mm).
+    ``objective(q) -> (f, df/dq)``; ``done()`` true stops it (CONVERGED_USER).
+    ``line_search``: TAO's line search type unless ``-<prefix>tao_ls_type``
+    is given.  Returns (TAO's reason, iterations)."""
+    def form(tao, X, G) -> float:
+        f, g = objective(q0 + scale_mm * X.getArray(readonly=True))
+        G.setArray(np.asarray(g, float) * scale_mm)
+        return float(f)
+
+    x = PETSc.Vec().createSeq(len(q0), comm=PETSc.COMM_SELF)
+    x.set(0.0)
+    xl, xu = x.duplicate(), x.duplicate()
+    xl.setArray((lo - q0) / scale_mm)
+    xu.setArray((hi - q0) / scale_mm)
+    tao = PETSc.TAO().create(PETSc.COMM_SELF)
+    tao.setOptionsPrefix(prefix)
+    tao.setType(PETSc.TAO.Type.BLMVM)
+    tao.setObjectiveGradient(form, None)
+    tao.setVariableBounds(xl, xu)
+    tao.setTolerances(gatol=0.0, grtol=0.0, gttol=0.0)
+    tao.setMaximumIterations(max_iterations)
+    tao.setMonitor(lambda t: t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
+                   if done() else None)
+    options, key = PETSc.Options(), f"{prefix}tao_ls_type"
+    default_ls = line_search is not None and not options.hasName(key)
+    if default_ls:
+        options[key] = line_search
+    tao.setFromOptions()
+    if default_ls:
+        options.delValue(key)
+    try:
+        tao.solve(x)
+        reason = TAO_REASONS.get(tao.getConvergedReason(), str(tao.getConvergedReason()))
+        return reason, tao.getIterationNumber()
+    finally:
+        for obj in (tao, x, xl, xu):
+            obj.destroy()
+
+
 def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = None,
                     reach_mm: float = 100.0, clearance_mm: float = 10.0, margin: float = 1.1,
                     max_iterations: int = 20, scale_mm: float = 10.0,
@@ -178,38 +221,17 @@ def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = Non
     design_path = scaled_path(targets_mm, margin)
     history, best = [], {}
 
-    def objective(tao, X, G) -> float:
-        q = q0 + scale_mm * X.getArray(readonly=True)
+    def objective(q):
         m = path_misfit(with_routes(arm, tendons, q), tendons, design_path, elements)
         history.append({"q_mm": q.tolist(), "f_mm2": m.f, "reached": int(m.reached.sum()),
                         "gradient": m.gradient.tolist()})
         if not best or m.f < best["f"]:
             best.update(f=m.f, q=q.copy())
-        G.setArray(m.gradient * scale_mm)
-        return m.f
+        return m.f, m.gradient
 
-    x = PETSc.Vec().createSeq(len(q0), comm=PETSc.COMM_SELF)
-    x.set(0.0)
-    xl, xu = x.duplicate(), x.duplicate()
-    xl.setArray((lo - q0) / scale_mm)
-    xu.setArray((hi - q0) / scale_mm)
-    tao = PETSc.TAO().create(PETSc.COMM_SELF)
-    tao.setOptionsPrefix(prefix)
-    tao.setType(PETSc.TAO.Type.BLMVM)
-    tao.setObjectiveGradient(objective, None)
-    tao.setVariableBounds(xl, xu)
-    tao.setTolerances(gatol=0.0, grtol=0.0, gttol=0.0)
-    tao.setMaximumIterations(max_iterations)
-    tao.setMonitor(lambda t: t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
-                   if best and best["f"] == 0.0 else None)
-    tao.setFromOptions()
-    try:
-        tao.solve(x)
-        reason = TAO_REASONS.get(tao.getConvergedReason(), str(tao.getConvergedReason()))
-        iterations = tao.getIterationNumber()
-    finally:
-        for obj in (tao, x, xl, xu):
-            obj.destroy()
+    reason, iterations = minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
+                                          max_iterations=max_iterations, prefix=prefix,
+                                          done=lambda: bool(best) and best["f"] == 0.0)
     after = with_routes(arm, tendons, best["q"])
     before_misfit = path_misfit(arm, tendons, targets_mm, elements)
     after_misfit = path_misfit(after, tendons, targets_mm, elements)
