@@ -128,9 +128,28 @@ def test_sweep_on_two_ranks_equals_one(tmp_path):
     (["--vary", "tendon1.route"], "needs --vary and --objective"),
     (["--vary", "tendon1.route", "--objective", "volume"], "expected area or path"),
     (["--vary", "tendon1.route", "--objective", "area", "--out", "x.h5"], "expected .toml"),
+    (["--vary", "tendon1.route", "--objective", "path:x.csv", "--plot", "p.png"],
+     "--plot draws an area design"),
 ])
 def test_cli_errors_one_line(tmp_path, args, message):
     run = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "design", *args],
                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert run.returncode == 2, run.stderr
     assert message in run.stderr and run.stderr.count("\n") == 1, run.stderr
+
+
+def test_area_design_small_run_and_plot(tmp_path):
+    """One TAO iteration in a 5 mm box: the best feasible design is kept, never
+    worse than the start; the re-sampling fills both checks; the figure is drawn."""
+    from elastica_petsc.plots.design import plot_area_design
+    from elastica_petsc.studies.design_area import design_for_area
+
+    arm = load_config()
+    r = design_for_area(arm, [0, 1], P_MAX, elements=ELEMENTS, reach_mm=5.0, nodes_per_edge=8,
+                        max_iterations=1, resample_cells=6)
+    assert r.history and r.after.area_mm2 >= r.before.area_mm2 == r.history[0]["area_mm2"]
+    q = np.concatenate([t.route_mm for t in r.arm_after.tendons])
+    assert np.all(np.abs(q - [46.3, -97.1, 26.1, 51.1]) <= 5.0 + 1e-9)
+    assert r.resampled_before.samples == 49 and isinstance(r.confirmed, bool)
+    plot_area_design(r, tmp_path / "d.png")
+    assert (tmp_path / "d.png").stat().st_size > 10_000

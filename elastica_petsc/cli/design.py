@@ -54,6 +54,8 @@ def add_parser(sub) -> None:
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--out", metavar="FILE",
                         help="the designed arm as a TOML config; with --sweep an .h5 file")
+    parser.add_argument("--plot", metavar="PNG",
+                        help="--objective area: the workspace before and after, and the history")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.set_defaults(run=run)
 
@@ -62,8 +64,8 @@ def run(args) -> int:
     from ..core.errors import InputError
 
     if args.sweep:
-        if args.vary:
-            raise InputError("--sweep evaluates a grid of designs; leave out --vary")
+        if args.vary or args.plot:
+            raise InputError("--sweep evaluates a grid of designs; leave out --vary and --plot")
         return _run_sweep(args)
     if not args.vary or not args.objective:
         raise InputError("design needs --vary and --objective (area or path:FILE.csv), "
@@ -72,9 +74,13 @@ def run(args) -> int:
         raise InputError(f"--iterations must be at least 1, got {args.iterations}")
     if not (args.reach > 0 and args.clearance >= 0):
         raise InputError("--reach must be positive and --clearance non-negative")
+    from ..io.hdf5 import PLOT_SUFFIXES, check_output_path
     if args.out:
-        from ..io.hdf5 import check_output_path
         check_output_path(args.out, args.overwrite, (".toml",))
+    if args.plot:
+        if args.objective != "area":
+            raise InputError("--plot draws an area design; use it with --objective area")
+        check_output_path(args.plot, args.overwrite, PLOT_SUFFIXES, "--plot")
     if args.objective == "area":
         return _run_area(args)
     return _run_path(args)
@@ -142,6 +148,10 @@ def _run_area(args) -> int:
                              max_iterations=args.iterations, resample_cells=args.resample_cells)
     summary = area_summary(result, disc.n_elements)
     _write(args, result.arm_after, summary, area_lines)
+    if args.plot:
+        from ..plots.design import plot_area_design
+        plot_area_design(result, args.plot)
+        summary["plot"] = args.plot
     _show(args, summary, result.history, area_lines)
     return 0 if result.confirmed else 1
 

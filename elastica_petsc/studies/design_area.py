@@ -154,6 +154,7 @@ class Resampled:
     stable: int                 # of them with lambda_min > 0 (Eq. (20))
     cables_clear: int           # of them with every cable clear of the arm
     seconds: float
+    tips_mm: np.ndarray = None  # tips of the stable samples (k, 2), for plots
 
 
 def _triangles(tips: np.ndarray, good: np.ndarray) -> np.ndarray:
@@ -233,7 +234,8 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
     seconds = float(np.nansum(s["seconds_control"]) + np.nansum(s["seconds_eigen"]))
     return Resampled(fine, abs(fine - coarse) + perimeter * lattice_mm, len(s["status"]),
                      int(reached.sum()), int(stable.sum()),
-                     int(np.all(s["cable_clear"], axis=1)[reached].sum()), seconds)
+                     int(np.all(s["cable_clear"], axis=1)[reached].sum()), seconds,
+                     np.asarray(s["tip"])[stable])
 
 
 # --- the optimiser -----------------------------------------------------------------------------
@@ -291,6 +293,7 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
                      nodes_per_edge=nodes_per_edge)
         history.append({"q_mm": q.tolist(), "area_mm2": a.area_mm2,
                         "gradient": a.gradient.tolist(), "feasible": a.feasible,
+                        "converged": a.converged, "cables_clear": a.cables_clear,
                         "det_sign_changes": a.det_sign_changes})
         if a.feasible and (not best or a.area_mm2 > best["area"].area_mm2):
             best.update(area=a, q=q.copy())
