@@ -341,8 +341,9 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
                 tension_max_N: float = 10.0, reach_mm: float = 100.0,
                 iterations: int = 15, resample_cells: int | None = 32,
                 elements: int | None = None):
-    """Routing points (mm) maximising the area A [mm^2] of the workspace W_0
-    within 0 <= P_i <= ``tension_max_N`` (tips of stable equilibria connected
+    """Routing points (mm; ``vary`` may add ``"tendonK.attach"``: attachment
+    arc lengths on mesh nodes, by a pattern search) maximising the area A
+    [mm^2] of the workspace W_0 within 0 <= P_i <= ``tension_max_N`` (tips of stable equilibria connected
     to the straight arm by quasi-static loading; the motor limit of Eq. (22)):
     A is the shoelace area of the image of the tension box's boundary, dA/dq
     the boundary integral of the normal component of the tip derivative
@@ -350,13 +351,14 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
     is ``confirmed`` only if the re-sampled areas differ by more than their
     errors.  Returns an ``AreaDesign`` (``arm_after``, ``before``/``after``,
     ``resampled_before``/``resampled_after``, ``confirmed``, ``history``)."""
-    from .studies.design import parse_vary
+    from .studies.design import parse_design_variables
     from .studies.design_area import design_for_area
 
-    tendons = parse_vary(list(vary), arm.n_tendons)
+    tendons, attaches = parse_design_variables(list(vary), arm.n_tendons)
     p_max = float(arm.tensions_from_N([tension_max_N])[0])
-    return design_for_area(arm, tendons, p_max, elements=elements, reach_mm=reach_mm,
-                           max_iterations=iterations, resample_cells=resample_cells)
+    return design_for_area(arm, tendons, p_max, elements=elements, attaches=attaches,
+                           reach_mm=reach_mm, max_iterations=iterations,
+                           resample_cells=resample_cells)
 
 
 def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,

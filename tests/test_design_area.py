@@ -153,3 +153,20 @@ def test_area_design_small_run_and_plot(tmp_path):
     assert r.resampled_before.samples == 49 and isinstance(r.confirmed, bool)
     plot_area_design(r, tmp_path / "d.png")
     assert (tmp_path / "d.png").stat().st_size > 10_000
+
+
+def test_attachment_search_on_nodes():
+    """Tendon 1's attachment, one node (20 mm at 30 elements) either way: the
+    search ends on the feasible node of largest area, computed here directly."""
+    from elastica_petsc.studies.design import with_attachment
+    from elastica_petsc.studies.design_area import design_for_area
+
+    arm = load_config()
+    r = design_for_area(arm, [], P_MAX, elements=ELEMENTS, attaches=[0], reach_mm=20.0,
+                        nodes_per_edge=8, resample_cells=None)
+    direct = {s: box_area(with_attachment(arm, 0, s), [], P_MAX, elements=ELEMENTS,
+                          nodes_per_edge=8) for s in (180.0, 200.0, 220.0)}
+    best = max((a.area_mm2, s) for s, a in direct.items() if a.feasible)
+    assert r.arm_after.tendons[0].attach_mm == best[1]
+    assert r.after.area_mm2 == pytest.approx(best[0], rel=1e-9)
+    assert r.confirmed is None and r.arm_after.tendons[1] == arm.tendons[1]

@@ -19,6 +19,7 @@ def add_parser(sub) -> None:
                     "BLMVM and exact gradients. --objective path:CSV: every target of the path "
                     "in W_0 (sum over targets of min_p |x_t - x_d|^2/2, Danskin's gradient). "
                     "--objective area: the area of W_0 within 0 <= P_i <= --tension-max "
+                    "(attachments, tendonK.attach, by a pattern search over mesh nodes) "
                     "(shoelace area of the image of the tension box's boundary, gradient the "
                     "boundary integral of the normal tip derivative), confirmed by an "
                     "independent tension-grid re-sampling of both arms. --sweep: evaluate the "
@@ -26,7 +27,8 @@ def add_parser(sub) -> None:
                     "into one HDF5 file (resumable). W_0: tips of stable equilibria connected to "
                     "the straight arm by quasi-static loading with all P_i >= 0.")
     parser.add_argument("--vary", nargs="+", metavar="tendonK.route",
-                        help="design variables of the optimiser, e.g. tendon1.route tendon2.route")
+                        help="design variables of the optimiser, e.g. tendon1.route "
+                             "tendon2.route (and, for --objective area, tendon1.attach)")
     parser.add_argument("--objective", metavar="area|path:CSV",
                         help="area, or path:FILE.csv (targets x_mm,y_mm) to be made reachable")
     parser.add_argument("--sweep", nargs="+", metavar="AXIS=START:STOP:STEP",
@@ -134,7 +136,7 @@ def _show(args, summary: dict, history, lines) -> None:
 
 def _run_area(args) -> int:
     from ..core.errors import InputError
-    from ..studies.design import parse_vary
+    from ..studies.design import parse_design_variables
     from ..studies.design_area import design_for_area
 
     if args.resample_cells < 2:
@@ -142,8 +144,9 @@ def _run_area(args) -> int:
     arm, disc = common.load_arm(args)
     if disc.n_tendons != 2:
         raise InputError("--objective area needs exactly two tendons")
-    tendons = parse_vary(args.vary, disc.n_tendons)
+    tendons, attaches = parse_design_variables(args.vary, disc.n_tendons)
     result = design_for_area(arm, tendons, _tension_max(args, arm), elements=disc.n_elements,
+                             attaches=attaches,
                              reach_mm=args.reach, clearance_mm=args.clearance,
                              max_iterations=args.iterations, resample_cells=args.resample_cells)
     summary = area_summary(result, disc.n_elements)
@@ -173,6 +176,8 @@ def area_summary(r, elements: int) -> dict:
         "confirmed": bool(r.confirmed),
         "routes_before_mm": [list(t.route_mm) for t in r.arm_before.tendons],
         "routes_after_mm": [list(t.route_mm) for t in r.arm_after.tendons],
+        "attach_before_mm": [t.attach_mm for t in r.arm_before.tendons],
+        "attach_after_mm": [t.attach_mm for t in r.arm_after.tendons],
         "iterations": r.iterations, "evaluations": len(r.history), "seconds": r.seconds,
         "tao_reason": r.reason,
     }
@@ -195,6 +200,9 @@ def area_lines(s: dict) -> list[str]:
              f"{s['seconds']:.1f} s; TAO: {s['tao_reason']}"]
     for k, (x, y) in enumerate(zip(s["routes_before_mm"], s["routes_after_mm"]), start=1):
         lines.append(f"  r_{k}: ({x[0]:.2f}, {x[1]:.2f}) -> ({y[0]:.2f}, {y[1]:.2f}) mm")
+    for k, (x, y) in enumerate(zip(s["attach_before_mm"], s["attach_after_mm"]), start=1):
+        if x != y:
+            lines.append(f"  s_{k} (attachment): {x:g} -> {y:g} mm")
     if s["fold_sign_changes_after"] or s["fold_sign_changes_before"]:
         lines.append(f"  note: det(d x_t/d p) changes sign {s['fold_sign_changes_before']} -> "
                      f"{s['fold_sign_changes_after']} times along the loop: a fold of the tip "

@@ -51,28 +51,44 @@ class DesignError(InputError):
     """A design request that cannot be carried out (one line for the user)."""
 
 
-def parse_vary(names, n_tendons: int) -> list[int]:
-    """``tendonK.route`` -> tendon index K-1 (0-based), in order, no repeats."""
-    out = []
+def parse_design_variables(names, n_tendons: int) -> tuple[list[int], list[int]]:
+    """``tendonK.route`` / ``tendonK.attach`` -> (route tendons, attachment
+    tendons), 0-based indices in order, no repeats."""
+    routes, attaches = [], []
     for name in names:
         head, _, what = name.partition(".")
-        if not head.startswith("tendon") or not head[6:].isdigit():
-            raise DesignError(f"--vary {name!r}: expected tendonK.route, e.g. tendon1.route")
+        if not head.startswith("tendon") or not head[6:].isdigit() or what not in ("route",
+                                                                                    "attach"):
+            raise DesignError(f"--vary {name!r}: expected tendonK.route or tendonK.attach, "
+                              "e.g. tendon1.route")
         k = int(head[6:])
         if not 1 <= k <= n_tendons:
             raise DesignError(f"--vary {name!r}: the arm has tendons 1..{n_tendons}")
-        if what == "attach":
-            raise DesignError(f"--vary {name!r}: attachment points sit on mesh nodes, so the "
-                              f"gradient optimiser does not vary them; sweep them instead "
-                              f"(--sweep tendon{k}.attach=START:STOP:STEP)")
-        if what != "route":
-            raise DesignError(f"--vary {name!r}: expected tendonK.route")
-        if k - 1 in out:
+        chosen = routes if what == "route" else attaches
+        if k - 1 in chosen:
             raise DesignError(f"--vary {name!r} given twice")
-        out.append(k - 1)
-    if not out:
-        raise DesignError("--vary: name at least one routing point, e.g. tendon2.route")
-    return out
+        chosen.append(k - 1)
+    if not routes and not attaches:
+        raise DesignError("--vary: name at least one design variable, e.g. tendon2.route")
+    return routes, attaches
+
+
+def parse_vary(names, n_tendons: int) -> list[int]:
+    """Routing points only (the path objective): ``tendonK.route`` -> K-1."""
+    routes, attaches = parse_design_variables(names, n_tendons)
+    if attaches:
+        k = attaches[0] + 1
+        raise DesignError(f"--vary tendon{k}.attach: attachment points sit on mesh nodes, so "
+                          "the path objective's gradient optimiser does not vary them; use "
+                          f"--objective area or --sweep tendon{k}.attach=START:STOP:STEP")
+    return routes
+
+
+def with_attachment(arm: Arm, tendon: int, s_mm: float) -> Arm:
+    """The arm with tendon ``tendon``'s attachment at arc length ``s_mm``."""
+    new = list(arm.tendons)
+    new[tendon] = Tendon(float(s_mm), new[tendon].route_mm)
+    return dataclasses.replace(arm, tendons=tuple(new))
 
 
 def with_routes(arm: Arm, tendons, q_mm) -> Arm:

@@ -266,51 +266,102 @@ class AreaDesign:
         return b.area_mm2 - b.error_mm2 > a.area_mm2 + a.error_mm2
 
 
+def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm: float):
+    """Attachment arc lengths on mesh nodes: a pattern search (move one
+    attachment by one node, keep the move if the design is feasible and the
+    area grows, until no move helps), within +- ``reach_mm`` of the start and
+    on (0, l].  ``evaluate(arm) -> BoxArea``.  Returns (arm, its BoxArea)."""
+    from .design import with_attachment
+
+    h = arm.length_mm / elements
+    start = {i: arm.tendons[i].attach_mm for i in attaches}
+    best = evaluate(arm)
+    moved = True
+    while moved:
+        moved = False
+        for i, step in ((i, step) for i in attaches for step in (h, -h)):
+            s = arm.tendons[i].attach_mm + step
+            if not (h - 1e-9 <= s <= arm.length_mm + 1e-9 and abs(s - start[i]) <= reach_mm):
+                continue
+            candidate = with_attachment(arm, i, s)
+            a = evaluate(candidate)
+            if a.feasible and a.area_mm2 > best.area_mm2:
+                arm, best, moved = candidate, a, True
+                break
+    return arm, best
+
+
 def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
-                    reach_mm: float = 100.0, clearance_mm: float = 10.0,
+                    attaches=(), reach_mm: float = 100.0, clearance_mm: float = 10.0,
                     nodes_per_edge: int = 24, max_iterations: int = 15, scale_mm: float = 10.0,
                     resample_cells: int | None = 32, prefix: str = "design_") -> AreaDesign:
     """Routing points (mm) of ``tendons`` (0-based) maximising the area A of the
     workspace within 0 <= p_i <= ``p_max`` (= P_max l^2/B; module docstring),
     by TAO BLMVM with the exact gradient dA/dq, within the bounds of
-    :func:`~elastica_petsc.studies.design.route_bounds`.  Then both arms are
-    re-sampled independently (:func:`resampled_area`, ``resample_cells``
-    cells per tension axis; None skips it) and the gain is ``confirmed`` only
-    if the re-sampled areas differ by more than their errors."""
+    :func:`~elastica_petsc.studies.design.route_bounds`; before that, the
+    attachment arc lengths of ``attaches`` on mesh nodes
+    (:func:`search_attachments`).  Then both arms are re-sampled
+    independently (:func:`resampled_area`, ``resample_cells`` cells per
+    tension axis; None skips it) and the gain is ``confirmed`` only if the
+    re-sampled areas differ by more than their errors."""
     import time
 
-    from .design import DesignError, minimise_bounded, route_bounds, with_routes
+    from .design import DesignError
 
     if not (np.isfinite(p_max) and p_max > 0):
         raise DesignError(f"--tension-max must be a positive force, got p = {p_max}")
     t0 = time.perf_counter()
-    q0 = np.concatenate([arm.tendons[i].route_mm for i in tendons]).astype(float)
-    lo, hi = route_bounds(arm, tendons, reach_mm, clearance_mm)
-    history, best, area = [], {}, {}
+    elements = Discretisation.from_arm(arm, elements).n_elements
+    history, best, first = [], {}, []
 
-    def objective(q):
-        a = box_area(with_routes(arm, tendons, q), tendons, p_max, elements=elements,
+    def evaluate(candidate):
+        a = box_area(candidate, tendons, p_max, elements=elements,
                      nodes_per_edge=nodes_per_edge)
-        history.append({"q_mm": q.tolist(), "area_mm2": a.area_mm2,
-                        "gradient": a.gradient.tolist(), "feasible": a.feasible,
-                        "converged": a.converged, "cables_clear": a.cables_clear,
-                        "det_sign_changes": a.det_sign_changes})
+        if not first:
+            first.append(a)
+        history.append({"attach_mm": [t.attach_mm for t in candidate.tendons],
+                        "routes_mm": [list(t.route_mm) for t in candidate.tendons],
+                        "area_mm2": a.area_mm2, "gradient": a.gradient.tolist(),
+                        "feasible": a.feasible, "converged": a.converged,
+                        "cables_clear": a.cables_clear, "det_sign_changes": a.det_sign_changes})
         if a.feasible and (not best or a.area_mm2 > best["area"].area_mm2):
-            best.update(area=a, q=q.copy())
-        area.setdefault("first", a)
-        scale = history[0]["area_mm2"]                     # f = -A/A_0, O(1)
-        if not a.feasible:           # a node unreachable, or a cable across the arm
-            return 1.0, np.zeros_like(a.gradient)       # the (Armijo) line search backs off
-        return -a.area_mm2 / scale, -a.gradient / scale
+            best.update(area=a, arm=candidate)
+        return a
 
-    reason, iterations = minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
-                                          max_iterations=max_iterations, prefix=prefix,
-                                          line_search="armijo")
-    after_arm = with_routes(arm, tendons, best.get("q", q0))
-    before, after = area["first"], best.get("area", area["first"])
+    designed, reason, iterations = arm, "", 0
+    if attaches:
+        designed, _ = search_attachments(arm, attaches, evaluate, elements=elements,
+                                         reach_mm=reach_mm)
+    if tendons:
+        reason, iterations = _optimise_routes(designed, tendons, evaluate, history,
+                                              reach_mm=reach_mm, clearance_mm=clearance_mm,
+                                              scale_mm=scale_mm, max_iterations=max_iterations,
+                                              prefix=prefix)
+    after_arm = best.get("arm", arm)
     checks = [None, None]
     if resample_cells:
         checks = [resampled_area(a, p_max, elements=elements, cells=resample_cells)
                   for a in (arm, after_arm)]
-    return AreaDesign(arm, after_arm, list(tendons), p_max, before, after, *checks, history,
-                      reason, iterations, time.perf_counter() - t0)
+    return AreaDesign(arm, after_arm, list(tendons), p_max, first[0], best.get("area", first[0]),
+                      *checks, history, reason, iterations, time.perf_counter() - t0)
+
+
+def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm, scale_mm,
+                     max_iterations, prefix):
+    """TAO BLMVM on the routing points of ``tendons`` (f = -A/A_0); an
+    infeasible design (a node unreachable, or a cable across the arm) returns
+    f = 1, so that the (Armijo) line search backs off."""
+    from .design import minimise_bounded, route_bounds, with_routes
+
+    q0 = np.concatenate([arm.tendons[i].route_mm for i in tendons]).astype(float)
+    lo, hi = route_bounds(arm, tendons, reach_mm, clearance_mm)
+
+    def objective(q):
+        a = evaluate(with_routes(arm, tendons, q))
+        scale = history[0]["area_mm2"]                     # f = -A/A_0, O(1)
+        if not a.feasible:
+            return 1.0, np.zeros_like(a.gradient)
+        return -a.area_mm2 / scale, -a.gradient / scale
+
+    return minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
+                            max_iterations=max_iterations, prefix=prefix, line_search="armijo")
