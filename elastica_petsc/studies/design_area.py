@@ -239,6 +239,7 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
 
 
 # --- the optimiser -----------------------------------------------------------------------------
+STALL_GAIN = 1e-3        # relative area gain over 3 iterations below which TAO is stopped
 @dataclass
 class AreaDesign:
     """Outcome of ``design --objective area`` (mm, mm^2, N)."""
@@ -363,5 +364,17 @@ def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm,
             return 1.0, np.zeros_like(a.gradient)
         return -a.area_mm2 / scale, -a.gradient / scale
 
+    best_by_iteration = []
+
+    def stalled() -> bool:
+        """Stop when the best feasible area grew by less than 0.1 % over the last
+        3 iterations (the optimum lies on the feasibility edge, where the line
+        search keeps being rejected)."""
+        best_by_iteration.append(max((h["area_mm2"] for h in history if h["feasible"]),
+                                     default=0.0))
+        b = best_by_iteration
+        return len(b) > 3 and b[-1] - b[-4] < STALL_GAIN * b[-1]
+
     return minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
-                            max_iterations=max_iterations, prefix=prefix, line_search="armijo")
+                            max_iterations=max_iterations, prefix=prefix, line_search="armijo",
+                            done=stalled)
