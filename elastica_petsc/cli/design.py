@@ -59,6 +59,8 @@ def add_parser(sub) -> None:
     parser.add_argument("--plot", metavar="PNG",
                         help="--objective area: the workspace before and after, and the history")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress bar or progress lines (for batch jobs)")
     parser.set_defaults(run=run)
 
 
@@ -112,14 +114,17 @@ def _write(args, arm, summary: dict, lines) -> None:
 
 
 def _run_path(args) -> int:
+    from ..core.progress import Progress
     from ..studies.design import design_for_path, parse_vary
 
     targets = _path_targets(args.objective)
     arm, disc = common.load_arm(args)
     tendons = parse_vary(args.vary, disc.n_tendons)
-    result = design_for_path(arm, tendons, targets, elements=disc.n_elements,
-                             reach_mm=args.reach, clearance_mm=args.clearance,
-                             margin=args.margin, max_iterations=args.iterations)
+    with Progress(None, "design", unit="path traces") as bar:
+        result = design_for_path(arm, tendons, targets, elements=disc.n_elements,
+                                 reach_mm=args.reach, clearance_mm=args.clearance,
+                                 margin=args.margin, max_iterations=args.iterations,
+                                 progress=bar)
     summary = _summary(result, disc.n_elements, len(targets))
     _write(args, result.arm_after, summary, _lines)
     _show(args, summary, result.history, _lines)
@@ -136,6 +141,7 @@ def _show(args, summary: dict, history, lines) -> None:
 
 def _run_area(args) -> int:
     from ..core.errors import InputError
+    from ..core.progress import Progress
     from ..studies.design import parse_design_variables
     from ..studies.design_area import design_for_area
 
@@ -145,10 +151,12 @@ def _run_area(args) -> int:
     if disc.n_tendons != 2:
         raise InputError("--objective area needs exactly two tendons")
     tendons, attaches = parse_design_variables(args.vary, disc.n_tendons)
-    result = design_for_area(arm, tendons, _tension_max(args, arm), elements=disc.n_elements,
-                             attaches=attaches,
-                             reach_mm=args.reach, clearance_mm=args.clearance,
-                             max_iterations=args.iterations, resample_cells=args.resample_cells)
+    with Progress(None, "design", unit="evaluations") as bar:
+        result = design_for_area(arm, tendons, _tension_max(args, arm),
+                                 elements=disc.n_elements, attaches=attaches,
+                                 reach_mm=args.reach, clearance_mm=args.clearance,
+                                 max_iterations=args.iterations,
+                                 resample_cells=args.resample_cells, progress=bar)
     summary = area_summary(result, disc.n_elements)
     _write(args, result.arm_after, summary, area_lines)
     if args.plot:

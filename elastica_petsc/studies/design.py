@@ -181,10 +181,11 @@ def scaled_path(targets_mm, margin: float) -> np.ndarray:
 
 
 def minimise_bounded(objective, q0, lo, hi, *, scale_mm: float, max_iterations: int,
-                     prefix: str, done=lambda: False, line_search: str | None = None
-                     ) -> tuple[str, int]:
+                     prefix: str, done=lambda: False, line_search: str | None = None,
+                     status: dict | None = None) -> tuple[str, int]:
     """TAO BLMVM on q = q0 + scale_mm * X within lo <= q <= hi (mm).
-    ``objective(q) -> (f, df/dq)``; ``done()`` true stops it (CONVERGED_USER).
+    ``objective(q) -> (f, df/dq)``; ``done()`` true stops it (CONVERGED_USER);
+    ``status["iteration"]`` follows TAO's iteration number.
     ``line_search``: TAO's line search type unless ``-<prefix>tao_ls_type``
     is given.  Returns (TAO's reason, iterations)."""
     def form(tao, X, G) -> float:
@@ -204,8 +205,14 @@ def minimise_bounded(objective, q0, lo, hi, *, scale_mm: float, max_iterations: 
     tao.setVariableBounds(xl, xu)
     tao.setTolerances(gatol=0.0, grtol=0.0, gttol=0.0)
     tao.setMaximumIterations(max_iterations)
-    tao.setMonitor(lambda t: t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
-                   if done() else None)
+    status = {} if status is None else status
+
+    def monitor(t) -> None:
+        status["iteration"] = t.getIterationNumber()
+        if done():
+            t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
+
+    tao.setMonitor(monitor)
     options, key = PETSc.Options(), f"{prefix}tao_ls_type"
     default_ls = line_search is not None and not options.hasName(key)
     if default_ls:
@@ -225,10 +232,12 @@ def minimise_bounded(objective, q0, lo, hi, *, scale_mm: float, max_iterations: 
 def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = None,
                     reach_mm: float = 100.0, clearance_mm: float = 10.0, margin: float = 1.1,
                     max_iterations: int = 20, scale_mm: float = 10.0,
-                    prefix: str = "design_") -> DesignResult:
+                    prefix: str = "design_", progress=None) -> DesignResult:
     """Routing points (mm) of ``tendons`` (0-based) that make every target of the
     path reachable (f = 0 on the path scaled by ``margin``), by TAO BLMVM with
-    the exact gradient of the module docstring.  Options prefix ``design_``."""
+    the exact gradient of the module docstring.  Options prefix ``design_``.
+    ``progress(traces, note)``, if given, is called after every path trace
+    (one per objective evaluation; their number is not known in advance)."""
     if margin < 1.0:
         raise DesignError(f"--margin must be at least 1, got {margin}")
     t0 = time.perf_counter()
@@ -243,12 +252,20 @@ def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = Non
                         "gradient": m.gradient.tolist()})
         if not best or m.f < best["f"]:
             best.update(f=m.f, q=q.copy())
+        if progress is not None:
+            progress(len(history), f"TAO iteration {status.get('iteration', 0)} of at most "
+                     f"{max_iterations}; misfit {m.f:.3g} mm^2, {history[-1]['reached']}/"
+                     f"{len(design_path)} reached")
         return m.f, m.gradient
 
+    status = {}
     reason, iterations = minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
                                           max_iterations=max_iterations, prefix=prefix,
-                                          done=lambda: bool(best) and best["f"] == 0.0)
+                                          done=lambda: bool(best) and best["f"] == 0.0,
+                                          status=status)
     after = with_routes(arm, tendons, best["q"])
+    if progress is not None:
+        progress(len(history), "tracing the task's path on the arm before and after")
     before_misfit = path_misfit(arm, tendons, targets_mm, elements)
     after_misfit = path_misfit(after, tendons, targets_mm, elements)
     return DesignResult(arm, after, list(tendons), before_misfit, after_misfit, history, reason,

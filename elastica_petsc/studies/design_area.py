@@ -295,7 +295,8 @@ def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm:
 def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
                     attaches=(), reach_mm: float = 100.0, clearance_mm: float = 10.0,
                     nodes_per_edge: int = 24, max_iterations: int = 15, scale_mm: float = 10.0,
-                    resample_cells: int | None = 32, prefix: str = "design_") -> AreaDesign:
+                    resample_cells: int | None = 32, prefix: str = "design_",
+                    progress=None) -> AreaDesign:
     """Routing points (mm) of ``tendons`` (0-based) maximising the area A of the
     workspace within 0 <= p_i <= ``p_max`` (= P_max l^2/B; module docstring),
     by TAO BLMVM with the exact gradient dA/dq, within the bounds of
@@ -304,7 +305,9 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
     (:func:`search_attachments`).  Then both arms are re-sampled
     independently (:func:`resampled_area`, ``resample_cells`` cells per
     tension axis; None skips it) and the gain is ``confirmed`` only if the
-    re-sampled areas differ by more than their errors."""
+    re-sampled areas differ by more than their errors.  ``progress(evaluations,
+    note)``, if given, is called after every evaluation and before the
+    re-sampling."""
     import time
 
     from .design import DesignError
@@ -327,6 +330,9 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
                         "cables_clear": a.cables_clear, "det_sign_changes": a.det_sign_changes})
         if a.feasible and (not best or a.area_mm2 > best["area"].area_mm2):
             best.update(area=a, arm=candidate)
+        if progress is not None:
+            progress(len(history), f"area {a.area_mm2:.0f} mm^2"
+                     + ("" if a.feasible else " (rejected: infeasible)"))
         return a
 
     designed, reason, iterations = arm, "", 0
@@ -341,6 +347,8 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
     after_arm = best.get("arm", arm)
     checks = [None, None]
     if resample_cells:
+        if progress is not None:
+            progress(len(history), "re-sampling both arms on a tension grid")
         checks = [resampled_area(a, p_max, elements=elements, cells=resample_cells)
                   for a in (arm, after_arm)]
     return AreaDesign(arm, after_arm, list(tendons), p_max, first[0], best.get("area", first[0]),
