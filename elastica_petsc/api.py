@@ -378,6 +378,50 @@ def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
                                reach_mm=reach_mm, margin=margin, progress=bar)
 
 
+def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
+                tension_max_N: float = 10.0, reach_mm: float = 100.0,
+                iterations: int = 15, resample_cells: int | None = 32,
+                elements: int | None = None):
+    """Routing points (mm; ``vary`` may add ``"tendonK.attach"``: attachment
+    arc lengths on mesh nodes, by a pattern search) maximising the area A
+    [mm^2] of the workspace W_0 within 0 <= P_i <= ``tension_max_N`` (tips of stable equilibria connected
+    to the straight arm by quasi-static loading; the motor limit of Eq. (22)):
+    A is the shoelace area of the image of the tension box's boundary, dA/dq
+    the boundary integral of the normal component of the tip derivative
+    (TAO BLMVM).  Both arms are then re-sampled on a tension grid; the gain
+    is ``confirmed`` only if the re-sampled areas differ by more than their
+    errors.  Returns an ``AreaDesign`` (``arm_after``, ``before``/``after``,
+    ``resampled_before``/``resampled_after``, ``confirmed``, ``history``)."""
+    from .studies.design import parse_design_variables
+    from .studies.design_area import design_for_area
+
+    tendons, attaches = parse_design_variables(list(vary), arm.n_tendons)
+    p_max = float(arm.tensions_from_N([tension_max_N])[0])
+    return design_for_area(arm, tendons, p_max, elements=elements, attaches=attaches,
+                           reach_mm=reach_mm, max_iterations=iterations,
+                           resample_cells=resample_cells)
+
+
+def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
+                 out: str | Path | None = None, overwrite: bool = False, resume: bool = False,
+                 comm=None, elements: int | None = None):
+    """Evaluate a grid of designs: ``axes`` are strings
+    ``"tendonK.route.x|route.y|attach=START:STOP:STEP"`` (mm; attachments on
+    mesh nodes).  Per design: the area [mm^2] of W_0 within 0 <= P_i <=
+    ``tension_max_N`` (as :func:`design_area`) and, with ``path_mm``, the
+    path's misfit [mm^2] and targets reached.  On every rank of ``comm``
+    (default ``MPI.COMM_WORLD``), checkpointed to ``out`` (.h5) and
+    resumable.  Returns a ``Sweep`` (``designs``, ``values``, ``best()``)."""
+    from .studies.design_sweep import parse_axis, run_sweep
+
+    disc = _mesh(arm, elements)
+    parsed = [parse_axis(text, disc.n_tendons) for text in axes]
+    p_max = float(arm.tensions_from_N([tension_max_N])[0])
+    return run_sweep(arm, disc.n_elements, parsed, p_max,
+                     targets_mm=None if path_mm is None else _points(path_mm), comm=comm,
+                     out=out, resume=resume, overwrite=overwrite, progress=False)
+
+
 def read(path: str | Path):
     """Load a file written by the tool back into its result: a :class:`State`
     for ``solve``/``control``/``stability`` files (the final state), a

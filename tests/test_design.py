@@ -42,7 +42,8 @@ def test_misfit_gradient_against_central_differences():
 def test_parse_vary_and_bounds():
     assert parse_vary(["tendon2.route", "tendon1.route"], 2) == [1, 0]
     for bad, message in ((["tendon3.route"], "tendons 1..2"), (["tendon1.attach"], "attachment"),
-                         (["arm.length"], "tendonK.route"), (["tendon1.route"] * 2, "twice")):
+                         (["arm.length"], "tendonK.route"), (["tendon1.route"] * 2, "twice"),
+                         (["tendon1.route.x"], "tendonK.route or tendonK.attach")):
         with pytest.raises(DesignError, match=message):
             parse_vary(bad, 2)
     lo, hi = route_bounds(load_config(), [0, 1], 100.0, 10.0)
@@ -65,7 +66,7 @@ def test_design_task_example(tmp_path):
 
 @pytest.mark.parametrize("args, message", [
     (["--vary", "tendon1.attach", "--objective", "path:x.csv"], "attachment points"),
-    (["--vary", "tendon1.route", "--objective", "area"], "expected path:FILE.csv"),
+    (["--vary", "tendon1.route", "--objective", "path"], "expected area or path:FILE.csv"),
     (["--vary", "tendon1.route", "--objective", "path:missing.csv"], "no such path file"),
 ])
 def test_cli_errors_one_line(tmp_path, args, message):

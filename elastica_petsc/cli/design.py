@@ -1,37 +1,63 @@
-"""``elastica-petsc design``: routing points that make a path traceable."""
+"""``elastica-petsc design``: routing points for a task (a path) or a larger
+workspace (area), and sweeps over a grid of designs (MPI)."""
 from __future__ import annotations
+
+import sys
 
 import numpy as np
 
 from . import common
 
+DEFAULT_TENSION_MAX_N = 10.0
+
 
 def add_parser(sub) -> None:
     parser = sub.add_parser(
-        "design", help="move routing points so that a path of targets becomes reachable",
-        description="Find routing points (within --reach mm of where they start and at least "
-                    "--clearance mm off the arm's line y = 0, on their side) for which every "
-                    "target of a path lies in the workspace W_0 (reached by tip control with "
-                    "P >= 0). Minimises the sum over targets of |x_t - x_d|^2/2 at the closest "
-                    "tips with TAO BLMVM and its exact gradient (Danskin: the derivative of "
-                    "the tip at fixed tensions, one more right-hand side of the bordered "
-                    "tangent), on the path scaled by --margin about its centroid. Writes the "
-                    "designed arm as a TOML config (--out); confirm with `trace --config`.")
-    parser.add_argument("--vary", nargs="+", required=True, metavar="tendonK.route",
-                        help="design variables, e.g. tendon1.route tendon2.route")
-    parser.add_argument("--objective", required=True, metavar="path:CSV",
-                        help="path:FILE.csv (targets x_mm,y_mm) to be made reachable")
+        "design", help="optimise routing points for a path or the workspace area; sweep designs",
+        description="Optimise routing points (within --reach mm of where they start and at "
+                    "least --clearance mm off the arm's line y = 0, on their side) with TAO "
+                    "BLMVM and exact gradients. --objective path:CSV: every target of the path "
+                    "in W_0 (sum over targets of min_p |x_t - x_d|^2/2, Danskin's gradient). "
+                    "--objective area: the area of W_0 within 0 <= P_i <= --tension-max "
+                    "(attachments, tendonK.attach, by a pattern search over mesh nodes) "
+                    "(shoelace area of the image of the tension box's boundary, gradient the "
+                    "boundary integral of the normal tip derivative), confirmed by an "
+                    "independent tension-grid re-sampling of both arms. --sweep: evaluate the "
+                    "area (and a path's misfit) over a grid of designs on all ranks of mpiexec, "
+                    "into one HDF5 file (resumable). W_0: tips of stable equilibria connected to "
+                    "the straight arm by quasi-static loading with all P_i >= 0.")
+    parser.add_argument("--vary", nargs="+", metavar="tendonK.route",
+                        help="design variables of the optimiser, e.g. tendon1.route "
+                             "tendon2.route (and, for --objective area, tendon1.attach)")
+    parser.add_argument("--objective", metavar="area|path:CSV",
+                        help="area, or path:FILE.csv (targets x_mm,y_mm) to be made reachable")
+    parser.add_argument("--sweep", nargs="+", metavar="AXIS=START:STOP:STEP",
+                        help="grid of designs instead of an optimisation; AXIS is "
+                             "tendonK.route.x, tendonK.route.y or tendonK.attach (mm; "
+                             "attachments on mesh nodes)")
+    common.add_tension_option(parser, "--tension-max",
+                              help=f"motor limit of the area objective (default "
+                                   f"{DEFAULT_TENSION_MAX_N:g} N)")
+    parser.add_argument("--resample-cells", type=int, default=32, metavar="K",
+                        help="tension-grid cells per axis of the re-sampling that checks an "
+                             "area design (default 32)")
     parser.add_argument("--margin", type=float, default=1.1, metavar="S",
-                        help="design for the path scaled by S about its centroid (default 1.1)")
+                        help="path: design for the path scaled by S about its centroid "
+                             "(default 1.1)")
     parser.add_argument("--iterations", type=int, default=20, metavar="K",
                         help="largest number of optimiser iterations (default 20)")
     parser.add_argument("--reach", type=float, default=100.0, metavar="MM",
                         help="half-width of each routing point's box (default 100)")
     parser.add_argument("--clearance", type=float, default=10.0, metavar="MM",
                         help="smallest distance of a routing point from y = 0 (default 10)")
+    parser.add_argument("--resume", action="store_true",
+                        help="--sweep: continue an interrupted sweep in --out")
     common.add_arm_options(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.add_argument("--out", metavar="TOML", help="write the designed arm to this config")
+    parser.add_argument("--out", metavar="FILE",
+                        help="the designed arm as a TOML config; with --sweep an .h5 file")
+    parser.add_argument("--plot", metavar="PNG",
+                        help="--objective area: the workspace before and after, and the history")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress bar or progress lines (for batch jobs)")
@@ -40,37 +66,219 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..core.errors import InputError
-    from ..core.progress import Progress
-    from ..studies.design import design_for_path, parse_vary
-    from ..studies.trace import read_csv
 
-    kind, _, source = args.objective.partition(":")
-    if kind != "path" or not source:
-        raise InputError(f"--objective {args.objective!r}: expected path:FILE.csv")
+    if args.sweep:
+        if args.vary or args.plot:
+            raise InputError("--sweep evaluates a grid of designs; leave out --vary and --plot")
+        return _run_sweep(args)
+    if not args.vary or not args.objective:
+        raise InputError("design needs --vary and --objective (area or path:FILE.csv), "
+                         "or --sweep")
     if args.iterations < 1:
         raise InputError(f"--iterations must be at least 1, got {args.iterations}")
     if not (args.reach > 0 and args.clearance >= 0):
         raise InputError("--reach must be positive and --clearance non-negative")
-    common.check_outputs(args)
+    from ..io.hdf5 import PLOT_SUFFIXES, check_output_path
+    if args.out:
+        check_output_path(args.out, args.overwrite, (".toml",))
+    if args.plot:
+        if args.objective != "area":
+            raise InputError("--plot draws an area design; use it with --objective area")
+        check_output_path(args.plot, args.overwrite, PLOT_SUFFIXES, "--plot")
+    if args.objective == "area":
+        return _run_area(args)
+    return _run_path(args)
+
+
+def _path_targets(objective: str):
+    from ..core.errors import InputError
+    from ..studies.trace import read_csv
+
+    kind, _, source = objective.partition(":")
+    if kind != "path" or not source:
+        raise InputError(f"--objective {objective!r}: expected area or path:FILE.csv")
+    return read_csv(source)
+
+
+def _tension_max(args, arm) -> float:
+    if args.tension_max is not None:
+        return float(args.tension_max)
+    return float(arm.tensions_from_N([DEFAULT_TENSION_MAX_N])[0])
+
+
+def _write(args, arm, summary: dict, lines) -> None:
+    if args.out:
+        from ..io.design import write_config
+        write_config(args.out, arm, lines(summary), args.overwrite)
+        summary["file"] = args.out
+
+
+def _run_path(args) -> int:
+    from ..core.progress import Progress
+    from ..studies.design import design_for_path, parse_vary
+
+    targets = _path_targets(args.objective)
     arm, disc = common.load_arm(args)
     tendons = parse_vary(args.vary, disc.n_tendons)
-    targets = read_csv(source)
     with Progress(None, "design", unit="path traces") as bar:
         result = design_for_path(arm, tendons, targets, elements=disc.n_elements,
                                  reach_mm=args.reach, clearance_mm=args.clearance,
                                  margin=args.margin, max_iterations=args.iterations,
                                  progress=bar)
     summary = _summary(result, disc.n_elements, len(targets))
-    if args.out:
-        from ..io.design import write_config
-        write_config(args.out, result.arm_after, _lines(summary), args.overwrite)
-        summary["file"] = args.out
+    _write(args, result.arm_after, summary, _lines)
+    _show(args, summary, result.history, _lines)
+    return 0 if result.misfit_after.reached.all() else 1
+
+
+def _show(args, summary: dict, history, lines) -> None:
     if args.json:
-        summary["history"] = result.history
+        summary["history"] = history
         common.print_json(summary)
     else:
-        print("\n".join(_lines(summary)))
-    return 0 if result.misfit_after.reached.all() else 1
+        print("\n".join(lines(summary)))
+
+
+def _run_area(args) -> int:
+    from ..core.errors import InputError
+    from ..core.progress import Progress
+    from ..studies.design import parse_design_variables
+    from ..studies.design_area import design_for_area
+
+    if args.resample_cells < 2:
+        raise InputError(f"--resample-cells must be at least 2, got {args.resample_cells}")
+    arm, disc = common.load_arm(args)
+    if disc.n_tendons != 2:
+        raise InputError("--objective area needs exactly two tendons")
+    tendons, attaches = parse_design_variables(args.vary, disc.n_tendons)
+    with Progress(None, "design", unit="evaluations") as bar:
+        result = design_for_area(arm, tendons, _tension_max(args, arm),
+                                 elements=disc.n_elements, attaches=attaches,
+                                 reach_mm=args.reach, clearance_mm=args.clearance,
+                                 max_iterations=args.iterations,
+                                 resample_cells=args.resample_cells, progress=bar)
+    summary = area_summary(result, disc.n_elements)
+    _write(args, result.arm_after, summary, area_lines)
+    if args.plot:
+        from ..plots.design import plot_area_design
+        plot_area_design(result, args.plot)
+        summary["plot"] = args.plot
+    _show(args, summary, result.history, area_lines)
+    return 0 if result.confirmed else 1
+
+
+def area_summary(r, elements: int) -> dict:
+    """The JSON summary of an area design (mm, mm^2, N)."""
+    def sampled(s):
+        return {"area_mm2": s.area_mm2, "error_mm2": s.error_mm2, "samples": s.samples,
+                "reached": s.reached, "stable": s.stable, "cables_clear": s.cables_clear}
+    force = r.arm_before.force_scale_N
+    return {
+        "objective": "area", "elements": elements, "tension_max": r.p_max,
+        "tension_max_N": r.p_max * force,
+        "area_before_mm2": r.before.area_mm2, "area_after_mm2": r.after.area_mm2,
+        "fold_sign_changes_before": r.before.det_sign_changes,
+        "fold_sign_changes_after": r.after.det_sign_changes,
+        "resampled_before": sampled(r.resampled_before),
+        "resampled_after": sampled(r.resampled_after),
+        "confirmed": bool(r.confirmed),
+        "routes_before_mm": [list(t.route_mm) for t in r.arm_before.tendons],
+        "routes_after_mm": [list(t.route_mm) for t in r.arm_after.tendons],
+        "attach_before_mm": [t.attach_mm for t in r.arm_before.tendons],
+        "attach_after_mm": [t.attach_mm for t in r.arm_after.tendons],
+        "iterations": r.iterations, "evaluations": len(r.history), "seconds": r.seconds,
+        "tao_reason": r.reason,
+    }
+
+
+def area_lines(s: dict) -> list[str]:
+    a, b = s["resampled_before"], s["resampled_after"]
+    gain = 100.0 * (s["area_after_mm2"] / s["area_before_mm2"] - 1.0)
+    verdict = ("confirmed by re-sampling" if s["confirmed"] else
+               "NOT confirmed by re-sampling (the optimiser's gain is not claimed)")
+    lines = [f"design (area of W_0 within 0 <= P_i <= {s['tension_max_N']:.3g} N, p = "
+             f"{s['tension_max']:.3g}; {s['elements']} elements): {s['area_before_mm2']:.0f} -> "
+             f"{s['area_after_mm2']:.0f} mm^2 ({gain:+.1f} %)",
+             f"  {verdict}: area {a['area_mm2']:.0f} ± {a['error_mm2']:.0f} mm^2 before, "
+             f"{b['area_mm2']:.0f} ± {b['error_mm2']:.0f} after (forward solves on a "
+             f"{int(round(np.sqrt(a['samples'])))}^2 tension grid; stable "
+             f"{a['stable']}/{a['samples']} and {b['stable']}/{b['samples']}, cables clear "
+             f"{a['cables_clear']} and {b['cables_clear']})",
+             f"  {s['iterations']} iterations, {s['evaluations']} evaluations, "
+             f"{s['seconds']:.1f} s; TAO: {s['tao_reason']}"]
+    for k, (x, y) in enumerate(zip(s["routes_before_mm"], s["routes_after_mm"]), start=1):
+        lines.append(f"  r_{k}: ({x[0]:.2f}, {x[1]:.2f}) -> ({y[0]:.2f}, {y[1]:.2f}) mm")
+    for k, (x, y) in enumerate(zip(s["attach_before_mm"], s["attach_after_mm"]), start=1):
+        if x != y:
+            lines.append(f"  s_{k} (attachment): {x:g} -> {y:g} mm")
+    if s["fold_sign_changes_after"] or s["fold_sign_changes_before"]:
+        lines.append(f"  note: det(d x_t/d p) changes sign {s['fold_sign_changes_before']} -> "
+                     f"{s['fold_sign_changes_after']} times along the loop: a fold of the tip "
+                     "map reaches the box's edge, so the loop's area is not exactly the image's; "
+                     "the re-sampled area is")
+    return lines
+
+
+def _run_sweep(args) -> int:
+    from mpi4py import MPI
+
+    from ..core.errors import InputError
+    from ..studies import workspace
+    from ..studies.design_sweep import parse_axis, run_sweep
+
+    comm = MPI.COMM_WORLD
+    try:                       # input errors agreed on by all ranks (one line, exit 2)
+        common.check_outputs(args, resume=args.resume)
+        arm, disc = common.load_arm(args)
+        axes = [parse_axis(text, disc.n_tendons) for text in args.sweep]
+        targets = None
+        if args.objective and args.objective != "area":
+            targets = _path_targets(args.objective)
+        error = None
+    except InputError as err:
+        error = str(err)
+    workspace.agree(comm, error)
+    sweep = run_sweep(arm, disc.n_elements, axes, _tension_max(args, arm), targets_mm=targets,
+                      comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
+                      provenance={"command_line": " ".join(sys.argv)})
+    if comm.rank != 0:
+        return 0
+    summary = sweep_summary(sweep, arm)
+    if args.json:
+        common.print_json(summary)
+    else:
+        print("\n".join(sweep_lines(summary)))
+    return 0 if sweep.complete else 130
+
+
+def sweep_summary(sweep, arm) -> dict:
+    v = sweep.values
+    best = sweep.best()
+    return {"designs": int(len(sweep.designs)), "done": int(sweep.done.sum()),
+            "complete": sweep.complete, "ranks": sweep.ranks, "axes": sweep.names,
+            "file": sweep.file,
+            "errors": int(np.sum(v["error"][sweep.done] != b"")),
+            "not_converged": int(np.sum(~v["area_converged"][sweep.done])),
+            "cables_crossing": int(np.sum(~v["cables_clear"][sweep.done])),
+            "best": None if best is None else {
+                "design_mm": dict(zip(sweep.names, sweep.designs[best].tolist())),
+                "area_mm2": float(v["area"][best]),
+                "path_reached": int(v["path_reached"][best])},
+            "seconds_designs": float(np.nansum(v["seconds"]))}
+
+
+def sweep_lines(s: dict) -> list[str]:
+    lines = [f"design sweep over {', '.join(s['axes'])}: {s['done']} of {s['designs']} designs "
+             f"on {s['ranks']} rank(s) ({s['seconds_designs']:.1f} s of design evaluations)",
+             f"  loop not solved: {s['not_converged']}; a cable across the arm: "
+             f"{s['cables_crossing']}; errors: {s['errors']}"]
+    if s["best"]:
+        design = ", ".join(f"{k} = {v:g}" for k, v in s["best"]["design_mm"].items())
+        lines.append(f"  largest area (loop solved, cables clear): {s['best']['area_mm2']:.0f} "
+                     f"mm^2 at {design} mm")
+    if s["file"]:
+        lines.append(f"  wrote {s['file']}")
+    return lines
 
 
 def _summary(result, elements: int, count: int) -> dict:

@@ -38,3 +38,44 @@ def write_config(path, arm, header_lines=(), overwrite: bool = False) -> Path:
     path = check_output_path(path, overwrite)
     path.write_text(config_toml(arm, header_lines))
     return path
+
+
+def write_sweep(path, results, attrs: dict, timing: dict) -> None:
+    """One checkpoint of ``design --sweep`` (written aside, renamed into place)::
+
+        grid/points      (D, k)  mm   the designs (one row each; axes in grid/names)
+        grid/names       (k,)         the swept parameters, e.g. tendon2.route.y
+        grid/axis_j      (m_j,)  mm   the values along axis j
+        grid/chunk_done  (D,)         design evaluated and stored (resume)
+        samples/FIELD    (D, ...)     per design: area [mm^2], area_converged,
+                                      cables_clear, det_sign_changes, path_misfit
+                                      [mm^2], path_reached, error, seconds, done
+    Root attributes: provenance, ``complete``, ``tension_max`` inside
+    ``grid_json``; group ``timing``: ranks, seconds_wall, seconds_io."""
+    import json
+
+    import numpy as np
+
+    from .hdf5 import atomic_h5, put, write_attrs
+
+    grid = results.grid
+    with atomic_h5(path, overwrite=True) as fh:
+        write_attrs(fh, attrs)
+        fh.attrs["complete"] = bool(results.chunk_done.all())
+        fh.attrs["samples_done"] = results.samples_done
+        fh.attrs["samples_total"] = grid.size
+        g = fh.create_group("grid")
+        axes = json.loads(attrs["grid_json"])["axes"]
+        put(g, "points", grid.points, "mm", "the designs, one per row (columns: grid/names)")
+        put(g, "names", np.array([a["name"].encode() for a in axes]), "", "swept parameters")
+        for j, a in enumerate(axes):
+            put(g, f"axis_{j}", np.array(a["values"]), "mm", f"values of {a['name']}")
+        put(g, "chunk_done", results.chunk_done, "1", "design evaluated and stored")
+        samples = fh.create_group("samples")
+        done = np.zeros(grid.size, bool)
+        for c in np.flatnonzero(results.chunk_done):
+            done[grid.chunks[c]] = True
+        put(samples, "done", done, "1", "design evaluated and stored")
+        for name, (_, _, units, description) in results.schema.items():
+            put(samples, name, results.data[name], units, description)
+        write_attrs(fh.create_group("timing"), timing)

@@ -51,27 +51,44 @@ class DesignError(InputError):
     """A design request that cannot be carried out (one line for the user)."""
 
 
-def parse_vary(names, n_tendons: int) -> list[int]:
-    """``tendonK.route`` -> tendon index K-1 (0-based), in order, no repeats."""
-    out = []
+def parse_design_variables(names, n_tendons: int) -> tuple[list[int], list[int]]:
+    """``tendonK.route`` / ``tendonK.attach`` -> (route tendons, attachment
+    tendons), 0-based indices in order, no repeats."""
+    routes, attaches = [], []
     for name in names:
         head, _, what = name.partition(".")
-        if not head.startswith("tendon") or not head[6:].isdigit():
-            raise DesignError(f"--vary {name!r}: expected tendonK.route, e.g. tendon1.route")
+        if not head.startswith("tendon") or not head[6:].isdigit() or what not in ("route",
+                                                                                    "attach"):
+            raise DesignError(f"--vary {name!r}: expected tendonK.route or tendonK.attach, "
+                              "e.g. tendon1.route")
         k = int(head[6:])
         if not 1 <= k <= n_tendons:
             raise DesignError(f"--vary {name!r}: the arm has tendons 1..{n_tendons}")
-        if what == "attach":
-            raise DesignError(f"--vary {name!r}: attachment points are not design variables "
-                              "(they must sit on mesh nodes); vary routing points")
-        if what != "route":
-            raise DesignError(f"--vary {name!r}: expected tendonK.route")
-        if k - 1 in out:
+        chosen = routes if what == "route" else attaches
+        if k - 1 in chosen:
             raise DesignError(f"--vary {name!r} given twice")
-        out.append(k - 1)
-    if not out:
-        raise DesignError("--vary: name at least one routing point, e.g. tendon2.route")
-    return out
+        chosen.append(k - 1)
+    if not routes and not attaches:
+        raise DesignError("--vary: name at least one design variable, e.g. tendon2.route")
+    return routes, attaches
+
+
+def parse_vary(names, n_tendons: int) -> list[int]:
+    """Routing points only (the path objective): ``tendonK.route`` -> K-1."""
+    routes, attaches = parse_design_variables(names, n_tendons)
+    if attaches:
+        k = attaches[0] + 1
+        raise DesignError(f"--vary tendon{k}.attach: attachment points sit on mesh nodes, so "
+                          "the path objective's gradient optimiser does not vary them; use "
+                          f"--objective area or --sweep tendon{k}.attach=START:STOP:STEP")
+    return routes
+
+
+def with_attachment(arm: Arm, tendon: int, s_mm: float) -> Arm:
+    """The arm with tendon ``tendon``'s attachment at arc length ``s_mm``."""
+    new = list(arm.tendons)
+    new[tendon] = Tendon(float(s_mm), new[tendon].route_mm)
+    return dataclasses.replace(arm, tendons=tuple(new))
 
 
 def with_routes(arm: Arm, tendons, q_mm) -> Arm:
@@ -163,6 +180,55 @@ def scaled_path(targets_mm, margin: float) -> np.ndarray:
     return c + margin * (t - c)
 
 
+def minimise_bounded(objective, q0, lo, hi, *, scale_mm: float, max_iterations: int,
+                     prefix: str, done=lambda: False, line_search: str | None = None,
+                     status: dict | None = None) -> tuple[str, int]:
+    """TAO BLMVM on q = q0 + scale_mm * X within lo <= q <= hi (mm).
+    ``objective(q) -> (f, df/dq)``; ``done()`` true stops it (CONVERGED_USER);
+    ``status["iteration"]`` follows TAO's iteration number.
+    ``line_search``: TAO's line search type unless ``-<prefix>tao_ls_type``
+    is given.  Returns (TAO's reason, iterations)."""
+    def form(tao, X, G) -> float:
+        f, g = objective(q0 + scale_mm * X.getArray(readonly=True))
+        G.setArray(np.asarray(g, float) * scale_mm)
+        return float(f)
+
+    x = PETSc.Vec().createSeq(len(q0), comm=PETSc.COMM_SELF)
+    x.set(0.0)
+    xl, xu = x.duplicate(), x.duplicate()
+    xl.setArray((lo - q0) / scale_mm)
+    xu.setArray((hi - q0) / scale_mm)
+    tao = PETSc.TAO().create(PETSc.COMM_SELF)
+    tao.setOptionsPrefix(prefix)
+    tao.setType(PETSc.TAO.Type.BLMVM)
+    tao.setObjectiveGradient(form, None)
+    tao.setVariableBounds(xl, xu)
+    tao.setTolerances(gatol=0.0, grtol=0.0, gttol=0.0)
+    tao.setMaximumIterations(max_iterations)
+    status = {} if status is None else status
+
+    def monitor(t) -> None:
+        status["iteration"] = t.getIterationNumber()
+        if done():
+            t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
+
+    tao.setMonitor(monitor)
+    options, key = PETSc.Options(), f"{prefix}tao_ls_type"
+    default_ls = line_search is not None and not options.hasName(key)
+    if default_ls:
+        options[key] = line_search
+    tao.setFromOptions()
+    if default_ls:
+        options.delValue(key)
+    try:
+        tao.solve(x)
+        reason = TAO_REASONS.get(tao.getConvergedReason(), str(tao.getConvergedReason()))
+        return reason, tao.getIterationNumber()
+    finally:
+        for obj in (tao, x, xl, xu):
+            obj.destroy()
+
+
 def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = None,
                     reach_mm: float = 100.0, clearance_mm: float = 10.0, margin: float = 1.1,
                     max_iterations: int = 20, scale_mm: float = 10.0,
@@ -180,42 +246,23 @@ def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = Non
     design_path = scaled_path(targets_mm, margin)
     history, best = [], {}
 
-    def objective(tao, X, G) -> float:
-        q = q0 + scale_mm * X.getArray(readonly=True)
+    def objective(q):
         m = path_misfit(with_routes(arm, tendons, q), tendons, design_path, elements)
         history.append({"q_mm": q.tolist(), "f_mm2": m.f, "reached": int(m.reached.sum()),
                         "gradient": m.gradient.tolist()})
         if not best or m.f < best["f"]:
             best.update(f=m.f, q=q.copy())
         if progress is not None:
-            progress(len(history), f"TAO iteration {tao.getIterationNumber()} of at most "
+            progress(len(history), f"TAO iteration {status.get('iteration', 0)} of at most "
                      f"{max_iterations}; misfit {m.f:.3g} mm^2, {history[-1]['reached']}/"
                      f"{len(design_path)} reached")
-        G.setArray(m.gradient * scale_mm)
-        return m.f
+        return m.f, m.gradient
 
-    x = PETSc.Vec().createSeq(len(q0), comm=PETSc.COMM_SELF)
-    x.set(0.0)
-    xl, xu = x.duplicate(), x.duplicate()
-    xl.setArray((lo - q0) / scale_mm)
-    xu.setArray((hi - q0) / scale_mm)
-    tao = PETSc.TAO().create(PETSc.COMM_SELF)
-    tao.setOptionsPrefix(prefix)
-    tao.setType(PETSc.TAO.Type.BLMVM)
-    tao.setObjectiveGradient(objective, None)
-    tao.setVariableBounds(xl, xu)
-    tao.setTolerances(gatol=0.0, grtol=0.0, gttol=0.0)
-    tao.setMaximumIterations(max_iterations)
-    tao.setMonitor(lambda t: t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
-                   if best and best["f"] == 0.0 else None)
-    tao.setFromOptions()
-    try:
-        tao.solve(x)
-        reason = TAO_REASONS.get(tao.getConvergedReason(), str(tao.getConvergedReason()))
-        iterations = tao.getIterationNumber()
-    finally:
-        for obj in (tao, x, xl, xu):
-            obj.destroy()
+    status = {}
+    reason, iterations = minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
+                                          max_iterations=max_iterations, prefix=prefix,
+                                          done=lambda: bool(best) and best["f"] == 0.0,
+                                          status=status)
     after = with_routes(arm, tendons, best["q"])
     if progress is not None:
         progress(len(history), "tracing the task's path on the arm before and after")

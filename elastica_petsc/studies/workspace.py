@@ -261,9 +261,9 @@ def empty_fields(schema: dict, count: int) -> dict[str, np.ndarray]:
 class Results:
     """All samples' fields in memory (rank 0), with per-chunk done flags."""
 
-    def __init__(self, grid: Grid, n_tendons: int):
+    def __init__(self, grid: Grid, n_tendons: int, schema: dict | None = None):
         self.grid = grid
-        self.schema = fields(n_tendons)
+        self.schema = fields(n_tendons) if schema is None else schema
         self.data = empty_fields(self.schema, grid.size)
         self.chunk_done = np.zeros(len(grid.chunks), bool)
         self.stranded = False            # other ranks still busy after a stop (see run)
@@ -274,6 +274,10 @@ class Results:
         for name, array in values.items():
             self.data[name][index] = array
         self.chunk_done[chunk] = True
+
+    def write(self, path: Path, attrs: dict, limits: dict, timing: dict) -> None:
+        """One checkpoint (:func:`write_results`); other studies' results override it."""
+        write_results(path, self, attrs, limits, timing)
 
     @property
     def samples_done(self) -> int:
@@ -373,11 +377,13 @@ def write_results(path: Path, results: Results, attrs: dict, limits: dict, timin
         write_attrs(fh.create_group("timing"), timing)
 
 
-def read_results(path: Path, grid: Grid, n_tendons: int, attrs: dict) -> Results:
-    """Load a partial file for ``resume``; refuse one made for another grid or arm."""
+def read_results(path: Path, grid: Grid, n_tendons: int, attrs: dict,
+                 results: Results | None = None) -> Results:
+    """Load a partial file for ``resume`` into ``results`` (default: a workspace
+    map's); refuse one made for another grid or arm."""
     import h5py
 
-    results = Results(grid, n_tendons)
+    results = Results(grid, n_tendons) if results is None else results
     try:
         with h5py.File(path, "r") as fh:
             for key in GRID_ATTRS:
@@ -540,7 +546,7 @@ class _Collector:
         t0 = time.perf_counter()
         self.timing["seconds_wall"] = t0 - self.t_start
         try:
-            write_results(self.out, self.results, self.attrs, self.limits, self.timing)
+            self.results.write(self.out, self.attrs, self.limits, self.timing)
         except InputError as err:
             self.results.write_error = str(err)
             self.counter.exhaust()
@@ -607,15 +613,16 @@ def _continue_provenance(out: Path, attrs: dict) -> None:
     attrs.update(first, resumed_command_lines=json.dumps(resumed))
 
 
-def _load(grid: Grid, out, attrs: dict, resume: bool, comm) -> Results | None:
+def _load(grid: Grid, out, attrs: dict, resume: bool, comm, new_results=None) -> Results | None:
     """Rank 0 reads the file to resume (or starts afresh); every rank learns which
-    chunks are done.  A file that cannot be resumed raises on every rank."""
+    chunks are done.  A file that cannot be resumed raises on every rank.
+    ``new_results()``: empty results of another study (default a workspace map's)."""
     results = chunk_done = error = None
     if comm.rank == 0:
         try:
-            results = (read_results(out, grid, attrs["n_tendons"], attrs)
-                       if resume and out is not None and out.exists()
-                       else Results(grid, attrs["n_tendons"]))
+            fresh = (new_results or (lambda: Results(grid, attrs["n_tendons"])))()
+            results = (read_results(out, grid, attrs["n_tendons"], attrs, fresh)
+                       if resume and out is not None and out.exists() else fresh)
             chunk_done = results.chunk_done
             if out is not None and resume and out.exists():
                 _continue_provenance(out, attrs)
@@ -629,7 +636,8 @@ def _load(grid: Grid, out, attrs: dict, resume: bool, comm) -> Results | None:
 
 def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, comm, resume: bool,
         checkpoint_seconds: float | None = None, progress=None,
-        progress_label: str = "workspace", stop: "_Stop | None" = None) -> Results | None:
+        progress_label: str = "workspace", stop: "_Stop | None" = None,
+        new_results=None) -> Results | None:
     """Sample the whole grid over the ranks of ``comm`` (stop protocol below).
 
     ``sampler.solve_chunk(points, stop) -> dict of per-sample arrays`` (or
@@ -646,17 +654,19 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
     collective is entered unless every rank is known to reach it.  ``stop``: a
     :class:`_Stop` already catching signals (:func:`run_map` installs it before
     its set-up, so a signal there stops the run at its first sample).
+    ``new_results``: a callable returning empty :class:`Results` of another
+    study (its own schema and file layout: ``design --sweep``); default a map's.
     """
     if stop is None:
         with _Stop() as stop:
             return run(grid, sampler, out, attrs, limits, comm=comm, resume=resume,
                        checkpoint_seconds=checkpoint_seconds, progress=progress,
-                       progress_label=progress_label, stop=stop)
+                       progress_label=progress_label, stop=stop, new_results=new_results)
     from ..core.progress import Progress
 
     if checkpoint_seconds is None:
         checkpoint_seconds = checkpoint_interval()
-    results, todo = _load(grid, out, attrs, resume, comm)
+    results, todo = _load(grid, out, attrs, resume, comm, new_results)
     counter = stop.counter = ChunkCounter(comm)
     if comm.rank == 0:
         bar = (Progress(grid.size, progress_label, already=results.samples_done)

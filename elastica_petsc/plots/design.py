@@ -1,0 +1,45 @@
+"""Figure of ``design --objective area``: the workspace within the motor limit
+before and after (the loop the objective integrates over and the tips of the
+independent re-sampling), and the objective along the optimisation."""
+from __future__ import annotations
+
+import numpy as np
+
+from .common import figure, save
+
+
+def plot_area_design(result, path) -> None:
+    """``result``: an :class:`~elastica_petsc.studies.design_area.AreaDesign`."""
+    fig, (ax, hx) = figure(ncols=2, figsize=(13, 6), gridspec_kw={"width_ratios": [3, 2]})
+    for label, arm, area, sampled, colour in (
+            ("before", result.arm_before, result.before, result.resampled_before, "0.45"),
+            ("after", result.arm_after, result.after, result.resampled_after, "tab:blue")):
+        if sampled is not None and sampled.tips_mm is not None:
+            ax.plot(sampled.tips_mm[:, 0], sampled.tips_mm[:, 1], ".", color=colour, ms=1.5,
+                    alpha=0.5)
+            text = f", re-sampled {sampled.area_mm2:.0f} ± {sampled.error_mm2:.0f} mm^2"
+        else:
+            text = ""
+        closed = np.vstack((area.loop_mm, area.loop_mm[:1]))
+        ax.plot(closed[:, 0], closed[:, 1], "-", color=colour, lw=1.5,
+                label=f"{label}: loop area {area.area_mm2:.0f} mm^2{text}")
+        routes = np.array([t.route_mm for t in arm.tendons])
+        ax.plot(routes[:, 0], routes[:, 1], "^", color=colour, ms=7, ls="none")
+    ax.plot([0, result.arm_before.length_mm], [0, 0], "k-", lw=0.8, label="straight arm")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    verdict = "confirmed" if result.confirmed else "NOT confirmed"
+    ax.set_title(f"W_0 within 0 <= P_i <= {result.p_max * result.arm_before.force_scale_N:.3g} N"
+                 f" (gain {verdict} by re-sampling)", fontsize=10)
+    ax.legend(fontsize=7, loc="lower left")
+    ok = [h["area_mm2"] if h["feasible"] else np.nan for h in result.history]
+    hx.plot(np.arange(1, len(ok) + 1), ok, "o", ms=3, color="tab:blue", label="feasible")
+    bad = [k + 1 for k, h in enumerate(result.history) if not h["feasible"]]
+    hx.plot(bad, [result.before.area_mm2] * len(bad), "x", color="tab:red",
+            label="rejected (loop not solved or a cable across the arm)")
+    hx.set_xlabel("evaluation")
+    hx.set_ylabel("loop area [mm^2]")
+    hx.legend(fontsize=7)
+    save(fig, path)
+

@@ -1,0 +1,388 @@
+"""The area objective of ``design`` (issue 13): the workspace of a motor with a
+force limit, its exact design gradient, and its check by re-sampling.
+
+**Which area.**  The unrestricted W_0 of the paper's arm (tips of stable
+equilibria connected to the straight arm by quasi-static loading with all
+P_i >= 0) is ill-posed as an objective: as P grows a cable collapses onto its
+routing point, the tip map x_t(p) folds inside the tension region (det(d x_t/d
+p) changes sign; on the paper's arm at 60 elements already inside the box
+0 <= p_i <= 40) and several equilibria share one P, so the area of a traced
+loop is not the area of W_0 and is not smooth in the design.  The last
+session's optimiser of that area raised the traced area from 478e3 to 802e3
+mm^2 while the independent Fig. 4 map of the optimised arm reached fewer
+targets (1029 against 1401): the gain was an artefact of folds.
+
+We therefore optimise the **restricted** workspace W_0 ∩ W_P of a motor limit
+P_max (Eq. (22) with P_crit = P_max, default 10 N): the tips of the equilibria
+reached by quasi-static loading from the straight arm with 0 <= P_i <= P_max.
+Where the tip map has no fold on the box B = [0, p_max]^2 (p = P l^2/B) its
+image is bounded by the image of the box's boundary, and
+
+    A(q) = | 1/2 ∮_{x_t(∂B)} (x dy - y dx) |                       [mm^2]
+
+Discretised on K nodes p_k of ∂B fixed in tension space (``nodes_per_edge``
+per edge), with tips x_k(q) reached along the loop (each solve continued from
+the previous node, a quasi-static loading path), A is the shoelace area of
+the nodes, a smooth function of the design q (routing points, mm).  Its
+derivative is the discrete boundary integral of the normal component of the
+tip derivative:
+
+    dA/dq = sigma sum_k  n_k . d x_k/d q,   n_k = 1/2 (y_{k+1} - y_{k-1}, x_{k-1} - x_{k+1})
+
+(sigma the loop's orientation) with d x_k/d q at fixed tensions from one more
+right-hand side of the tangent system, K du/dr_i = -dF/dr_i (the tendon's
+border columns, :meth:`Manifold.route_derivative`), Eq. (13) for the tip.
+Verified by a Taylor test of order 2 (tests/test_design_area.py).
+
+**Its validity is checked, not assumed.**  Along the loop, det(d x_t/d p)
+(two more right-hand sides: K du/dp = -dF/dp, Eq. (14)) must keep one sign;
+a change is a fold reaching the boundary and is reported.  Interior folds,
+unstable states and states off the quasi-static branch are what the
+independent re-sampling (:func:`resampled_area`) catches: a forward tension-
+grid map (``workspace --mode tensions``) over B, its cells' images as
+triangles, and the area of their union counted on a fine lattice.  Where
+the map folds, the union is smaller than A; so the optimiser's gain is
+claimed only if the re-sampled areas before and after differ by more than
+their errors.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse.linalg as spla
+
+from ..core.clearance import state_cable_clear
+from ..core.fem import Discretisation
+from ..core.model import Arm
+from ..solvers.continuation import Manifold
+from ..solvers.equilibrium import EquilibriumSolver
+
+
+def box_loop(p_max: float, nodes_per_edge: int) -> np.ndarray:
+    """Tensions (K, 2) around the box [0, p_max]^2, counter-clockwise in p from
+    the origin: P_2 = 0, P_1 = p_max, P_2 = p_max, P_1 = 0 (``nodes_per_edge``
+    nodes per edge, the corners once)."""
+    t = np.arange(nodes_per_edge) / nodes_per_edge * p_max
+    zero, top = np.zeros_like(t), np.full_like(t, p_max)
+    return np.concatenate([np.column_stack((t, zero)), np.column_stack((top, t)),
+                           np.column_stack((p_max - t, top)), np.column_stack((zero, p_max - t))])
+
+
+def shoelace_signed(loop: np.ndarray) -> float:
+    """1/2 sum (x_k y_{k+1} - x_{k+1} y_k) of a closed polygon (last joined to first)."""
+    x, y = loop[:, 0], loop[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def shoelace_normals(loop: np.ndarray) -> np.ndarray:
+    """d(signed shoelace)/d x_k, (K, 2): half the chord across node k turned by
+    -90 degrees, the discrete outward normal times the node's share of length."""
+    nxt, prv = np.roll(loop, -1, axis=0), np.roll(loop, 1, axis=0)
+    return 0.5 * np.column_stack((nxt[:, 1] - prv[:, 1], prv[:, 0] - nxt[:, 0]))
+
+
+@dataclass
+class BoxArea:
+    """The area objective of one design (module docstring), mm and mm^2."""
+
+    area_mm2: float
+    gradient: np.ndarray        # dA/dq [mm^2/mm], 2 per varied tendon
+    loop_mm: np.ndarray         # tips at the loop's nodes (K, 2)
+    tensions: np.ndarray        # the nodes in tension space (K, 2), p = P l^2/B
+    det_sign_changes: int       # sign changes of det(d x_t/d p) along the loop
+    converged: bool             # every node solved along the loop
+    cables_clear: bool          # no cable crosses the arm at any node (core/clearance.py)
+
+    @property
+    def feasible(self) -> bool:
+        return self.converged and self.cables_clear
+
+
+def _node_derivatives(mf: Manifold, u: np.ndarray, p: np.ndarray, tendons) -> np.ndarray:
+    """d x_t/d(p_1, p_2, r_i...) at fixed everything else, (2, 2 + 2 len(tendons)):
+    one factorisation of K, right-hand sides -dF/dp (Eq. (14)) and -dF/dr_i."""
+    w = np.concatenate((u, p))
+    rhs = [mf.load_columns(w)] + [mf.route_derivative(w, i) for i in tendons]
+    du = spla.splu(mf.jacobian(w).tocsc()).solve(-np.hstack(rhs))
+    zeros = np.zeros(mf.n)
+    return np.column_stack([mf.tip_velocity(w, np.concatenate((du[:, c], zeros)))
+                            for c in range(du.shape[1])])
+
+
+def box_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
+             nodes_per_edge: int = 24) -> BoxArea:
+    """A(q) and dA/dq (module docstring) for the routing points of ``tendons``
+    (0-based) of ``arm``, on the box 0 <= p_i <= ``p_max`` (non-dimensional).
+    Two tendons only."""
+    disc = Discretisation.from_arm(arm, elements)
+    if disc.n_tendons != 2:
+        raise ValueError("the area objective needs exactly two tendons")
+    l_mm = arm.length_mm
+    mf = Manifold(disc)
+    tensions = box_loop(p_max, nodes_per_edge)
+    tips, dtip, dets, ok, clear, previous = [], [], [], True, True, None
+    with EquilibriumSolver(disc) as solver:            # the routing points live in disc
+        for p in tensions:
+            eq = solver.solve(p, start=previous)
+            ok &= bool(eq.converged)
+            clear &= bool(np.all(state_cable_clear(eq)))
+            previous = eq
+            d = _node_derivatives(mf, eq.u, eq.p, tendons)
+            tips.append(eq.tip * l_mm)
+            dets.append(np.linalg.det(d[:, :2]))
+            dtip.append(d[:, 2:])                      # mm per mm: x_t/l per r/l
+    loop = np.array(tips)
+    signed = shoelace_signed(loop)
+    sigma = 1.0 if signed >= 0 else -1.0
+    normals = shoelace_normals(loop)
+    grad = sigma * np.einsum("ka,kaj->j", normals, np.array(dtip))
+    signs = np.sign(dets)
+    changes = int(np.sum(signs != np.roll(signs, 1)))
+    return BoxArea(abs(signed), grad, loop, tensions, changes, ok, clear)
+
+
+# --- independent re-sampling -------------------------------------------------------------------
+@dataclass
+class Resampled:
+    """Area of the image of the tension box from a forward tension-grid map (mm^2)."""
+
+    area_mm2: float
+    error_mm2: float            # |A(s) - A(2s)| + lattice term (see resampled_area)
+    samples: int
+    reached: int                # converged forward solves
+    stable: int                 # of them with lambda_min > 0 (Eq. (20))
+    cables_clear: int           # of them with every cable clear of the arm
+    seconds: float
+    tips_mm: np.ndarray = None  # tips of the stable samples (k, 2), for plots
+
+
+def _triangles(tips: np.ndarray, good: np.ndarray) -> np.ndarray:
+    """The images (T, 3, 2) of the two triangles of each grid cell whose three
+    corners are good; ``tips`` and ``good`` are (n, n[, 2]) on the tension lattice."""
+    a, b = tips[:-1, :-1], tips[1:, :-1]
+    c, d = tips[1:, 1:], tips[:-1, 1:]
+    ga, gb, gc, gd = good[:-1, :-1], good[1:, :-1], good[1:, 1:], good[:-1, 1:]
+    t1 = np.stack((a, b, c), axis=2)[ga & gb & gc]
+    t2 = np.stack((a, c, d), axis=2)[ga & gc & gd]
+    return np.concatenate((t1, t2))
+
+
+def union_area(triangles: np.ndarray, h: float) -> float:
+    """Area (mm^2) of the union of triangles, counted on a square lattice of
+    spacing ``h`` mm (a point counts once however many triangles hold it)."""
+    if len(triangles) == 0:
+        return 0.0
+    lo = triangles.reshape(-1, 2).min(axis=0)
+    hi = triangles.reshape(-1, 2).max(axis=0)
+    shape = np.ceil((hi - lo) / h).astype(int) + 1
+    covered = np.zeros(shape, bool)
+    for tri in triangles:
+        i0, j0 = np.floor((tri.min(axis=0) - lo) / h).astype(int)
+        i1, j1 = np.ceil((tri.max(axis=0) - lo) / h).astype(int) + 1
+        gx, gy = np.meshgrid(lo[0] + h * np.arange(i0, i1), lo[1] + h * np.arange(j0, j1),
+                             indexing="ij")
+        covered[i0:i1, j0:j1] |= _inside_triangle(tri, gx, gy)
+    return float(covered.sum()) * h * h
+
+
+def _inside_triangle(tri: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
+    (x0, y0), (x1, y1), (x2, y2) = tri
+    det = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+    if det == 0.0:
+        return np.zeros(gx.shape, bool)
+    l1 = ((gx - x0) * (y2 - y0) - (x2 - x0) * (gy - y0)) / det
+    l2 = ((x1 - x0) * (gy - y0) - (gx - x0) * (y1 - y0)) / det
+    return (l1 >= 0) & (l2 >= 0) & (l1 + l2 <= 1)
+
+
+def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells: int = 20,
+                   lattice_mm: float = 0.25) -> Resampled:
+    """Re-sample the workspace of ``arm`` within 0 <= p_i <= ``p_max``: forward
+    solves on a (cells + 1)^2 tension lattice (``workspace --mode tensions``:
+    quasi-static loading from the straight arm, continued along rows), the
+    union of the images of the cells whose corners are stable (lambda_min > 0)
+    equilibria, its area counted on a lattice of ``lattice_mm``.  The error is
+    |A(s) - A(2s)| (the same map on every other lattice line; it bounds the
+    chords' error whenever halving s at least halves it, and Richardson's
+    s^2 estimate, a third of it, was too small on coarse grids) plus
+    perimeter x lattice spacing (a bound on the counting's).  Measured on the
+    paper's arm (60 elements, P_max = 10 N): A = 60917, 58914 mm^2 at 16, 32
+    cells against 58472 mm^2 for the loop's shoelace at 48 nodes per edge."""
+    from mpi4py import MPI
+
+    from .workspace import REACHED, run_map
+
+    disc = Discretisation.from_arm(arm, elements)
+    spacing = p_max / cells
+    ws = run_map(arm, disc, mode="tensions", tension_spacing=spacing, tension_max=p_max,
+                 comm=MPI.COMM_SELF, progress=False)
+    s = ws.samples
+    index = np.rint(np.asarray(ws.points) / spacing).astype(int)
+    n = cells + 1
+    tips = np.full((n, n, 2), np.nan)
+    good = np.zeros((n, n), bool)
+    reached = s["status"] == REACHED
+    with np.errstate(invalid="ignore"):
+        stable = reached & (s["lambda_min"] > 0)
+    tips[index[:, 0], index[:, 1]] = s["tip"]
+    good[index[:, 0], index[:, 1]] = stable
+    fine = union_area(_triangles(tips, good), lattice_mm)
+    coarse = union_area(_triangles(tips[::2, ::2], good[::2, ::2]), lattice_mm)
+    edge = np.concatenate([tips[:, 0], tips[-1, 1:], tips[-2::-1, -1], tips[0, -2:0:-1]])
+    perimeter = float(np.nansum(np.linalg.norm(np.diff(edge, axis=0), axis=1)))
+    seconds = float(np.nansum(s["seconds_control"]) + np.nansum(s["seconds_eigen"]))
+    return Resampled(fine, abs(fine - coarse) + perimeter * lattice_mm, len(s["status"]),
+                     int(reached.sum()), int(stable.sum()),
+                     int(np.all(s["cable_clear"], axis=1)[reached].sum()), seconds,
+                     np.asarray(s["tip"])[stable])
+
+
+# --- the optimiser -----------------------------------------------------------------------------
+STALL_GAIN = 1e-3        # relative area gain over 3 iterations below which TAO is stopped
+@dataclass
+class AreaDesign:
+    """Outcome of ``design --objective area`` (mm, mm^2, N)."""
+
+    arm_before: Arm
+    arm_after: Arm
+    tendons: list
+    p_max: float                    # the box's bound, non-dimensional
+    before: BoxArea
+    after: BoxArea
+    resampled_before: Resampled | None
+    resampled_after: Resampled | None
+    history: list
+    reason: str
+    iterations: int
+    seconds: float
+
+    @property
+    def confirmed(self) -> bool | None:
+        """The gain holds in the re-sampling: the intervals A +- error of the
+        re-sampled areas before and after do not overlap (None: not re-sampled)."""
+        a, b = self.resampled_before, self.resampled_after
+        if a is None or b is None:
+            return None
+        return b.area_mm2 - b.error_mm2 > a.area_mm2 + a.error_mm2
+
+
+def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm: float):
+    """Attachment arc lengths on mesh nodes: a pattern search (move one
+    attachment by one node, keep the move if the design is feasible and the
+    area grows, until no move helps), within +- ``reach_mm`` of the start and
+    on (0, l].  ``evaluate(arm) -> BoxArea``.  Returns (arm, its BoxArea)."""
+    from .design import with_attachment
+
+    h = arm.length_mm / elements
+    start = {i: arm.tendons[i].attach_mm for i in attaches}
+    best = evaluate(arm)
+    moved = True
+    while moved:
+        moved = False
+        for i, step in ((i, step) for i in attaches for step in (h, -h)):
+            s = arm.tendons[i].attach_mm + step
+            if not (h - 1e-9 <= s <= arm.length_mm + 1e-9 and abs(s - start[i]) <= reach_mm):
+                continue
+            candidate = with_attachment(arm, i, s)
+            a = evaluate(candidate)
+            if a.feasible and a.area_mm2 > best.area_mm2:
+                arm, best, moved = candidate, a, True
+                break
+    return arm, best
+
+
+def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
+                    attaches=(), reach_mm: float = 100.0, clearance_mm: float = 10.0,
+                    nodes_per_edge: int = 24, max_iterations: int = 15, scale_mm: float = 10.0,
+                    resample_cells: int | None = 32, prefix: str = "design_",
+                    progress=None) -> AreaDesign:
+    """Routing points (mm) of ``tendons`` (0-based) maximising the area A of the
+    workspace within 0 <= p_i <= ``p_max`` (= P_max l^2/B; module docstring),
+    by TAO BLMVM with the exact gradient dA/dq, within the bounds of
+    :func:`~elastica_petsc.studies.design.route_bounds`; before that, the
+    attachment arc lengths of ``attaches`` on mesh nodes
+    (:func:`search_attachments`).  Then both arms are re-sampled
+    independently (:func:`resampled_area`, ``resample_cells`` cells per
+    tension axis; None skips it) and the gain is ``confirmed`` only if the
+    re-sampled areas differ by more than their errors.  ``progress(evaluations,
+    note)``, if given, is called after every evaluation and before the
+    re-sampling."""
+    import time
+
+    from .design import DesignError
+
+    if not (np.isfinite(p_max) and p_max > 0):
+        raise DesignError(f"--tension-max must be a positive force, got p = {p_max}")
+    t0 = time.perf_counter()
+    elements = Discretisation.from_arm(arm, elements).n_elements
+    history, best, first = [], {}, []
+
+    def evaluate(candidate):
+        a = box_area(candidate, tendons, p_max, elements=elements,
+                     nodes_per_edge=nodes_per_edge)
+        if not first:
+            first.append(a)
+        history.append({"attach_mm": [t.attach_mm for t in candidate.tendons],
+                        "routes_mm": [list(t.route_mm) for t in candidate.tendons],
+                        "area_mm2": a.area_mm2, "gradient": a.gradient.tolist(),
+                        "feasible": a.feasible, "converged": a.converged,
+                        "cables_clear": a.cables_clear, "det_sign_changes": a.det_sign_changes})
+        if a.feasible and (not best or a.area_mm2 > best["area"].area_mm2):
+            best.update(area=a, arm=candidate)
+        if progress is not None:
+            progress(len(history), f"area {a.area_mm2:.0f} mm^2"
+                     + ("" if a.feasible else " (rejected: infeasible)"))
+        return a
+
+    designed, reason, iterations = arm, "", 0
+    if attaches:
+        designed, _ = search_attachments(arm, attaches, evaluate, elements=elements,
+                                         reach_mm=reach_mm)
+    if tendons:
+        reason, iterations = _optimise_routes(designed, tendons, evaluate, history,
+                                              reach_mm=reach_mm, clearance_mm=clearance_mm,
+                                              scale_mm=scale_mm, max_iterations=max_iterations,
+                                              prefix=prefix)
+    after_arm = best.get("arm", arm)
+    checks = [None, None]
+    if resample_cells:
+        if progress is not None:
+            progress(len(history), "re-sampling both arms on a tension grid")
+        checks = [resampled_area(a, p_max, elements=elements, cells=resample_cells)
+                  for a in (arm, after_arm)]
+    return AreaDesign(arm, after_arm, list(tendons), p_max, first[0], best.get("area", first[0]),
+                      *checks, history, reason, iterations, time.perf_counter() - t0)
+
+
+def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm, scale_mm,
+                     max_iterations, prefix):
+    """TAO BLMVM on the routing points of ``tendons`` (f = -A/A_0); an
+    infeasible design (a node unreachable, or a cable across the arm) returns
+    f = 1, so that the (Armijo) line search backs off."""
+    from .design import minimise_bounded, route_bounds, with_routes
+
+    q0 = np.concatenate([arm.tendons[i].route_mm for i in tendons]).astype(float)
+    lo, hi = route_bounds(arm, tendons, reach_mm, clearance_mm)
+
+    def objective(q):
+        a = evaluate(with_routes(arm, tendons, q))
+        scale = history[0]["area_mm2"]                     # f = -A/A_0, O(1)
+        if not a.feasible:
+            return 1.0, np.zeros_like(a.gradient)
+        return -a.area_mm2 / scale, -a.gradient / scale
+
+    best_by_iteration = []
+
+    def stalled() -> bool:
+        """Stop when the best feasible area grew by less than 0.1 % over the last
+        3 iterations (the optimum lies on the feasibility edge, where the line
+        search keeps being rejected)."""
+        best_by_iteration.append(max((h["area_mm2"] for h in history if h["feasible"]),
+                                     default=0.0))
+        b = best_by_iteration
+        return len(b) > 3 and b[-1] - b[-4] < STALL_GAIN * b[-1]
+
+    return minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
+                            max_iterations=max_iterations, prefix=prefix, line_search="armijo",
+                            done=stalled)

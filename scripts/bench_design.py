@@ -1,0 +1,97 @@
+#!/usr/bin/env python3
+"""Timing of ``design`` (issue 13): the sweep on 1 and 2 ranks, and the
+optimisers' iterations and time.
+
+``sweep``: ``elastica-petsc design --sweep tendon2.route.y=A:B:S
+tendon1.attach=...`` (area objective at the default P_max = 10 N) at
+--elements, on 1 rank and under ``mpiexec -n 2``, rank counts interleaved,
+median wall time of --repeat runs each; checks that both files hold the same
+areas.  ``optimise``: one ``design --objective area`` and one
+``design --objective path:CSV`` (the circle of radius 80 mm about (420, 260)
+mm of examples/design_task.py), reporting iterations, evaluations, seconds
+and the outcome from their --json.
+
+Usage: bench_design.py sweep [--elements N] [--repeat R]
+       bench_design.py optimise [--elements N]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+SWEEP = ["tendon2.route.y=30:60:10", "tendon1.attach=150:250:50"]   # 12 designs
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1")
+CLI = [sys.executable, "-m", "elastica_petsc.cli", "design"]
+
+
+def _run(cmd, cwd) -> float:
+    t0 = time.perf_counter()
+    done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, env=ENV)
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed: {done.stderr}")
+    return time.perf_counter() - t0
+
+
+def sweep(elements: int, repeat: int) -> None:
+    times = {1: [], 2: []}
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(repeat):
+            for ranks in (1, 2):
+                cmd = (["mpiexec", "-n", "2"] if ranks == 2 else []) + CLI + [
+                    "--sweep", *SWEEP, "--elements", str(elements), "--out", f"r{ranks}.h5",
+                    "--overwrite", "--json"]
+                times[ranks].append(_run(cmd, tmp))
+        areas = [h5py.File(Path(tmp) / f"r{r}.h5", "r")["samples/area"][()] for r in (1, 2)]
+    same = np.array_equal(areas[0], areas[1])
+    t1, t2 = statistics.median(times[1]), statistics.median(times[2])
+    print(f"design --sweep {' '.join(SWEEP)} --elements {elements}: {len(areas[0])} designs")
+    print("| ranks | median wall s | min | max | speed-up |")
+    print("|---|---|---|---|---|")
+    for r, t in ((1, t1), (2, t2)):
+        print(f"| {r} | {t:.1f} | {min(times[r]):.1f} | {max(times[r]):.1f} | {t1 / t:.2f} |")
+    print(f"identical areas on 1 and 2 ranks: {same}")
+
+
+def optimise(elements: int) -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        theta = np.linspace(0, 2 * np.pi, 37)
+        circle = np.column_stack((420 + 80 * np.cos(theta), 260 + 80 * np.sin(theta)))
+        np.savetxt(Path(tmp) / "circle.csv", circle, delimiter=",", fmt="%.4f")
+        for objective in ("area", "path:circle.csv"):
+            cmd = CLI + ["--vary", "tendon1.route", "tendon2.route", "--objective", objective,
+                         "--elements", str(elements), "--json"]
+            done = subprocess.run(cmd, cwd=tmp, capture_output=True, text=True, env=ENV)
+            s = json.loads(done.stdout)
+            keys = ("iterations", "evaluations", "seconds", "tao_reason")
+            extra = (("area_before_mm2", "area_after_mm2", "confirmed") if objective == "area"
+                     else ("reached_before", "reached_after"))
+            print(objective, "exit", done.returncode,
+                  {k: s[k] for k in keys + extra},
+                  {k: s[k] for k in ("resampled_before", "resampled_after") if k in s})
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("what", choices=("sweep", "optimise"))
+    parser.add_argument("--elements", type=int, default=60)
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    if args.what == "sweep":
+        sweep(args.elements, args.repeat)
+    else:
+        optimise(args.elements)
+
+
+if __name__ == "__main__":
+    main()
