@@ -251,7 +251,8 @@ def _attrs(arm, elements, grid, p_max, targets_mm, extra) -> dict:
     meta = dict(grid.meta, tension_max=p_max, tension_max_N=float(arm.tensions_to_N(
         np.array([p_max]))[0]),
         path=None if targets_mm is None else np.asarray(targets_mm, float).tolist())
-    attrs.update(mode=grid.mode, elements=elements, n_tendons=len(arm.tendons),
+    attrs.update(mode=grid.mode, sampler="design-sweep", elements=elements,
+                 n_tendons=len(arm.tendons),
                  config_json=json.dumps(arm_to_dict(arm)), grid_json=json.dumps(meta))
     attrs.update(extra or {})
     return attrs

@@ -86,7 +86,8 @@ STATUS_NAMES = {NOT_DONE: "not computed", REACHED: "reached with P >= 0",
 # the sampler attribute of a file (part of what a resume must match); files
 # written before it existed were made by the local sampler (targets) or by
 # forward solves (tensions)
-SAMPLERS = {"targets": ("global-search", "local"), "tensions": ("forward",)}
+SAMPLERS = {"targets": ("global-search", "local"), "tensions": ("forward",),
+            "design-sweep": ("design-sweep",)}
 
 
 def reason_counts(reasons: np.ndarray) -> str:
