@@ -105,7 +105,12 @@ def closest_in_box(A, c, lo, hi) -> tuple[np.ndarray, float]:
     """The step in the box that best meets the linearised constraints:
     argmin |A^T d + c| over lo <= d <= hi (bounded least squares, scipy),
     and the residual |A^T d + c| it leaves."""
-    A = np.asarray(A, float)
-    res = lsq_linear(A.T, -np.asarray(c, float), bounds=(lo, hi), method="bvls")
-    d = np.clip(res.x, lo, hi)
+    A, c = np.asarray(A, float), np.asarray(c, float)
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    d = lo.copy()
+    free = hi - lo > 1e-14 * (1.0 + np.abs(lo))      # scipy needs lo < hi: fix the others
+    if np.any(free):
+        rhs = -c - A[~free].T @ d[~free]
+        res = lsq_linear(A[free].T, rhs, bounds=(lo[free], hi[free]), method="bvls")
+        d[free] = np.clip(res.x, lo[free], hi[free])
     return d, float(np.linalg.norm(A.T @ d + c))

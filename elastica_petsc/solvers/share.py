@@ -70,12 +70,15 @@ METHODS = ("newton", "almm")
 SHARE_INFEASIBLE = "SHARE_INFEASIBLE"
 SHARE_MAX_ITERATIONS = "SHARE_MAX_ITERATIONS"
 SHARE_LINE_SEARCH_FAILURE = "SHARE_LINE_SEARCH_FAILURE"
+SHARE_STALLED = "SHARE_STALLED"
 SHARE_FAILED = "SHARE_FAILED"
 CONSTRAINT_SCALE = 1e-3      # ALMM: tip error unit inside the solve, units of l
 GATOL = 1e-7                 # ALMM gradient tolerance of the scaled problem (f / f_0)
 KKT_TOL = 1e-9               # newton: relative KKT residual at convergence
 MAX_BACKTRACKS = 12          # newton: merit line-search halvings per iteration
 INFEASIBLE_GAIN = 1e-3       # newton: relative tip-error gain below which it is SHARE_INFEASIBLE
+STALL_ITS, STALL_GAIN = 5, 0.1   # newton: SHARE_STALLED if the tip error (still > 10x the
+#                                  tolerance) has not dropped by 10 % over 5 iterations
 
 
 def objective(share: str, ev: Evaluation) -> tuple[float, np.ndarray]:
@@ -223,7 +226,10 @@ class TensionSharer:
         self._evals = 0
         cur = self._point(start, target)
         if np.any(start.p < floor):                # onto the floor first (the tip moves)
-            cur = self._eval(np.maximum(start.p, floor), cur, target) or cur
+            raised = self._eval(np.maximum(start.p, floor), cur, target)
+            if raised is None:
+                return self._result(target, cur, SHARE_STALLED, 0, [cur], floor, np.inf)
+            cur = raised
         W = self._W if self._W is not None else _hessian_f(self.share, start)
         lam = np.zeros(2) if self._lam is None else self._lam
         guess, nu, reason, hist, kkt = self._active, 0.0, SHARE_MAX_ITERATIONS, [cur], np.inf
@@ -234,6 +240,11 @@ class TensionSharer:
                 reason = TARGET_REACHED
                 break
             if it == self.max_it:
+                break
+            errors = [float(np.linalg.norm(h.c)) for h in hist[-STALL_ITS - 1:]]
+            if (len(errors) > STALL_ITS and errors[-1] > 10.0 * tol_c
+                    and errors[-1] > (1.0 - STALL_GAIN) * errors[0]):
+                reason = SHARE_STALLED
                 break
             radius = max(self.trust, float(np.max(cur.ev.p)))
             lo = np.maximum(floor - cur.ev.p, -radius)
@@ -320,12 +331,14 @@ class TensionSharer:
         if reason == TARGET_REACHED:
             message = (f"tip within {err_mm:.2e} mm of the target; tensions shared "
                        f"{self.share} (KKT residual {kkt:.1e}, {its} SQP iterations)")
-        elif reason == SHARE_INFEASIBLE:
+        elif reason in (SHARE_INFEASIBLE, SHARE_STALLED):
+            why = ("the linearised tip constraint cannot be met within the bounds and the "
+                   "closest step gains nothing" if reason == SHARE_INFEASIBLE else
+                   "the tip error stopped decreasing (or no equilibrium at the raised tensions)")
             message = (f"no tension set with every P >= {floor_N:g} N was found that puts the tip "
-                       f"on the target: from this state the linearised tip constraint cannot be "
-                       f"met within the bounds and the closest step gains nothing (tip "
-                       f"{err_mm:.4g} mm away). A local finding, not a proof: the target may "
-                       f"be reachable with P >= {floor_N:g} N on another branch")
+                       f"on the target ({reason}): from this state {why} (tip {err_mm:.4g} mm "
+                       f"away after {its} iterations). A local finding, not a proof: the target "
+                       f"may be reachable with P >= {floor_N:g} N on another branch")
         else:
             message = (f"tension sharing ({self.share}) stopped ({reason}) after {its} "
                        f"iterations with the tip {err_mm:.3g} mm from the target and KKT "
