@@ -366,6 +366,7 @@ class TensionSharer:
         cur = self._current
         if cur is not None and np.array_equal(cur.p, p):
             return cur
+        self._evals += 1
         ev = self.controller.evaluate(np.maximum(p, 0.0), start=cur.equilibrium,
                                       start_loading=cur.loading)
         if ev is not None:
@@ -378,17 +379,21 @@ class TensionSharer:
         self._current = Evaluation(reached.p.copy(), reached.equilibrium, reached.sensitivity,
                                    reached.loading)
         target = reached.target
+        self._evals = 0
         tao, vecs = self._create(ctl.n, target)
         try:
             vecs[0].setArray(np.maximum(reached.p, self.min_tension))
             tao.solve(vecs[0])
             reason = tao.getConvergedReason()
+            its = tao.getIterationNumber()
             p = np.maximum(vecs[0].getArray(readonly=True).copy(), self.min_tension)
         finally:
             for obj in (tao, *vecs):
                 obj.destroy()
         ev = self._almm_eval(p) or self._current
         res = ctl.solve(target, p0=ev.p, start=ev.equilibrium, start_loading=ev.loading)
+        res = dataclasses.replace(res, iterations=its + res.iterations,
+                                  evaluations=self._evals + res.evaluations)
         if not res.converged or np.min(res.p) < self.min_tension - 1e-9:
             return dataclasses.replace(
                 res, converged=False, reachable=None, reason=SHARE_FAILED,
