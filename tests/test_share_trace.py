@@ -19,7 +19,7 @@ from elastica_petsc.core.config import load_config
 from elastica_petsc.core.qp import LOWER, closest_in_box, solve_box_qp
 from elastica_petsc.solvers.control import Evaluation, TipController
 from elastica_petsc.solvers.share import (SHARE_INFEASIBLE, SHARE_STALLED, TensionSharer,
-                                          kkt_residual, objective)
+                                          family, kkt_residual, objective)
 from elastica_petsc.studies import trace as paths
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "three_tendon.toml"
@@ -44,29 +44,6 @@ def traced():
         out["family"] = {key: brute_force(ctl, *out[key], picks=(3, 12, 20))
                          for key in ("min-norm", "min-energy", "floor")}
     return out
-
-
-def family(ctl, ev, target, j, ts):
-    """The states with p_j = t (t in ``ts``, in order) and the tip on ``target``:
-    Newton on the other two tensions, each continued from the last."""
-    others = [i for i in range(3) if i != j]
-    found = []
-    for t in ts:
-        for _ in range(30):
-            r = ev.equilibrium.tip - target
-            if np.linalg.norm(r) < 1e-12 and ev.p[j] == t:
-                break
-            S, p = ev.sensitivity.tip, ev.p.copy()
-            p[others] += np.linalg.solve(S[others].T, -r - S[j] * (t - p[j]))
-            p[j] = t
-            ev = ctl.evaluate(np.maximum(p, 0.0), start=ev.equilibrium)
-            if ev is None:
-                break
-        if ev is None:
-            break
-        if np.linalg.norm(ev.equilibrium.tip - target) < 1e-10:
-            found.append(ev)
-    return found
 
 
 def brute_force(ctl, result, sharer, picks):

@@ -274,7 +274,8 @@ class TensionSharer:
     def _eval(self, p: np.ndarray, origin: _Point, target: np.ndarray) -> _Point | None:
         self._evals += 1
         ev = self.controller.evaluate(np.maximum(p, 0.0), start=origin.ev.equilibrium,
-                                      start_loading=origin.ev.loading)
+                                      start_loading=origin.ev.loading,
+                                      tangent=origin.ev.sensitivity.state_derivative)
         return None if ev is None else self._point(ev, target)
 
     def _clip(self, cur: _Point, p: np.ndarray, floor: float) -> np.ndarray:
@@ -448,3 +449,31 @@ class TensionSharer:
         # problem for thousands of iterations (measured on a traced circle)
         set_from_options(tao, "share_", {"tao_almm_subsolver_tao_max_it": "100"})
         return tao, (x, lb, ub, ce, J)
+
+
+def family(controller: TipController, ev: Evaluation, target, j: int, values,
+           tol: float = 1e-12) -> list[Evaluation]:
+    """An independent check of the sharing (n = 3): the tension sets on the
+    target with p_j fixed at each of ``values`` (in order), by Newton on the
+    other two tensions (the 2 x 2 block of the tip Jacobian, Eq. (13)), each
+    continued from the last; stops at the first value it cannot reach.
+    Returns the states found (tip within ``tol`` l of the target)."""
+    target = np.asarray(target, float)
+    others = [i for i in range(len(ev.p)) if i != j]
+    if len(others) != 2:
+        raise InputError(f"the family check needs 3 tendons, got {len(ev.p)}")
+    found = []
+    for t in values:
+        for _ in range(30):
+            r = ev.equilibrium.tip - target
+            if np.linalg.norm(r) < tol and ev.p[j] == t:
+                break
+            S, p = ev.sensitivity.tip, ev.p.copy()
+            p[others] += np.linalg.solve(S[others].T, -r - S[j] * (t - p[j]))
+            p[j] = t
+            ev = controller.evaluate(np.maximum(p, 0.0), start=ev.equilibrium)
+            if ev is None:
+                return found
+        if np.linalg.norm(ev.equilibrium.tip - target) < 10 * tol:
+            found.append(ev)
+    return found
