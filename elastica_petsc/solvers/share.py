@@ -264,6 +264,8 @@ class TensionSharer:
             cur = new
             hist.append(cur)
         self._W, self._lam, self._active = W, lam, guess
+        if reason != TARGET_REACHED:                  # report the closest tip found
+            cur = min(hist, key=lambda h: float(np.linalg.norm(h.c)))
         return self._result(target, cur, reason, len(hist) - 1, hist, floor, kkt)
 
     # --- newton internals ---------------------------------------------------------
