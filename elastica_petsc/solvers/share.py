@@ -198,7 +198,8 @@ class TensionSharer:
         return dataclasses.replace(res, strategy=f"{reached.strategy}; shared {self.share}")
 
     def follow(self, target, previous: Evaluation | None, reacher, *, p0=None, start=None,
-               start_loading=None, floor: float | None = None) -> ControlResult:
+               start_loading=None, floor: float | None = None,
+               global_search: bool = True) -> ControlResult:
         """One point of a path (units of l): from the previous point's shared state
         (``previous``), :meth:`track` to ``target``; if that fails, or with no
         previous point (then from ``p0``/``start``), reach the target first
@@ -210,7 +211,8 @@ class TensionSharer:
                 if res.converged:
                     return res
             p0, start, start_loading = previous.p, previous.equilibrium, previous.loading
-        reached = reacher.reach(target, p0=p0, start=start, start_loading=start_loading)
+        reached = reacher.reach(target, p0=p0, start=start, start_loading=start_loading,
+                                global_search=global_search)
         if not reached.converged:
             return reached
         return self.solve(reached, floor)

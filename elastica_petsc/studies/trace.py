@@ -267,13 +267,15 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
         if sharer is None:
             res = reacher.reach(x_d / controller.length_mm, p0=p0, start=start,
                                 start_loading=loading, global_search=global_search)
+            p0, start, loading = res.p, res.equilibrium, res.loading
         else:
             res = sharer.follow(x_d / controller.length_mm, previous, reacher, p0=p0,
                                 start=start, start_loading=loading,
-                                floor=None if floors is None else floors[k])
-            previous = Evaluation(res.p, res.equilibrium, res.sensitivity, res.loading)
+                                floor=None if floors is None else floors[k],
+                                global_search=global_search)
+            if res.converged:          # the next point starts from the last shared state
+                previous = Evaluation(res.p, res.equilibrium, res.sensitivity, res.loading)
         results.append(res)
-        p0, start, loading = res.p, res.equilibrium, res.loading
         if on_point is not None:
             on_point(len(results))
         if stop_on_failure and not res.converged:
