@@ -56,7 +56,9 @@ def add_share_options(parser) -> None:
                         help="how tension is shared among the tension sets that reach the "
                              "target (n >= 3 tendons): min-norm |P|, min-energy (strain "
                              "energy, Eq. (21)), none (default: whatever the optimiser finds); "
-                             "an SQP on the KKT conditions (tip on the target, P >= the floor)")
+                             "an SQP on the KKT conditions (tip on the target, P >= the floor). "
+                             "With 2 tendons the tensions at a tip are unique: only the floor "
+                             "matters")
     parser.add_argument("--min-tension-N", type=float, default=0.0, metavar="N",
                         help="pretension floor in newtons: every tension at least this "
                              "(every cable taut; implies --share min-norm unless given)")
