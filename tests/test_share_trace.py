@@ -176,3 +176,18 @@ def test_cli_trace_share_json(tmp_path):
     assert data["share"] == "min-energy" and data["min_tension_floor_N"] == 1.0
     assert data["all_reached"] and min(data["min_tension_N"]) >= 1.0 - 1e-6
     assert data["closure_cable_length_change_mm"] < 1e-3
+
+
+def test_api_trace_share_and_bad_input():
+    import elastica_petsc as ep
+    from elastica_petsc.core.errors import InputError
+
+    arm = load_config(CONFIG)
+    pts = paths.circle(CENTER, RADIUS, 7)
+    res = ep.trace(arm, pts, min_tension_N=1.0, elements=ELEMENTS)     # implies min-norm
+    assert res.all_converged and np.min(res.tensions_N) >= 1.0 - 1e-9
+    assert np.max(np.abs(res.cable_lengths_mm[-1] - res.cable_lengths_mm[0])) < 1e-3
+    with pytest.raises(InputError, match="sharing"):
+        ep.trace(arm, pts, share="max-norm", elements=ELEMENTS)
+    with pytest.raises(InputError, match="minimum tension"):
+        ep.trace(arm, pts, share="min-norm", min_tension_N=-1.0, elements=ELEMENTS)
