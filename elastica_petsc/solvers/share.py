@@ -159,13 +159,15 @@ class TensionSharer:
     min_tension : the floor p_min (non-dimensional; P_min = p_min B / l^2).
     method : ``newton`` (SQP on the KKT system, default) or ``almm`` (TAO), module doc.
     max_it : iteration cap per target (both methods).
+    max_evaluations : newton: cap on equilibrium solves per target (each can be a
+        long continuation when the tensions change much).
     trust : newton: a step changes no tension by more than max(trust, max p).
     kkt_tol : newton: relative KKT residual (:func:`kkt_residual`) at convergence.
     """
 
     def __init__(self, controller: TipController, share: str = "min-norm",
-                 min_tension: float = 0.0, *, method: str = "newton", max_it: int = 40,
-                 trust: float = 10.0, kkt_tol: float = KKT_TOL):
+                 min_tension: float = 0.0, *, method: str = "newton", max_it: int = 30,
+                 max_evaluations: int = 60, trust: float = 10.0, kkt_tol: float = KKT_TOL):
         if share not in SHARES:
             raise InputError(f"unknown tension sharing {share!r} (choose from {SHARES})")
         if method not in METHODS:
@@ -178,6 +180,7 @@ class TensionSharer:
                              f"limit {upper:g} (P l^2/B)")
         self.controller, self.share, self.min_tension = controller, share, float(min_tension)
         self.method, self.max_it, self.trust, self.kkt_tol = method, int(max_it), trust, kkt_tol
+        self.max_evaluations = int(max_evaluations)
         self._evals = 0
         self._current: Evaluation | None = None
         self.reset()
@@ -211,8 +214,10 @@ class TensionSharer:
                 if res.converged:
                     return res
             p0, start, start_loading = previous.p, previous.equilibrium, previous.loading
+        # the reacher's seed library grows like n! levels^n equilibrium solves (about
+        # 31,000 for n = 4, measured: minutes): its global search only up to 3 tendons
         reached = reacher.reach(target, p0=p0, start=start, start_loading=start_loading,
-                                global_search=global_search)
+                                global_search=global_search and self.controller.n <= 3)
         if not reached.converged:
             return reached
         return self.solve(reached, floor)
@@ -241,7 +246,7 @@ class TensionSharer:
                     and kkt <= self.kkt_tol):
                 reason = TARGET_REACHED
                 break
-            if it == self.max_it:
+            if it == self.max_it or self._evals >= self.max_evaluations:
                 break
             errors = [float(np.linalg.norm(h.c)) for h in hist[-STALL_ITS - 1:]]
             if (len(errors) > STALL_ITS and errors[-1] > 10.0 * tol_c
@@ -346,8 +351,8 @@ class TensionSharer:
                        f"may be reachable with P >= {floor_N:g} N on another branch")
         else:
             message = (f"tension sharing ({self.share}) stopped ({reason}) after {its} "
-                       f"iterations with the tip {err_mm:.3g} mm from the target and KKT "
-                       f"residual {kkt:.1e}")
+                       f"iterations and {self._evals} equilibrium solves with the tip "
+                       f"{err_mm:.3g} mm from the target and KKT residual {kkt:.1e}")
         tol = 1e-9
         upper = np.inf if ctl.upper is None else ctl.upper
         on_bound = tuple((i + 1, "lower") for i in np.flatnonzero(ev.p <= floor + tol)) + tuple(
