@@ -62,7 +62,7 @@ from petsc4py import PETSc
 
 from .options import set_from_options
 from ..core.errors import InputError
-from ..core.qp import FREE, LOWER, UPPER, closest_in_box, solve_box_qp
+from ..core.qp import FREE, closest_in_box, solve_box_qp
 from .control import TARGET_REACHED, ControlResult, Evaluation, TipController
 
 SHARES = ("min-norm", "min-energy")
