@@ -113,6 +113,19 @@ def _tensions(arm: Arm, tensions_N, tensions) -> np.ndarray:
     return check_tensions(p, arm.n_tendons)
 
 
+def _progress(progress, label: str, unit: str):
+    """``progress=`` of the long studies as a context: True draws the command
+    line's bar (lines in logs; core/progress.py), a callable is called as
+    ``progress(done, note)``, None/False report nothing."""
+    from contextlib import nullcontext
+
+    from .core.progress import Progress
+
+    if progress is True:
+        return Progress(None, label, unit=unit)
+    return nullcontext(progress or None)
+
+
 def _loading(order) -> str:
     return "proportional" if order is None else "order " + ",".join(map(str, order))
 
@@ -150,7 +163,10 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
     When the local solve stalls, a global search follows (other loading
     orders, a homotopy in target space) unless ``global_search=False``;
     ``reachable`` is True, False only with evidence about the whole
-    (``evidence``), or None when the strategies are exhausted without proof.
+    (``evidence``: ``BEYOND_REACH``, |x_d| > l; ``OUTSIDE_BOUNDARY``, outside
+    the traced boundary of W_0, docs/model.md §9, traced once per arm in the
+    process when the search is exhausted), or None when the strategies are
+    exhausted without proof.
     ``cables``: ``"prefer"``/``"require"``/``"ignore"`` states whose cables
     cross the arm.  With n >= 3 tendons, ``share="min-norm"``/``"min-energy"``
     and ``min_tension_N`` choose among the tension sets that reach the target.
@@ -161,6 +177,7 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
 
     from .solvers.control import TipController
     from .solvers.reach import Reacher, simplest_loading
+    from .studies.boundary import boundary_proof
 
     target = np.asarray(target_mm, dtype=float).ravel()
     if target.size != 2 or not np.all(np.isfinite(target)):
@@ -169,8 +186,9 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
         guess = arm.tensions_from_N(guess_N)
     p0 = None if guess is None else check_tensions(guess, arm.n_tendons)
     with TipController(arm, n_elements=elements, method=method, tip_tol_mm=tol_mm) as ctl:
-        result = Reacher(ctl).reach(arm.from_mm(target), p0=p0, global_search=global_search,
-                                    cables=cables)
+        reacher = Reacher(ctl, boundary=boundary_proof(arm, ctl.disc))
+        result = reacher.reach(arm.from_mm(target), p0=p0, global_search=global_search,
+                               cables=cables)
         sharer = _sharer(arm, ctl, share, min_tension_N)
         if sharer is not None and result.converged:
             result = sharer.solve(result)
@@ -281,11 +299,14 @@ def frequencies(state: State, *, control: str = "load", modes: int = 3):
         return solver.frequencies(eq.u, eq.p, state.arm, nev=modes, control=control)
 
 
-def lengths(arm: Arm, lengths_mm, *, all: bool = False, elements: int | None = None):
+def lengths(arm: Arm, lengths_mm, *, all: bool = False, elements: int | None = None,
+            progress=None):
     """Length control (Sec. 4.6): the equilibrium, with its tensions, that
     prescribed cable lengths impose (slack cables carry no tension).  With
     ``all=True``, a deflated multi-start search for several equilibria
-    (a ``SearchResult``: the list found, not a proof that there are no more)."""
+    (a ``SearchResult``: the list found, not a proof that there are no more);
+    ``progress`` (True: a bar, or a callable ``progress(steps, note)``) reports
+    its search steps (continuation points and attempts from starts)."""
     from .solvers.lengths import LengthSolver
     from .studies.search import length_equilibria, tension_starts
 
@@ -295,17 +316,22 @@ def lengths(arm: Arm, lengths_mm, *, all: bool = False, elements: int | None = N
             return solver.follow_mm(lengths_mm)
         with EquilibriumSolver(disc) as eqs:
             starts = tension_starts(eqs)
-        return length_equilibria(solver, solver.to_l(lengths_mm), starts)
+        with _progress(progress, "lengths search", "search steps") as bar:
+            return length_equilibria(solver, solver.to_l(lengths_mm), starts, progress=bar)
 
 
-def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None = None):
-    """Equilibria that share the given tensions (load control, Fig. 8), by a
-    deflated multi-start search; a ``SearchResult``."""
+def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None = None,
+               progress=None):
+    """Equilibria that share the given tensions (load control, Eq. (9), Fig. 8),
+    by a deflated multi-start search; a ``SearchResult`` (not a proof that there
+    are no more).  ``progress``: as for :func:`lengths`."""
     from .studies.search import equilibria as search, tension_starts
 
     p = _tensions(arm, tensions_N, tensions)
     with EquilibriumSolver(_mesh(arm, elements)) as eqs:
-        return search(eqs, p, tension_starts(eqs), length_mm=arm.length_mm)
+        starts = tension_starts(eqs)
+        with _progress(progress, "equilibria", "search steps") as bar:
+            return search(eqs, p, starts, length_mm=arm.length_mm, progress=bar)
 
 
 def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",
@@ -323,29 +349,41 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
                    comm=comm, out=out, overwrite=overwrite)
 
 
-def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None):
+def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None,
+             progress=None):
     """The boundary of the workspace W_0 of a two-tendon arm (and of the
     restricted workspace, Eqs. (18)-(22)) traced by pseudo-arclength
     continuation in tension space instead of sampling.  Returns a
     ``BoundaryResult``: ``polygons_mm`` and ``areas_mm2`` per set
-    (``"W0"``, ``"restricted"``), ``solves``, ``messages`` (where the method
-    stops, e.g. fold curves of the tip map it does not trace)."""
+    (``"W0"``, ``"restricted"``; mm, mm^2), ``solves``, ``messages`` (where
+    the method stops); for W_0 also the fold curves of the tip map
+    (det d x_t/dp = 0, Eq. (13): ``fold_polylines_mm``), the faces they and
+    the loop cut the plane into (``faces``: winding number, preimage count),
+    ``area_bounds_mm2``, ``contains(points_mm)`` and ``outside(target_mm)``
+    (the OUTSIDE_BOUNDARY evidence of tip control; docs/model.md §9.1).
+    ``progress`` (True: a bar, or a callable ``progress(solves, note)``)
+    reports the continuation solves."""
     from .studies.boundary import trace_boundary
 
-    return trace_boundary(arm, _mesh(arm, elements), restricted=restricted)
+    with _progress(progress, "boundary", "continuation solves") as bar:
+        return trace_boundary(arm, _mesh(arm, elements), restricted=restricted, progress=bar)
 
 
 def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
-           reach_mm: float = 100.0, margin: float = 1.1, elements: int | None = None):
+           reach_mm: float = 100.0, margin: float = 1.1, elements: int | None = None,
+           progress=None):
     """Routing points that make every point of a path reachable with P >= 0
     (TAO BLMVM on the exact gradient; ``vary``: ``"tendonK.route"`` names).
     Returns a ``DesignResult``: ``arm_after`` is the designed arm,
-    ``misfit_before``/``misfit_after`` the path's reachability, ``history``."""
+    ``misfit_before``/``misfit_after`` the path's reachability, ``history``.
+    ``progress`` (True: a bar, or a callable ``progress(traces, note)``)
+    reports each path trace (one per objective evaluation)."""
     from .studies.design import design_for_path, parse_vary
 
     tendons = parse_vary(list(vary), arm.n_tendons)
-    return design_for_path(arm, tendons, _points(points_mm), elements=elements,
-                           reach_mm=reach_mm, margin=margin)
+    with _progress(progress, "design", "path traces") as bar:
+        return design_for_path(arm, tendons, _points(points_mm), elements=elements,
+                               reach_mm=reach_mm, margin=margin, progress=bar)
 
 
 def read(path: str | Path):

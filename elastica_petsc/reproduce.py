@@ -85,6 +85,7 @@ def fig8(ctx: Context) -> None:
     from .solvers.lengths import LengthSolver
     from .studies.search import length_equilibria
     from .plots.lengths import plot_states
+    from .core.progress import Progress
 
     arm, l_mm = ctx.arm, ctx.arm.length_mm
     disc = Discretisation.from_arm(arm)
@@ -92,7 +93,8 @@ def fig8(ctx: Context) -> None:
         state1 = eqs.solve(PAPER_P, order=(2, 1))
         proportional = eqs.solve(PAPER_P)
         state3 = eqs.solve(PAPER_P, order=(1, 2))
-        search = length_equilibria(ls, FIG8_LENGTHS_MM / l_mm, eq_solver=eqs)
+        with Progress(None, "Fig. 8 search", unit="search steps") as bar:
+            search = length_equilibria(ls, FIG8_LENGTHS_MM / l_mm, eq_solver=eqs, progress=bar)
         found1 = search.closest(p=PAPER_P).state
         found2 = search.closest(p=[9.7, 12.6]).state
     L1, L3 = state1.cable_lengths * l_mm, state3.cable_lengths * l_mm
@@ -220,6 +222,7 @@ def workspace(ctx: Context) -> Path:
     outside mpiexec, a job of that many ranks is spawned: :mod:`.studies.workspace_job`)."""
     from .core.errors import InputError
     from .core.fem import Discretisation
+    from .core.progress import quiet
     from .studies.workspace import run_map
 
     out = ctx.out / "fig4_workspace.h5"
@@ -227,14 +230,16 @@ def workspace(ctx: Context) -> Path:
                   provenance={"command_line": ctx.command})
     if ctx.comm.size == 1 and ctx.jobs > 1:
         from .studies.workspace_job import spawn
-        status = spawn(ctx.arm, ctx.arm.elements, ctx.jobs, **kwargs)
+        # the job's progress: a bar if our stdout is a terminal, else lines on stderr
+        status = spawn(ctx.arm, ctx.arm.elements, ctx.jobs, progress=False if quiet() else None,
+                       **kwargs)
         if status == 130:
             raise KeyboardInterrupt
         if status != 0:
             raise InputError(f"the workspace job on {ctx.jobs} ranks ended with status {status}")
     else:
         result = run_map(ctx.arm, Discretisation.from_arm(ctx.arm), comm=ctx.comm,
-                         progress=False, **kwargs)
+                         **kwargs)                  # a bar on rank 0 (none with --quiet)
         if not result.complete:
             raise KeyboardInterrupt
     return out

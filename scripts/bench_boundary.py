@@ -1,70 +1,106 @@
-#!/usr/bin/env python3
-"""Cost of the workspace boundary by continuation against the sampled map (issue 13).
+"""Benchmark: `boundary` (workspace boundary by continuation, issue 13) against
+an earlier revision, interleaved, median of repeats.
 
-Runs :func:`elastica_petsc.studies.boundary.trace_boundary` on the paper's arm
-(180 elements, one rank) ``--repeat`` times for W_0 alone and for W_0 plus
-the restricted workspace; prints the median wall time (min, max) and the
-number of continuation solves, and their ratio to the 4,202 targets of the
-sampled Fig. 4 map.  With ``--samples WS.h5`` (from ``mpiexec -n 2
-elastica-petsc workspace --spacing 11.67 --out WS.h5``) also the agreement of
-the W_0 polygon with the map and the map's own wall time and optimiser
-iterations (each iteration solves at least one equilibrium).
+    python scripts/bench_boundary.py [--repeats 5] [--before ea2832d] [--map MAP.h5]
 
-Usage: bench_boundary.py [--repeat R] [--samples WS.h5]
+Each measurement is a fresh process that traces once to warm up (imports,
+PETSc start-up) and then times a second trace_boundary of the paper's arm
+(180 elements): wall and CPU seconds, and the continuation solves (each a
+nonlinear solve of the extended system).  Cases: the W_0 loop alone
+(tip_folds=False), W_0 with the tip-map folds (the default; the earlier
+revision only scanned det S on the loop), and W_0 plus the restricted
+workspace (the CLI default).  The earlier revision's code is taken with
+`git archive` into a temporary directory.  With --map (a 4,202-target
+`workspace` file), the solve counts are also compared with the map's: its
+targets and its optimiser iterations (each at least one equilibrium solve).
+Ratios are what to compare on a shared machine; the load is printed.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
-import time
+import subprocess
+import sys
+import tempfile
 
-import numpy as np
+HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+SNIPPET = r"""
+import json, sys, time
+from elastica_petsc.core.config import load_config
+from elastica_petsc.studies.boundary import trace_boundary
+arm = load_config()
+kw = json.loads(sys.argv[1])
+trace_boundary(arm, **kw)
+w0, c0 = time.perf_counter(), time.process_time()
+r = trace_boundary(arm, **kw)
+print(json.dumps({"wall": time.perf_counter() - w0, "cpu": time.process_time() - c0,
+                  "solves": r.solves, "area": r.areas_mm2["W0"]}))
+"""
+
+CASES = {"W0 loop only": {"restricted": False, "tip_folds": False},
+         "W0 + tip-map folds": {"restricted": False},
+         "W0 + folds + restricted": {"restricted": True}}
+
+
+def measure(root: str, kwargs: dict) -> dict:
+    env = dict(os.environ, PYTHONPATH=root)
+    out = subprocess.run([sys.executable, "-c", SNIPPET, json.dumps(kwargs)], cwd=root, env=env,
+                         capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def extract(revision: str, target: str) -> str:
+    archive = subprocess.run(["git", "archive", revision, "elastica_petsc", "configs"], cwd=HERE,
+                             capture_output=True, check=True).stdout
+    subprocess.run(["tar", "-x", "-C", target], input=archive, check=True)
+    return target
+
+
+def map_counts(path: str) -> dict:
+    import h5py
+    import numpy as np
+
+    with h5py.File(path, "r") as fh:
+        iterations = fh["samples/iterations"][()] if "samples/iterations" in fh else None
+        n = len(iterations) if iterations is not None else None
+    return {"targets": n, "iterations": int(np.sum(iterations)) if n else None}
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--samples", metavar="H5")
-    args = parser.parse_args()
-    import petsc4py
-    petsc4py.init([])
-    from elastica_petsc.core.config import load_config
-    from elastica_petsc.studies.boundary import compare_with_samples, trace_boundary
-
-    arm = load_config()
-    rows = []
-    for restricted in (False, True):
-        times, result = [], None
-        for _ in range(args.repeat):
-            t0 = time.perf_counter()
-            result = trace_boundary(arm, restricted=restricted, tip_folds=False)
-            times.append(time.perf_counter() - t0)
-        rows.append((restricted, statistics.median(times), min(times), max(times), result))
-    print("| regions | wall time, median (min-max) | continuation solves | solves / 4202 |")
-    print("|---|---|---|---|")
-    for restricted, med, lo, hi, result in rows:
-        name = "W_0 + restricted" if restricted else "W_0"
-        print(f"| {name} | {med:.2f} s ({lo:.2f}-{hi:.2f}) | {result.solves} | "
-              f"{result.solves / 4202:.1%} |")
-    result = rows[-1][-1]
-    print(f"\nareas: W_0 {result.areas_mm2['W0']:.0f} mm^2, restricted "
-          f"{result.areas_mm2['restricted']:.0f} mm^2; loops: "
-          + "; ".join(f"{k}: " + " -> ".join(c.constraint for c in r.curves)
-                      for k, r in result.regions.items()))
-    if args.samples:
-        import h5py
-        with h5py.File(args.samples, "r") as fh:
-            status = fh["samples/status"][()]
-            targets = fh["samples/target"][()]
-            spacing = json.loads(fh.attrs["grid_json"])["spacing"]
-            iterations = int(np.sum(fh["samples/iterations"][()]))
-            wall = float(fh["timing"].attrs.get("seconds_wall", np.nan))
-            ranks = int(fh["timing"].attrs.get("ranks", 0))
-        agreement = compare_with_samples(result.polygons_mm["W0"][0], targets, status, spacing)
-        print(f"\nsampled map: {len(status)} targets, {iterations} optimiser iterations, "
-              f"{wall:.1f} s on {ranks} rank(s)")
-        print(json.dumps(agreement, indent=1))
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--before", default="ea2832d", help="earlier revision (git)")
+    ap.add_argument("--map", help="a workspace file (targets) to compare solve counts with")
+    args = ap.parse_args()
+    print(f"load average: {os.getloadavg()}")
+    with tempfile.TemporaryDirectory() as tmp:
+        roots = {"before": extract(args.before, tmp), "after": HERE}
+        rows = {}
+        for case, kwargs in CASES.items():
+            runs = {"before": [], "after": []}
+            for _ in range(args.repeats):
+                for label, root in roots.items():           # interleaved
+                    runs[label].append(measure(root, kwargs))
+            rows[case] = runs
+    print(f"{'case':26s} {'':6s} {'wall s':>8s} {'cpu s':>8s} {'solves':>7s} {'area mm^2':>10s}")
+    for case, runs in rows.items():
+        med = {k: {q: statistics.median(r[q] for r in v) for q in ("wall", "cpu", "solves", "area")}
+               for k, v in runs.items()}
+        for label in ("before", "after"):
+            m = med[label]
+            print(f"{case:26s} {label:6s} {m['wall']:8.3f} {m['cpu']:8.3f} {m['solves']:7.0f} "
+                  f"{m['area']:10.0f}")
+        print(f"{'':26s} ratio  {med['before']['wall'] / med['after']['wall']:8.2f} "
+              f"{med['before']['cpu'] / med['after']['cpu']:8.2f}   (before / after)")
+    if args.map:
+        counts = map_counts(args.map)
+        after = statistics.median(r["solves"] for r in rows["W0 + tip-map folds"]["after"])
+        print(f"map {args.map}: {counts['targets']} targets, {counts['iterations']} optimiser "
+              f"iterations; W0 + folds: {after:.0f} solves = {100 * after / counts['targets']:.1f} % "
+              f"of the targets, {100 * after / counts['iterations']:.2f} % of the iterations")
 
 
 if __name__ == "__main__":

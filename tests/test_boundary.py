@@ -26,7 +26,7 @@ ELEMENTS = 60          # the paper's arm on a coarser mesh (attachments on nodes
 def paper():
     arm = load_config()
     disc = Discretisation.from_arm(arm, ELEMENTS)
-    return arm, disc, trace_boundary(arm, disc, restricted=False, tip_folds=False)
+    return arm, disc, trace_boundary(arm, disc, restricted=False)
 
 
 def test_loop_closes_through_faces_collapse_and_fold(paper):
@@ -42,7 +42,10 @@ def test_loop_closes_through_faces_collapse_and_fold(paper):
         for pt in curve.points:
             assert np.max(np.abs(mf.residual(pt.w))) < 1e-8
             assert np.all(pt.w[-2:] >= -1e-9)
-    assert result.solves <= 0.05 * 4202
+    # the boundary (loop and tip-map folds) within 5 % of the 4202-target map's
+    # targets; the scan rays (evidence, not boundary) are counted apart
+    assert 0 < result.scan_solves < result.solves
+    assert result.solves - result.scan_solves <= 0.05 * 4202
 
 
 def test_p1_zero_edge_matches_forward_solves(paper):
@@ -114,6 +117,113 @@ def test_left_lobe_tip_reached_with_nonnegative_tensions(paper):
     assert tip[0] < -100 and tip[1] > 100
     poly = result.polygons_mm["W0"][0]
     assert winding_number(poly, tip[None])[0] != 0
+
+
+def test_tip_map_folds_traced_to_the_region_boundary(paper):
+    """Fold curves of the tip map (det S = 0 inside D): every sign change of the
+    intrinsic test on the loop is the end of a traced fold curve; the fold
+    nodes are stable equilibria with P >= 0 where det S vanishes (relative to
+    its size at an interior point); the fold ends are corners with the
+    region's boundary (cut where they leave D)."""
+    from elastica_petsc.solvers.continuation import Manifold
+
+    arm, disc, result = paper
+    assert len(result.crossings) >= 2 and all(x.traced for x in result.crossings)
+    assert result.untraced_folds == []
+    # the scan rays' sign changes are all crossings of traced fold curves
+    assert len(result.scan) == 3 and sum(c for _, c, _ in result.scan) >= 1
+    assert all(bad == 0 for _, _, bad in result.scan)
+    assert len(result.fold_curves) >= 1
+    mf = Manifold(disc)
+    with EquilibriumSolver(disc) as solver:
+        eq = solver.solve([20.0, 8.0])
+    scale = abs(np.linalg.det(mf.tip_jacobian(np.concatenate((eq.u, eq.p)))[0]))
+    for curve in result.fold_curves:
+        assert curve.end == "corner", curve.end
+        for pt in curve.points[1:-1]:
+            assert np.max(np.abs(mf.residual(pt.w))) < 1e-8
+            assert np.all(pt.w[-2:] >= -1e-9) and pt.unstable_modes == 0
+            assert abs(np.linalg.det(mf.tip_jacobian(pt.w)[0])) < 1e-6 * scale
+
+
+def test_w0_faces_hole_and_outside_verdicts(paper):
+    """The bounded faces of the plane minus the traced curves: two with winding
+    number -1 (one preimage each) and one of winding 0 around r_1 with no
+    preimage (a hole, not in W_0), so the area is exact (bounds equal).  A
+    target 10 mm beyond the P_1 = 0 edge is outside; 10 mm inside is not."""
+    arm, disc, result = paper
+    big = [f for f in result.faces if f["area_mm2"] > 1e4]
+    assert sorted((f["winding"], f["preimages"]) for f in big) == [(-1, 1), (-1, 1), (0, 0)]
+    lo, hi = result.area_bounds_mm2
+    assert lo == hi == result.area_mm2
+    tip, outward = _p1_edge_point(result, arm)
+    assert result.outside(tip + 10.0 * outward)[0].startswith("OUTSIDE_BOUNDARY")
+    assert result.outside(tip - 10.0 * outward)[0] == ""
+
+
+def _p1_edge_point(result, arm):
+    """A node of the upper P_1 = 0 edge (y > 200 mm) and the outward unit normal
+    of its tip image (mm)."""
+    edge = result.regions["W0"].curves[-1]
+    assert edge.constraint == "P1=0"
+    k = max(range(1, len(edge.points) - 1), key=lambda j: edge.points[j].tip[1])
+    pt = edge.points[k]
+    tip = pt.tip * arm.length_mm
+    inward = pt.tip_inward - (pt.tip_inward @ pt.tip_velocity) * pt.tip_velocity / (
+        pt.tip_velocity @ pt.tip_velocity)
+    assert tip[1] > 200
+    return tip, -inward / np.linalg.norm(inward)
+
+
+def test_control_beyond_p1_edge_is_proven_unreachable(paper):
+    """Issue 11: a target 10 mm beyond the P_1 = 0 locus is reported
+    reachable: false (OUTSIDE_BOUNDARY, exit 3 in the CLI) once the global
+    search is exhausted; 10 mm inside it is reached."""
+    import elastica_petsc as ep
+
+    arm, disc, result = paper
+    tip, outward = _p1_edge_point(result, arm)
+    beyond = ep.control(arm, tip + 10.0 * outward, elements=ELEMENTS)
+    assert beyond.reachable is False and beyond.reason == "OUTSIDE_BOUNDARY", beyond.message
+    assert "mm from it" in beyond.evidence
+    inside = ep.control(arm, tip - 10.0 * outward, elements=ELEMENTS)
+    assert inside.converged and inside.reachable is True
+
+
+def test_tip_fold_gradient_taylor(paper):
+    """d det(T tau)/dw of the tip-fold constraint: Taylor remainder O(eps^2)."""
+    from elastica_petsc.solvers.continuation import Manifold, TipFold
+
+    arm, disc, _ = paper
+    with EquilibriumSolver(disc) as solver:
+        eq = solver.solve([20.0, 8.0])
+    w = np.concatenate((eq.u, eq.p))
+    fold = TipFold(Manifold(disc))
+    fold.reset(w)
+    c0, g = fold.value(w), fold.gradient(w)
+    d = np.random.default_rng(2).standard_normal(w.size)
+    d[-2:] *= 10.0
+    remainders = [abs(fold.value(w + eps * d) - c0 - eps * g @ d) for eps in (1e-3, 5e-4, 2.5e-4)]
+    rates = np.log2(np.array(remainders[:-1]) / np.array(remainders[1:]))
+    assert np.all(rates > 1.8), (remainders, rates)
+
+
+def test_outside_map_and_preimage_counts():
+    """A counter-clockwise square (interior to the left): N = 1 inside, 0 out;
+    a ray through a 'fold' polyline is not used; the outside map's walls
+    stop the flood at the square."""
+    from elastica_petsc.studies.boundary import OutsideMap, preimage_counts
+
+    square = np.array([[0, 0], [10, 0], [10, 10], [0, 10]], float)
+    pts = np.array([[5, 5], [15, 5], [-3, 7]], float)
+    assert list(preimage_counts(square, np.ones(4), [], pts)) == [1, 0, 0]
+    wall = [np.array([[-1.0, -50.0], [-1.0, 50.0], [50.0, 50.0], [50.0, -50.0], [-1.0, -50.0]])]
+    counts = preimage_counts(square, np.ones(4), wall, np.array([[5.0, 5.0]]), n_directions=8)
+    assert np.isnan(counts[0])                        # every ray crosses the 'fold'
+    om = OutsideMap([square], 0.25, closed=(0,))
+    assert list(om.outside(pts)) == [False, True, True]
+    assert om.distance(np.array([[5.0, 12.0]]))[0] == pytest.approx(2.0)
+    assert 100.0 <= om.hull_area() <= 100.0 + 40.0 * 3 * 0.25     # walls: 3 cells wide
 
 
 def test_geometry_helpers():

@@ -60,7 +60,7 @@ def test_solve_switches_onto_a_stable_buckled_branch(config, side, sign):
 
 
 def test_equilibria_lists_the_straight_arm_and_both_buckled_states(config):
-    run = cli("equilibria", "--config", config, "--tensions", 18.6, "--json")
+    run = cli("equilibria", "--config", config, "--tensions", 18.6, "--json", "--quiet")
     assert run.returncode == 0, run.stderr
     assert run.stderr == ""                                  # no overflow warnings
     states = json.loads(run.stdout)["equilibria"]

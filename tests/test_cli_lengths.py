@@ -135,7 +135,8 @@ def dp_dL(ls, L, start, h_mm=0.01):
 def fig8_lengths(tmp_path_factory):
     d = tmp_path_factory.mktemp("fig8_lengths")
     out, png = d / "states.h5", d / "states.png"
-    run = cli("lengths", "--lengths", *L_FIG8_MM, "--all", "--json", "--out", out, "--plot", png)
+    run = cli("lengths", "--lengths", *L_FIG8_MM, "--all", "--json", "--out", out, "--plot", png,
+              "--quiet")
     assert run.returncode == 0, run.stderr
     assert run.stderr == ""                       # issue 12: no warnings, no overflows
     return json.loads(run.stdout), out, png

@@ -150,3 +150,43 @@ def test_workspace_cli_vtk_and_grid_index(tmp_path):
     np.testing.assert_array_equal(mesh.point_data["W0"], w0.astype(np.uint8))
     for name in ("tension_1_N", "tension_2_p", "cable_length_1_mm", "lambda_min", "status"):
         assert name in mesh.point_data
+
+
+def _cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "elastica_petsc.cli", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_solve_and_lengths_cli_vtk(tmp_path):
+    """`solve --vtk`: DIR/solve.vtu holds the state the command printed (arm
+    nodes, routing points, tip, theta, cable tensions and lengths); `lengths
+    --vtk`: DIR/state_K.vtu per state and DIR/states.pvd; an occupied folder
+    is refused before any computing."""
+    run = _cli("solve", "--tensions", "25.2", "10.8", "--order", "2,1", "--elements",
+               str(ELEMENTS), "--vtk", str(tmp_path / "s"), "--json")
+    assert run.returncode == 0, run.stderr
+    state = json.loads(run.stdout)
+    mesh = meshio.read(tmp_path / "s" / "solve.vtu")
+    n = len(state["tensions"])
+    assert len(mesh.points) == ELEMENTS + 1 + n
+    assert [(c.type, len(c.data)) for c in mesh.cells] == [("line", ELEMENTS + n)]
+    np.testing.assert_allclose(mesh.points[ELEMENTS, :2], state["tip_mm"], atol=1e-6)
+    np.testing.assert_allclose(np.ravel(mesh.cell_data["tension_N"][0])[ELEMENTS:],
+                               state["tensions_N"], rtol=1e-6)
+    np.testing.assert_allclose(np.ravel(mesh.cell_data["cable_length_mm"][0])[ELEMENTS:],
+                               state["cable_lengths_mm"], atol=1e-3)
+    assert mesh.point_data["theta_rad"][0] == 0.0 and mesh.point_data["s_mm"][ELEMENTS] == 600.0
+    # the same cable lengths prescribed (length control) give the same state
+    run = _cli("lengths", "--lengths", *map(str, state["cable_lengths_mm"]), "--elements",
+               str(ELEMENTS), "--vtk", str(tmp_path / "L"), "--out", str(tmp_path / "L.h5"),
+               "--json")
+    assert run.returncode == 0, run.stderr
+    sets = ET.parse(tmp_path / "L" / "states.pvd").getroot().findall("./Collection/DataSet")
+    assert [(d.get("timestep"), d.get("file")) for d in sets] == [("1", "state_1.vtu")]
+    back = meshio.read(tmp_path / "L" / "state_1.vtu")
+    with h5py.File(tmp_path / "L.h5", "r") as fh:                 # --out beside --vtk
+        assert list(fh["equilibria"]) == ["state_1"]
+    np.testing.assert_allclose(back.points[:ELEMENTS + 1], mesh.points[:ELEMENTS + 1], atol=1e-3)
+    again = _cli("solve", "--tensions", "1", "1", "--vtk", str(tmp_path / "s"))
+    assert again.returncode == 2 and "folder is not empty" in again.stderr
+    assert again.stderr.count("\n") == 1

@@ -26,16 +26,18 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..studies.boundary import compare_restricted, compare_with_samples, trace_boundary
+    from ..core.progress import Progress
+    from ..studies.boundary import compare_map, compare_restricted, trace_boundary
 
     common.check_outputs(args)
     arm, disc = common.load_arm(args)
     samples = _read_samples(args.overlay) if args.overlay else None
-    result = trace_boundary(arm, disc, restricted=not args.no_restricted)
+    with Progress(None, "boundary", unit="continuation solves") as bar:
+        result = trace_boundary(arm, disc, restricted=not args.no_restricted, progress=bar)
     summary = _summary(result)
     if samples is not None:
-        summary["agreement"] = compare_with_samples(
-            result.polygons_mm["W0"][0], samples["target"], samples["status"], samples["spacing"])
+        summary["agreement"] = compare_map(result, samples["target"], samples["status"],
+                                           samples["spacing"])
         if "restricted" in result.polygons_mm:
             summary["agreement_restricted"] = compare_restricted(
                 result.polygons_mm["restricted"][0], samples["target"], samples["masks"],
@@ -53,6 +55,8 @@ def run(args) -> int:
     if args.json:
         summary["polygons"] = {k: [p.tolist() for p in v] for k, v in result.polygons_mm.items()}
         summary["tip_folds_mm"] = result.tip_folds_mm.tolist()
+        summary["fold_curves_mm"] = [line.tolist() for line in result.fold_polylines_mm]
+        summary["faces"] = result.faces
         common.print_json(summary)
     else:
         print(_format(summary))
@@ -78,7 +82,8 @@ def _as_data(result) -> dict:
         nodes = region.nodes()
         regions[name] = {"polygon": result.polygons_mm[name][0],
                          "area_mm2": result.areas_mm2[name],
-                         "tip": nodes["tip"] * result.arm.length_mm}
+                         "tip": nodes["tip"] * result.arm.length_mm,
+                         "folds": result.fold_polylines_mm if name == "W0" else []}
     return {"regions": regions, "tip_folds": result.tip_folds_mm}
 
 
@@ -87,7 +92,13 @@ def _summary(result) -> dict:
         "area_mm2": result.areas_mm2["W0"],
         "restricted_area_mm2": result.areas_mm2.get("restricted"),
         "solves": result.solves,
+        "scan_solves": result.scan_solves,
+        "scan": [{"ray": ray, "sign_changes": n, "unexplained": bad}
+                 for ray, n, bad in result.scan],
         "seconds": result.seconds,
+        "area_bounds_mm2": list(result.area_bounds_mm2),
+        "fold_curves": len(result.fold_curves),
+        "untraced_folds": result.untraced_folds,
         "closed": {k: r.closed for k, r in result.regions.items()},
         "curves": {k: [c.constraint for c in r.curves] for k, r in result.regions.items()},
         "messages": result.messages,
@@ -99,6 +110,12 @@ def _summary(result) -> dict:
 def _format(s: dict) -> str:
     lines = [f"W_0 area: {s['area_mm2']:.0f} mm^2 ({s['solves']} continuation solves, "
              f"{s['seconds']:.2f} s)"]
+    lo, hi = s["area_bounds_mm2"]
+    if lo == lo:                                            # not NaN: faces classified
+        lines.append(f"  tip-map fold curves traced: {s['fold_curves']} (scan: "
+                     + ", ".join(f"{r['ray']} {r['sign_changes']} sign changes" for r in s["scan"])
+                     + f", {s['scan_solves']} of the solves); W_0 area "
+                     + (f"exact (faces decided)" if lo == hi else f"between {lo:.0f} and {hi:.0f} mm^2"))
     if s["restricted_area_mm2"] is not None:
         lines.append(f"restricted workspace area: {s['restricted_area_mm2']:.0f} mm^2")
     for name, curves in s["curves"].items():

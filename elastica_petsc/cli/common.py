@@ -153,8 +153,8 @@ def check_path_points(points, step_mm: float) -> None:
 
 def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None:
     """Fail early, before any computing, on output paths that would be refused:
-    --out (.h5), --plot (.png/.pdf/.svg), --schedule (.csv) and ``extra``
-    ({option: path}); two options naming one file are refused too.  With
+    --out (.h5), --plot (.png/.pdf/.svg), --schedule (.csv), the --vtk folder
+    and ``extra`` ({option: path}); two options naming one file are refused too.  With
     ``resume`` an existing --out is the file to continue."""
     from ..io.hdf5 import H5_SUFFIXES, PLOT_SUFFIXES, check_distinct, check_output_path
 
@@ -171,6 +171,9 @@ def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None
         check_output_path(path, args.overwrite, None, option)
         paths[option] = path
     check_distinct(paths)
+    if getattr(args, "vtk", None):
+        from ..io.vtk import check_directory
+        check_directory(args.vtk, args.overwrite)
 
 
 def print_json(data: dict) -> None:

@@ -20,7 +20,8 @@ def add_parser(sub) -> None:
                     "reaches the state from the straight arm (reproduce it with `solve --from`). "
                     "When the local iteration stalls, a global search follows (homotopy in "
                     "target space, restarts from other loading orders). Exit status 0: reached; "
-                    "3: proven unreachable (|target| > l); 4: not reached and not proven "
+                    "3: proven unreachable (|target| > l, or outside the traced boundary of W_0 "
+                    "with two tendons: evidence OUTSIDE_BOUNDARY); 4: not reached and not proven "
                     "unreachable (the closest tip found is printed).")
     parser.add_argument("--target", type=float, nargs=2, required=True, metavar=("X", "Y"),
                         help="desired tip position in mm")
@@ -160,9 +161,6 @@ def run(args) -> int:
     if args.animate:
         from ..plots.animate import check_animation_path
         check_animation_path(args.animate, args.overwrite)
-    if args.vtk:
-        from ..io.vtk import check_directory
-        check_directory(args.vtk, args.overwrite)
     result = api.control(arm, args.target, guess=guess, method=args.method, tol_mm=args.tol_mm,
                          global_search=not args.local, cables=args.cables, share=args.share,
                          min_tension_N=args.min_tension_N, animate=args.animate,
@@ -181,11 +179,8 @@ def run(args) -> int:
         from ..plots.control import plot_descent
         plot_descent(arm, result, args.plot)
     if args.vtk:
-        from pathlib import Path
-
-        from ..io.vtk import write_state
-        Path(args.vtk).mkdir(exist_ok=True)
-        write_state(Path(args.vtk) / "control.vtu", arm, result.equilibrium)
+        from ..io.vtk import write_states
+        write_states(args.vtk, arm, [result.equilibrium], name="control")
     if result.converged:
         return 0
     print(f"elastica-petsc: {unreachable_message(summary)}", file=sys.stderr)

@@ -33,11 +33,14 @@ def add_parser(sub) -> None:
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--out", metavar="TOML", help="write the designed arm to this config")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress bar or progress lines (for batch jobs)")
     parser.set_defaults(run=run)
 
 
 def run(args) -> int:
     from ..core.errors import InputError
+    from ..core.progress import Progress
     from ..studies.design import design_for_path, parse_vary
     from ..studies.trace import read_csv
 
@@ -52,9 +55,11 @@ def run(args) -> int:
     arm, disc = common.load_arm(args)
     tendons = parse_vary(args.vary, disc.n_tendons)
     targets = read_csv(source)
-    result = design_for_path(arm, tendons, targets, elements=disc.n_elements,
-                             reach_mm=args.reach, clearance_mm=args.clearance,
-                             margin=args.margin, max_iterations=args.iterations)
+    with Progress(None, "design", unit="path traces") as bar:
+        result = design_for_path(arm, tendons, targets, elements=disc.n_elements,
+                                 reach_mm=args.reach, clearance_mm=args.clearance,
+                                 margin=args.margin, max_iterations=args.iterations,
+                                 progress=bar)
     summary = _summary(result, disc.n_elements, len(targets))
     if args.out:
         from ..io.design import write_config

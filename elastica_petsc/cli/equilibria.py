@@ -10,7 +10,7 @@ under load control, and every state is also judged held at its own cable lengths
 from __future__ import annotations
 
 from . import common
-from .lengths import add_search_options
+from .lengths import add_search_options, add_vtk_option
 
 
 def add_parser(sub) -> None:
@@ -26,12 +26,14 @@ def add_parser(sub) -> None:
                     "not proven to be everything.")
     common.add_tension_options(parser)
     add_search_options(parser)
+    add_vtk_option(parser)
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
 
 
 def run(args) -> int:
+    from ..core.progress import Progress
     from ..solvers.equilibrium import check_tensions
     from ..studies.search import search_tensions
     from ..io.summary import rounded
@@ -42,8 +44,10 @@ def run(args) -> int:
     p = check_tensions(common.tensions(args, arm), disc.n_tendons)
     settings = check_search_options(args)
     common.check_outputs(args)
-    result = search_tensions(arm, p, elements=disc.n_elements, effort=args.effort,
-                             levels=args.levels, deflation_rounds=args.deflation_rounds)
+    with Progress(None, "equilibria", unit="search steps") as bar:
+        result = search_tensions(arm, p, elements=disc.n_elements, effort=args.effort,
+                                 levels=args.levels, deflation_rounds=args.deflation_rounds,
+                                 progress=bar)
     states = [f.state for f in result.states]
     data = {"control": "load", "tensions": rounded(p), "tensions_N": rounded(arm.tensions_to_N(p)),
             "elements": disc.n_elements,

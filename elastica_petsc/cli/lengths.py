@@ -66,9 +66,16 @@ def add_parser(sub) -> None:
                         help="search for several equilibria (multi-start, continuation and "
                              "deflation) instead of following the straight arm")
     add_search_options(parser)
+    add_vtk_option(parser)
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
+
+
+def add_vtk_option(parser) -> None:
+    parser.add_argument("--vtk", metavar="DIR",
+                        help="write every state for ParaView: DIR/state_K.vtu (arm and cables, "
+                             "K the state's number) and DIR/states.pvd listing them")
 
 
 # --- validation ------------------------------------------------------------------------
@@ -303,6 +310,9 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
         write_states(args.out, args.overwrite, arm, data, states, kind)
     if args.plot and states:
         plot(arm, data, states, args.plot, title)
+    if args.vtk and states:
+        from ..io.vtk import write_states as write_vtk       # write_states: the HDF5 above
+        write_vtk(args.vtk, arm, states, numbers=[s["number"] for s in data["equilibria"]])
     if not states:
         msg = data.get("message") or "no equilibrium converged"
         print(f"elastica-petsc: {msg}", file=sys.stderr)
@@ -312,6 +322,7 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
 
 # --- the command -----------------------------------------------------------------------
 def run(args) -> int:
+    from ..core.progress import Progress
     from ..solvers.lengths import follow_lengths
     from ..studies.search import search_lengths
     from ..io.summary import rounded
@@ -323,8 +334,10 @@ def run(args) -> int:
     common.check_outputs(args)
     data = {"control": "length", "lengths_mm": rounded(L_mm), "elements": disc.n_elements}
     if args.all:
-        result = search_lengths(arm, L_mm, elements=disc.n_elements, effort=args.effort,
-                                levels=args.levels, deflation_rounds=args.deflation_rounds)
+        with Progress(None, "lengths --all", unit="search steps") as bar:
+            result = search_lengths(arm, L_mm, elements=disc.n_elements, effort=args.effort,
+                                    levels=args.levels, deflation_rounds=args.deflation_rounds,
+                                    progress=bar)
         states = [f.state for f in result.states]
         data["equilibria"] = [state_summary(arm, f.state, "length", f) for f in result.states]
         data["search"] = search_summary(result, settings)

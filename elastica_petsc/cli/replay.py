@@ -58,6 +58,7 @@ def run(args) -> int:
     import numpy as np
 
     from ..core.errors import InputError
+    from ..core.progress import Progress
     from ..studies.replay import replay_trace
     from ..io.replay import read_trace, write_replay
     from ..io.summary import replay_summary
@@ -68,8 +69,10 @@ def run(args) -> int:
     trace = read_trace(args.trace)
     common.check_outputs(args)
     arm, K = trace["arm"], trace["K"]
-    result = replay_trace(trace, first_by_lengths=args.first_by_lengths,
-                          tip_tol_mm=args.tip_tol_mm, shape_tol=args.shape_tol)
+    with Progress(K, "replay") as bar:
+        result = replay_trace(trace, first_by_lengths=args.first_by_lengths,
+                              tip_tol_mm=args.tip_tol_mm, shape_tol=args.shape_tol,
+                              on_point=bar.update)
     pts = result.points
     data = replay_summary(args.trace, trace, result, tip_tol_mm=args.tip_tol_mm,
                           shape_tol=args.shape_tol)

@@ -27,6 +27,9 @@ def add_parser(sub) -> None:
                         help="with --from a trace file: the point (row 0..K-1 of /path)")
     parser.add_argument("--state", type=int, metavar="K",
                         help="with --from a lengths/equilibria file: equilibria/state_K (1..)")
+    parser.add_argument("--vtk", metavar="DIR",
+                        help="write the state (arm with s, theta and curvature; cables with "
+                             "tension and length) for ParaView as DIR/solve.vtu")
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
@@ -120,6 +123,9 @@ def run(args) -> int:
         order = f"order {args.order}" if args.order else "proportional loading"
         plot_equilibria(arm, [(eq, tension_label(arm, eq.p))], args.plot,
                         title=f"Equilibrium, {order}")
+    if args.vtk:
+        from ..io.vtk import write_states
+        write_states(args.vtk, arm, [eq], name="solve")
     if not eq.converged:
         print(f"elastica-petsc: solve failed: {eq.message}", file=sys.stderr)
         return 1

@@ -10,12 +10,24 @@
   stderr each time another ``log_percent`` (default 5 %) of the work is
   done, at most one every ``log_seconds`` (default 2 s); runs shorter than
   that print nothing.
+* Work whose total is not known in advance (``total=None``: the steps of a
+  search, continuation steps, optimiser evaluations) shows the work done,
+  in its ``unit``, and the elapsed time, never a percentage or a time left:
+  ``label: 37 search steps  12 s  <note>`` redrawn on a terminal, and in
+  logs one line every ``open_log_seconds`` (default 10 s) while work is
+  being done (and a last one at the end; runs shorter than that print
+  nothing).  ``note`` says what is being done (a phase, a curve).
+* A Progress is also a callback, ``progress(done, note)``: the library's
+  long studies take ``progress=`` (None: silent) and call it.
+* Under ``mpiexec`` only rank 0 reports (a command that every rank runs
+  alike would otherwise draw one bar per rank).
 * :func:`configure` (``quiet=True``, the command line's ``--quiet``)
   silences every bar and line of the process.
 """
 from __future__ import annotations
 
 import os
+import shutil
 import sys
 import threading
 import time
@@ -27,6 +39,11 @@ _OPEN: set = set()
 def configure(*, quiet: bool = False) -> None:
     """Process-wide switch: ``quiet=True`` turns every later Progress off."""
     _SETTINGS["quiet"] = bool(quiet)
+
+
+def quiet() -> bool:
+    """Whether :func:`configure` silenced progress (for a child process's flag)."""
+    return _SETTINGS["quiet"]
 
 
 def close_all() -> None:
@@ -50,6 +67,15 @@ def _launcher_on_terminal() -> bool:
     return target.startswith(("/dev/pts/", "/dev/tty", "/dev/console"))
 
 
+def _rank() -> int:
+    """This process's MPI rank as its launcher tells it (0 outside mpiexec): a
+    serial command run on several ranks draws one bar, not one per rank."""
+    for name in MPI_RANK_VARIABLES:
+        if os.environ.get(name, "").isdigit():
+            return int(os.environ[name])
+    return 0
+
+
 def _terminal():
     """The stream to draw a bar on, or None: stderr or stdout if a terminal;
     under an MPI launcher, stdout only if the launcher itself writes to one."""
@@ -66,16 +92,21 @@ def _terminal():
 class Progress:
     """``update(done)`` after each unit of work; ``close(done)`` at the end
     (or use it as a context manager).  ``already``: units done before this
-    run started (a resume), left out of the rate."""
+    run started (a resume), left out of the rate.  ``total=None``: the total
+    is not known (module docstring); ``unit`` names what ``done`` counts."""
 
-    def __init__(self, total: int, label: str, *, stream=None, interval: float = 1.0,
-                 already: int = 0, log_percent: float = 5.0, log_seconds: float = 2.0):
-        self.total, self.label = int(total), label
+    def __init__(self, total: int | None, label: str, *, stream=None, interval: float = 1.0,
+                 already: int = 0, log_percent: float = 5.0, log_seconds: float = 2.0,
+                 unit: str = "", open_log_seconds: float = 10.0):
+        self.total = None if total is None else int(total)
+        self.label, self.unit, self.note = label, unit, ""
         self.interval, self.log_percent, self.log_seconds = interval, log_percent, log_seconds
+        self.open_log_seconds = open_log_seconds
+        self._drawn = 0
         self.already = self.done = already
         self.start = time.monotonic()
         self.mode = "off"
-        if not _SETTINGS["quiet"]:
+        if not _SETTINGS["quiet"] and (stream is not None or _rank() == 0):
             if stream is not None:
                 self.stream, self.mode = stream, ("bar" if stream.isatty() else "log")
             else:
@@ -93,25 +124,38 @@ class Progress:
             self._thread.start()
 
     # --- the caller's side -----------------------------------------------------
-    def update(self, done: int, force: bool = False, total: int | None = None) -> None:
-        """Record ``done`` units (of a new ``total`` when given); draw or log if due."""
+    def update(self, done: int, force: bool = False, total: int | None = None,
+               note: str | None = None) -> None:
+        """Record ``done`` units (of a new ``total`` when given; ``note``: what is
+        being done); draw or log if due."""
         self.done = int(done)
         if total is not None:
             self.total = int(total)
+        if note is not None:
+            self.note = note
         if self.mode == "bar" and force:
             self._draw()
         elif self.mode == "log":
             self._log(force)
 
+    def __call__(self, done: int, note: str | None = None) -> None:
+        """The callback form of :meth:`update` (what the library's ``progress=`` calls)."""
+        self.update(done, note=note)
+
     def close(self, done: int | None = None) -> None:
         if done is not None:
             self.done = int(done)
+        if self.total is None:
+            self.note = "done"
         if self.mode == "bar":
             self.stop()
             self._draw()
             with self._lock:
                 self.stream.write("\n")
                 self.stream.flush()
+        elif self.mode == "log" and self.total is None:
+            if self._logged_step and self.done != self._logged_step:   # closes a run it logged
+                self._log_open(force=True)
         elif self.mode == "log":
             final = int(100.0 * self.done / max(self.total, 1) // self.log_percent)
             self._log(force=self.done > self.already and self._logged_step < final
@@ -141,8 +185,11 @@ class Progress:
 
     # --- drawing ---------------------------------------------------------------
     def status(self) -> tuple[float, float]:
-        """(elapsed, estimated seconds left; NaN while nothing new is done)."""
+        """(elapsed, estimated seconds left; NaN while nothing new is done or
+        when the total is not known)."""
         elapsed = time.monotonic() - self.start
+        if self.total is None:
+            return elapsed, float("nan")
         fresh = self.done - self.already
         left = (self.total - self.done) * elapsed / fresh if fresh > 0 else float("nan")
         return elapsed, left
@@ -151,19 +198,50 @@ class Progress:
         while not self._halt.wait(self.interval):
             self._draw()
 
-    def _draw(self) -> None:
+    def _count(self) -> str:
+        return f"{self.done} {self.unit}".rstrip()
+
+    def _line(self) -> str:
+        """The bar's text (without the carriage return)."""
         elapsed, left = self.status()
+        if self.total is None:
+            text = f"{self.label}: {self._count()}  {elapsed:.0f} s"
+            return text + (f"  {self.note}" if self.note else "")
         width = 30
         filled = int(width * min(self.done, self.total) / max(self.total, 1))
         eta = f"~{left:.0f} s left" if left == left else "estimating"
+        return (f"{self.label} [{'#' * filled}{'.' * (width - filled)}] "
+                f"{self.done}/{self.total}  {elapsed:.0f} s  {eta}")
+
+    def _draw(self) -> None:
+        text = self._line()
+        width = max(shutil.get_terminal_size((100, 24)).columns - 1, 20)   # never wrap
+        if len(text) > width:
+            text = text[:width - 3] + "..."
         with self._lock:
             if self._halt.is_set() and self.mode != "bar":
                 return
-            self.stream.write(f"\r{self.label} [{'#' * filled}{'.' * (width - filled)}] "
-                              f"{self.done}/{self.total}  {elapsed:.0f} s  {eta}   ")
+            pad = min(max(self._drawn - len(text), 0) + 3, width - len(text))  # wipe the rest
+            self.stream.write(f"\r{text}{' ' * pad}")
             self.stream.flush()
+            self._drawn = len(text)
+
+    def _log_open(self, force: bool) -> None:
+        """Open-ended work in a log: one line every ``open_log_seconds`` of work."""
+        now = time.monotonic()
+        if not force and (now - self._logged_at < self.open_log_seconds
+                          or self.done == self._logged_step):
+            return
+        self._logged_step, self._logged_at = self.done, now
+        note = f"; {self.note}" if self.note else ""
+        self.stream.write(f"{self.label}: {self._count()}, {now - self.start:.0f} s "
+                          f"elapsed{note}\n")
+        self.stream.flush()
 
     def _log(self, force: bool) -> None:
+        if self.total is None:
+            self._log_open(force)
+            return
         now = time.monotonic()
         step = int(100.0 * self.done / max(self.total, 1) // self.log_percent)
         due = step > self._logged_step and now - self._logged_at >= self.log_seconds

@@ -15,6 +15,12 @@ Layout (root attributes: provenance of :func:`elastica_petsc.io.hdf5.provenance`
         curves         attrs: names_json (constraint of each curve, in order),
                               ends_json (why each curve ended)
     tip_folds          (f, 2)  mm       points of the W0 loop where det S changes sign
+    W0/folds/<k>/tip   (m, 2)  mm       tip image of fold curve k of the tip map inside D
+    W0/folds/<k>/tensions (m, 2) P l^2/B  its nodes' tensions
+        attrs: end (why it ended), end_constraint (the boundary piece it was cut at)
+    W0 attrs: area_lower_mm2, area_upper_mm2 (proven in W_0 / not proven outside),
+              faces_json (bounded faces: point_mm, area_mm2, winding, preimages),
+              untraced_json (fold crossings not traced: no OUTSIDE_BOUNDARY verdicts)
 """
 from __future__ import annotations
 
@@ -50,8 +56,26 @@ def write_boundary(path, result, overwrite: bool = False) -> None:
             curves = group.create_group("curves")
             curves.attrs["names_json"] = json.dumps([c.constraint for c in region.curves])
             curves.attrs["ends_json"] = json.dumps([c.end for c in region.curves])
+        if "W0" in fh:
+            _write_folds(fh["W0"], result)
         put(fh, "tip_folds", result.tip_folds_mm, "mm",
             "points of the W0 loop where det(d x_t/d p) changes sign (tip-map folds)")
+
+
+def _write_folds(group, result) -> None:
+    """Fold curves of the tip map, face list and area bounds of W_0."""
+    lo, hi = result.area_bounds_mm2
+    group.attrs["area_lower_mm2"], group.attrs["area_upper_mm2"] = lo, hi
+    group.attrs["faces_json"] = json.dumps(result.faces)
+    group.attrs["untraced_json"] = json.dumps(result.untraced_folds)
+    folds = group.create_group("folds")
+    for k, (curve, line) in enumerate(zip(result.fold_curves, result.fold_polylines_mm)):
+        sub = folds.create_group(str(k))
+        put(sub, "tip", line, "mm", "tip image of a fold curve of the tip map (Hermite-densified)")
+        put(sub, "tensions", np.array([pt.w[-2:] for pt in curve.points]), "P l^2/B",
+            "tensions at the fold curve's continuation nodes")
+        sub.attrs["end"] = curve.end
+        sub.attrs["end_constraint"] = curve.end_constraint or ""
 
 
 def read_boundary(path) -> dict:
@@ -73,7 +97,9 @@ def read_boundary(path) -> dict:
                     "polygon": g["polygon"][()], "area_mm2": float(g.attrs["area_mm2"]),
                     "closed": bool(g.attrs["closed"]), "tip": g["nodes/tip"][()],
                     "tensions": g["nodes/tensions"][()], "curve": g["nodes/curve"][()],
-                    "names": json.loads(g["curves"].attrs["names_json"])}
+                    "names": json.loads(g["curves"].attrs["names_json"]),
+                    "folds": [g["folds"][k]["tip"][()] for k in sorted(g["folds"], key=int)]
+                    if "folds" in g else []}
     except OSError as err:
         raise InputError(f"{path}: cannot read it as HDF5: {err}") from None
     return out

@@ -9,6 +9,9 @@ beside them; booleans as UInt8 0/1 (VTK has no boolean type).
   ``part`` = 0) and each cable as one line cell from its attachment node to
   its routing point (``part`` = i, ``tension_N``, ``tension_p``,
   ``cable_length_mm``).  Eqs. (2)-(4).
+* :func:`write_states` — equilibria into a folder (``solve``, ``control``,
+  ``lengths``, ``equilibria`` ``--vtk``): one such file each, and a
+  ``.pvd`` listing several by their number.
 * :func:`write_trace` — a traced path: one state file per point (and per
   point of the approach from the straight arm, when given),
   ``<name>.pvd`` listing them with the schedule's time (s) or the point
@@ -142,6 +145,21 @@ def state_grid(arm, eq):
 def write_state(path, arm, eq) -> Path:
     """One equilibrium as a .vtu file (arm and cables, mm)."""
     return write_vtu(path, *state_grid(arm, eq))
+
+
+def write_states(directory, arm, states, *, name: str = "state", numbers=None) -> list[Path]:
+    """Equilibria ``states`` into ``directory`` (created if missing): one
+    ``<name>.vtu`` for a single state without ``numbers``, else
+    ``<name>_<K>.vtu`` per state K of ``numbers`` (default 1, 2, ...) and
+    ``<name>s.pvd`` listing them with K as the time step.  Returns the files."""
+    directory = Path(directory)
+    directory.mkdir(exist_ok=True)
+    if numbers is None and len(states) == 1:
+        return [write_state(directory / f"{name}.vtu", arm, states[0])]
+    numbers = range(1, len(states) + 1) if numbers is None else numbers
+    files = [write_state(directory / f"{name}_{k}.vtu", arm, eq) for k, eq in zip(numbers, states)]
+    return files + [write_pvd(directory / f"{name}s.pvd",
+                              [(k, f.name) for k, f in zip(numbers, files)])]
 
 
 def write_trace(directory, arm, trace, *, name: str = "trace", times_s=None,

@@ -31,10 +31,13 @@ def plot_boundary(data: dict, path, *, arm_length_mm: float, routes_mm: np.ndarr
         if name == "W0":
             ax.plot(region["tip"][:, 0], region["tip"][:, 1], ".", color=colour, ms=4, zorder=8,
                     label="continuation nodes")
+            for k, line in enumerate(region.get("folds", [])):
+                ax.plot(line[:, 0], line[:, 1], "-", color="tab:red", lw=1.4, zorder=8,
+                        label="tip-map fold curves (det S = 0)" if k == 0 else None)
     folds = data["tip_folds"]
     if len(folds):
         ax.plot(folds[:, 0], folds[:, 1], "D", color="tab:orange", ms=5, zorder=9,
-                label="tip-map folds on the loop (det S = 0)")
+                label="where they meet the loop")
     ax.plot(0, 0, "ks", ms=6)
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")

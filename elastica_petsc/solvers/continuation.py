@@ -56,11 +56,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
+from scipy.linalg import lu_factor
 
 from ..core.fem import Discretisation
 from .equilibrium import SNES_REASONS
 from .inertia import InertiaCounter
 from .linalg import use_bordered_lu
+from .options import set_from_options
 
 # LU with partial pivoting for the extended systems: their leading block J is
 # singular on the fold and their last rows have no diagonal entry, so the
@@ -85,10 +87,9 @@ class ContinuationError(RuntimeError):
     """The curve could not be followed (step too small, singular system)."""
 
 
-class BorderedAIJ:
-    """A PETSc AIJ matrix [[A, C], [R]]: the sparse pattern A (size x size) of
-    fem's Jacobian bordered by k dense columns C and k dense rows R
-    (k x (size + k)); the pattern is fixed, values are reset in one call."""
+class BorderedPattern:
+    """CSR structure of [[A, C], [R]]: the sparse pattern A (size x size) of
+    fem's Jacobian bordered by k dense columns C and k dense rows R."""
 
     def __init__(self, indptr, indices, size: int, k: int):
         nnz_rows = np.diff(indptr)
@@ -103,23 +104,52 @@ class BorderedAIJ:
         new_idx[self.col_pos] = size + np.arange(k)
         new_idx[self.row_pos] = np.arange(size + k)
         self.csr = (new_ptr, new_idx)
-        self.size, self.k = size, k
-        self.values = np.zeros(new_ptr[-1])
-        self.mat = PETSc.Mat().createAIJ(size=(size + k, size + k), csr=(new_ptr, new_idx,
+        self.n = size + k
+        self._rows = np.repeat(np.arange(self.n), np.diff(new_ptr))
+
+    def values(self, base_values, columns, rows) -> np.ndarray:
+        out = np.empty(self.csr[0][-1])
+        out[self.base_pos] = base_values
+        out[self.col_pos] = columns
+        out[self.row_pos] = rows
+        return out
+
+    def determinant_sign(self, values) -> float:
+        """Sign of det of the matrix with these values, from a dense LAPACK LU
+        (m ~ 200: cheaper than extracting U from a sparse factorisation)."""
+        dense = np.zeros((self.n, self.n))
+        dense[self._rows, self.csr[1]] = values
+        lu, piv = lu_factor(dense, check_finite=False)
+        swaps = np.count_nonzero(piv != np.arange(len(piv)))
+        return float(np.prod(np.sign(np.diag(lu)))) * (-1.0) ** swaps
+
+    def lu_of_transpose(self, values):
+        """SuperLU (scipy, partial pivoting) of B^T, B the CSR matrix with these
+        values (its CSR arrays are the CSC arrays of B^T): B x = b is
+        ``lu.solve(b, trans="T")``, B^T y = c is ``lu.solve(c)``."""
+        from scipy.sparse.linalg import splu
+        Bt = sp.csc_matrix((values, self.csr[1], self.csr[0]), shape=(self.n, self.n))
+        # natural order: the dense border is last, so its fill stays in the border
+        return splu(Bt, permc_spec="NATURAL")
+
+
+class BorderedAIJ:
+    """A PETSc AIJ matrix [[A, C], [R]]: the sparse pattern A (size x size) of
+    fem's Jacobian bordered by k dense columns C and k dense rows R
+    (k x (size + k)); the pattern is fixed, values are reset in one call."""
+
+    def __init__(self, indptr, indices, size: int, k: int):
+        self.pattern = BorderedPattern(indptr, indices, size, k)
+        self.csr, self.size, self.k = self.pattern.csr, size, k
+        self.values = np.zeros(self.csr[0][-1])
+        self.mat = PETSc.Mat().createAIJ(size=(size + k, size + k), csr=(*self.csr,
                                          self.values), comm=PETSc.COMM_SELF)
 
     def fill(self, base_values, columns, rows, mat: PETSc.Mat | None = None) -> None:
-        self.values[self.base_pos] = base_values
-        self.values[self.col_pos] = columns
-        self.values[self.row_pos] = rows
+        self.values[:] = self.pattern.values(base_values, columns, rows)
         target = self.mat if mat is None else mat
         target.setValuesCSR(*self.csr, self.values)
         target.assemble()
-
-    def dense(self) -> np.ndarray:
-        """The current matrix as a dense array (for determinant signs)."""
-        n = self.size + self.k
-        return sp.csr_matrix((self.values, self.csr[1], self.csr[0]), shape=(n, n)).toarray()
 
     def destroy(self) -> None:
         self.mat.destroy()
@@ -139,6 +169,8 @@ class Manifold:
         weights[: disc.n_elements] = disc.h
         weights[self.size:] = 1.0 / p_ref**2
         self.metric = weights                      # D of the module docstring
+        self._jac_cache, self._load_cache = {}, {}
+        self._rows_of_entries = np.repeat(np.arange(self.size), np.diff(indptr))
 
     def split(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return w[: self.size], w[self.size:]
@@ -147,14 +179,38 @@ class Manifold:
         u, p = self.split(w)
         return self.disc.residual(u, p)
 
+    def jacobian_values(self, w: np.ndarray) -> np.ndarray:
+        """Entries of J = dF/du at w (pattern ``csr``); the last few w are cached
+        (the corrector, the tangent and the fold test functions ask at the same w)."""
+        key = w.tobytes()
+        if key not in self._jac_cache:
+            if len(self._jac_cache) >= 4:
+                self._jac_cache.pop(next(iter(self._jac_cache)))
+            u, p = self.split(w)
+            self._jac_cache[key] = self.disc.jacobian_values(u, p)
+        return self._jac_cache[key]
+
     def jacobian(self, w: np.ndarray) -> sp.csr_matrix:
-        u, p = self.split(w)
-        return sp.csr_matrix((self.disc.jacobian_values(u, p), self.csr[1], self.csr[0]),
+        return sp.csr_matrix((self.jacobian_values(w), self.csr[1], self.csr[0]),
                              shape=(self.size, self.size))
 
+    def residual_gradient(self, w: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """grad_w (v . F) = (J^T v, (dF/dp)^T v), (m,), without building a matrix."""
+        rows = self._rows_of_entries
+        jt_v = np.bincount(self.csr[1], weights=self.jacobian_values(w) * v[rows],
+                           minlength=self.size)
+        return np.concatenate((jt_v, self.load_columns(w).T @ v))
+
     def load_columns(self, w: np.ndarray) -> np.ndarray:
-        """dF/dp, (size, n): the tensions' columns (Eq. (14)); F is linear in p."""
-        return self.disc.load_derivative(self.split(w)[0]).T
+        """dF/dp, (size, n): the tensions' columns (Eq. (14)); F is linear in p.
+        Depends on u only; the last few are cached like :meth:`jacobian_values`."""
+        u = self.split(w)[0]
+        key = u.tobytes()
+        if key not in self._load_cache:
+            if len(self._load_cache) >= 4:
+                self._load_cache.pop(next(iter(self._load_cache)))
+            self._load_cache[key] = self.disc.load_derivative(u).T
+        return self._load_cache[key]
 
     def route_derivative(self, w: np.ndarray, i: int) -> np.ndarray:
         """dF/dr_i, (size, 2), at fixed u and p: F_theta depends on r_i only through
@@ -182,6 +238,39 @@ class Manifold:
 
     def norm(self, t: np.ndarray) -> float:
         return float(np.sqrt(np.sum(self.metric * t * t)))
+
+    def tip_gradient(self, w: np.ndarray) -> np.ndarray:
+        """T = d x_t/du, (2, size): x_t = h sum_e (cos phi_e, sin phi_e) with the
+        element midpoint angles phi_e = (theta_e + theta_e+1)/2 (Eq. (2)), so
+        d x_t/d theta_k = (g_k-1 + g_k)/2, g_e = h (-sin phi_e, cos phi_e), g_N = 0."""
+        disc = self.disc
+        phi = disc.element_angles(disc.split(self.split(w)[0])[0])
+        g = disc.h * np.vstack((-np.sin(phi), np.cos(phi)))            # (2, N)
+        out = np.zeros((2, self.size))
+        out[:, : disc.n_elements] = 0.5 * g
+        out[:, : disc.n_elements - 1] += 0.5 * g[:, 1:]
+        return out
+
+    def tip_curvature_term(self, w: np.ndarray, a: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+        """grad_u (a . T(u) alpha) at fixed a (2,) and alpha (size,), padded to (m,):
+        the second derivative of the tip (Eq. (2)) contracted with a and alpha."""
+        disc = self.disc
+        N = disc.n_elements
+        phi = disc.element_angles(disc.split(self.split(w)[0])[0])
+        dphi = disc.element_angles(np.concatenate(([0.0], alpha[:N])))
+        q = disc.h * (-a[0] * np.cos(phi) - a[1] * np.sin(phi)) * dphi   # d/dphi_e
+        out = np.zeros(self.m)
+        out[:N] = 0.5 * q
+        out[:N - 1] += 0.5 * q[1:]
+        return out
+
+    def tip_jacobian(self, w: np.ndarray, lu=None) -> tuple[np.ndarray, np.ndarray, object]:
+        """S = d x_t/dp on M at w (Eq. (13)), alpha = du/dp (size, n) from
+        J alpha = -dF/dp (Eq. (14)) and the LU of J (scipy), for reuse."""
+        from scipy.sparse.linalg import splu
+        lu = splu(self.jacobian(w).tocsc()) if lu is None else lu
+        alpha = -lu.solve(self.load_columns(w))
+        return self.tip_gradient(w) @ alpha, alpha, lu
 
 
 # --- constraints c(w) = 0 cutting curves out of M ----------------------------------
@@ -220,6 +309,25 @@ class TensionBound(Constraint):
     def gradient(self, w):
         g = np.zeros(self.mf.m)
         g[self.mf.size + self.i] = 1.0
+        return g
+
+
+class TensionRay(Constraint):
+    """The ray p = s (cos a, sin a), s >= 0, of the tension plane: c = n . p with
+    n = (-sin a, cos a) (proportional loading in a fixed ratio; a scan line)."""
+
+    def __init__(self, manifold: Manifold, angle: float):
+        self.mf = manifold
+        self.normal = np.array([-np.sin(angle), np.cos(angle)])
+        self.direction = np.array([np.cos(angle), np.sin(angle)])
+        self.name = f"ray {np.degrees(angle):.0f} deg"
+
+    def value(self, w):
+        return float(self.normal @ w[self.mf.size:])
+
+    def gradient(self, w):
+        g = np.zeros(self.mf.m)
+        g[self.mf.size:] = self.normal
         return g
 
 
@@ -328,8 +436,7 @@ class FoldSystem:
         filled (and factored) once per w and bordering, results are cached."""
         key = w.tobytes()
         if self._cache.get("w") != key:
-            u, p = self.mf.split(w)
-            self.mat.fill(self.mf.disc.jacobian_values(u, p), self.b[:, None],
+            self.mat.fill(self.mf.jacobian_values(w), self.b[:, None],
                           np.append(self.c, 0.0)[None, :])
             self.ksp.setOperators(self.mat.mat)
             self._cache = {"w": key}
@@ -351,13 +458,12 @@ class FoldSystem:
         # transpose of [J b; c^T 0] is [J^T c; b^T 0]: its solution is (psi, s)
         psi, _ = self._solve(w, True)
         eps = 1e-6 / max(np.linalg.norm(v), 1e-300)
-        u, p = self.mf.split(w)
-
-        def grad_psi_F(uu):
-            J = self.mf.jacobian(np.concatenate((uu, p)))
-            return np.concatenate((J.T @ psi, self.mf.disc.load_derivative(uu) @ psi))
-
-        dJv = (grad_psi_F(u + eps * v) - grad_psi_F(u - eps * v)) / (2 * eps)
+        step = np.concatenate((eps * v, np.zeros(self.mf.n)))
+        # central difference in the direction v of grad_w (psi . F): the design
+        # gradients (route_velocity) need it accurate, and consistent with
+        # Fold.route_gradient
+        dJv = (self.mf.residual_gradient(w + step, psi)
+               - self.mf.residual_gradient(w - step, psi)) / (2 * eps)
         return s, -dJv, v / np.linalg.norm(v)
 
     def destroy(self) -> None:
@@ -399,6 +505,82 @@ class Fold(Constraint):
         return -(a - b) / (2 * eps)
 
 
+class TipFold(Constraint):
+    """A fold of the tip map on M: rank [d x_t along M] < 2, Eq. (13).
+
+    With R (2 x m) rows transverse to the tangent plane of M, the bordered
+    matrix B = [dF/dw; R] and tau = B^-1 [0; I] (two vectors spanning the
+    tangent plane), c = det (T tau), T = d x_t/du.  Its zero set does not
+    depend on R (another R multiplies c by a nonzero factor), and with
+    R = [0 I] (the tension rows) it is det S = 0, S = d x_t/dp; a frame R
+    from the tangent plane itself keeps B regular across the fold of M (where
+    det S is unbounded).  The frame is fixed within a corrector solve and
+    moved to the current tangent plane at accepted points (:meth:`update`).
+    Gradient, with A = adj(T tau), a_j its rows, mu_j = B^-T [T^T a_j; 0]:
+
+        dc = sum_j a_j . (dT tau_j) - mu_j . (dG tau_j),   G = dF/dw,
+
+    the last term as the forward difference, in the direction tau_j, of
+    grad_w (mu_j . F) = (J^T mu_j, (dF/dp)^T mu_j)."""
+
+    name = "tip fold"
+
+    def __init__(self, manifold: Manifold):
+        self.mf = manifold
+        self.R = None
+        self._cache = (None, None)
+        self.pattern = BorderedPattern(*manifold.csr, manifold.size, manifold.n)
+
+    def reset(self, w) -> None:
+        """Frame R = [0 I] (tension rows: regular where K is), then moved to w."""
+        self.R = np.zeros((self.mf.n, self.mf.m))
+        self.R[:, self.mf.size:] = np.eye(self.mf.n)
+        self._cache = (None, None)
+        self.update(w)
+
+    def update(self, w) -> None:
+        """Frame from the tangent plane at w (D-orthonormalised, orientation kept)."""
+        tau = self._data(w)[1]
+        metric = self.mf.metric
+        q = tau / np.sqrt(np.sum(metric[:, None] * tau * tau, axis=0))[None]
+        second = q[:, 1] - (metric * q[:, 0]) @ q[:, 1] * q[:, 0]
+        q[:, 1] = second / self.mf.norm(second)
+        self.R = (metric[:, None] * q).T
+        self._cache = (None, None)
+
+    def _data(self, w):
+        key = w.tobytes()
+        if self._cache[0] != key:
+            mf = self.mf
+            values = self.pattern.values(mf.jacobian_values(w), mf.load_columns(w), self.R)
+            lu = self.pattern.lu_of_transpose(values)                  # of B^T
+            rhs = np.zeros((mf.m, mf.n))
+            rhs[mf.size:] = np.eye(mf.n)
+            tau = lu.solve(rhs, trans="T")
+            T = mf.tip_gradient(w)
+            self._cache = (key, (T @ tau[: mf.size], tau, lu, T))
+        return self._cache[1]
+
+    def value(self, w):
+        return float(np.linalg.det(self._data(w)[0]))
+
+    def gradient(self, w):
+        mf = self.mf
+        S, tau, lu, T = self._data(w)
+        adj = np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]])
+
+        out = np.zeros(mf.m)
+        for j in range(mf.n):
+            out += mf.tip_curvature_term(w, adj[j], tau[: mf.size, j])
+            rhs = np.zeros(mf.m)
+            rhs[: mf.size] = T.T @ adj[j]
+            mu = lu.solve(rhs)[: mf.size]                              # B^T mu = rhs
+            d = tau[:, j]
+            eps = 1e-7 / max(mf.norm(d), 1e-300)
+            out -= (mf.residual_gradient(w + eps * d, mu) - mf.residual_gradient(w, mu)) / eps
+        return out
+
+
 @dataclass
 class CurvePoint:
     """An accepted point on a curve: state, tangent and test functions."""
@@ -410,6 +592,9 @@ class CurvePoint:
     unstable_modes: int
     det_sign: float                   # sign of det [dG/dw; t^T] (branch points)
     iterations: int
+    tip_det: float = np.nan           # intrinsic tip-map test (CurveTracer.tangent)
+    tip_inward: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
+    #                                   tip motion into the admissible side
 
 
 @dataclass
@@ -434,6 +619,7 @@ class CurveTracer:
         self.mf = Manifold(disc)
         mf = self.mf
         self.jump_tol, self.max_tip_step, self.ds_max = jump_tol, max_tip_step, ds_max
+        self.step_max_it = 6
         self.A = BorderedAIJ(*mf.csr, mf.size, mf.n)
         self.x = PETSc.Vec().createSeq(mf.m, comm=PETSc.COMM_SELF)
         self.f = self.x.duplicate()
@@ -445,7 +631,13 @@ class CurveTracer:
         atol = max(1e-10, 1e-14 * disc.n_elements ** 1.5)
         snes.setTolerances(rtol=1e-10, atol=atol, stol=1e-14, max_it=12)
         use_pivoting_lu(snes.getKSP())
-        snes.setFromOptions()
+        # full Newton steps by default: the predictor is close, and a corrector
+        # that would need damping is a step to halve (one residual per iteration)
+        set_from_options(snes, prefix, {"snes_linesearch_type": "basic"})
+        self.rtol, self.atol, self.stol, _ = snes.getTolerances()
+        self.contraction = 0.5
+        self._fnorms = []
+        snes.setConvergenceTest(self._converged)
         self.snes = snes
         self.ksp = PETSc.KSP().create(PETSc.COMM_SELF)
         self.ksp.setOptionsPrefix(prefix + "tangent_")
@@ -461,16 +653,16 @@ class CurveTracer:
         Fv.setArray(np.concatenate((self.mf.residual(w), [value(w) for value, _ in self._rows])))
 
     def _fill(self, w, rows) -> None:
-        u, p = self.mf.split(w)
-        self.A.fill(self.mf.disc.jacobian_values(u, p), self.mf.load_columns(w), rows)
+        self.A.fill(self.mf.jacobian_values(w), self.mf.load_columns(w), rows)
 
     def _form_jacobian(self, snes, X, J, P) -> None:
         w = X.getArray(readonly=True)
         self._fill(w, np.array([gradient(w) for _, gradient in self._rows]))
 
-    def _solve(self, w0: np.ndarray, rows) -> tuple[np.ndarray, bool, int]:
+    def _solve(self, w0: np.ndarray, rows, max_it: int = 12) -> tuple[np.ndarray, bool, int]:
         self._rows = rows
         self.x.setArray(w0)
+        self.snes.setTolerances(max_it=max_it)
         self.snes.solve(None, self.x)
         self.solves += 1
         reason = self.snes.getConvergedReason()
@@ -479,6 +671,28 @@ class CurveTracer:
 
     def reason(self) -> str:
         return SNES_REASONS.get(self.snes.getConvergedReason(), "UNKNOWN")
+
+    def _converged(self, snes, it, norms):
+        """PETSc's tests (atol, rtol, stol, max_it) plus one for Newton from a
+        close predictor: from the second iteration on, a residual that does not
+        shrink by ``contraction`` per iteration is not converging quadratically
+        (the step is too long or the curve jumped): stop, the step is halved."""
+        xnorm, snorm, fnorm = norms
+        R = PETSc.SNES.ConvergedReason
+        self._fnorms = [fnorm] if it == 0 else self._fnorms + [fnorm]
+        if not np.isfinite(fnorm):
+            return R.DIVERGED_FNORM_NAN
+        if fnorm < self.atol:
+            return R.CONVERGED_FNORM_ABS
+        if it > 0 and fnorm < self.rtol * self._fnorms[0]:
+            return R.CONVERGED_FNORM_RELATIVE
+        if it > 0 and snorm < self.stol * xnorm:
+            return R.CONVERGED_SNORM_RELATIVE
+        if it >= snes.getTolerances()[3]:
+            return R.DIVERGED_MAX_IT
+        if it >= 2 and fnorm > self.contraction * self._fnorms[-2]:
+            return R.DIVERGED_DTOL
+        return R.ITERATING
 
     @staticmethod
     def _row(constraint: Constraint):
@@ -491,28 +705,45 @@ class CurveTracer:
     # --- tangents and test functions --------------------------------------------
     def tangent(self, w: np.ndarray, constraint: Constraint, orient: np.ndarray) -> tuple:
         """Unit tangent (metric D) of the curve {F = 0, c = 0} at w, oriented so
-        that t . D orient > 0, and the sign of det of the bordered matrix."""
-        row = self.mf.metric * orient
-        self._fill(w, np.array([constraint.gradient(w), row]))
-        self.ksp.setOperators(self.A.mat)
-        rhs = self.x.duplicate()
-        rhs.set(0.0)
-        rhs.setValue(self.mf.m - 1, 1.0)
-        rhs.assemble()
-        sol = rhs.duplicate()
-        self.ksp.solve(rhs, sol)
-        t = sol.getArray().copy()
-        rhs.destroy(); sol.destroy()
-        sign, _ = np.linalg.slogdet(self.A.dense())
-        return t / self.mf.norm(t), float(sign)
+        that t . D orient > 0; the sign of det B of the bordered matrix
+        B = [dF/dw; dc/dw; orient^T D]; and the intrinsic tip-map test
 
-    def point(self, w, t, det_sign, iterations) -> CurvePoint:
+            tip_det = sign(det B) det [T tau, T t],   B tau = e_(m-1),
+
+        (tau: the direction in M leaving the curve with dc = 1), which does not
+        depend on the two bordering rows (changing them scales det [T tau, T t]
+        and det B by reciprocal factors).  In the stable region, with the rows
+        picking p, it is det S det J: its sign changes exactly across a fold of
+        the tip map (det S = 0), and it stays finite across the fold of M.
+        Also sets ``last_inward`` = side * T tau, the tip's motion as the
+        state leaves the curve into the constraint's admissible side.
+        One sparse LU (scipy SuperLU, partial pivoting) gives all three."""
+        mf = self.mf
+        values = self.A.pattern.values(mf.jacobian_values(w), mf.load_columns(w),
+                                       np.array([constraint.gradient(w), mf.metric * orient]))
+        lu = self.A.pattern.lu_of_transpose(values)                    # of B^T
+        rhs = np.zeros((mf.m, 2))
+        rhs[-1, 0] = rhs[-2, 1] = 1.0
+        sol = lu.solve(rhs, trans="T")
+        sign = self.A.pattern.determinant_sign(values)
+        scale = mf.norm(sol[:, 0])
+        t, tau = sol[:, 0] / scale, sol[:, 1]
+        T = mf.tip_gradient(w)
+        n = mf.size
+        tip_det = sign * float(np.linalg.det(np.column_stack((T @ tau[:n], T @ t[:n]))))
+        self.last_inward = constraint.side * (T @ tau[:n])
+        return t, sign, tip_det
+
+    def point(self, w, t, det_sign, iterations, tip_det: float = np.nan,
+              tip_inward=None) -> CurvePoint:
         u, p = self.mf.split(w)
         return CurvePoint(w=w.copy(), t=t.copy(), tip=self.mf.tip(w),
                           tip_velocity=self.mf.tip_velocity(w, t),
                           # on a face p_i = 0 a round-off -1e-17 must not reach sqrt(p)
                           unstable_modes=self.inertia.negative_eigenvalues(u, np.maximum(p, 0)),
-                          det_sign=det_sign, iterations=iterations)
+                          det_sign=det_sign, iterations=iterations, tip_det=tip_det,
+                          tip_inward=(np.full(2, np.nan) if tip_inward is None
+                                      else np.array(tip_inward, float)))
 
     def correct(self, w_guess: np.ndarray, constraints) -> tuple[np.ndarray, bool]:
         """Solve F = 0 with two scalar constraints (a corner of two curves)."""
@@ -549,10 +780,19 @@ class CurveTracer:
         rv.destroy(); sol.destroy()
         return out
 
+    def step_limit(self, pt: CurvePoint) -> float:
+        """The step length whose predicted tip step is 0.8 max_tip_step (a
+        longer one would be rejected after its corrector)."""
+        speed = float(np.linalg.norm(pt.tip_velocity))
+        return 0.8 * self.max_tip_step / speed if speed > 0 else self.ds_max
+
     def step(self, pt: CurvePoint, constraint: Constraint, ds: float):
-        """One predictor-corrector step of length ds: (point | None, iterations)."""
+        """One predictor-corrector step of length ds: (point | None, iterations).
+        The corrector gets ``step_max_it`` Newton iterations: from the tangent
+        predictor a step that needs more is too long (it is halved)."""
         w_pred = pt.w + ds * pt.t
-        w, ok, its = self._solve(w_pred, [self._row(constraint), self._arclength_row(pt.t, w_pred)])
+        w, ok, its = self._solve(w_pred, [self._row(constraint), self._arclength_row(pt.t, w_pred)],
+                                 max_it=self.step_max_it)
         if not ok:
             return None, its
         n_angles = self.mf.disc.n_elements
@@ -560,8 +800,8 @@ class CurveTracer:
             return None, its
         if np.linalg.norm(self.mf.tip(w) - pt.tip) > self.max_tip_step:
             return None, its
-        t, det_sign = self.tangent(w, constraint, pt.t)
-        return self.point(w, t, det_sign, its), its
+        t, det_sign, tip_det = self.tangent(w, constraint, pt.t)
+        return self.point(w, t, det_sign, its, tip_det, self.last_inward), its
 
     def destroy(self) -> None:
         self.inertia.destroy()

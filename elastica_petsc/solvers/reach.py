@@ -30,7 +30,11 @@ Verdicts (``ControlResult.reachable``):
 * True: reached (E < eps).
 * False: only with a proof about all of W_0, named in ``evidence``.  Proven
   here: ``|x_d| > l`` (``BEYOND_REACH``): the arm is inextensible, so
-  |x_t| = |int_0^l t ds| <= l (Eq. (2)) for every state.
+  |x_t| = |int_0^l t ds| <= l (Eq. (2)) for every state.  With a
+  ``boundary`` (a callable, e.g. :func:`elastica_petsc.studies.boundary.boundary_proof`),
+  once the search is exhausted: ``OUTSIDE_BOUNDARY``, the target lies in the
+  unbounded component of the plane minus the traced boundary curves of W_0
+  (faces and tip-map folds, docs/model.md §9), with its distance to them.
 * None (reason ``SEARCH_EXHAUSTED``): not reached and not proven
   unreachable; the result is the closest tip found (a stationary point with
   a tension on its lower bound is *local* evidence that the target needs
@@ -57,6 +61,8 @@ from .control import ControlResult, TipController
 from .equilibrium import COLLAPSE_LENGTH, Equilibrium
 
 BEYOND_REACH = "BEYOND_REACH"            # reason and evidence: |x_d| > l
+OUTSIDE_BOUNDARY = "OUTSIDE_BOUNDARY"    # reason and evidence: outside the traced boundary
+#                                          of W_0 (faces and tip-map folds, docs/model.md §9)
 SEARCH_EXHAUSTED = "SEARCH_EXHAUSTED"    # reason: global strategies tried, undecided
 CABLE_CROSSES_ARM = "CABLE_CROSSES_ARM"  # reason (cables="require"): reached only with a
 #                                          cable through the arm
@@ -184,12 +190,17 @@ class Reacher:
     local_its : iteration limit of the local solves of the global phase (a
         reached target needs < 10 from a good start; a solve that stalls
         would otherwise spend its full budget on penalised evaluations).
+    boundary : None, or a callable target (units of l) -> (evidence, distance
+        in units of l), evidence '' unless the target is proven outside W_0;
+        asked only when the search is exhausted (``OUTSIDE_BOUNDARY``).
     """
 
     def __init__(self, controller: TipController, *, homotopy_step: float = 0.08,
                  min_step: float = 2e-3, max_seeds: int = 6, max_substeps: int = 25,
-                 local_its: int = 30, max_homotopies: int = 4, seeds: SeedLibrary | None = None):
+                 local_its: int = 30, max_homotopies: int = 4, seeds: SeedLibrary | None = None,
+                 boundary=None):
         self.controller = controller
+        self.boundary = boundary
         self.max_homotopies = max_homotopies
         self.local_its = local_its
         self.homotopy_step = homotopy_step
@@ -278,7 +289,18 @@ class Reacher:
             if res is not None:
                 res = dataclasses.replace(res, strategy=f"{kind} from {s.label}")
                 return self._clear(target, res, cables)
-        return self._closest(target, tried)
+        return self._outside(target, self._closest(target, tried))
+
+    def _outside(self, target: np.ndarray, res: ControlResult) -> ControlResult:
+        """An undecided result becomes ``reachable=False`` (OUTSIDE_BOUNDARY)
+        when ``self.boundary`` proves the target outside W_0."""
+        if res.converged or res.reachable is not None or self.boundary is None:
+            return res
+        evidence, _ = self.boundary(target)
+        if not evidence:
+            return res
+        return dataclasses.replace(res, reachable=False, reason=OUTSIDE_BOUNDARY,
+                                   evidence=evidence, message=evidence)
 
     def _clear(self, target, res: ControlResult, cables: str) -> ControlResult:
         """Apply the cable policy to a reached state (module doc)."""

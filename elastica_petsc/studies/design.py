@@ -166,10 +166,12 @@ def scaled_path(targets_mm, margin: float) -> np.ndarray:
 def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = None,
                     reach_mm: float = 100.0, clearance_mm: float = 10.0, margin: float = 1.1,
                     max_iterations: int = 20, scale_mm: float = 10.0,
-                    prefix: str = "design_") -> DesignResult:
+                    prefix: str = "design_", progress=None) -> DesignResult:
     """Routing points (mm) of ``tendons`` (0-based) that make every target of the
     path reachable (f = 0 on the path scaled by ``margin``), by TAO BLMVM with
-    the exact gradient of the module docstring.  Options prefix ``design_``."""
+    the exact gradient of the module docstring.  Options prefix ``design_``.
+    ``progress(traces, note)``, if given, is called after every path trace
+    (one per objective evaluation; their number is not known in advance)."""
     if margin < 1.0:
         raise DesignError(f"--margin must be at least 1, got {margin}")
     t0 = time.perf_counter()
@@ -185,6 +187,10 @@ def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = Non
                         "gradient": m.gradient.tolist()})
         if not best or m.f < best["f"]:
             best.update(f=m.f, q=q.copy())
+        if progress is not None:
+            progress(len(history), f"TAO iteration {tao.getIterationNumber()} of at most "
+                     f"{max_iterations}; misfit {m.f:.3g} mm^2, {history[-1]['reached']}/"
+                     f"{len(design_path)} reached")
         G.setArray(m.gradient * scale_mm)
         return m.f
 
@@ -211,6 +217,8 @@ def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = Non
         for obj in (tao, x, xl, xu):
             obj.destroy()
     after = with_routes(arm, tendons, best["q"])
+    if progress is not None:
+        progress(len(history), "tracing the task's path on the arm before and after")
     before_misfit = path_misfit(arm, tendons, targets_mm, elements)
     after_misfit = path_misfit(after, tendons, targets_mm, elements)
     return DesignResult(arm, after, list(tendons), before_misfit, after_misfit, history, reason,

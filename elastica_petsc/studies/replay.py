@@ -104,7 +104,7 @@ class Replay:
 
 def replay(solver: LengthSolver, lengths_mm, planned_tips_mm, planned_tensions=None,
            planned_thetas=None, *, eq_solver: EquilibriumSolver | None = None,
-           tip_tol_mm: float = 1e-3, shape_tol: float = 1e-3) -> Replay:
+           tip_tol_mm: float = 1e-3, shape_tol: float = 1e-3, on_point=None) -> Replay:
     """Step the length-controlled arm through a schedule of cable lengths.
 
     ``lengths_mm`` (K, n) and ``planned_tips_mm`` (K, 2) come from a traced
@@ -120,7 +120,7 @@ def replay(solver: LengthSolver, lengths_mm, planned_tips_mm, planned_tensions=N
     A point is on the planned branch if its shape is within ``shape_tol``
     rad of the planned shape (when given) or else its tip within
     ``tip_tol_mm`` of the planned tip.  Stops after a point that cannot be
-    reached.
+    reached.  ``on_point(done)`` is called after each point (progress).
     """
     if solver.length_mm is None:
         raise InputError("replay needs the arm length: build the solver with "
@@ -176,18 +176,21 @@ def replay(solver: LengthSolver, lengths_mm, planned_tips_mm, planned_tensions=N
         points.append(ReplayPoint(k, Ls[k].copy(), tips[k].copy(), state, tip_err, shape_err,
                                   bool(on and state.converged),
                                   bool(state.jumps or state.instabilities)))
+        if on_point is not None:
+            on_point(k + 1)
         if not state.converged:
             break
     return Replay(tuple(points), K, method)
 
 
 def replay_trace(trace: dict, *, first_by_lengths: bool = False, tip_tol_mm: float = 1e-3,
-                 shape_tol: float = 1e-3) -> Replay:
+                 shape_tol: float = 1e-3, on_point=None) -> Replay:
     """:func:`replay` of a traced path as read by
     :func:`elastica_petsc.io.replay.read_trace` (its arm, mesh, cable lengths
     and tips in mm, planned tensions and shapes), with a solver made for it;
     ``first_by_lengths``: reach the first point by length continuation instead
-    of the load-controlled state at the planned tensions."""
+    of the load-controlled state at the planned tensions; ``on_point(done)``:
+    progress, as for :func:`replay`."""
     from ..core.fem import Discretisation
 
     arm = trace["arm"]
@@ -195,4 +198,4 @@ def replay_trace(trace: dict, *, first_by_lengths: bool = False, tip_tol_mm: flo
     with LengthSolver(disc, length_mm=arm.length_mm) as solver:
         return replay(solver, trace["cable_lengths"], trace["tip"],
                       None if first_by_lengths else trace["tensions"], trace["theta"],
-                      tip_tol_mm=tip_tol_mm, shape_tol=shape_tol)
+                      tip_tol_mm=tip_tol_mm, shape_tol=shape_tol, on_point=on_point)

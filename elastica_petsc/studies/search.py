@@ -244,16 +244,24 @@ def tension_starts(eq_solver: EquilibriumSolver, levels=(5.0, 10.0, 20.0), order
 class _Collector:
     """Distinct states in order of discovery, compared by shape, and a log of
     every attempt: (start, method, outcome) with outcome "new k", "again k"
-    (k: 1-based state number) or PETSc's reason of the failure."""
+    (k: 1-based state number) or PETSc's reason of the failure.  ``progress``
+    (optional) is called as ``progress(steps, note)`` after every search step
+    (:meth:`step`: a continuation point or an attempt from a start)."""
 
-    def __init__(self, tol: float):
-        self.tol = tol
+    def __init__(self, tol: float, progress=None):
+        self.tol, self.progress, self.steps = tol, progress, 0
         self.found: list[list] = []          # [state, start, method, hits]
         self.log: list[tuple[str, str, str]] = []
         self.attempts = self.failures = self.duplicates = 0
 
+    def step(self, what: str) -> None:
+        self.steps += 1
+        if self.progress is not None:
+            self.progress(self.steps, f"{len(self.found)} found; {what}")
+
     def offer(self, state, start: str, method: str) -> bool:
         self.attempts += 1
+        self.step(f"{method} from {start}")
         if state is None or not state.converged:
             self.failures += 1
             self.log.append((start, method, "failed" if state is None else
@@ -324,6 +332,7 @@ def deflated_continuation(solve, paths, start, found: "_Collector", what: str, *
     for how, points in paths:
         branches, current = [start], [start]
         for k, target in enumerate(points):
+            found.step(f"continuation in {what}, {how}: {k + 1}/{len(points)}")
             current = []
             for previous in branches:
                 state = solve(target, previous)
@@ -402,7 +411,7 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
                       eq_solver: EquilibriumSolver | None = None, continuation: bool = True,
                       effort: int = 1, levels=None, deflation_rounds: int | None = None,
                       passes: int = 2, steps: int | None = None,
-                      tol: float = SAME_SHAPE_TOL) -> SearchResult:
+                      tol: float = SAME_SHAPE_TOL, progress=None) -> SearchResult:
     """Distinct equilibria with cable lengths ``lengths`` (units of l).
 
     In phases k = 1..``effort`` (:func:`effort_settings`, a higher effort
@@ -420,11 +429,13 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
     distinct if some nodal angle differs by more than ``tol`` rad.  Each
     state reports its stability under load and length control.  What is
     returned is what these methods reached, never a claim that no other
-    equilibrium exists.
+    equilibrium exists.  ``progress(steps, note)``, if given, is called after
+    every search step (a continuation point or an attempt from a start; the
+    number of steps is not known in advance).
     """
     L = check_lengths(lengths, solver.disc.n_tendons)
     disc = solver.disc
-    found = _Collector(tol)
+    found = _Collector(tol, progress)
     deflation = Deflation(disc.h)
 
     def continue_paths(k_steps: int) -> list:
@@ -513,7 +524,7 @@ class LoadSolves:
 def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1, levels=None,
                deflation_rounds: int | None = None, passes: int = 2, steps: int | None = None,
                tol: float = SAME_SHAPE_TOL, prefix: str = "defl_",
-               length_mm: float | None = None) -> SearchResult:
+               length_mm: float | None = None, progress=None) -> SearchResult:
     """Distinct load-controlled equilibria at fixed tensions ``p``.
 
     (0) Loading paths from the straight arm: proportional and every order
@@ -530,12 +541,13 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
     sweeps).  Each state is a :class:`LengthEquilibrium` whose prescribed
     lengths are its own cable chords, with ``unstable_modes`` (load control)
     and ``length_unstable_modes`` (the same state held at its cable
-    lengths).  Not a proof of completeness.
+    lengths).  Not a proof of completeness.  ``progress``: as for
+    :func:`length_equilibria`.
     """
     disc = eq_solver.disc
     p = check_tensions(p, disc.n_tendons)
     n = disc.n_tendons
-    found = _Collector(tol)
+    found = _Collector(tol, progress)
     deflation = Deflation(disc.h)
     solves = LoadSolves(eq_solver, prefix, length_mm)
 
@@ -576,11 +588,13 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
 
 # --- one call each, from an arm (for the command line and the Python API) -------------
 def search_lengths(arm, lengths_mm, *, elements: int | None = None, effort: int = 1,
-                   levels=None, deflation_rounds: int | None = None) -> SearchResult:
+                   levels=None, deflation_rounds: int | None = None,
+                   progress=None) -> SearchResult:
     """Every equilibrium this search finds with the cable lengths ``lengths_mm``
     (mm, one per tendon) under length control (Sec. 4.6, Eq. (23)):
     :func:`length_equilibria` on ``arm`` (``elements``: mesh, default the
-    arm's).  States are non-dimensional (``*_mm`` properties in mm)."""
+    arm's).  States are non-dimensional (``*_mm`` properties in mm).
+    ``progress(steps, note)``: see :func:`length_equilibria`."""
     from ..core.fem import Discretisation
 
     disc = Discretisation.from_arm(arm, elements)
@@ -588,17 +602,19 @@ def search_lengths(arm, lengths_mm, *, elements: int | None = None, effort: int 
     with LengthSolver(disc, length_mm=arm.length_mm) as solver, \
             EquilibriumSolver(disc) as eq_solver:
         return length_equilibria(solver, L, eq_solver=eq_solver, effort=effort, levels=levels,
-                                 deflation_rounds=deflation_rounds)
+                                 deflation_rounds=deflation_rounds, progress=progress)
 
 
 def search_tensions(arm, p, *, elements: int | None = None, effort: int = 1, levels=None,
-                    deflation_rounds: int | None = None) -> SearchResult:
+                    deflation_rounds: int | None = None, progress=None) -> SearchResult:
     """Every equilibrium this search finds at the tensions ``p`` (non-dimensional,
     p = P l^2/B; ``arm.tensions_from_N`` converts newtons) under load control
-    (Eq. (9)): :func:`equilibria` on ``arm``."""
+    (Eq. (9)): :func:`equilibria` on ``arm``.  ``progress(steps, note)``: see
+    :func:`length_equilibria`."""
     from ..core.fem import Discretisation
 
     disc = Discretisation.from_arm(arm, elements)
     with EquilibriumSolver(disc) as eq_solver:
         return equilibria(eq_solver, p, effort=effort, levels=levels,
-                          deflation_rounds=deflation_rounds, length_mm=arm.length_mm)
+                          deflation_rounds=deflation_rounds, length_mm=arm.length_mm,
+                          progress=progress)

@@ -35,8 +35,9 @@ def spawn(arm, elements: int, ranks: int, **kwargs) -> int:
         spec = Path(tmp) / "spec.json"
         spec.write_text(json.dumps({"arm": arm_to_dict(arm), "elements": elements,
                                     "kwargs": kwargs}))
+        # our stdout (the job writes nothing else there): on a terminal, rank 0 draws its bar
         return subprocess.run([mpiexec, "-n", str(ranks), sys.executable, "-m", __name__,
-                               str(spec)], env=env, stdout=subprocess.DEVNULL).returncode
+                               str(spec)], env=env).returncode
 
 
 def main(argv: list[str]) -> int:
@@ -47,10 +48,11 @@ def main(argv: list[str]) -> int:
     from .workspace import run_map
 
     spec = json.loads(Path(argv[1]).read_text())
+    spec["kwargs"].setdefault("progress", False)      # None: progress lines on stderr
     arm = arm_from_dict(spec["arm"])
     try:
         result = run_map(arm, Discretisation.from_arm(arm, spec["elements"]),
-                         progress=False, **spec["kwargs"])
+                         **spec["kwargs"])
     except InputError as err:
         print(f"elastica-petsc: error: {err}", file=sys.stderr)
         return 2
