@@ -221,12 +221,17 @@ def _points(points_mm) -> np.ndarray:
     return points
 
 
-def trace(arm: Arm, points_mm, *, step_mm: float | None = None, elements: int | None = None):
+def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | None = None,
+          min_tension_N: float = 0.0, elements: int | None = None):
     """Tip control along a path, each target warm-started from the previous
     solution (Sec. 4.5, Fig. 3).  ``step_mm`` inserts points so that no two
-    consecutive targets are further apart.  Returns a ``TraceResult``
-    (``tips_mm``, ``tensions_N``, ``cable_lengths_mm`` per point) and its
-    for a timed motor schedule with an approach move see :func:`schedule`."""
+    consecutive targets are further apart.  With n >= 3 tendons,
+    ``share="min-norm"``/``"min-energy"`` (minimum |P| or strain energy,
+    Eq. (21)) and ``min_tension_N`` (every P_i >= it, N) pick one tension set
+    per point among those that reach it (SQP on the KKT system, followed from
+    point to point), so a closed path closes in cable space.  Returns a
+    ``TraceResult`` (``tips_mm``, ``tensions_N``, ``cable_lengths_mm`` per
+    point); for a timed motor schedule with an approach move see :func:`schedule`."""
     from .solvers.control import TipController
     from .studies import trace as paths
 
@@ -234,19 +239,24 @@ def trace(arm: Arm, points_mm, *, step_mm: float | None = None, elements: int | 
     if step_mm is not None:
         points = paths.densify(points, step_mm)
     with TipController(arm, n_elements=elements) as ctl:
-        return paths.trace(ctl, points)
+        sharer = _sharer(arm, ctl, share, min_tension_N)
+        return paths.trace(ctl, points, sharer=sharer)
 
 
 def schedule(arm: Arm, points_mm, *, step_mm: float = 1.0, speed_mm_s: float | None = None,
              amplitude_mm: float = 1.0, approach: bool = True, guess_N=None, guess=None,
-             on_point=None, elements: int | None = None):
+             on_point=None, share: str | None = None, min_tension_N: float = 0.0,
+             elements: int | None = None):
     """A timed motor schedule for a path (Sec. 4.5): an approach move from the
     straight arm (or the state at ``guess_N``, or ``guess`` in p) to the
     first point, then the path traced at ``step_mm`` spacing, cable lengths
     turned into spool revolutions and microsteps, timed at ``speed_mm_s``
     (default: the safe speed 2 pi f_1 * ``amplitude_mm`` from the lowest
     natural frequency, Sec. 4.5 (vi)).  ``on_point(done, total)`` reports
-    progress.  Returns a ``TracedSchedule``: ``.schedule`` (``write_csv(path)``,
+    progress.  ``share``/``min_tension_N``: tension sharing with n >= 3 tendons,
+    as in :func:`trace` (along the approach the floor grows from 0 N at the
+    straight arm to ``min_tension_N`` at the first point).
+    Returns a ``TracedSchedule``: ``.schedule`` (``write_csv(path)``,
     ``lengths_at(t)``), ``.path`` and ``.approach`` (``TraceResult``), ``.speed``."""
     from .solvers.control import TipController
     from .studies import trace as paths
@@ -259,7 +269,8 @@ def schedule(arm: Arm, points_mm, *, step_mm: float = 1.0, speed_mm_s: float | N
     with TipController(arm, n_elements=elements) as ctl:
         return trace_schedule(ctl, points, step_mm=step_mm, speed_mm_s=speed_mm_s,
                               amplitude_mm=amplitude_mm, approach=approach, p0=p0,
-                              on_point=on_point)
+                              on_point=on_point,
+                              sharer=_sharer(arm, ctl, share, min_tension_N))
 
 
 def stability(state: State, *, modes: int = 4):

@@ -10,28 +10,11 @@ from elastica_petsc.core.config import load_config
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.solvers.control import TipController
 from elastica_petsc.solvers.reach import Reacher
-from elastica_petsc.solvers.share import TensionSharer, kkt_residual, objective
+from elastica_petsc.solvers.share import TensionSharer, family, kkt_residual, objective
 
 from test_reach import three_tendon_arm
 
 ELEMENTS = 60
-
-
-def family(ctl, target, ev, ts):
-    """Brute force: for p_2 = t (t in ``ts``, increasing, continued from ``ev``),
-    Newton on (p_1, p_3) puts the tip on the target; the states reached."""
-    out = []
-    for t in ts:
-        for _ in range(30):
-            r = ev.equilibrium.tip - target
-            if np.linalg.norm(r) < 1e-12 and ev.p[1] == t:
-                break
-            S, p = ev.sensitivity.tip, ev.p.copy()
-            p[[0, 2]] += np.linalg.solve(S[[0, 2]].T, -r - S[1] * (t - p[1]))
-            p[1] = t
-            ev = ctl.evaluate(np.maximum(p, 0.0), start=ev.equilibrium)
-        out.append(ev)
-    return out
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +28,7 @@ def shared():
         for share in ("min-norm", "min-energy"):
             res = TensionSharer(ctl, share).solve(reached)
             ev = ctl.evaluate(res.p, start=res.equilibrium)
-            fam = family(ctl, target, ev, np.linspace(res.p[1] - 0.5, res.p[1] + 0.5, 11))
+            fam = family(ctl, ev, target, 1, np.linspace(res.p[1] - 0.5, res.p[1] + 0.5, 11))
             out[share] = (res, ev, fam, target)
         floor = TensionSharer(ctl, "min-norm", min_tension=1.0 / arm3.force_scale_N)
         out["floor"] = floor.solve(reached)

@@ -56,9 +56,10 @@ def add_share_options(parser) -> None:
     parser.add_argument("--share", choices=("min-norm", "min-energy", "none"), default=None,
                         help="how tension is shared among the tension sets that reach the "
                              "target (n >= 3 tendons): min-norm |P|, min-energy (strain "
-                             "energy, Eq. (21)), none (default: whatever the optimiser finds). "
-                             "TAO ALMM from the reached state; experimental: 0.3-7 s per "
-                             "target at 60 elements")
+                             "energy, Eq. (21)), none (default: whatever the optimiser finds); "
+                             "an SQP on the KKT conditions (tip on the target, P >= the floor). "
+                             "With 2 tendons the tensions at a tip are unique: only the floor "
+                             "matters")
     parser.add_argument("--min-tension-N", type=float, default=0.0, metavar="N",
                         help="pretension floor in newtons: every tension at least this "
                              "(every cable taut; implies --share min-norm unless given)")
@@ -110,6 +111,8 @@ def unreachable_message(s: dict) -> str:
         return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm is reached only "
                 f"with a cable through the arm (cable_clear {s['cable_clear']}) and --cables "
                 "require was given; no state with clear cables was found")
+    if s["reason"].startswith("SHARE_"):
+        return f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm: {s['message']}"
     if s["reachable"] is False:
         return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm is not reachable: "
                 f"{s['evidence']}; {where}")

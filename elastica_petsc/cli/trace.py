@@ -4,6 +4,7 @@ from __future__ import annotations
 import sys
 
 from . import common
+from .control import add_share_options
 
 SHAPES = ("paper-triangle", "convoluted", "circle", "line")
 
@@ -61,6 +62,7 @@ def add_parser(sub) -> None:
                         help="tolerated vibration amplitude for the suggested tracing speed "
                              "v_max = 2 pi f_1 * amplitude (default 1 mm; needs "
                              "mass_per_length_kg_m in the config)")
+    add_share_options(parser)
     common.add_arm_options(parser)
     common.add_output_options(parser)
     parser.set_defaults(run=run)
@@ -131,7 +133,14 @@ def trace_summary(arm, result, schedule) -> dict:
                         "replays it",
         "max_rounding_error_mm": float(f"{np.max(np.abs(schedule.rounding_error_mm)):.3g}"),
         "mm_per_microstep": float(f"{schedule.mm_per_step:.6g}"),
+        "min_tension_N": rounded(result.tensions_N.min(axis=0)),
     }
+
+
+def share_summary(args) -> dict:
+    """The sharing rule asked for (the library resolves None the same way)."""
+    share = args.share or ("min-norm" if args.min_tension_N > 0 else "none")
+    return {"share": share, "min_tension_floor_N": args.min_tension_N}
 
 
 def point_entries(result, schedule) -> list[dict]:
@@ -165,6 +174,10 @@ def format_trace(s: dict) -> str:
         lines.append(f"tendon {i}: tension {P[0]:.3f}..{P[1]:.3f} N, cable length "
                      f"{L[0]:.2f}..{L[1]:.2f} mm; length and tension move oppositely in {mono} "
                      "of the steps (Sec. 4.1)")
+    if s["share"] != "none":
+        lines.append(f"tensions shared {s['share']} with every P >= {s['min_tension_floor_N']:g} "
+                     f"N: lowest tension per tendon along the path "
+                     + ", ".join(f"{v:.4g}" for v in s["min_tension_N"]) + " N")
     if s["closes"]:
         lines.append(f"closed path: cable lengths at the end differ from the start by at most "
                      f"{s['closure_cable_length_change_mm']:.3g} mm")
@@ -240,6 +253,7 @@ def write_outputs(args, arm, disc, planned) -> None:
             fh.attrs["elements"] = disc.n_elements
             fh.attrs["step_mm"] = args.step
             fh.attrs["source"] = args.path or args.shape
+            write_attrs(fh, share_summary(args))
             write_trace(fh, arm, result, schedule)
     if args.plot:
         from ..plots.control import plot_trace_figures
@@ -265,10 +279,12 @@ def run(args) -> int:
     with Progress(len(points), "trace") as bar:
         planned = api.schedule(arm, points, step_mm=args.step, speed_mm_s=args.speed_mm_s,
                                amplitude_mm=args.amplitude_mm, approach=not args.no_approach,
-                               guess=guess, elements=disc.n_elements,
+                               guess=guess, elements=disc.n_elements, share=args.share,
+                               min_tension_N=args.min_tension_N,
                                on_point=lambda done, total: bar.update(done, total=total))
     result = planned.path
     summary = trace_summary(arm, result, planned.schedule)
+    summary.update(share_summary(args))
     summary.update({k: v for k, v in planned.speed.items() if k not in ("speed_mm_s",
                                                                            "speed_source")})
     summary.update(schedule_summary(planned, guess is not None))

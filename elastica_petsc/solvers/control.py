@@ -349,7 +349,8 @@ class TipController:
             self._cache.popitem(last=False)
 
     def evaluate(self, p, start: Equilibrium | None = None,
-                 start_loading: Loading | None = None) -> Evaluation | None:
+                 start_loading: Loading | None = None,
+                 tangent: np.ndarray | None = None) -> Evaluation | None:
         """Equilibrium and sensitivities at tensions ``p`` (cached by p).
 
         Continuation from ``start`` (default: the last good state of the
@@ -357,7 +358,8 @@ class TipController:
         both fail.  Outside a solve and without ``start``: proportional
         loading from the straight arm.  The evaluation records its loading
         path (:class:`~elastica_petsc.core.loading.Loading`): the origin's
-        path continued to ``p`` (``start_loading`` for ``start``; None if unknown)."""
+        path continued to ``p`` (``start_loading`` for ``start``; None if unknown).
+        ``tangent``: du/dp at ``start`` for the first predictor (Eq. (14))."""
         p = check_tensions(p, self.n)
         cached = self._cache.get(p.tobytes())
         if cached is not None:
@@ -365,7 +367,7 @@ class TipController:
         st = self._state
         if st is not None and (p.tobytes() in st.failed_at or st.failed >= st.max_failures):
             return None                 # known to fail, or the failure budget is spent
-        starts = self._origins(start, start_loading)
+        starts = self._origins(start, start_loading, tangent)
         message = ""
         for origin, tangent, loading in starts:
             eq = self.solver.solve(p, start=origin, tangent=tangent)
@@ -390,12 +392,12 @@ class TipController:
             st.failed_at.add(p.tobytes())
         return None
 
-    def _origins(self, start, start_loading) -> list:
+    def _origins(self, start, start_loading, tangent=None) -> list:
         """(equilibrium, du/dp for the predictor, its loading path) to continue from."""
         st = self._state
         starts = []
         if start is not None:
-            starts.append((start, None, start_loading))
+            starts.append((start, tangent, start_loading))
         elif st is not None:
             if st.last_good is not None:
                 good = st.last_good

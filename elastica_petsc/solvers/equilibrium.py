@@ -357,10 +357,11 @@ class EquilibriumSolver:
         continuation = AmplitudeContinuation(disc, pa, pb, self.atol)
         found, its, self._branch_ends = {}, 0, []
         for sign in (1.0, -1.0):
-            outcome, ((u0, l0), (u1, l1)) = continuation.branch(u, lam, v, sign)
+            outcome, ends = continuation.branch(u, lam, v, sign)
             self._branch_ends.append(outcome)
-            if outcome != "reached":
+            if outcome != "reached":          # (ends[0] is None if lost at the first step)
                 continue
+            (u0, l0), (u1, l1) = ends
             u_end, n, _ = self.newton(u0 + (1.0 - l0) / (l1 - l0) * (u1 - u0), pb)
             its += n
             if self.converged() and self.inertia.negative_eigenvalues(u_end, pb) == 0:

@@ -71,7 +71,8 @@ def approach_targets(start_tip_mm, first_mm, step_mm: float,
 
 def trace_schedule(controller: TipController, targets_mm, *, step_mm: float = 1.0,
                    speed_mm_s: float | None = None, amplitude_mm: float = 1.0,
-                   approach: bool = True, p0=None, on_point=None) -> TracedSchedule:
+                   approach: bool = True, p0=None, on_point=None,
+                   sharer=None) -> TracedSchedule:
     """Trace ``targets_mm`` (k, 2) [mm] after an approach move and build the
     timed motor schedule.
 
@@ -85,6 +86,10 @@ def trace_schedule(controller: TipController, targets_mm, *, step_mm: float = 1.
         False: the schedule starts at the first target.
     on_point(done, total) : called after each traced point (approach and
         path together: ``done`` and ``total`` count both).
+    sharer : a :class:`~elastica_petsc.solvers.share.TensionSharer` (n >= 3
+        tendons): approach and path use the shared tensions; along the approach
+        the floor p_min grows linearly with the distance travelled, from 0 at
+        the straight arm (whose tensions are 0) to the sharer's at the first target.
     Results are kept per point (``path.results``) for figures and HDF5."""
     targets = np.asarray(targets_mm, float)
     if targets.ndim != 2 or targets.shape[1:] != (2,) or len(targets) == 0:
@@ -98,11 +103,17 @@ def trace_schedule(controller: TipController, targets_mm, *, step_mm: float = 1.
         tip0 = np.array([l_mm, 0.0]) if start is None else start.tip * l_mm
         first = approach_targets(tip0, targets[0], step_mm)
         total = len(first) + len(targets)
+        floors = None
+        if sharer is not None:
+            gone = np.linalg.norm(first - tip0, axis=1)
+            floors = sharer.min_tension * gone / max(float(np.linalg.norm(targets[0] - tip0)),
+                                                     1e-300)
         before = trace(controller, first, p0=p0, start=start, keep_results=True,
+                       sharer=sharer, floors=floors,
                        on_point=None if on_point is None else (lambda k: on_point(k, total)))
         p0, start = before.p[-1], before.results[-1].equilibrium
     done = 0 if before is None else before.n_points
-    path = trace(controller, targets, p0=p0, start=start, keep_results=True,
+    path = trace(controller, targets, p0=p0, start=start, keep_results=True, sharer=sharer,
                  on_point=None if on_point is None
                  else (lambda k: on_point(done + k, done + len(targets))))
     speed = suggested_speed(controller.arm, controller.disc, path, amplitude_mm)

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..solvers.control import ControlResult, TipController
+from ..solvers.control import ControlResult, Evaluation, TipController
 from ..core.errors import InputError
 
 
@@ -225,7 +225,8 @@ def monotonic_fraction(lengths, tensions, tol_L: float = 1e-9, tol_P: float = 1e
 
 def trace(controller: TipController, targets_mm, *, p0=None, start=None,
           start_loading=None, keep_results: bool = False, stop_on_failure: bool = False,
-          on_point=None, global_search: bool = True) -> TraceResult:
+          on_point=None, global_search: bool = True, sharer=None,
+          floors=None) -> TraceResult:
     """Tip control at each target in turn (mm), warm-started from the previous
     point's tensions and equilibrium (Sec. 4.5 (v)).
 
@@ -240,6 +241,13 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
     global_search : a point the warm-started local solve does not reach is
         passed to the global strategies of :mod:`elastica_petsc.solvers.reach`
         (their cost is paid only by such points).
+    sharer : a :class:`~elastica_petsc.solvers.share.TensionSharer` (n >= 3
+        tendons): each point's tensions are the shared ones (minimum norm or
+        strain energy, p >= p_min), followed from the previous point's shared
+        state by :meth:`TensionSharer.follow` (one SQP on the KKT system per
+        point; the plain path is untouched without it).
+    floors : with ``sharer``, a per-point floor p_min (non-dimensional, length
+        k; default the sharer's), e.g. ramped along an approach from the straight arm.
     """
     from ..solvers.reach import Reacher
 
@@ -247,14 +255,27 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
     targets = np.asarray(targets_mm, dtype=float)
     if targets.ndim != 2 or targets.shape[1] != 2 or len(targets) == 0:
         raise PathError(f"targets must have shape (k, 2) in mm, got {targets.shape}")
+    if floors is not None and len(floors) != len(targets):
+        raise InputError(f"floors must have one value per target ({len(targets)}), "
+                         f"got {len(floors)}")
     results = []
     t0 = time.perf_counter()
     loading = start_loading
-    for x_d in targets:
-        res = reacher.reach(x_d / controller.length_mm, p0=p0, start=start,
-                            start_loading=loading, global_search=global_search)
+    previous = None if sharer is None or start is None else controller.evaluate(
+        start.p, start=start, start_loading=start_loading)
+    for k, x_d in enumerate(targets):
+        if sharer is None:
+            res = reacher.reach(x_d / controller.length_mm, p0=p0, start=start,
+                                start_loading=loading, global_search=global_search)
+            p0, start, loading = res.p, res.equilibrium, res.loading
+        else:
+            res = sharer.follow(x_d / controller.length_mm, previous, reacher, p0=p0,
+                                start=start, start_loading=loading,
+                                floor=None if floors is None else floors[k],
+                                global_search=global_search)
+            if res.converged:          # the next point starts from the last shared state
+                previous = Evaluation(res.p, res.equilibrium, res.sensitivity, res.loading)
         results.append(res)
-        p0, start, loading = res.p, res.equilibrium, res.loading
         if on_point is not None:
             on_point(len(results))
         if stop_on_failure and not res.converged:
