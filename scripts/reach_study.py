@@ -8,7 +8,7 @@ Prints the counts, the strategy that reached the hard ones, the total time and
 the mean time per target of the hardest 5 %.
 
 Usage: python scripts/reach_study.py [--targets 200] [--p-max 60] [--elements 180]
-       [--seed 1] [--local]
+       [--seed 1] [--local] [--config configs/three_tendon.toml]
 """
 from __future__ import annotations
 
@@ -23,6 +23,7 @@ def main() -> int:
     ap.add_argument("--elements", type=int, default=180)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--local", action="store_true", help="local solve only (the old behaviour)")
+    ap.add_argument("--config", default=None, help="arm TOML (default: the paper's arm)")
     args = ap.parse_args()
     import numpy as np
 
@@ -30,7 +31,7 @@ def main() -> int:
     from elastica_petsc.solvers.control import TipController
     from elastica_petsc.solvers.reach import Reacher
 
-    arm = load_config()
+    arm = load_config(args.config)
     rng = np.random.default_rng(args.seed)
     times, failed, hard = [], [], []
     with TipController(arm, n_elements=args.elements) as ctl:
@@ -51,7 +52,8 @@ def main() -> int:
                                res.reachable, round(res.tip_error_mm, 3)))
     n = len(times)
     worst = sorted(times)[-max(1, n // 20):]
-    print(f"{n} targets (p in [0, {args.p_max:g}]^2, {args.elements} elements, seed "
+    print(f"{n} targets ({arm.n_tendons} "
+          f"tendons, p in [0, {args.p_max:g}]^n, {args.elements} elements, seed "
           f"{args.seed}): {n - len(failed)} reached ({100 * (n - len(failed)) / n:.1f} %), "
           f"{sum(1 for f in failed if f[2] is False)} reported reachable: false")
     print(f"total {sum(times):.1f} s; median {1e3 * float(np.median(times)):.1f} ms per target; "
