@@ -8,7 +8,8 @@ targets, the paper's Fig. 4 half-disc).  Traces the boundary of the map's arm
 (W_0 with the tip-map folds, faces decided: docs/model.md §9.1) and counts:
 
 * reached samples (status 1) not in W_0 by more than one grid spacing;
-* samples whose tip control ended on P_i = 0 (status 2, a local verdict) in
+* samples whose tip control ended on P_i = 0 (status 2, a local verdict; in a
+  map of the global sampler: every sample not reached, 4 and 6) in
   W_0 by more than one spacing (these are reachable states the map missed);
 * not-converged samples (status 3) in W_0;
 * samples of status 2 that the boundary proves outside W_0 (the verdict
@@ -42,8 +43,11 @@ def main() -> None:
     with open_h5(args.map) as fh:
         arm = file_arm(fh)
     result = trace_boundary(arm, Discretisation.from_arm(arm, args.elements), restricted=False)
-    out = compare_map(result, samples["target"], samples["status"], samples["spacing"])
-    status2 = samples["target"][samples["status"] == 2]
+    # maps of the global sampler: every target not reached (undecided, 4, or proven
+    # outside the traced boundary, 6) is counted with the local sampler's status 2
+    status = np.where(np.isin(samples["status"], (4, 6)), 2, samples["status"])
+    out = compare_map(result, samples["target"], status, samples["spacing"])
+    status2 = samples["target"][status == 2]
     om = result.outside_map
     far = om.distance(status2) > 3 * result.cell_mm
     proven = om.outside(status2) & far if not result.untraced_folds else np.zeros(len(status2), bool)
