@@ -56,7 +56,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
-from scipy.linalg import lu_factor
 
 from ..core.fem import Discretisation
 from .equilibrium import SNES_REASONS
@@ -114,14 +113,13 @@ class BorderedPattern:
         out[self.row_pos] = rows
         return out
 
-    def determinant_sign(self, values) -> float:
-        """Sign of det of the matrix with these values, from a dense LAPACK LU
-        (m ~ 200: cheaper than extracting U from a sparse factorisation)."""
-        dense = np.zeros((self.n, self.n))
-        dense[self._rows, self.csr[1]] = values
-        lu, piv = lu_factor(dense, check_finite=False)
-        swaps = np.count_nonzero(piv != np.arange(len(piv)))
-        return float(np.prod(np.sign(np.diag(lu)))) * (-1.0) ** swaps
+    @staticmethod
+    def determinant_sign(lu) -> float:
+        """Sign of det B from the SuperLU factors of B^T (:meth:`lu_of_transpose`):
+        P_r B^T P_c = L U with L unit lower triangular, so
+        sign det B = sign(P_r) sign(P_c) prod sign(U_kk) (no dense LU needed)."""
+        sign = float(np.prod(np.sign(lu.U.diagonal())))
+        return sign * permutation_sign(lu.perm_r) * permutation_sign(lu.perm_c)
 
     def lu_of_transpose(self, values):
         """SuperLU (scipy, partial pivoting) of B^T, B the CSR matrix with these
@@ -131,6 +129,21 @@ class BorderedPattern:
         Bt = sp.csc_matrix((values, self.csr[1], self.csr[0]), shape=(self.n, self.n))
         # natural order: the dense border is last, so its fill stays in the border
         return splu(Bt, permc_spec="NATURAL")
+
+
+def permutation_sign(perm: np.ndarray) -> float:
+    """Sign (+1 or -1) of a permutation: (-1)^(n - number of cycles); fixed
+    points are skipped."""
+    perm = np.asarray(perm)
+    seen = perm == np.arange(len(perm))
+    swaps = 0
+    for start in np.flatnonzero(~seen):
+        j, length = start, 0
+        while not seen[j]:
+            seen[j] = True
+            j, length = perm[j], length + 1
+        swaps += length - 1 if length else 0
+    return -1.0 if swaps % 2 else 1.0
 
 
 class BorderedAIJ:
@@ -725,7 +738,7 @@ class CurveTracer:
         rhs = np.zeros((mf.m, 2))
         rhs[-1, 0] = rhs[-2, 1] = 1.0
         sol = lu.solve(rhs, trans="T")
-        sign = self.A.pattern.determinant_sign(values)
+        sign = self.A.pattern.determinant_sign(lu)
         scale = mf.norm(sol[:, 0])
         t, tau = sol[:, 0] / scale, sol[:, 1]
         T = mf.tip_gradient(w)
