@@ -241,13 +241,28 @@ class Walker:
             hits.append(self.fold)
         return hits
 
+    def _collapse_limit(self, pt, active) -> float:
+        """The step length at which the predictor w + ds t brings a cable to half
+        the collapse length eps (linearised; a cable's length is convex along the
+        predictor's line, so the predicted length stays above eps/2).  Past its
+        routing point the cable direction of Eq. (3) flips, and a corrector
+        started there fails whatever the step: the step is cut to reach the
+        event (L_i = eps) instead of being halved after failed correctors."""
+        limit = np.inf
+        for c in self.constraints:
+            if isinstance(c, CableCollapse) and c is not active:
+                rate = float(c.gradient(pt.w) @ pt.t)
+                if rate < 0:
+                    limit = min(limit, 0.5 * (c.value(pt.w) + c.eps) / -rate)
+        return limit
+
     def follow(self, start, active) -> tuple[Curve, object, np.ndarray | None]:
         """Follow ``active`` from the point ``start`` until another constraint
         becomes active: (curve, the new constraint, the corner state w)."""
         curve = Curve(active.name, [start], active=active)
         pt, ds = start, self.ds0
         while len(curve.points) < self.max_points:
-            ds = min(ds, self.tr.step_limit(pt))
+            ds = min(ds, self.tr.step_limit(pt), self._collapse_limit(pt, active))
             new, its = self.tr.step(pt, active, ds)
             if self.progress is not None:
                 self.progress(self.tr.solves, f"along {active.name}, point {len(curve.points)}")
@@ -679,25 +694,28 @@ def union_area(poly: np.ndarray, step: float | None = None) -> float:
     (the region W_0 when the loop crosses itself; the shoelace area would
     count a doubly wound part twice).  Scan lines at the midpoints of strips
     of height ``step`` (default 1/2000 of the height): on each, the crossings
-    are sorted and the winding number accumulated (all lines at once)."""
+    are sorted and the winding number accumulated.  Only the (line, edge)
+    pairs that cross are formed (each edge spans a range of lines), then
+    sorted together by line and abscissa."""
     a, b = poly, np.roll(poly, -1, axis=0)
     y0, y1 = float(np.min(poly[:, 1])), float(np.max(poly[:, 1]))
     step = (y1 - y0) / 2000 if step is None else step
-    total = 0.0
+    ys = np.arange(y0 + step / 2, y1, step)
     lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
+    first = np.searchsorted(ys, lo, side="left")                 # lines with lo <= y < hi
+    count = np.searchsorted(ys, hi, side="left") - first
+    edge = np.repeat(np.arange(len(a)), count)
+    line = np.arange(len(edge)) - np.repeat(np.cumsum(count) - count - first, count)
     dy = np.where(b[:, 1] != a[:, 1], b[:, 1] - a[:, 1], 1.0)
-    direction = np.where(b[:, 1] > a[:, 1], 1, -1)
-    for ys in np.array_split(np.arange(y0 + step / 2, y1, step), 8):
-        y = ys[:, None]
-        hit = (lo <= y) & (hi > y)                                   # (lines, edges)
-        x = np.where(hit, a[:, 0] + (y - a[:, 1]) / dy * (b[:, 0] - a[:, 0]), 1e300)
-        order = np.argsort(x, axis=1)
-        xs = np.take_along_axis(x, order, axis=1)
-        winding = np.cumsum(np.take_along_axis(np.where(hit, direction, 0), order, axis=1),
-                            axis=1)[:, :-1]
-        gaps = np.diff(xs, axis=1)
-        total += float(np.sum(np.where(winding != 0, gaps, 0.0)))
-    return total * step
+    x = a[edge, 0] + (ys[line] - a[edge, 1]) / dy[edge] * (b[edge, 0] - a[edge, 0])
+    order = np.lexsort((x, line))
+    x, line = x[order], line[order]
+    up = np.where(b[:, 1] > a[:, 1], 1, -1)[edge][order]       # crossing direction
+    winding = np.cumsum(up)
+    starts = np.flatnonzero(np.diff(line, prepend=-1))          # first crossing of each line
+    winding -= np.repeat(winding[starts] - up[starts], np.diff(np.append(starts, len(line))))
+    same = line[1:] == line[:-1]
+    return float(np.sum(np.where(same & (winding[:-1] != 0), np.diff(x), 0.0))) * step
 
 
 def union_area_gradient(nodes: np.ndarray, velocity: np.ndarray,
