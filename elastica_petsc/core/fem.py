@@ -126,10 +126,16 @@ class Discretisation:
         steps = self.h * np.column_stack((np.cos(phi), np.sin(phi)))
         return np.vstack((np.zeros((1, 2)), np.cumsum(steps, axis=0)))
 
-    def attachment_gradients(self, theta: np.ndarray) -> np.ndarray:
-        """g[i, k-1] = d X_i / d theta_k, shape (n, N, 2)."""
+    def trig(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """cos phi_e and sin phi_e of the element angles (shared by the kernels)."""
         phi = self.element_angles(theta)
-        half_normals = 0.5 * self.h * np.column_stack((-np.sin(phi), np.cos(phi)))
+        return np.cos(phi), np.sin(phi)
+
+    def attachment_gradients(self, theta: np.ndarray, cs=None) -> np.ndarray:
+        """g[i, k-1] = d X_i / d theta_k, shape (n, N, 2); ``cs``: :meth:`trig`
+        of theta if already known."""
+        c, s = self.trig(theta) if cs is None else cs
+        half_normals = 0.5 * self.h * np.column_stack((-s, c))
         per_element = self.support[:, :, None] * half_normals[None]        # (n, N, 2)
         g = per_element.copy()                     # element k-1 = left of node k
         g[:, :-1] += per_element[:, 1:]           # element k   = right of node k
@@ -170,12 +176,12 @@ class Discretisation:
         lengths = np.linalg.norm(chord, axis=1)
         return lengths, chord / lengths[:, None]
 
-    def residual(self, u: np.ndarray, p, tip_moment: float = 0.0) -> np.ndarray:
-        """F(u) of the bordered system (Eq. (9) with the midpoint rule, plus y - X(theta))."""
+    def residual(self, u: np.ndarray, p, tip_moment: float = 0.0, cs=None) -> np.ndarray:
+        """F(u) of the bordered system (Eq. (9) with the midpoint rule, plus y - X(theta));
+        ``cs``: :meth:`trig` of the angles if already known."""
         theta, y = self.split(u)
         _, d = self.cables(y)
-        phi = self.element_angles(theta)
-        c, s = np.cos(phi), np.sin(phi)
+        c, s = self.trig(theta) if cs is None else cs
         force = self.tendon_sums(np.asarray(p, float)[:, None] * d)      # sum of F_i per element
         # (h/2) t_e x F on each element: the load integral of Eq. (9), midpoint rule
         q = 0.5 * self.h * (c * force[:, 1] - s * force[:, 0])
@@ -230,13 +236,14 @@ class Discretisation:
         (one border column per tendon)."""
         return self.bordered_pattern(np.asarray(self.attach_nodes), upper=True)
 
-    def band(self, theta, d, p) -> np.ndarray:
-        """Tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper)."""
+    def band(self, theta, d, p, cs=None) -> np.ndarray:
+        """Tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper);
+        ``cs``: :meth:`trig` of theta if already known."""
         N, h = self.n_elements, self.h
-        phi = self.element_angles(theta)
+        c, s = self.trig(theta) if cs is None else cs
         force = self.tendon_sums(p[:, None] * d)
         # d/dtheta of -(h/2) t_e x F on element e: (h/4) t_e.F on its two nodes
-        w = 0.25 * h * (np.cos(phi) * force[:, 0] + np.sin(phi) * force[:, 1])
+        w = 0.25 * h * (c * force[:, 0] + s * force[:, 1])
         band = np.empty((N, 3))
         band[:, 0], band[:, 2] = -1.0 / h, -1.0 / h
         band[:, 1] = 2.0 / h
@@ -246,19 +253,21 @@ class Discretisation:
         band[1:, 0] += w[1:]
         return band
 
-    def jacobian_values(self, u: np.ndarray, p) -> np.ndarray:
-        """Entries of dF/du in the order of :attr:`pattern` (consistent tangent)."""
+    def jacobian_values(self, u: np.ndarray, p, cs=None, g=None) -> np.ndarray:
+        """Entries of dF/du in the order of :attr:`pattern` (consistent tangent);
+        ``cs``, ``g``: :meth:`trig` and :meth:`attachment_gradients` if known."""
         N, n = self.n_elements, self.n_tendons
         p = np.asarray(p, float)
         theta, y = self.split(u)
         lengths, d = self.cables(y)
-        g = self.attachment_gradients(theta)                    # (n, N, 2)
+        cs = self.trig(theta) if cs is None else cs
+        g = self.attachment_gradients(theta, cs) if g is None else g      # (n, N, 2)
         # dF_theta/dy_i = p_i/L_i (I - d d^T) g = p_i/L_i (d_perp . g) d_perp   (Eq. (17))
         d_perp = np.column_stack((-d[:, 1], d[:, 0]))
         lever = (p / lengths)[:, None] * self.transverse_gradients(g, d)
         border = (lever[:, :, None] * d_perp[:, None, :]).transpose(1, 0, 2).reshape(N, 2 * n)
         yrows = -g.transpose(0, 2, 1).reshape(2 * n, N)        # dF_y/dtheta = -dX/dtheta
-        source = np.concatenate((self.band(theta, d, p).ravel(), border.ravel(),
+        source = np.concatenate((self.band(theta, d, p, cs).ravel(), border.ravel(),
                                  yrows.ravel(), np.ones(2 * n)))
         return source[self.pattern[2]]
 
@@ -291,11 +300,22 @@ class Discretisation:
         weights = np.sqrt(np.maximum(np.asarray(p, float), 0.0) / lengths)
         return weights[:, None] * self.transverse_gradients(self.attachment_gradients(theta), d)
 
-    def load_derivative(self, u: np.ndarray) -> np.ndarray:
-        """dF/dp, shape (n, size): row i is dF/dp_i (right-hand sides of Eq. (14))."""
+    def load_derivative(self, u: np.ndarray, g=None) -> np.ndarray:
+        """dF/dp, shape (n, size): row i is dF/dp_i (right-hand sides of Eq. (14));
+        ``g``: :meth:`attachment_gradients` if known."""
         theta, y = self.split(u)
         _, d = self.cables(y)
-        g = self.attachment_gradients(theta)
+        g = self.attachment_gradients(theta) if g is None else g
         out = np.zeros((self.n_tendons, self.size))
         out[:, : self.n_elements] = -(g[..., 0] * d[:, :1] + g[..., 1] * d[:, 1:])
         return out
+
+    def linearisation(self, u: np.ndarray, p) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """F (:meth:`residual`), the entries of dF/du (:meth:`jacobian_values`) and
+        dF/dp (:meth:`load_derivative`) at (u, p) in one pass: the element
+        angles' cosines and sines and the attachment gradients are shared."""
+        theta = self.split(u)[0]
+        cs = self.trig(theta)
+        g = self.attachment_gradients(theta, cs)
+        return (self.residual(u, p, cs=cs), self.jacobian_values(u, p, cs, g),
+                self.load_derivative(u, g))

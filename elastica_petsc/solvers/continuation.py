@@ -168,6 +168,13 @@ class BorderedAIJ:
         self.mat.destroy()
 
 
+def _remember(cache: dict, key, value, size: int = 4) -> None:
+    """Keep ``value`` under ``key`` in a small cache (the oldest entry goes)."""
+    if key not in cache and len(cache) >= size:
+        cache.pop(next(iter(cache)))
+    cache[key] = value
+
+
 class Manifold:
     """F(u, p) = 0 of one discretised arm as functions of w = (u, p)."""
 
@@ -189,18 +196,22 @@ class Manifold:
         return w[: self.size], w[self.size:]
 
     def residual(self, w: np.ndarray) -> np.ndarray:
+        """F at w; J and dF/dp at w are computed in the same pass
+        (:meth:`Discretisation.linearisation`) and cached: Newton, the tangent
+        and the test functions ask for them at the iterates it evaluates."""
         u, p = self.split(w)
-        return self.disc.residual(u, p)
+        F, J, L = self.disc.linearisation(u, p)
+        _remember(self._jac_cache, w.tobytes(), J)
+        _remember(self._load_cache, u.tobytes(), L.T)
+        return F
 
     def jacobian_values(self, w: np.ndarray) -> np.ndarray:
         """Entries of J = dF/du at w (pattern ``csr``); the last few w are cached
         (the corrector, the tangent and the fold test functions ask at the same w)."""
         key = w.tobytes()
         if key not in self._jac_cache:
-            if len(self._jac_cache) >= 4:
-                self._jac_cache.pop(next(iter(self._jac_cache)))
             u, p = self.split(w)
-            self._jac_cache[key] = self.disc.jacobian_values(u, p)
+            _remember(self._jac_cache, key, self.disc.jacobian_values(u, p))
         return self._jac_cache[key]
 
     def jacobian(self, w: np.ndarray) -> sp.csr_matrix:
@@ -220,9 +231,7 @@ class Manifold:
         u = self.split(w)[0]
         key = u.tobytes()
         if key not in self._load_cache:
-            if len(self._load_cache) >= 4:
-                self._load_cache.pop(next(iter(self._load_cache)))
-            self._load_cache[key] = self.disc.load_derivative(u).T
+            _remember(self._load_cache, key, self.disc.load_derivative(u).T)
         return self._load_cache[key]
 
     def route_derivative(self, w: np.ndarray, i: int) -> np.ndarray:
