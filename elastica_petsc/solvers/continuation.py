@@ -66,7 +66,7 @@ from .options import set_from_options
 # LU with partial pivoting for the extended systems: their leading block J is
 # singular on the fold and their last rows have no diagonal entry, so the
 # natural-order LU without pivoting of linalg.use_bordered_lu would break down.
-PIVOTING_LU = ("umfpack", "superlu", "mumps")
+PIVOTING_LU = ("klu", "umfpack", "superlu", "mumps")
 
 
 def use_pivoting_lu(ksp: PETSc.KSP) -> PETSc.KSP:

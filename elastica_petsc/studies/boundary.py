@@ -536,8 +536,11 @@ class OutsideMap:
             a, b = line[:-1], line[1:]
             self.segments.append((a, b))
             n = np.maximum(np.ceil(np.linalg.norm(b - a, axis=1) / (0.5 * self.cell)), 1)
-            seg = np.repeat(np.arange(len(a)), n.astype(int) + 1)
-            frac = np.concatenate([np.linspace(0.0, 1.0, m + 1) for m in n.astype(int)])
+            n = n.astype(int)
+            seg = np.repeat(np.arange(len(a)), n + 1)
+            # samples k / n_seg, k = 0..n_seg, of every segment (as np.linspace rounds them)
+            k = np.arange(len(seg)) - np.repeat(np.cumsum(n + 1) - (n + 1), n + 1)
+            frac = np.where(k == n[seg], 1.0, k * (1.0 / n[seg]))
             ij = np.floor((a[seg] + frac[:, None] * (b - a)[seg] - self.origin)
                           / self.cell).astype(int)
             for di in (-1, 0, 1):
@@ -546,7 +549,9 @@ class OutsideMap:
                          np.clip(ij[:, 1] + dj, 0, shape[1] - 1)] = True
         labels, self.n_labels = ndimage.label(~wall)
         border = np.unique(np.concatenate((labels[0], labels[-1], labels[:, 0], labels[:, -1])))
-        self.outside_cells = np.isin(labels, border[border > 0])
+        on_border = np.zeros(self.n_labels + 1, bool)
+        on_border[border[border > 0]] = True
+        self.outside_cells = on_border[labels]
         self.labels, self.border_labels, self.shape = labels, border[border > 0], shape
 
     def bounded_faces(self) -> list[tuple[np.ndarray, float]]:
@@ -559,7 +564,13 @@ class OutsideMap:
             return []
         depth = ndimage.distance_transform_edt(free)
         ids = [k for k in range(1, self.n_labels + 1) if k not in set(self.border_labels)]
-        where = ndimage.maximum_position(depth, self.labels, ids)
+        boxes = ndimage.find_objects(self.labels)
+        where = []
+        for k in ids:                           # of the deepest cells, the first in C order
+            box = boxes[k - 1]
+            hit = np.argmax(np.where(self.labels[box] == k, depth[box], -1.0))
+            where.append(tuple(int(i) + sl.start for i, sl in
+                               zip(np.unravel_index(hit, self.labels[box].shape), box)))
         sizes = ndimage.sum(free, self.labels, ids)
         return [(self.origin + (np.array(ij) + 0.5) * self.cell, float(n) * self.cell**2, k)
                 for ij, n, k in zip(where, sizes, ids)]
@@ -756,22 +767,24 @@ def shoelace(poly: np.ndarray) -> float:
 
 def hermite_densify(tip, velocity, per_segment: int = 8) -> np.ndarray:
     """Cubic Hermite curve through the nodes with their tip velocities d x_t/ds
-    (per unit of the curve's arclength parameter), ``per_segment`` points each."""
-    out = [tip[:1]]
-    for a in range(len(tip) - 1):
-        b = a + 1
-        chord = np.linalg.norm(tip[b] - tip[a])
-        va, vb = velocity[a], velocity[b]
-        na, nb = np.linalg.norm(va), np.linalg.norm(vb)
-        if chord == 0 or na == 0 or nb == 0:
-            out.append(tip[b:b + 1])
-            continue
-        ma, mb = va / na * chord, vb / nb * chord      # tangents scaled to the chord
-        s = np.linspace(0, 1, per_segment + 1)[1:, None]
-        h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
-        h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
-        out.append(h00 * tip[a] + h10 * ma + h01 * tip[b] + h11 * mb)
-    return np.vstack(out)
+    (per unit of the curve's arclength parameter), ``per_segment`` points each
+    (a segment with a zero chord or velocity keeps only its end node)."""
+    tip, velocity = np.asarray(tip, float), np.asarray(velocity, float)
+    a, b = tip[:-1], tip[1:]
+    chord = np.linalg.norm(b - a, axis=1)
+    na, nb = np.linalg.norm(velocity[:-1], axis=1), np.linalg.norm(velocity[1:], axis=1)
+    smooth = (chord != 0) & (na != 0) & (nb != 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ma = velocity[:-1] / na[:, None] * chord[:, None]       # tangents scaled to the chord
+        mb = velocity[1:] / nb[:, None] * chord[:, None]
+    s = np.linspace(0, 1, per_segment + 1)[1:, None]
+    h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
+    h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+    curve = (h00[None] * a[:, None] + h10[None] * ma[:, None] + h01[None] * b[:, None]
+             + h11[None] * mb[:, None])                          # (segments, per_segment, 2)
+    keep = np.where(smooth[:, None], True, np.arange(per_segment)[None] == per_segment - 1)
+    curve[~smooth, -1] = b[~smooth]
+    return np.vstack((tip[:1], curve[keep]))
 
 
 def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
@@ -806,11 +819,21 @@ def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
 
 
 def self_intersections(poly: np.ndarray) -> int:
-    """Number of crossings between non-adjacent edges of a closed polygon."""
+    """Number of crossings between non-adjacent edges of a closed polygon.
+    Only pairs whose x-ranges overlap are tested (a crossing inside both edges
+    needs it): edges sorted by their left end, each against the later ones
+    starting left of its right end."""
     a, b = poly, np.roll(poly, -1, axis=0)
     n = len(a)
-    i, j = np.triu_indices(n, k=2)
-    keep = ~((i == 0) & (j == n - 1))                      # the closing edge meets edge 0
+    left, right = np.minimum(a[:, 0], b[:, 0]), np.maximum(a[:, 0], b[:, 0])
+    order = np.argsort(left, kind="stable")
+    stop = np.searchsorted(left[order], right[order], side="right")
+    count = np.maximum(stop - np.arange(n) - 1, 0)
+    first = np.repeat(np.arange(n), count)
+    second = np.arange(len(first)) - np.repeat(np.cumsum(count) - count, count) + first + 1
+    i, j = order[first], order[second]
+    i, j = np.minimum(i, j), np.maximum(i, j)
+    keep = (j - i >= 2) & ~((i == 0) & (j == n - 1))      # adjacent edges share a vertex
     i, j = i[keep], j[keep]
     p, r = a[i], b[i] - a[i]
     q, s = a[j], b[j] - a[j]
