@@ -310,12 +310,13 @@ class Discretisation:
         out[:, : self.n_elements] = -(g[..., 0] * d[:, :1] + g[..., 1] * d[:, 1:])
         return out
 
-    def linearisation(self, u: np.ndarray, p) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def linearisation(self, u: np.ndarray, p, residual: bool = True) -> tuple:
         """F (:meth:`residual`), the entries of dF/du (:meth:`jacobian_values`) and
         dF/dp (:meth:`load_derivative`) at (u, p) in one pass: the element
-        angles' cosines and sines and the attachment gradients are shared."""
+        angles' cosines and sines and the attachment gradients are shared.
+        With ``residual=False`` only (dF/du, dF/dp)."""
         theta = self.split(u)[0]
         cs = self.trig(theta)
         g = self.attachment_gradients(theta, cs)
-        return (self.residual(u, p, cs=cs), self.jacobian_values(u, p, cs, g),
-                self.load_derivative(u, g))
+        out = (self.jacobian_values(u, p, cs, g), self.load_derivative(u, g))
+        return ((self.residual(u, p, cs=cs),) + out) if residual else out

@@ -104,7 +104,7 @@ class BorderedPattern:
         new_idx[self.row_pos] = np.arange(size + k)
         self.csr = (new_ptr, new_idx)
         self.n = size + k
-        self._rows = np.repeat(np.arange(self.n), np.diff(new_ptr))
+        self._transpose = None
 
     def values(self, base_values, columns, rows) -> np.ndarray:
         out = np.empty(self.csr[0][-1])
@@ -126,9 +126,12 @@ class BorderedPattern:
         values (its CSR arrays are the CSC arrays of B^T): B x = b is
         ``lu.solve(b, trans="T")``, B^T y = c is ``lu.solve(c)``."""
         from scipy.sparse.linalg import splu
-        Bt = sp.csc_matrix((values, self.csr[1], self.csr[0]), shape=(self.n, self.n))
+        if self._transpose is None:            # built (and checked) once, values reset
+            self._transpose = sp.csc_matrix((values, self.csr[1], self.csr[0]),
+                                            shape=(self.n, self.n))
+        self._transpose.data[:] = values
         # natural order: the dense border is last, so its fill stays in the border
-        return splu(Bt, permc_spec="NATURAL")
+        return splu(self._transpose, permc_spec="NATURAL")
 
 
 def permutation_sign(perm: np.ndarray) -> float:
@@ -210,9 +213,15 @@ class Manifold:
         (the corrector, the tangent and the fold test functions ask at the same w)."""
         key = w.tobytes()
         if key not in self._jac_cache:
-            u, p = self.split(w)
-            _remember(self._jac_cache, key, self.disc.jacobian_values(u, p))
+            self._linearise(w)
         return self._jac_cache[key]
+
+    def _linearise(self, w: np.ndarray) -> None:
+        """Cache J and dF/dp at w, computed together (shared kernels)."""
+        u, p = self.split(w)
+        J, L = self.disc.linearisation(u, p, residual=False)
+        _remember(self._jac_cache, w.tobytes(), J)
+        _remember(self._load_cache, u.tobytes(), L.T)
 
     def jacobian(self, w: np.ndarray) -> sp.csr_matrix:
         return sp.csr_matrix((self.jacobian_values(w), self.csr[1], self.csr[0]),
@@ -228,10 +237,9 @@ class Manifold:
     def load_columns(self, w: np.ndarray) -> np.ndarray:
         """dF/dp, (size, n): the tensions' columns (Eq. (14)); F is linear in p.
         Depends on u only; the last few are cached like :meth:`jacobian_values`."""
-        u = self.split(w)[0]
-        key = u.tobytes()
+        key = self.split(w)[0].tobytes()
         if key not in self._load_cache:
-            _remember(self._load_cache, key, self.disc.load_derivative(u).T)
+            self._linearise(w)
         return self._load_cache[key]
 
     def route_derivative(self, w: np.ndarray, i: int) -> np.ndarray:
