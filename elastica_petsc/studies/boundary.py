@@ -961,13 +961,24 @@ def curve_polyline(curve: Curve, length_mm: float) -> np.ndarray:
 
 
 def winding_number(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Winding number of the closed polygon around each point (Sunday's rule)."""
+    """Winding number of the closed polygon around each point (Sunday's rule:
+    an upward edge with the point on its left counts +1, a downward edge with
+    the point on its right -1, each edge half-open in y).  Only the (edge,
+    point) pairs whose y-ranges match are formed (points sorted by y)."""
     a, b = poly, np.roll(poly, -1, axis=0)
-    x, y = points[:, 0][:, None], points[:, 1][:, None]
+    points = np.atleast_2d(points)
+    order = np.argsort(points[:, 1], kind="stable")
+    ys = points[order, 1]
+    first = np.searchsorted(ys, np.minimum(a[:, 1], b[:, 1]), side="left")
+    count = np.searchsorted(ys, np.maximum(a[:, 1], b[:, 1]), side="left") - first
+    edge = np.repeat(np.arange(len(a)), count)
+    point = order[np.arange(len(edge)) - np.repeat(np.cumsum(count) - count - first, count)]
+    a, b = a[edge], b[edge]
+    x, y = points[point, 0], points[point, 1]
     cross = (b[:, 0] - a[:, 0]) * (y - a[:, 1]) - (x - a[:, 0]) * (b[:, 1] - a[:, 1])
     up = (a[:, 1] <= y) & (b[:, 1] > y) & (cross > 0)
     down = (a[:, 1] > y) & (b[:, 1] <= y) & (cross < 0)
-    return np.sum(up, axis=1) - np.sum(down, axis=1)
+    return np.bincount(point, weights=up.astype(float) - down, minlength=len(points)).astype(int)
 
 
 def _inside(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
