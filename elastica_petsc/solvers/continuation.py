@@ -666,6 +666,7 @@ class CurveTracer:
         set_from_options(snes, prefix, {"snes_linesearch_type": "basic"})
         self.rtol, self.atol, self.stol, _ = snes.getTolerances()
         self.contraction = 0.5
+        self.lag_below = 1e-7          # residual norm below which the Jacobian is kept
         self._fnorms = []
         snes.setConvergenceTest(self._converged)
         self.snes = snes
@@ -686,6 +687,13 @@ class CurveTracer:
         self.A.fill(self.mf.jacobian_values(w), self.mf.load_columns(w), rows)
 
     def _form_jacobian(self, snes, X, J, P) -> None:
+        """The extended Jacobian at the iterate, except once Newton is within
+        ``lag_below`` of the root: then the previous iterate's (already
+        factored) matrix is kept (PETSc does not refactor an unchanged
+        operator), a chord step from an O(|dx|)-accurate Jacobian; the stopping
+        tests on the residual are unchanged."""
+        if snes.getIterationNumber() > 0 and self._fnorms and self._fnorms[-1] < self.lag_below:
+            return
         w = X.getArray(readonly=True)
         self._fill(w, np.array([gradient(w) for _, gradient in self._rows]))
 
