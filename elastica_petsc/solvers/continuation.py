@@ -640,7 +640,8 @@ class Curve:
 class CurveTracer:
     """Pseudo-arclength continuation on M with one active constraint and SNES
     as the corrector (options prefix ``cont_``).  ``solves`` counts the
-    corrector solves (each one nonlinear solve of the extended system)."""
+    corrector solves (each one nonlinear solve of the extended system),
+    ``rejected`` the steps among them that were not accepted."""
 
     def __init__(self, disc: Discretisation, *, jump_tol: float = 0.5,
                  max_tip_step: float = 0.2, ds_max: float = 4.0, prefix: str = "cont_"):
@@ -674,6 +675,7 @@ class CurveTracer:
         self.ksp.setFromOptions()
         self.inertia = InertiaCounter(disc)
         self.solves = 0
+        self.rejected = 0            # steps whose corrector failed or was rejected (halved)
         self._rows = None            # the two scalar equations: callables (value, gradient)
 
     # --- the extended system G(w) = [F; r_1; r_2] -----------------------------
@@ -829,12 +831,10 @@ class CurveTracer:
         w_pred = pt.w + ds * pt.t
         w, ok, its = self._solve(w_pred, [self._row(constraint), self._arclength_row(pt.t, w_pred)],
                                  max_it=self.step_max_it)
-        if not ok:
-            return None, its
         n_angles = self.mf.disc.n_elements
-        if np.max(np.abs(w[:n_angles] - w_pred[:n_angles])) > self.jump_tol:
-            return None, its
-        if np.linalg.norm(self.mf.tip(w) - pt.tip) > self.max_tip_step:
+        if (not ok or np.max(np.abs(w[:n_angles] - w_pred[:n_angles])) > self.jump_tol
+                or np.linalg.norm(self.mf.tip(w) - pt.tip) > self.max_tip_step):
+            self.rejected += 1
             return None, its
         t, det_sign, tip_det = self.tangent(w, constraint, pt.t)
         return self.point(w, t, det_sign, its, tip_det, self.last_inward), its

@@ -119,6 +119,7 @@ class BoundaryResult:
     faces: list = field(default_factory=list)            # classify_faces (W0)
     scan: list = field(default_factory=list)             # scan_rays: (ray, changes, unexplained)
     scan_solves: int = 0                                 # of ``solves``, spent on the scan
+    rejected_steps: int = 0                              # of ``solves``, steps not accepted
     area_bounds_mm2: tuple = (np.nan, np.nan)            # W0: (proven in, not proven out)
     _outside: object = field(default=None, repr=False)
 
@@ -913,12 +914,13 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
                 messages.append(f"{name}: the loop's image crosses itself {crossings} times "
                                 "(the tip map is not one-to-one on the region); the area is "
                                 "that of the set it winds around")
-        solves = tracer.solves
+        solves, rejected = tracer.solves, tracer.rejected
     folds = np.array([x.tip for x in fold_crossings]).reshape(-1, 2) * arm.length_mm
     result = BoundaryResult(arm, regions, polygons, areas, folds, solves,
                             time.perf_counter() - t0, messages, gradients, fold_curves,
                             [curve_polyline(c, arm.length_mm) for c in fold_curves], fold_crossings,
-                            cell_mm=arm.length_mm / 500, scan=scan, scan_solves=scan_solves)
+                            cell_mm=arm.length_mm / 500, scan=scan, scan_solves=scan_solves,
+                            rejected_steps=rejected)
     messages += [f"W0: tip-map fold not traced: {why} (no OUTSIDE_BOUNDARY verdicts)"
                  for why in result.untraced_folds]
     if tip_folds and regions["W0"].closed and not result.untraced_folds:
