@@ -119,7 +119,10 @@ class BorderedPattern:
         P_r B^T P_c = L U with L unit lower triangular, so
         sign det B = sign(P_r) sign(P_c) prod sign(U_kk) (no dense LU needed)."""
         sign = float(np.prod(np.sign(lu.U.diagonal())))
-        return sign * permutation_sign(lu.perm_r) * permutation_sign(lu.perm_c)
+        for perm in (lu.perm_r, lu.perm_c):         # perm_c: the identity in natural order
+            if np.any(perm != np.arange(len(perm))):
+                sign *= permutation_sign(perm)
+        return sign
 
     def lu_of_transpose(self, values):
         """SuperLU (scipy, partial pivoting) of B^T, B the CSR matrix with these
