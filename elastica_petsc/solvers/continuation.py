@@ -27,7 +27,14 @@ here on a plain SNES (Newton with line search, options prefix ``cont_``).
 Step control: the step doubles after a corrector of at most 3 Newton
 iterations and halves on failure, on a corrector that moved any angle by
 more than ``jump_tol`` from the predictor (a jump to another branch) or on a
-tip step longer than ``max_tip_step``.
+tip step longer than ``max_tip_step``.  Before the corrector the step is
+capped so that the predicted tip step is 0.8 ``max_tip_step``
+(:meth:`CurveTracer.step_limit`) and, on the boundary tracer's walks, so that
+the predictor at most halves a cable that shortens (past its routing point
+the cable direction of Eq. (3) flips and no corrector converges;
+``studies/boundary.py``, ``Walker._collapse_limit``).  Within a corrector,
+once the residual is below ``lag_below`` the factored Jacobian of the
+previous iterate is kept (a chord step; the stopping tests are unchanged).
 
 Test functions along a curve (evaluated at every accepted point):
 stability (negative eigenvalues of K by Sylvester inertia: a change is a
