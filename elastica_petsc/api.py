@@ -202,14 +202,10 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
 
 def _sharer(arm: Arm, controller, share: str | None, min_tension_N: float):
     """The TensionSharer asked for (n >= 3 tendons), or None."""
-    from .solvers.share import TensionSharer
+    from .solvers.share import TensionSharer, share_rule
 
-    if share is None:
-        share = "min-norm" if min_tension_N > 0 else "none"
+    share = share_rule(share, min_tension_N)
     if share == "none":
-        if min_tension_N > 0:
-            raise InputError("a pretension floor (--min-tension-N) needs a sharing rule: "
-                             "drop --share none")
         return None
     return TensionSharer(controller, share, float(arm.tensions_from_N(min_tension_N)))
 
@@ -335,7 +331,8 @@ def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None
 
 def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",
               out: str | Path | None = None, overwrite: bool = False, comm=None,
-              elements: int | None = None, global_search: bool = True):
+              elements: int | None = None, global_search: bool = True,
+              share: str | None = None, min_tension_N: float = 0.0):
     """Sample the workspace W_0 and its restrictions (Eqs. (18)-(22), Figs. 4-5)
     on a grid of targets (``mode="targets"``: tip control to each) or of
     tensions (``"tensions"``).  Runs serially, or on every rank of ``comm``
@@ -345,11 +342,18 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
     Targets (mm) that local tip control does not reach go through the global
     search (seeds over every loading order, reached neighbours) and are
     classed REACHED, UNDECIDED (no proof either way) or BEYOND_REACH
-    (|x| > l, proven); ``global_search=False`` keeps the local verdicts."""
+    (|x| > l, proven); ``global_search=False`` keeps the local verdicts.
+    ``share="min-norm"``/``"min-energy"`` and ``min_tension_N`` (the floor
+    P_min, N; mode targets): the tensions stored per reached target are the
+    sharing rule's (n >= 3 tendons; minimum |P| or strain energy, Eq. (21));
+    with a floor the map samples W_0(P_min) (reached with every P_i >= P_min;
+    BELOW_FLOOR: reached with P >= 0 but no tensions >= P_min found, not a
+    proof; docs/model.md §9.3)."""
     from .studies.workspace import run_map
 
     return run_map(arm, _mesh(arm, elements), mode=mode, spacing_mm=spacing_mm, box_mm=box_mm,
-                   comm=comm, out=out, overwrite=overwrite, global_search=global_search)
+                   comm=comm, out=out, overwrite=overwrite, global_search=global_search,
+                   share=share, min_tension_N=min_tension_N)
 
 
 def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None,

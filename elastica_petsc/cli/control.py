@@ -51,11 +51,11 @@ def add_parser(sub) -> None:
     parser.set_defaults(run=run)
 
 
-def add_share_options(parser) -> None:
-    """--share and --min-tension-N (redundant tendons)."""
+def add_share_options(parser, where: str = "the target") -> None:
+    """--share and --min-tension-N (redundant tendons); ``where``: what they apply to."""
     parser.add_argument("--share", choices=("min-norm", "min-energy", "none"), default=None,
-                        help="how tension is shared among the tension sets that reach the "
-                             "target (n >= 3 tendons): min-norm |P|, min-energy (strain "
+                        help=f"how tension is shared among the tension sets that reach {where} "
+                             "(n >= 3 tendons): min-norm |P|, min-energy (strain "
                              "energy, Eq. (21)), none (default: whatever the optimiser finds); "
                              "an SQP on the KKT conditions (tip on the target, P >= the floor). "
                              "With 2 tendons the tensions at a tip are unique: only the floor "
