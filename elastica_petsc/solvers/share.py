@@ -87,7 +87,8 @@ def share_rule(share: str | None, min_tension_N: float = 0.0) -> str:
     and 'none' without.  :class:`InputError` for an unknown rule, a floor that is
     not a finite number >= 0, or a floor with 'none'."""
     if not (np.isfinite(min_tension_N) and min_tension_N >= 0):
-        raise InputError(f"--min-tension-N must be a number of newtons >= 0, got {min_tension_N}")
+        raise InputError(f"the minimum tension (--min-tension-N) must be a number of newtons "
+                         f">= 0, got {min_tension_N}")
     if share is None:
         return "min-norm" if min_tension_N > 0 else "none"
     if share not in SHARES + ("none",):
