@@ -164,7 +164,7 @@ def run(args) -> int:
     result = api.control(arm, args.target, guess=guess, method=args.method, tol_mm=args.tol_mm,
                          global_search=not args.local, cables=args.cables, share=args.share,
                          min_tension_N=args.min_tension_N, animate=args.animate,
-                         elements=disc.n_elements)
+                         elements=disc.n_elements, progress=True)
     summary = control_summary(arm, result)
     if args.json:
         common.print_json(summary)

@@ -107,6 +107,7 @@ class SeedLibrary:
         self.levels = tuple(v for v in levels if v <= upper)
         self.divisions = divisions if controller.n <= 2 else 2
         self._seeds: list[Start] | None = None
+        self.on_seed = None            # called with the number of seeds kept so far (progress)
 
     def seeds(self) -> list[Start]:
         if self._seeds is None:
@@ -122,6 +123,8 @@ class SeedLibrary:
         ok = eq.converged and eq.stable and np.min(eq.cable_lengths) > 5 * COLLAPSE_LENGTH
         if ok:
             self._seeds.append(Start(eq, loading, label))
+            if self.on_seed is not None:
+                self.on_seed(len(self._seeds))
         return ok
 
     def _sweep(self, parent: Start, order: tuple) -> None:
@@ -193,13 +196,18 @@ class Reacher:
     boundary : None, or a callable target (units of l) -> (evidence, distance
         in units of l), evidence '' unless the target is proven outside W_0;
         asked only when the search is exhausted (``OUTSIDE_BOUNDARY``).
+    progress : None, or a callable ``progress(steps, note)`` told of every
+        search step of :meth:`reach` (a local solve, a homotopy sub-target,
+        building the seed library, the boundary proof) with what it is doing
+        (core/progress.py: ``control`` shows it while the global search runs).
     """
 
     def __init__(self, controller: TipController, *, homotopy_step: float = 0.08,
                  min_step: float = 2e-3, max_seeds: int = 6, max_substeps: int = 25,
                  local_its: int = 30, max_homotopies: int = 4, seeds: SeedLibrary | None = None,
-                 boundary=None):
+                 boundary=None, progress=None):
         self.controller = controller
+        self.progress, self.steps = progress, 0
         self.boundary = boundary
         self.max_homotopies = max_homotopies
         self.local_its = local_its
@@ -208,6 +216,12 @@ class Reacher:
         self.max_seeds = max_seeds
         self.max_substeps = max_substeps
         self.library = seeds if seeds is not None else SeedLibrary(controller)
+
+    def step(self, note: str) -> None:
+        """One search step done or starting (``progress``)."""
+        self.steps += 1
+        if self.progress is not None:
+            self.progress(self.steps, note)
 
     # --- strategies --------------------------------------------------------------
     def homotopy(self, target: np.ndarray, start: Start) -> ControlResult | None:
@@ -223,6 +237,8 @@ class Reacher:
         eq, loading, last = start.equilibrium, start.loading, None
         for _ in range(self.max_substeps):
             t_new = 1.0 if t + h >= 1.0 - 1e-12 else t + h
+            self.step(f"homotopy in target space from {start.label or 'a state'}: "
+                       f"{100 * t_new:.0f} % of the way")
             res = ctl.solve(tip0 + t_new * d, start=eq, start_loading=loading, max_failures=2,
                             max_it=self.local_its)
             if res.converged:
@@ -237,6 +253,7 @@ class Reacher:
         return last
 
     def _local(self, target, start: Start, tried: list) -> ControlResult | None:
+        self.step(f"local solve from {start.label or 'a state'}")
         res = self.controller.solve(target, start=start.equilibrium, start_loading=start.loading,
                                     max_failures=3, max_it=self.local_its)
         tried.append(res)
@@ -272,6 +289,7 @@ class Reacher:
             return dataclasses.replace(first, reachable=False, reason=BEYOND_REACH,
                                        local_reason=first.reason, evidence=evidence,
                                        message=evidence)
+        self.step("local tip control")
         first = ctl.solve(target, p0=p0, start=start, start_loading=start_loading)
         if first.converged:
             return self._clear(target, first, cables)
@@ -279,6 +297,10 @@ class Reacher:
             return first
         tried = [first]
         origin = self._origin(first, start, start_loading)
+        self.step("global search: seed library (equilibria over every loading order)")
+        if self.progress is not None:
+            self.library.on_seed = lambda count: self.progress(
+                self.steps, f"global search: seed library, {count} equilibria")
         seeds = self.library.nearest(target, self.max_seeds)
         plan = ([("neighbour", s, self._local) for s in neighbours]
                 + [("seed", s, self._local) for s in seeds]
@@ -296,6 +318,7 @@ class Reacher:
         when ``self.boundary`` proves the target outside W_0."""
         if res.converged or res.reachable is not None or self.boundary is None:
             return res
+        self.step("boundary proof: the traced boundary of W_0")
         evidence, _ = self.boundary(target)
         if not evidence:
             return res
@@ -306,6 +329,7 @@ class Reacher:
         """Apply the cable policy to a reached state (module doc)."""
         if cables == "ignore" or np.all(state_cable_clear(res.equilibrium)):
             return res
+        self.step("a cable crosses the arm: searching for clear cables")
         tried = []
         seeds = [s for s in self.library.nearest(target, 4 * self.max_seeds)
                  if np.all(state_cable_clear(s.equilibrium))]
@@ -335,6 +359,7 @@ class Reacher:
         reported undecided (SEARCH_EXHAUSTED)."""
         best = min(tried, key=lambda r: float(np.linalg.norm(r.tip - target)))
         if not np.array_equal(best.target, target):
+            self.step("local solve from the closest tip found")
             best = self.controller.solve(target, start=best.equilibrium,
                                          start_loading=best.loading, max_failures=3)
         if best.converged:
