@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import math
 
 import numpy as np
 
@@ -67,6 +68,8 @@ SEARCH_EXHAUSTED = "SEARCH_EXHAUSTED"    # reason: global strategies tried, unde
 CABLE_CROSSES_ARM = "CABLE_CROSSES_ARM"  # reason (cables="require"): reached only with a
 #                                          cable through the arm
 CABLE_POLICIES = ("ignore", "prefer", "require")
+MAX_SEED_SOLVES = 2000                   # budget of a seed library, equilibrium solves (the
+#                                          full library of n <= 3 tendons fits: 1566 for n = 3)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -98,23 +101,82 @@ class SeedLibrary:
     raises the tendons one after another in that order.  Proportional rays
     along simplex-grid directions are added.  Kept: converged, stable, no
     cable shorter than 5 COLLAPSE_LENGTH.  Built on first use (a few hundred
-    warm continuation solves; about 1-2 s at 180 elements on an idle core)."""
+    warm continuation solves; about 1-2 s at 180 elements on an idle core).
+
+    Budget (``max_solves`` equilibrium solves, default :data:`MAX_SEED_SOLVES`):
+    the full library takes up to n! sum_{k=1}^{n} L^k sweep solves (L levels)
+    plus L per ray, which grows like n! 6^n (about 37,000 solves for n = 4:
+    minutes).  The rule: all levels and all n! loading orders while they fit
+    (every arm with n <= 3 tendons); else the largest number of levels L that
+    fits (spread over the range, the smallest and largest kept; L = 1: the
+    middle level), then as many loading orders as fit (each tendon first
+    once before the others), and a hard stop at the budget (rays included).
+    :attr:`cap_note` says what was cut ('' when nothing was)."""
 
     def __init__(self, controller: TipController, levels=(2.0, 6.0, 14.0, 28.0, 50.0, 80.0),
-                 divisions: int = 4):
+                 divisions: int = 4, max_solves: int = MAX_SEED_SOLVES):
         self.controller = controller
         upper = np.inf if controller.upper is None else controller.upper
-        self.levels = tuple(v for v in levels if v <= upper)
+        full = tuple(v for v in levels if v <= upper)
         self.divisions = divisions if controller.n <= 2 else 2
+        self.max_solves, self.solves, self.stopped = int(max_solves), 0, False
+        self.full_count = self._count(len(full), math.factorial(controller.n))
+        self.levels, self.orders = self._budget(full)
         self._seeds: list[Start] | None = None
         self.on_seed = None            # called with the number of seeds kept so far (progress)
+        self._full_levels = len(full)
+
+    def _count(self, levels: int, orders: int) -> int:
+        """Upper bound of the solves of ``orders`` sweeps over ``levels`` levels, and the rays."""
+        n = self.controller.n
+        rays = sum(1 for c in itertools.product(range(self.divisions + 1), repeat=n)
+                   if sum(c) == self.divisions and max(c) < self.divisions)
+        return orders * sum(levels ** k for k in range(1, n + 1)) + rays * levels
+
+    def _budget(self, full: tuple) -> tuple[tuple, list]:
+        """(levels, loading orders) that fit the budget (class doc)."""
+        n = self.controller.n
+        orders = list(itertools.permutations(range(n)))
+        L = len(full)
+        while L > 1 and self._count(L, len(orders)) > self.max_solves:
+            L -= 1
+        if L < len(full):
+            pick = ([len(full) // 2] if L == 1 else
+                    np.round(np.linspace(0, len(full) - 1, L)).astype(int).tolist())
+            full = tuple(full[i] for i in pick)
+        if self._count(L, len(orders)) > self.max_solves:      # each tendon first once, first
+            first = [tuple((i + j) % n for j in range(n)) for i in range(n)]
+            orders = first + [o for o in orders if o not in first]
+            while len(orders) > 1 and self._count(L, len(orders)) > self.max_solves:
+                orders.pop()
+        return full, orders
+
+    @property
+    def cap_note(self) -> str:
+        """What the budget cut from the library ('' if nothing)."""
+        n_orders = math.factorial(self.controller.n)
+        if (len(self.levels) == self._full_levels and len(self.orders) == n_orders
+                and not self.stopped):
+            return ""
+        return (f"seed library capped by its budget of {self.max_solves} equilibrium solves "
+                f"(the full library needs up to {self.full_count}): {len(self.levels)} of "
+                f"{self._full_levels} tension levels, {len(self.orders)} of {n_orders} loading "
+                f"orders" + (", stopped at the budget" if self.stopped else ""))
+
+    def _solve(self, p: np.ndarray, start: Equilibrium | None) -> Equilibrium | None:
+        """One counted solve; None once the budget is spent."""
+        if self.solves >= self.max_solves:
+            self.stopped = True
+            return None
+        self.solves += 1
+        return self.controller.solver.solve(p, start=start)
 
     def seeds(self) -> list[Start]:
         if self._seeds is None:
             self._seeds = []
             n = self.controller.n
             root = Start(None, Loading.straight(n), "")
-            for order in itertools.permutations(range(n)):
+            for order in self.orders:
                 self._sweep(root, order)
             self._rays()
         return self._seeds
@@ -132,12 +194,14 @@ class SeedLibrary:
         into the remaining tendons from each state (continuation throughout)."""
         if not order:
             return
-        solver, i = self.controller.solver, order[0]
+        i = order[0]
         eq, loading = parent.equilibrium, parent.loading
         for level in self.levels:
             p = (np.zeros(self.controller.n) if eq is None else eq.p).copy()
             p[i] = level
-            eq = solver.solve(p, start=eq)
+            eq = self._solve(p, eq)
+            if eq is None:
+                return
             loading = loading.then(p)
             label = f"p={np.round(p, 3).tolist()} {loading.describe()}"
             if not self._keep(eq, loading, label):
@@ -148,14 +212,15 @@ class SeedLibrary:
 
     def _rays(self) -> None:
         n, k = self.controller.n, self.divisions
-        solver = self.controller.solver
         for combo in itertools.product(range(k + 1), repeat=n):
             if sum(combo) != k or max(combo) == k:
                 continue                      # one-tendon rays are in the sweeps
             direction = np.array(combo, float) / max(combo)
             eq, loading = None, Loading.straight(n)
             for level in self.levels:
-                eq = solver.solve(level * direction, start=eq)
+                eq = self._solve(level * direction, eq)
+                if eq is None:
+                    return
                 loading = loading.then(level * direction)
                 if not self._keep(eq, loading, f"p={np.round(level * direction, 3).tolist()} "
                                                "proportional from zero"):
@@ -300,7 +365,9 @@ class Reacher:
         self.step("global search: seed library (equilibria over every loading order)")
         if self.progress is not None:
             self.library.on_seed = lambda count: self.progress(
-                self.steps, f"global search: seed library, {count} equilibria")
+                self.steps, f"global search: seed library, {count} equilibria"
+                + (f" (capped: budget of {self.library.max_solves} solves)"
+                   if self.library.cap_note else ""))
         seeds = self.library.nearest(target, self.max_seeds)
         plan = ([("neighbour", s, self._local) for s in neighbours]
                 + [("seed", s, self._local) for s in seeds]
@@ -365,10 +432,11 @@ class Reacher:
         if best.converged:
             return dataclasses.replace(best, strategy="closest state")
         mm = self.controller.length_mm
+        capped = self.library.cap_note
         note = (f"{SEARCH_EXHAUSTED}: not reached by the local solve, a homotopy in target "
-                f"space, {len(tried)} solves from neighbours and seeds (other loading orders); "
-                f"not proven unreachable. Closest tip {best.tip_error * mm:.4g} mm away, local "
-                f"end {best.reason}")
+                f"space, {len(tried)} solves from neighbours and seeds (other loading orders"
+                + (f"; {capped}" if capped else "") + "); not proven unreachable. Closest tip "
+                f"{best.tip_error * mm:.4g} mm away, local end {best.reason}")
         return dataclasses.replace(best, reachable=None, reason=SEARCH_EXHAUSTED,
                                    local_reason=best.reason,
                                    message=note + "; " + best.message, evidence=note)
