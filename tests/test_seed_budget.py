@@ -60,3 +60,16 @@ def test_a_search_ended_by_the_budget_is_undecided_and_says_so():
         assert res.reachable is None and res.reason == SEARCH_EXHAUSTED
         assert "seed library capped by its budget of 40" in res.message
         assert "seed library capped" in res.evidence
+
+
+def test_the_text_output_names_the_cap():
+    from elastica_petsc.cli.control import unreachable_message
+
+    with TipController(four_tendon_arm(), n_elements=30) as ctl:
+        note = SeedLibrary(ctl).cap_note
+    s = {"target_mm": [-400.0, -300.0], "tip_mm": [-300.0, -250.0], "tip_error_mm": 100.0,
+         "on_bound": [], "reason": SEARCH_EXHAUSTED, "local_reason": "STATIONARY",
+         "reachable": None, "message": "", "evidence": f"{SEARCH_EXHAUSTED}: ... (other "
+         f"loading orders; {note}); not proven unreachable", "cable_clear": [True] * 4}
+    text = unreachable_message(s)
+    assert text.endswith("; " + note) and "not proven unreachable" in text

@@ -1,6 +1,7 @@
 """``elastica-petsc control``: tensions that put the tip on a target (Eqs. (10)-(12), Algorithm 1)."""
 from __future__ import annotations
 
+import re
 import sys
 
 from . import common
@@ -116,9 +117,10 @@ def unreachable_message(s: dict) -> str:
     if s["reachable"] is False:
         return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm is not reachable: "
                 f"{s['evidence']}; {where}")
+    capped = re.search(r"seed library capped by its budget[^;)]*", s["evidence"] or "")
     return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm not reached and not "
             f"proven unreachable ({s['reason']}, local end {s['local_reason']}): {where}; "
-            f"{bounds}")
+            f"{bounds}" + (f"; {capped.group(0)}" if capped else ""))
 
 
 def format_control(s: dict) -> str:

@@ -158,8 +158,8 @@ class SeedLibrary:
         if (len(self.levels) == self._full_levels and len(self.orders) == n_orders
                 and not self.stopped):
             return ""
-        return (f"seed library capped by its budget of {self.max_solves} equilibrium solves "
-                f"(the full library needs up to {self.full_count}): {len(self.levels)} of "
+        return (f"seed library capped by its budget of {self.max_solves} equilibrium solves, "
+                f"the full library needing up to {self.full_count}: {len(self.levels)} of "
                 f"{self._full_levels} tension levels, {len(self.orders)} of {n_orders} loading "
                 f"orders" + (", stopped at the budget" if self.stopped else ""))
 
