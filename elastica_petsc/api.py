@@ -357,7 +357,8 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
     sharing rule's (n >= 3 tendons; minimum |P| or strain energy, Eq. (21));
     with a floor the map samples W_0(P_min) (reached with every P_i >= P_min;
     BELOW_FLOOR: reached with P >= 0 but no tensions >= P_min found, not a
-    proof; docs/model.md §9.3)."""
+    proof; UNIQUE_BELOW_FLOOR: two tendons, the target's only tensions are
+    below P_min, proven; docs/model.md §9.3)."""
     from .studies.workspace import run_map
 
     return run_map(arm, _mesh(arm, elements), mode=mode, spacing_mm=spacing_mm, box_mm=box_mm,

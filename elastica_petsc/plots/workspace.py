@@ -10,7 +10,8 @@ import numpy as np
 
 from .common import figure, save
 from ..studies.workspace import (BELOW_FLOOR, BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED,
-                                 OUTSIDE_BOUNDARY, REACHED, UNDECIDED, reason_counts, share_of)
+                                 OUTSIDE_BOUNDARY, REACHED, UNDECIDED, UNIQUE_BELOW_FLOOR,
+                                 reason_counts, share_of)
 
 
 def read_workspace(path) -> dict:
@@ -80,6 +81,8 @@ def _classes(data: dict) -> list[tuple[np.ndarray, str, str, str]]:
             (reached & found, "darkgreen", "D", f"reached, {w0}, by the global search"),
             (status == BELOW_FLOOR, "gold", "s",
              "reached with P >= 0, no tensions >= the floor found (undecided)"),
+            (status == UNIQUE_BELOW_FLOOR, "tab:brown", "s",
+             "reached with P >= 0, its only tensions below the floor (proven)"),
             (status == UNDECIDED, "tab:orange", "o",
              "not reached after the global search (undecided)"),
             (status == OUTSIDE_BOUNDARY, "tab:purple", ".",

@@ -27,7 +27,8 @@ from ..core.fem import Discretisation
 from ..core.model import Arm
 from ..solvers.stability import StabilityError, StabilitySolver
 from .workspace import (BELOW_FLOOR, BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED,
-                        OUTSIDE_BOUNDARY, REACHED, UNDECIDED, empty_fields, fields)
+                        OUTSIDE_BOUNDARY, REACHED, UNDECIDED, UNIQUE_BELOW_FLOOR, empty_fields,
+                        fields)
 
 
 class _Sampler:
@@ -177,7 +178,8 @@ class TargetSampler(_Sampler):
     and a sample still not shared is tried again from the next shared sample
     (backwards, like the backward sweep).  With two tendons there is no
     redundancy: the tensions of the state reached are kept and checked against
-    the floor.  A sample reached with P >= 0 whose sharing fails is
+    the floor; one below it is ``UNIQUE_BELOW_FLOOR`` (proven) where the traced
+    boundary shows the target has no other preimage (:meth:`_unique`).  A sample reached with P >= 0 whose sharing fails is
     ``BELOW_FLOOR`` with a floor (reason: how the sharer stopped; its P >= 0
     state is kept: it is in W_0, undecided for W_0(p_min)), and stays
     ``REACHED`` without one (``shared`` False).  No sharing, no floor: nothing
@@ -207,6 +209,7 @@ class TargetSampler(_Sampler):
             from ..solvers.share import TensionSharer
             self.sharer = TensionSharer(self.controller, share, self.min_tension)
         self._reached = {}                 # sample -> ControlResult that reached it (a chunk)
+        self._faces = None                 # two tendons with a floor: the traced boundary
 
     @property
     def library(self):
@@ -436,6 +439,9 @@ class TargetSampler(_Sampler):
             for k in self._reached:
                 if np.min(out["tensions"][k]) >= self.min_tension - 1e-12:
                     out["shared"][k] = True
+                elif self._unique(points[k]):
+                    out["status"][k] = UNIQUE_BELOW_FLOOR
+                    out["reason"][k] = b"UNIQUE_BELOW_FLOOR"
                 else:
                     out["status"][k], out["reason"][k] = BELOW_FLOOR, b"BELOW_FLOOR"
             return True
@@ -458,6 +464,23 @@ class TargetSampler(_Sampler):
             if self.min_tension > 0:
                 out["status"][k] = BELOW_FLOOR
         return True
+
+    def _unique(self, target_mm) -> bool:
+        """Two tendons: whether ``target_mm`` has one preimage in the region D of the
+        traced boundary of W_0 (docs/model.md §9.1: a bounded face with N = 1, the
+        loop closed, every fold traced, the target more than 3 cells from every
+        traced curve), so that the state reached is its only one (§9.3).  The
+        boundary is traced on first need, once per process."""
+        if self._faces is None:
+            from .boundary import trace_boundary
+            self._faces = trace_boundary(self.arm, self.disc, restricted=False)
+        res, point = self._faces, np.asarray(target_mm, float).reshape(1, 2)
+        if not res.regions["W0"].closed or res.untraced_folds or not res.faces:
+            return False
+        if res.outside_map.distance(point)[0] <= 3 * res.cell_mm:
+            return False
+        label = int(res.outside_map.label(point)[0])
+        return any(f["label"] == label and f["preimages"] == 1 for f in res.faces)
 
     def _share_one(self, target_mm, k: int, out: dict, starts: tuple):
         """Track the shared tensions at sample ``k`` from each of ``starts`` (an

@@ -76,9 +76,11 @@ STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the other ranks' l
 # and files written before the global search).  With a pretension floor P_min
 # (``--min-tension-N``) REACHED means reached with every P_i >= P_min (W_0(P_min),
 # docs/model.md §9.3), and BELOW_FLOOR: reached with P >= 0 (in W_0), but no tension
-# set with every P_i >= P_min was found (not a proof that there is none).
+# set with every P_i >= P_min was found (not a proof that there is none);
+# UNIQUE_BELOW_FLOOR (two tendons): the tensions found are below the floor and they
+# are the target's only ones (a face of the traced boundary with one preimage): proven.
 (NOT_DONE, REACHED, NEEDS_NEGATIVE, NOT_CONVERGED, UNDECIDED, BEYOND_REACH,
- OUTSIDE_BOUNDARY, BELOW_FLOOR) = 0, 1, 2, 3, 4, 5, 6, 7
+ OUTSIDE_BOUNDARY, BELOW_FLOOR, UNIQUE_BELOW_FLOOR) = 0, 1, 2, 3, 4, 5, 6, 7, 8
 STATUS_NAMES = {NOT_DONE: "not computed", REACHED: "reached with P >= 0",
                 NEEDS_NEGATIVE: "tip control ended on P_i = 0 (would need a negative tension locally; not a proof of outside W_0)",
                 NOT_CONVERGED: "not converged",
@@ -87,7 +89,10 @@ STATUS_NAMES = {NOT_DONE: "not computed", REACHED: "reached with P >= 0",
                 OUTSIDE_BOUNDARY: "outside the traced W_0 boundary (proven unreachable, "
                                   "docs/model.md §9.1)",
                 BELOW_FLOOR: "reached with P >= 0, but no tensions >= the floor found "
-                             "(undecided for W_0(P_min): not a proof, docs/model.md §9.3)"}
+                             "(undecided for W_0(P_min): not a proof, docs/model.md §9.3)",
+                UNIQUE_BELOW_FLOOR: "reached with P >= 0 by the only tensions that reach it, "
+                                    "below the floor (proven outside W_0(P_min), two tendons, "
+                                    "docs/model.md §9.3)"}
 # the sampler attribute of a file (part of what a resume must match); files
 # written before it existed were made by the local sampler (targets) or by
 # forward solves (tensions)
@@ -727,7 +732,7 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
 STATUS_KEYS = {NOT_DONE: "NOT_COMPUTED", REACHED: "REACHED", NEEDS_NEGATIVE: "NEEDS_NEGATIVE",
                NOT_CONVERGED: "NOT_CONVERGED", UNDECIDED: "UNDECIDED",
                BEYOND_REACH: "BEYOND_REACH", OUTSIDE_BOUNDARY: "OUTSIDE_BOUNDARY",
-               BELOW_FLOOR: "BELOW_FLOOR"}
+               BELOW_FLOOR: "BELOW_FLOOR", UNIQUE_BELOW_FLOOR: "UNIQUE_BELOW_FLOOR"}
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
@@ -804,7 +809,9 @@ class WorkspaceMap:
         OUTSIDE_BOUNDARY (outside the traced boundary of W_0, proven: docs/model.md
         §9.1) with the global search (``sampler`` "global-search"); with a floor
         (``min_tension_N`` > 0) BELOW_FLOOR: reached with P >= 0 but no tensions
-        >= the floor found (not a proof, docs/model.md §9.3); NEEDS_NEGATIVE (the local
+        >= the floor found (not a proof, docs/model.md §9.3), and UNIQUE_BELOW_FLOOR:
+        two tendons, the target's only tensions are below the floor (proven);
+        NEEDS_NEGATIVE (the local
         tip-control solve ended on a bound P_i = 0: a local verdict, not a proof
         that the target is outside W_0) or NOT_CONVERGED with the local sampler
         ("local"); NOT_COMPUTED.  `elastica-petsc boundary` gives the edge of
@@ -955,7 +962,9 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
     equilibria with every P_i >= P_min connected to the straight arm by
     quasi-static loading with all P_i >= 0 (docs/model.md §9.3), and a target
     reached with P >= 0 for which no tensions >= P_min are found is
-    BELOW_FLOOR (not a proof).  Both are file attributes (``share``,
+    BELOW_FLOOR (not a proof), or UNIQUE_BELOW_FLOOR with two tendons where
+    the traced boundary shows its tensions are its only ones (proven).  Both
+    are file attributes (``share``,
     ``min_tension_N``, N; ``min_tension``, P l^2/B) that a resume must match.
 
     Collective over ``comm`` (default ``MPI.COMM_WORLD``; one rank runs
