@@ -179,8 +179,8 @@ class TargetSampler(_Sampler):
     (backwards, like the backward sweep).  With two tendons there is no
     redundancy: the tensions of the state reached are kept and checked against
     the floor; one below it is ``UNIQUE_BELOW_FLOOR`` (proven) where the traced
-    boundary shows the target has no other preimage (:meth:`_unique`).  A sample reached with P >= 0 whose sharing fails is
-    ``BELOW_FLOOR`` with a floor (reason: how the sharer stopped; its P >= 0
+    boundary shows the target has no other preimage (:meth:`_unique`).  A
+    sample reached with P >= 0 whose sharing fails is ``BELOW_FLOOR`` with a floor (reason: how the sharer stopped; its P >= 0
     state is kept: it is in W_0, undecided for W_0(p_min)), and stays
     ``REACHED`` without one (``shared`` False).  No sharing, no floor: nothing
     of this runs (the maps are those of before).
