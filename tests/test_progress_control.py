@@ -12,9 +12,13 @@ import subprocess
 import sys
 import time
 
+import pytest
 from test_progress import assert_timely, run_in_pty
 
 from elastica_petsc.core.progress import Progress
+
+# timing is part of what these tests check: scripts/test.sh runs them alone
+pytestmark = pytest.mark.serial
 
 # at 30 elements the local solve stalls at (500, 0) mm (on the x axis: every target there
 # is stationary from the straight arm's sensitivities) and the global search reaches it from
