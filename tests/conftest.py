@@ -81,7 +81,7 @@ def paper_solver(paper_arm):
 # scripts/test.sh (pytest-xdist, a file per worker) hands files out in collection
 # order, so a long file collected last would leave the other core idle at the end.
 SLOW_FILES_FIRST = ("test_workspace.py", "test_readme.py", "test_reproduce.py", "test_api.py",
-                    "test_cli_lengths.py", "test_lengths.py", "test_search_curves.py",
+                    "test_cli_lengths.py", "test_lengths.py", "test_search_curves.py", "test_workspace_share.py",
                     "test_boundary.py")
 
 
