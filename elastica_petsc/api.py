@@ -113,16 +113,17 @@ def _tensions(arm: Arm, tensions_N, tensions) -> np.ndarray:
     return check_tensions(p, arm.n_tendons)
 
 
-def _progress(progress, label: str, unit: str):
+def _progress(progress, label: str, unit: str, delay: float = 0.0):
     """``progress=`` of the long studies as a context: True draws the command
-    line's bar (lines in logs; core/progress.py), a callable is called as
-    ``progress(done, note)``, None/False report nothing."""
+    line's bar (lines in logs; core/progress.py; on a terminal only after
+    ``delay`` seconds), a callable is called as ``progress(done, note)``,
+    None/False report nothing."""
     from contextlib import nullcontext
 
     from .core.progress import Progress
 
     if progress is True:
-        return Progress(None, label, unit=unit)
+        return Progress(None, label, unit=unit, delay=delay)
     return nullcontext(progress or None)
 
 
@@ -155,7 +156,7 @@ def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None, side: str | N
 def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blmvm",
             tol_mm: float = 1e-5, global_search: bool = True, cables: str = "prefer",
             share: str | None = None, min_tension_N: float = 0.0, animate=None,
-            elements: int | None = None):
+            elements: int | None = None, progress=None):
     """Non-negative tensions that put the tip on ``target_mm`` (Eqs. (10)-(12)):
     TAO BLMVM (``method="blmvm"``) or the paper's gradient descent (``"gd"``,
     Algorithm 1), from ``guess_N`` (or ``guess`` in p = P l^2/B; default 0).
@@ -171,12 +172,16 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
     cross the arm.  With n >= 3 tendons, ``share="min-norm"``/``"min-energy"``
     and ``min_tension_N`` choose among the tension sets that reach the target.
     ``animate``: a .gif/.mp4 path for the arm through the iterations.
+    ``progress`` (True: a bar after 1 s, or a callable ``progress(steps, note)``)
+    reports the search steps (local solves, homotopy sub-targets, the seed
+    library, the boundary proof) with the stage.
     Returns a ``ControlResult`` (``tensions_N``, ``cable_lengths_mm``,
     ``tip_mm``, ``converged``, ``reachable``, ``loading``)."""
     import dataclasses
 
     from .solvers.control import TipController
     from .solvers.reach import Reacher, simplest_loading
+    from .solvers.share import share_rule
     from .studies.boundary import boundary_proof
 
     target = np.asarray(target_mm, dtype=float).ravel()
@@ -185,13 +190,17 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
     if guess_N is not None:
         guess = arm.tensions_from_N(guess_N)
     p0 = None if guess is None else check_tensions(guess, arm.n_tendons)
-    with TipController(arm, n_elements=elements, method=method, tip_tol_mm=tol_mm) as ctl:
-        reacher = Reacher(ctl, boundary=boundary_proof(arm, ctl.disc))
+    sharer_asked = share_rule(share, min_tension_N)          # bad input before any solve
+    with (_progress(progress, "control", "search steps", delay=1.0) as bar,
+          TipController(arm, n_elements=elements, method=method, tip_tol_mm=tol_mm) as ctl):
+        reacher = Reacher(ctl, boundary=boundary_proof(arm, ctl.disc), progress=bar)
         result = reacher.reach(arm.from_mm(target), p0=p0, global_search=global_search,
                                cables=cables)
-        sharer = _sharer(arm, ctl, share, min_tension_N)
+        sharer = _sharer(arm, ctl, sharer_asked, min_tension_N)
         if sharer is not None and result.converged:
+            reacher.step(f"tension sharing ({sharer.share})")
             result = sharer.solve(result)
+        reacher.step("the simplest loading path that reaches the state")
         result = dataclasses.replace(result, loading=simplest_loading(
             ctl.solver, result.equilibrium, result.loading))
         if animate:
@@ -202,14 +211,10 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
 
 def _sharer(arm: Arm, controller, share: str | None, min_tension_N: float):
     """The TensionSharer asked for (n >= 3 tendons), or None."""
-    from .solvers.share import TensionSharer
+    from .solvers.share import TensionSharer, share_rule
 
-    if share is None:
-        share = "min-norm" if min_tension_N > 0 else "none"
+    share = share_rule(share, min_tension_N)
     if share == "none":
-        if min_tension_N > 0:
-            raise InputError("a pretension floor (--min-tension-N) needs a sharing rule: "
-                             "drop --share none")
         return None
     return TensionSharer(controller, share, float(arm.tensions_from_N(min_tension_N)))
 
@@ -335,7 +340,8 @@ def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None
 
 def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",
               out: str | Path | None = None, overwrite: bool = False, comm=None,
-              elements: int | None = None, global_search: bool = True):
+              elements: int | None = None, global_search: bool = True,
+              share: str | None = None, min_tension_N: float = 0.0):
     """Sample the workspace W_0 and its restrictions (Eqs. (18)-(22), Figs. 4-5)
     on a grid of targets (``mode="targets"``: tip control to each) or of
     tensions (``"tensions"``).  Runs serially, or on every rank of ``comm``
@@ -345,11 +351,19 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
     Targets (mm) that local tip control does not reach go through the global
     search (seeds over every loading order, reached neighbours) and are
     classed REACHED, UNDECIDED (no proof either way) or BEYOND_REACH
-    (|x| > l, proven); ``global_search=False`` keeps the local verdicts."""
+    (|x| > l, proven); ``global_search=False`` keeps the local verdicts.
+    ``share="min-norm"``/``"min-energy"`` and ``min_tension_N`` (the floor
+    P_min, N; mode targets): the tensions stored per reached target are the
+    sharing rule's (n >= 3 tendons; minimum |P| or strain energy, Eq. (21));
+    with a floor the map samples W_0(P_min) (reached with every P_i >= P_min;
+    BELOW_FLOOR: reached with P >= 0 but no tensions >= P_min found, not a
+    proof; UNIQUE_BELOW_FLOOR: two tendons, the target's only tensions are
+    below P_min, proven; docs/model.md §9.3)."""
     from .studies.workspace import run_map
 
     return run_map(arm, _mesh(arm, elements), mode=mode, spacing_mm=spacing_mm, box_mm=box_mm,
-                   comm=comm, out=out, overwrite=overwrite, global_search=global_search)
+                   comm=comm, out=out, overwrite=overwrite, global_search=global_search,
+                   share=share, min_tension_N=min_tension_N)
 
 
 def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None,

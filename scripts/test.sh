@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Set up (idempotent) and run the test suite, serial tests then MPI tests.
+# Set up (idempotent) and run the test suite (or the tests given as arguments).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 venv="$(bash "$here/scripts/setup.sh")"
@@ -11,4 +11,10 @@ cd "$here"
 "$venv/bin/python" -c "import meshio" 2>/dev/null ||
     "$venv/bin/python" -m pip install -q --no-deps meshio==5.3.5 rich==13.9.4
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-"$venv/bin/python" -m pytest -q "$@"
+if (($#)); then                                   # the tests asked for, in one process
+  exec "$venv/bin/python" -m pytest -q "$@"
+fi
+# the whole suite: a file per worker on every core (pytest-xdist, a Debian package), then
+# the tests marked serial (they time a terminal or a start-up) alone on the machine
+"$venv/bin/python" -m pytest -q -n auto --dist loadfile -m "not serial"
+"$venv/bin/python" -m pytest -q -m serial

@@ -75,3 +75,16 @@ def paper_solver(paper_arm):
     solver = EquilibriumSolver(Discretisation.from_arm(paper_arm, 180))
     yield solver
     solver.destroy()
+
+
+# The slowest files first (measured with --durations): the parallel run of
+# scripts/test.sh (pytest-xdist, a file per worker) hands files out in collection
+# order, so a long file collected last would leave the other core idle at the end.
+SLOW_FILES_FIRST = ("test_workspace.py", "test_readme.py", "test_reproduce.py", "test_api.py",
+                    "test_cli_lengths.py", "test_lengths.py", "test_search_curves.py", "test_workspace_share.py",
+                    "test_boundary.py")
+
+
+def pytest_collection_modifyitems(items):
+    rank = {name: k for k, name in enumerate(SLOW_FILES_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))     # stable sort

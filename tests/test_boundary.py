@@ -164,6 +164,29 @@ def test_w0_faces_hole_and_outside_verdicts(paper):
     assert result.outside(tip - 10.0 * outward)[0] == ""
 
 
+def test_hole_around_r1_is_proven_outside(paper):
+    """The face of winding 0 with no preimage (the hole around r_1) is outside
+    W_0: a target there gets OUTSIDE_BOUNDARY.  Independent check: no stable
+    tip of a tension-grid map (forward solves, 0 <= p_i <= 40) falls in it,
+    while such tips do fill the faces with one preimage around it."""
+    from mpi4py import MPI
+
+    from elastica_petsc.studies.workspace import run_map
+
+    arm, disc, result = paper
+    hole = [f for f in result.faces if f["winding"] == 0 and f["preimages"] == 0]
+    assert len(hole) == 1 and hole[0]["area_mm2"] > 1e5
+    evidence, dist = result.outside(hole[0]["point_mm"])
+    assert evidence.startswith("OUTSIDE_BOUNDARY") and "hole" in evidence and dist > 50
+    grid = run_map(arm, disc, mode="tensions", tension_spacing=5.0, tension_max=40.0,
+                   comm=MPI.COMM_SELF)
+    tips = grid.tip_mm[grid.status == "REACHED"]
+    labels = result.outside_map.label(tips)
+    assert not np.any(labels == hole[0]["label"])
+    one = [f["label"] for f in result.faces if f["preimages"] == 1 and f["area_mm2"] > 1e4]
+    assert np.isin(labels, one).sum() > 0.5 * len(tips)
+
+
 def _p1_edge_point(result, arm):
     """A node of the upper P_1 = 0 edge (y > 200 mm) and the outward unit normal
     of its tip image (mm)."""

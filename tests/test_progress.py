@@ -17,6 +17,9 @@ import pytest
 from elastica_petsc.core import progress
 from elastica_petsc.core.progress import Progress
 
+# timing is part of what these tests check: scripts/test.sh runs them alone
+pytestmark = pytest.mark.serial
+
 
 class FakeTerminal(io.StringIO):
     def isatty(self) -> bool:

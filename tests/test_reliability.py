@@ -27,6 +27,9 @@ MPIEXEC = shutil.which("mpiexec")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1")
 
+# timing is part of what these tests check: scripts/test.sh runs them alone
+pytestmark = pytest.mark.serial
+
 
 def cli(*args, cwd=None, env=None, timeout=60) -> tuple[subprocess.CompletedProcess, float]:
     t0 = time.perf_counter()

@@ -1,6 +1,7 @@
 """``elastica-petsc control``: tensions that put the tip on a target (Eqs. (10)-(12), Algorithm 1)."""
 from __future__ import annotations
 
+import re
 import sys
 
 from . import common
@@ -51,11 +52,11 @@ def add_parser(sub) -> None:
     parser.set_defaults(run=run)
 
 
-def add_share_options(parser) -> None:
-    """--share and --min-tension-N (redundant tendons)."""
+def add_share_options(parser, where: str = "the target") -> None:
+    """--share and --min-tension-N (redundant tendons); ``where``: what they apply to."""
     parser.add_argument("--share", choices=("min-norm", "min-energy", "none"), default=None,
-                        help="how tension is shared among the tension sets that reach the "
-                             "target (n >= 3 tendons): min-norm |P|, min-energy (strain "
+                        help=f"how tension is shared among the tension sets that reach {where} "
+                             "(n >= 3 tendons): min-norm |P|, min-energy (strain "
                              "energy, Eq. (21)), none (default: whatever the optimiser finds); "
                              "an SQP on the KKT conditions (tip on the target, P >= the floor). "
                              "With 2 tendons the tensions at a tip are unique: only the floor "
@@ -116,9 +117,10 @@ def unreachable_message(s: dict) -> str:
     if s["reachable"] is False:
         return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm is not reachable: "
                 f"{s['evidence']}; {where}")
+    capped = re.search(r"seed library capped by its budget[^;)]*", s["evidence"] or "")
     return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm not reached and not "
             f"proven unreachable ({s['reason']}, local end {s['local_reason']}): {where}; "
-            f"{bounds}")
+            f"{bounds}" + (f"; {capped.group(0)}" if capped else ""))
 
 
 def format_control(s: dict) -> str:
@@ -164,7 +166,7 @@ def run(args) -> int:
     result = api.control(arm, args.target, guess=guess, method=args.method, tol_mm=args.tol_mm,
                          global_search=not args.local, cables=args.cables, share=args.share,
                          min_tension_N=args.min_tension_N, animate=args.animate,
-                         elements=disc.n_elements)
+                         elements=disc.n_elements, progress=True)
     summary = control_summary(arm, result)
     if args.json:
         common.print_json(summary)

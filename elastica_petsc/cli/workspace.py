@@ -31,6 +31,9 @@ def add_parser(sub) -> None:
                         help="mode targets: no global search for the targets local tip control "
                              "does not reach; they keep its local verdicts (ended on P_i = 0, "
                              "not converged), as before the global search; faster")
+    from .control import add_share_options
+    add_share_options(parser, "each reached target (mode targets; the map then samples "
+                              "W_0(P_min), docs/model.md §9.3)")
     parser.add_argument("--chunk", type=int, default=24, metavar="K",
                         help="samples per work unit (warm-started in a row; default 24)")
     parser.add_argument("--resume", action="store_true",
@@ -84,7 +87,7 @@ def _run(args, comm) -> int:
         arm, disc, mode=args.mode, spacing_mm=args.spacing, box_mm=args.box,
         tension_spacing=args.tension_spacing, tension_max=args.tension_max, chunk=args.chunk,
         comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
-        global_search=not args.local_only)
+        global_search=not args.local_only, share=args.share, min_tension_N=args.min_tension_N)
     if comm.rank != 0:
         return 0
     summary = result.summary()
@@ -146,6 +149,9 @@ def _derived_plots(args) -> dict:
 
 def format_summary(s: dict) -> str:
     lines = [f"workspace samples: {s['samples_done']}/{s['samples_total']} done -> {s['file']}"]
+    if s.get("share", "none") != "none":
+        lines.append(f"  tensions shared {s['share']}, every P >= {s['min_tension_floor_N']:g} N "
+                     "(W_0(P_min), docs/model.md §9.3)")
     for name, count in s["status_counts"].items():
         lines.append(f"  {name}: {count}")
     lines.append("  admissible: " + ", ".join(f"{k} {v}" for k, v in s["masks"].items()))

@@ -23,6 +23,9 @@
   alike would otherwise draw one bar per rank).
 * :func:`configure` (``quiet=True``, the command line's ``--quiet``)
   silences every bar and line of the process.
+* ``delay`` (seconds): a bar is drawn only once the work has lasted that
+  long, so a command that is usually fast (``control``: its global search
+  runs only when the local solve stalls) prints nothing when it is.
 """
 from __future__ import annotations
 
@@ -97,10 +100,11 @@ class Progress:
 
     def __init__(self, total: int | None, label: str, *, stream=None, interval: float = 1.0,
                  already: int = 0, log_percent: float = 5.0, log_seconds: float = 2.0,
-                 unit: str = "", open_log_seconds: float = 10.0):
+                 unit: str = "", open_log_seconds: float = 10.0, delay: float = 0.0):
         self.total = None if total is None else int(total)
         self.label, self.unit, self.note = label, unit, ""
         self.interval, self.log_percent, self.log_seconds = interval, log_percent, log_seconds
+        self.delay = float(delay)
         self.open_log_seconds = open_log_seconds
         self._drawn = 0
         self.already = self.done = already
@@ -118,7 +122,8 @@ class Progress:
         self._halt = threading.Event()
         self._thread = None
         if self.mode == "bar":
-            self._draw()
+            if self.delay <= 0:
+                self._draw()
             self._thread = threading.Thread(target=self._tick, daemon=True, name="progress")
             _OPEN.add(self)
             self._thread.start()
@@ -133,7 +138,7 @@ class Progress:
             self.total = int(total)
         if note is not None:
             self.note = note
-        if self.mode == "bar" and force:
+        if self.mode == "bar" and force and self._due():
             self._draw()
         elif self.mode == "log":
             self._log(force)
@@ -149,10 +154,11 @@ class Progress:
             self.note = "done"
         if self.mode == "bar":
             self.stop()
-            self._draw()
-            with self._lock:
-                self.stream.write("\n")
-                self.stream.flush()
+            if self._drawn:                         # nothing was drawn within ``delay``
+                self._draw()
+                with self._lock:
+                    self.stream.write("\n")
+                    self.stream.flush()
         elif self.mode == "log" and self.total is None:
             if self._logged_step and self.done != self._logged_step:   # closes a run it logged
                 self._log_open(force=True)
@@ -177,7 +183,7 @@ class Progress:
             self.close()
         else:
             self.stop()
-            if self.mode == "bar":
+            if self.mode == "bar" and self._drawn:
                 with self._lock:
                     self.stream.write("\n")
                     self.stream.flush()
@@ -194,9 +200,15 @@ class Progress:
         left = (self.total - self.done) * elapsed / fresh if fresh > 0 else float("nan")
         return elapsed, left
 
+    def _due(self) -> bool:
+        """Past the ``delay`` (or already drawn)."""
+        return self._drawn > 0 or time.monotonic() - self.start >= self.delay
+
     def _tick(self) -> None:
-        while not self._halt.wait(self.interval):
-            self._draw()
+        while not self._halt.wait(self.interval if self._drawn or self.delay <= 0
+                                  else min(self.interval, self.delay)):
+            if self._due():
+                self._draw()
 
     def _count(self) -> str:
         return f"{self.done} {self.unit}".rstrip()

@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from .common import figure, save
-from ..studies.workspace import (BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED, OUTSIDE_BOUNDARY,
-                                 REACHED, UNDECIDED, reason_counts)
+from ..studies.workspace import (BELOW_FLOOR, BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED,
+                                 OUTSIDE_BOUNDARY, REACHED, UNDECIDED, UNIQUE_BELOW_FLOOR,
+                                 reason_counts, share_of)
 
 
 def read_workspace(path) -> dict:
@@ -22,6 +23,7 @@ def read_workspace(path) -> dict:
         data["length_mm"] = float(config["arm"]["length_mm"])
         data["routes_mm"] = np.array([t["route_mm"] for t in config["tendon"]], float)
         data["mode"] = fh.attrs["mode"]
+        data["share"], data["min_tension_N"] = share_of(fh.attrs)
         grid = json.loads(fh.attrs.get("grid_json", "{}"))
         data["spacing"] = grid.get("spacing") if data["mode"] == "targets" else None
         data["masks"] = {name: fh["masks"][name][()] for name in fh["masks"]}
@@ -65,15 +67,22 @@ def _rigid_link(ax, length_mm: float) -> None:
 def _classes(data: dict) -> list[tuple[np.ndarray, str, str, str]]:
     """(selection, colour, marker, label) of each class of sample drawn in Fig. 4:
     reached locally (green) or by the global search (dark green), not reached
-    after the global search (orange: undecided), outside the traced W_0
+    after the global search (orange: undecided), reached with P >= 0 but not
+    with the floor's tensions (gold: undecided for W_0(P_min)), outside the traced W_0
     boundary (purple: proven), beyond reach (black), and the
     local sampler's classes (red: ended on P_i = 0; grey: not converged)."""
     status = data["status"]
     strategy = data.get("strategy", np.full(status.shape, b""))
     found = np.array([s.startswith((b"seed", b"neighbour")) for s in strategy], bool)
     reached = status == REACHED
-    return [(reached & ~found, "tab:green", "o", "reached, P >= 0 (W_0)"),
-            (reached & found, "darkgreen", "D", "reached, P >= 0 (W_0), by the global search"),
+    floor = data.get("min_tension_N", 0.0)
+    w0 = f"P >= {floor:g} N (W_0(P_min))" if floor > 0 else "P >= 0 (W_0)"
+    return [(reached & ~found, "tab:green", "o", f"reached, {w0}"),
+            (reached & found, "darkgreen", "D", f"reached, {w0}, by the global search"),
+            (status == BELOW_FLOOR, "gold", "s",
+             "reached with P >= 0, no tensions >= the floor found (undecided)"),
+            (status == UNIQUE_BELOW_FLOOR, "tab:brown", "s",
+             "reached with P >= 0, its only tensions below the floor (proven)"),
             (status == UNDECIDED, "tab:orange", "o",
              "not reached after the global search (undecided)"),
             (status == OUTSIDE_BOUNDARY, "tab:purple", ".",

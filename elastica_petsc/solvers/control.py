@@ -739,6 +739,11 @@ class TipController:
             history_E=np.array([h[2] for h in hist]), on_bound=tuple(on_bound),
             length_mm=mm, force_scale_N=self.arm.force_scale_N, loading=ev.loading)
 
+    def forget(self) -> None:
+        """Drop the cached evaluations (they are keyed by tensions alone, and the
+        branch depends on the start): before evaluations from an unrelated state."""
+        self._cache.clear()
+
     def forward(self, p, start: Equilibrium | None = None) -> Equilibrium:
         """The equilibrium at tensions ``p`` (load stepping from ``start`` or the
         straight arm); convenience for known-answer checks."""

@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import math
 
 import numpy as np
 
@@ -67,6 +68,8 @@ SEARCH_EXHAUSTED = "SEARCH_EXHAUSTED"    # reason: global strategies tried, unde
 CABLE_CROSSES_ARM = "CABLE_CROSSES_ARM"  # reason (cables="require"): reached only with a
 #                                          cable through the arm
 CABLE_POLICIES = ("ignore", "prefer", "require")
+MAX_SEED_SOLVES = 2000                   # budget of a seed library, equilibrium solves (the
+#                                          full library of n <= 3 tendons fits: 1566 for n = 3)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -98,22 +101,82 @@ class SeedLibrary:
     raises the tendons one after another in that order.  Proportional rays
     along simplex-grid directions are added.  Kept: converged, stable, no
     cable shorter than 5 COLLAPSE_LENGTH.  Built on first use (a few hundred
-    warm continuation solves; about 1-2 s at 180 elements on an idle core)."""
+    warm continuation solves; about 1-2 s at 180 elements on an idle core).
+
+    Budget (``max_solves`` equilibrium solves, default :data:`MAX_SEED_SOLVES`):
+    the full library takes up to n! sum_{k=1}^{n} L^k sweep solves (L levels)
+    plus L per ray, which grows like n! 6^n (about 37,000 solves for n = 4:
+    minutes).  The rule: all levels and all n! loading orders while they fit
+    (every arm with n <= 3 tendons); else the largest number of levels L that
+    fits (spread over the range, the smallest and largest kept; L = 1: the
+    middle level), then as many loading orders as fit (each tendon first
+    once before the others), and a hard stop at the budget (rays included).
+    :attr:`cap_note` says what was cut ('' when nothing was)."""
 
     def __init__(self, controller: TipController, levels=(2.0, 6.0, 14.0, 28.0, 50.0, 80.0),
-                 divisions: int = 4):
+                 divisions: int = 4, max_solves: int = MAX_SEED_SOLVES):
         self.controller = controller
         upper = np.inf if controller.upper is None else controller.upper
-        self.levels = tuple(v for v in levels if v <= upper)
+        full = tuple(v for v in levels if v <= upper)
         self.divisions = divisions if controller.n <= 2 else 2
+        self.max_solves, self.solves, self.stopped = int(max_solves), 0, False
+        self.full_count = self._count(len(full), math.factorial(controller.n))
+        self.levels, self.orders = self._budget(full)
         self._seeds: list[Start] | None = None
+        self.on_seed = None            # called with the number of seeds kept so far (progress)
+        self._full_levels = len(full)
+
+    def _count(self, levels: int, orders: int) -> int:
+        """Upper bound of the solves of ``orders`` sweeps over ``levels`` levels, and the rays."""
+        n = self.controller.n
+        rays = sum(1 for c in itertools.product(range(self.divisions + 1), repeat=n)
+                   if sum(c) == self.divisions and max(c) < self.divisions)
+        return orders * sum(levels ** k for k in range(1, n + 1)) + rays * levels
+
+    def _budget(self, full: tuple) -> tuple[tuple, list]:
+        """(levels, loading orders) that fit the budget (class doc)."""
+        n = self.controller.n
+        orders = list(itertools.permutations(range(n)))
+        L = len(full)
+        while L > 1 and self._count(L, len(orders)) > self.max_solves:
+            L -= 1
+        if L < len(full):
+            pick = ([len(full) // 2] if L == 1 else
+                    np.round(np.linspace(0, len(full) - 1, L)).astype(int).tolist())
+            full = tuple(full[i] for i in pick)
+        if self._count(L, len(orders)) > self.max_solves:      # each tendon first once, first
+            first = [tuple((i + j) % n for j in range(n)) for i in range(n)]
+            orders = first + [o for o in orders if o not in first]
+            while len(orders) > 1 and self._count(L, len(orders)) > self.max_solves:
+                orders.pop()
+        return full, orders
+
+    @property
+    def cap_note(self) -> str:
+        """What the budget cut from the library ('' if nothing)."""
+        n_orders = math.factorial(self.controller.n)
+        if (len(self.levels) == self._full_levels and len(self.orders) == n_orders
+                and not self.stopped):
+            return ""
+        return (f"seed library capped by its budget of {self.max_solves} equilibrium solves, "
+                f"the full library needing up to {self.full_count}: {len(self.levels)} of "
+                f"{self._full_levels} tension levels, {len(self.orders)} of {n_orders} loading "
+                f"orders" + (", stopped at the budget" if self.stopped else ""))
+
+    def _solve(self, p: np.ndarray, start: Equilibrium | None) -> Equilibrium | None:
+        """One counted solve; None once the budget is spent."""
+        if self.solves >= self.max_solves:
+            self.stopped = True
+            return None
+        self.solves += 1
+        return self.controller.solver.solve(p, start=start)
 
     def seeds(self) -> list[Start]:
         if self._seeds is None:
             self._seeds = []
             n = self.controller.n
             root = Start(None, Loading.straight(n), "")
-            for order in itertools.permutations(range(n)):
+            for order in self.orders:
                 self._sweep(root, order)
             self._rays()
         return self._seeds
@@ -122,6 +185,8 @@ class SeedLibrary:
         ok = eq.converged and eq.stable and np.min(eq.cable_lengths) > 5 * COLLAPSE_LENGTH
         if ok:
             self._seeds.append(Start(eq, loading, label))
+            if self.on_seed is not None:
+                self.on_seed(len(self._seeds))
         return ok
 
     def _sweep(self, parent: Start, order: tuple) -> None:
@@ -129,12 +194,14 @@ class SeedLibrary:
         into the remaining tendons from each state (continuation throughout)."""
         if not order:
             return
-        solver, i = self.controller.solver, order[0]
+        i = order[0]
         eq, loading = parent.equilibrium, parent.loading
         for level in self.levels:
             p = (np.zeros(self.controller.n) if eq is None else eq.p).copy()
             p[i] = level
-            eq = solver.solve(p, start=eq)
+            eq = self._solve(p, eq)
+            if eq is None:
+                return
             loading = loading.then(p)
             label = f"p={np.round(p, 3).tolist()} {loading.describe()}"
             if not self._keep(eq, loading, label):
@@ -145,14 +212,15 @@ class SeedLibrary:
 
     def _rays(self) -> None:
         n, k = self.controller.n, self.divisions
-        solver = self.controller.solver
         for combo in itertools.product(range(k + 1), repeat=n):
             if sum(combo) != k or max(combo) == k:
                 continue                      # one-tendon rays are in the sweeps
             direction = np.array(combo, float) / max(combo)
             eq, loading = None, Loading.straight(n)
             for level in self.levels:
-                eq = solver.solve(level * direction, start=eq)
+                eq = self._solve(level * direction, eq)
+                if eq is None:
+                    return
                 loading = loading.then(level * direction)
                 if not self._keep(eq, loading, f"p={np.round(level * direction, 3).tolist()} "
                                                "proportional from zero"):
@@ -193,13 +261,18 @@ class Reacher:
     boundary : None, or a callable target (units of l) -> (evidence, distance
         in units of l), evidence '' unless the target is proven outside W_0;
         asked only when the search is exhausted (``OUTSIDE_BOUNDARY``).
+    progress : None, or a callable ``progress(steps, note)`` told of every
+        search step of :meth:`reach` (a local solve, a homotopy sub-target,
+        building the seed library, the boundary proof) with what it is doing
+        (core/progress.py: ``control`` shows it while the global search runs).
     """
 
     def __init__(self, controller: TipController, *, homotopy_step: float = 0.08,
                  min_step: float = 2e-3, max_seeds: int = 6, max_substeps: int = 25,
                  local_its: int = 30, max_homotopies: int = 4, seeds: SeedLibrary | None = None,
-                 boundary=None):
+                 boundary=None, progress=None):
         self.controller = controller
+        self.progress, self.steps = progress, 0
         self.boundary = boundary
         self.max_homotopies = max_homotopies
         self.local_its = local_its
@@ -208,6 +281,12 @@ class Reacher:
         self.max_seeds = max_seeds
         self.max_substeps = max_substeps
         self.library = seeds if seeds is not None else SeedLibrary(controller)
+
+    def step(self, note: str) -> None:
+        """One search step done or starting (``progress``)."""
+        self.steps += 1
+        if self.progress is not None:
+            self.progress(self.steps, note)
 
     # --- strategies --------------------------------------------------------------
     def homotopy(self, target: np.ndarray, start: Start) -> ControlResult | None:
@@ -223,6 +302,8 @@ class Reacher:
         eq, loading, last = start.equilibrium, start.loading, None
         for _ in range(self.max_substeps):
             t_new = 1.0 if t + h >= 1.0 - 1e-12 else t + h
+            self.step(f"homotopy in target space from {start.label or 'a state'}: "
+                       f"{100 * t_new:.0f} % of the way")
             res = ctl.solve(tip0 + t_new * d, start=eq, start_loading=loading, max_failures=2,
                             max_it=self.local_its)
             if res.converged:
@@ -237,6 +318,7 @@ class Reacher:
         return last
 
     def _local(self, target, start: Start, tried: list) -> ControlResult | None:
+        self.step(f"local solve from {start.label or 'a state'}")
         res = self.controller.solve(target, start=start.equilibrium, start_loading=start.loading,
                                     max_failures=3, max_it=self.local_its)
         tried.append(res)
@@ -272,6 +354,7 @@ class Reacher:
             return dataclasses.replace(first, reachable=False, reason=BEYOND_REACH,
                                        local_reason=first.reason, evidence=evidence,
                                        message=evidence)
+        self.step("local tip control")
         first = ctl.solve(target, p0=p0, start=start, start_loading=start_loading)
         if first.converged:
             return self._clear(target, first, cables)
@@ -279,6 +362,12 @@ class Reacher:
             return first
         tried = [first]
         origin = self._origin(first, start, start_loading)
+        self.step("global search: seed library (equilibria over every loading order)")
+        if self.progress is not None:
+            self.library.on_seed = lambda count: self.progress(
+                self.steps, f"global search: seed library, {count} equilibria"
+                + (f" (capped: budget of {self.library.max_solves} solves)"
+                   if self.library.cap_note else ""))
         seeds = self.library.nearest(target, self.max_seeds)
         plan = ([("neighbour", s, self._local) for s in neighbours]
                 + [("seed", s, self._local) for s in seeds]
@@ -296,6 +385,7 @@ class Reacher:
         when ``self.boundary`` proves the target outside W_0."""
         if res.converged or res.reachable is not None or self.boundary is None:
             return res
+        self.step("boundary proof: the traced boundary of W_0")
         evidence, _ = self.boundary(target)
         if not evidence:
             return res
@@ -306,6 +396,7 @@ class Reacher:
         """Apply the cable policy to a reached state (module doc)."""
         if cables == "ignore" or np.all(state_cable_clear(res.equilibrium)):
             return res
+        self.step("a cable crosses the arm: searching for clear cables")
         tried = []
         seeds = [s for s in self.library.nearest(target, 4 * self.max_seeds)
                  if np.all(state_cable_clear(s.equilibrium))]
@@ -335,15 +426,17 @@ class Reacher:
         reported undecided (SEARCH_EXHAUSTED)."""
         best = min(tried, key=lambda r: float(np.linalg.norm(r.tip - target)))
         if not np.array_equal(best.target, target):
+            self.step("local solve from the closest tip found")
             best = self.controller.solve(target, start=best.equilibrium,
                                          start_loading=best.loading, max_failures=3)
         if best.converged:
             return dataclasses.replace(best, strategy="closest state")
         mm = self.controller.length_mm
+        capped = self.library.cap_note
         note = (f"{SEARCH_EXHAUSTED}: not reached by the local solve, a homotopy in target "
-                f"space, {len(tried)} solves from neighbours and seeds (other loading orders); "
-                f"not proven unreachable. Closest tip {best.tip_error * mm:.4g} mm away, local "
-                f"end {best.reason}")
+                f"space, {len(tried)} solves from neighbours and seeds (other loading orders"
+                + (f"; {capped}" if capped else "") + "); not proven unreachable. Closest tip "
+                f"{best.tip_error * mm:.4g} mm away, local end {best.reason}")
         return dataclasses.replace(best, reachable=None, reason=SEARCH_EXHAUSTED,
                                    local_reason=best.reason,
                                    message=note + "; " + best.message, evidence=note)

@@ -81,6 +81,24 @@ STALL_ITS, STALL_GAIN = 5, 0.1   # newton: SHARE_STALLED if the tip error (still
 #                                  tolerance) has not dropped by 10 % over 5 iterations
 
 
+def share_rule(share: str | None, min_tension_N: float = 0.0) -> str:
+    """The sharing rule a user asked for: ``share`` ('min-norm', 'min-energy' or
+    'none'); None means 'min-norm' with a floor (``min_tension_N`` > 0, newtons)
+    and 'none' without.  :class:`InputError` for an unknown rule, a floor that is
+    not a finite number >= 0, or a floor with 'none'."""
+    if not (np.isfinite(min_tension_N) and min_tension_N >= 0):
+        raise InputError(f"the minimum tension (--min-tension-N) must be a number of newtons "
+                         f">= 0, got {min_tension_N}")
+    if share is None:
+        return "min-norm" if min_tension_N > 0 else "none"
+    if share not in SHARES + ("none",):
+        raise InputError(f"unknown tension sharing {share!r} (choose from {SHARES + ('none',)})")
+    if share == "none" and min_tension_N > 0:
+        raise InputError("a pretension floor (--min-tension-N) needs a sharing rule: "
+                         "drop --share none")
+    return share
+
+
 def objective(share: str, ev: Evaluation) -> tuple[float, np.ndarray]:
     """(f, grad f) of the sharing rule at an evaluated state (module doc)."""
     p = ev.p

@@ -163,22 +163,32 @@ class BoundaryResult:
 
     def outside(self, target_mm, margin_mm: float | None = None) -> tuple[str, float]:
         """(evidence, distance in mm): evidence is '' unless ``target_mm`` is
-        proven outside W_0 by docs/model.md §9: the loop is closed, every fold
-        of the tip map meeting it is traced to the region's boundary, and the
-        target lies in the unbounded component of the plane minus the loop's
-        and the folds' images, farther than ``margin_mm`` (default 3 cells)
-        from them.  The distance is to the nearest traced curve."""
+        proven outside W_0 by docs/model.md §9.1: the loop is closed, every
+        fold of the tip map meeting it is traced to the region's boundary, the
+        target lies farther than ``margin_mm`` (default 3 cells) from the
+        loop's and the folds' images, and in a face of the plane minus them
+        with no preimage: the unbounded face, or a bounded face whose
+        preimage count N (:func:`classify_faces`) is decided, 0 and
+        consistent with its winding number 0.  The distance is to the
+        nearest traced curve."""
         target = np.asarray(target_mm, float).reshape(1, 2)
         margin = 3 * self.cell_mm if margin_mm is None else margin_mm
         dist = float(self.outside_map.distance(target)[0])
-        if not self.regions["W0"].closed or self.untraced_folds:
+        if not self.regions["W0"].closed or self.untraced_folds or dist <= margin:
             return "", dist
-        if not self.outside_map.outside(target)[0] or dist <= margin:
+        curves = (f"loop of {len(self.regions['W0'].curves)} curves and "
+                  f"{len(self.fold_curves)} tip-map fold curves")
+        if self.outside_map.outside(target)[0]:
+            return (f"OUTSIDE_BOUNDARY: the target lies outside the traced boundary of W_0 "
+                    f"({curves}), {dist:.3g} mm from it (docs/model.md §9.1)"), dist
+        label = int(self.outside_map.label(target)[0])
+        empty = [f for f in self.faces if f["label"] == label
+                 and f["preimages"] == 0 and f["winding"] == 0]
+        if not empty:
             return "", dist
-        return (f"OUTSIDE_BOUNDARY: the target lies outside the traced boundary of W_0 "
-                f"(loop of {len(self.regions['W0'].curves)} curves and "
-                f"{len(self.fold_curves)} tip-map fold curves), {dist:.3g} mm from it "
-                "(docs/model.md §9)"), dist
+        return (f"OUTSIDE_BOUNDARY: the target lies in a hole of W_0, a bounded face of the "
+                f"plane minus the traced boundary ({curves}) with no preimage, counted along "
+                f"a ray to infinity; {dist:.3g} mm from the boundary (docs/model.md §9.1)"), dist
 
 
 def constraints_for(tracer: CurveTracer, arm: Arm, restricted: bool) -> list:

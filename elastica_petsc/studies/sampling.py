@@ -26,8 +26,9 @@ from ..solvers.equilibrium import Equilibrium, EquilibriumSolver
 from ..core.fem import Discretisation
 from ..core.model import Arm
 from ..solvers.stability import StabilityError, StabilitySolver
-from .workspace import (BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED, OUTSIDE_BOUNDARY, REACHED,
-                        UNDECIDED, empty_fields, fields)
+from .workspace import (BELOW_FLOOR, BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED,
+                        OUTSIDE_BOUNDARY, REACHED, UNDECIDED, UNIQUE_BELOW_FLOOR, empty_fields,
+                        fields)
 
 
 class _Sampler:
@@ -166,6 +167,23 @@ class TargetSampler(_Sampler):
     Every result still depends on the chunk alone (the seeds are a fixed
     function of the arm), so maps stay equal on any number of ranks.  The
     extra cost is paid only by samples that local control did not reach.
+
+    Tension sharing (``share`` 'min-norm'/'min-energy', floor ``min_tension``
+    p_min; docs/model.md §9.3), after all of the above, so the rule changes
+    which tensions are stored, never which targets are reached
+    (:meth:`_share_chunk`): with n >= 3 tendons each reached sample's tensions
+    are replaced by the sharing rule's (SQP on the KKT conditions,
+    :class:`~elastica_petsc.solvers.share.TensionSharer`), warm-started from the
+    chunk's previous shared sample, else from the sample's own reached state,
+    and a sample still not shared is tried again from the next shared sample
+    (backwards, like the backward sweep).  With two tendons there is no
+    redundancy: the tensions of the state reached are kept and checked against
+    the floor; one below it is ``UNIQUE_BELOW_FLOOR`` (proven) where the traced
+    boundary shows the target has no other preimage (:meth:`_unique`).  A
+    sample reached with P >= 0 whose sharing fails is ``BELOW_FLOOR`` with a floor (reason: how the sharer stopped; its P >= 0
+    state is kept: it is in W_0, undecided for W_0(p_min)), and stays
+    ``REACHED`` without one (``shared`` False).  No sharing, no floor: nothing
+    of this runs (the maps are those of before).
     """
 
     head_guess = 2.0
@@ -175,7 +193,8 @@ class TargetSampler(_Sampler):
     search_its = 15            # iteration limit of a search solve (a reached one needs < 10)
     search_failures = 3        # failure budget of a search solve
 
-    def __init__(self, arm: Arm, disc: Discretisation, global_search: bool = True):
+    def __init__(self, arm: Arm, disc: Discretisation, global_search: bool = True,
+                 share: str = "none", min_tension: float = 0.0):
         from ..solvers.control import TipController
 
         super().__init__(arm, disc)
@@ -184,6 +203,13 @@ class TargetSampler(_Sampler):
         self.global_search = global_search
         self._library = None
         self._outside = None
+        self.share, self.min_tension = share, float(min_tension)
+        self.sharer = None
+        if share != "none" and disc.n_tendons >= 3:
+            from ..solvers.share import TensionSharer
+            self.sharer = TensionSharer(self.controller, share, self.min_tension)
+        self._reached = {}                 # sample -> ControlResult that reached it (a chunk)
+        self._faces = None                 # two tendons with a floor: the traced boundary
 
     @property
     def library(self):
@@ -204,6 +230,7 @@ class TargetSampler(_Sampler):
     def solve_chunk(self, points: np.ndarray, stop) -> dict | None:
         out = self._empty(len(points))
         out["target"][:] = points
+        self._reached = {}
         states = {}                        # sample -> equilibrium, reached samples
         runs = {}                          # sample -> [(start, result)] of its local solves
         if self.global_search:
@@ -221,6 +248,8 @@ class TargetSampler(_Sampler):
                 return None
             out["status"][(out["status"] == NEEDS_NEGATIVE)
                           | (out["status"] == NOT_CONVERGED)] = UNDECIDED
+        if self.share != "none" and not self._share_chunk(points, out, stop):
+            return None
         return out
 
     def _forward(self, points, out: dict, states: dict, runs: dict, stop) -> bool:
@@ -395,11 +424,94 @@ class TargetSampler(_Sampler):
         out["tip_error"][k] = result.tip_error_mm
         out["status"][k] = status
         if status == REACHED:
+            self._reached[k] = result
             self._record(out, k, result.equilibrium)
         else:
             out["tip"][k] = result.tip * self.arm.length_mm
             out["tensions"][k] = result.p
             out["tensions_N"][k] = self.arm.tensions_to_N(result.p)    # N wherever p is
+
+    # --- tension sharing (class doc) -----------------------------------------------
+    def _share_chunk(self, points, out: dict, stop) -> bool:
+        """Share the tensions of every reached sample of the chunk (class doc);
+        False if stopped."""
+        if self.sharer is None:                     # two tendons: the floor is a check
+            for k in self._reached:
+                if np.min(out["tensions"][k]) >= self.min_tension - 1e-12:
+                    out["shared"][k] = True
+                elif self._unique(points[k]):
+                    out["status"][k] = UNIQUE_BELOW_FLOOR
+                    out["reason"][k] = b"UNIQUE_BELOW_FLOOR"
+                else:
+                    out["status"][k], out["reason"][k] = BELOW_FLOOR, b"BELOW_FLOOR"
+            return True
+        shared, last = {}, None                     # sample -> shared Evaluation
+        for k in sorted(self._reached):
+            if stop():
+                return False
+            result = self._share_one(points[k], k, out, (last, "own"))
+            if result is not None:
+                last = shared[k] = result
+        for k in sorted(set(self._reached) - set(shared), reverse=True):
+            later = [j for j in shared if j > k]
+            if later:
+                if stop():
+                    return False
+                result = self._share_one(points[k], k, out, (shared[min(later)],))
+                if result is not None:
+                    shared[k] = result
+        for k in set(self._reached) - set(shared):
+            if self.min_tension > 0:
+                out["status"][k] = BELOW_FLOOR
+        return True
+
+    def _unique(self, target_mm) -> bool:
+        """Two tendons: whether ``target_mm`` has one preimage in the region D of the
+        traced boundary of W_0 (docs/model.md §9.1: a bounded face with N = 1, the
+        loop closed, every fold traced, the target more than 3 cells from every
+        traced curve), so that the state reached is its only one (§9.3).  The
+        boundary is traced on first need, once per process."""
+        if self._faces is None:
+            from .boundary import trace_boundary
+            self._faces = trace_boundary(self.arm, self.disc, restricted=False)
+        res, point = self._faces, np.asarray(target_mm, float).reshape(1, 2)
+        if not res.regions["W0"].closed or res.untraced_folds or not res.faces:
+            return False
+        if res.outside_map.distance(point)[0] <= 3 * res.cell_mm:
+            return False
+        label = int(res.outside_map.label(point)[0])
+        return any(f["label"] == label and f["preimages"] == 1 for f in res.faces)
+
+    def _share_one(self, target_mm, k: int, out: dict, starts: tuple):
+        """Track the shared tensions at sample ``k`` from each of ``starts`` (an
+        Evaluation, None: skip, 'own': the sample's reached state) until one
+        succeeds; store it and return its Evaluation, else store the sharer's
+        stopping reason and return None."""
+        from ..solvers.control import Evaluation
+
+        t0 = time.perf_counter()
+        target, reached, result = target_mm / self.arm.length_mm, self._reached[k], None
+        for start in starts:
+            if start is None:
+                continue
+            if isinstance(start, str):              # "own"
+                start = Evaluation(reached.p.copy(), reached.equilibrium, reached.sensitivity,
+                                   reached.loading)
+            self.controller.forget()                # evaluations cached for another branch
+            self.sharer.reset()
+            result = self.sharer.track(target, start)
+            if result.converged:
+                break
+        out["seconds_control"][k] += time.perf_counter() - t0
+        if result is None:
+            return None
+        out["reason"][k] = result.reason.encode()[:48]
+        if not result.converged:
+            return None
+        out["shared"][k] = True
+        out["tip_error"][k] = result.tip_error_mm
+        self._record(out, k, result.equilibrium)
+        return Evaluation(result.p, result.equilibrium, result.sensitivity, result.loading)
 
     def destroy(self) -> None:
         self.controller.destroy()

@@ -73,16 +73,26 @@ STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the other ranks' l
 # search: no proof either way), BEYOND_REACH (|x_d| > l: proven) or OUTSIDE_BOUNDARY
 # (outside the traced boundary of W_0, docs/model.md §9.1: proven).  NEEDS_NEGATIVE
 # and NOT_CONVERGED are the local verdicts of sampler "local" (``global_search=False``
-# and files written before the global search).
+# and files written before the global search).  With a pretension floor P_min
+# (``--min-tension-N``) REACHED means reached with every P_i >= P_min (W_0(P_min),
+# docs/model.md §9.3), and BELOW_FLOOR: reached with P >= 0 (in W_0), but no tension
+# set with every P_i >= P_min was found (not a proof that there is none);
+# UNIQUE_BELOW_FLOOR (two tendons): the tensions found are below the floor and they
+# are the target's only ones (a face of the traced boundary with one preimage): proven.
 (NOT_DONE, REACHED, NEEDS_NEGATIVE, NOT_CONVERGED, UNDECIDED, BEYOND_REACH,
- OUTSIDE_BOUNDARY) = 0, 1, 2, 3, 4, 5, 6
+ OUTSIDE_BOUNDARY, BELOW_FLOOR, UNIQUE_BELOW_FLOOR) = 0, 1, 2, 3, 4, 5, 6, 7, 8
 STATUS_NAMES = {NOT_DONE: "not computed", REACHED: "reached with P >= 0",
                 NEEDS_NEGATIVE: "tip control ended on P_i = 0 (would need a negative tension locally; not a proof of outside W_0)",
                 NOT_CONVERGED: "not converged",
                 UNDECIDED: "not reached after the global search (undecided: not proven outside W_0)",
                 BEYOND_REACH: "beyond reach |x| > l (proven unreachable)",
                 OUTSIDE_BOUNDARY: "outside the traced W_0 boundary (proven unreachable, "
-                                  "docs/model.md §9.1)"}
+                                  "docs/model.md §9.1)",
+                BELOW_FLOOR: "reached with P >= 0, but no tensions >= the floor found "
+                             "(undecided for W_0(P_min): not a proof, docs/model.md §9.3)",
+                UNIQUE_BELOW_FLOOR: "reached with P >= 0 by the only tensions that reach it, "
+                                    "below the floor (proven outside W_0(P_min), two tendons, "
+                                    "docs/model.md §9.3)"}
 # the sampler attribute of a file (part of what a resume must match); files
 # written before it existed were made by the local sampler (targets) or by
 # forward solves (tensions)
@@ -152,6 +162,10 @@ def fields(n_tendons: int) -> dict[str, tuple[tuple, str, str, str]]:
         "seconds_eigen": ((), "f8", "s", "wall time of the eigenvalue solve"),
         "cable_clear": (n, "?", "1", "reached state: the straight cable [x_i, r_i] does not "
                         "cross the arm (core/clearance.py); False where not reached"),
+        "shared": ((), "?", "1", "with --share/--min-tension-N (file attributes share, "
+                   "min_tension_N): the stored tensions are the sharing rule's (KKT conditions "
+                   "met, every P_i >= the floor; two tendons: the state's own tensions, unique "
+                   "on its branch, checked against the floor); False otherwise"),
     }
 
 
@@ -301,8 +315,19 @@ class Results:
 
 # what must be equal for a resume: everything that changes a sample's result
 GRID_ATTRS = ("mode", "config_json", "elements", "grid_json", "petsc_options",
-              "elastica_petsc_version", "sampler")
-OPTIONAL_FIELDS = ("strategy",)     # absent from files written before the global search
+              "elastica_petsc_version", "sampler", "share", "min_tension_N")
+OPTIONAL_FIELDS = ("strategy", "shared")   # absent from files written before the global
+#                                            search / before tension sharing
+# attributes of files written before they existed (and of other studies' files)
+ATTR_DEFAULTS = {"share": "none", "min_tension_N": 0.0}
+
+
+def share_of(attrs) -> tuple[str, float]:
+    """(share, min_tension_N) of a file's root ``attrs``: the tension sharing of a
+    target map ('none', 0.0 for files written before sharing existed)."""
+    share = attrs.get("share", ATTR_DEFAULTS["share"])
+    share = share.decode() if isinstance(share, bytes) else str(share)
+    return share, float(attrs.get("min_tension_N", ATTR_DEFAULTS["min_tension_N"]))
 
 
 def sampler_of(attrs, mode: str) -> str:
@@ -388,14 +413,14 @@ def read_results(path: Path, grid: Grid, n_tendons: int, attrs: dict,
     try:
         with h5py.File(path, "r") as fh:
             for key in GRID_ATTRS:
-                stored = fh.attrs.get(key)
+                stored = fh.attrs.get(key, ATTR_DEFAULTS.get(key))
                 if isinstance(stored, bytes):
                     stored = stored.decode()
                 if key == "sampler":
                     stored = sampler_of(fh.attrs, attrs["mode"])
-                if stored != attrs[key]:
+                if stored != attrs.get(key, ATTR_DEFAULTS.get(key)):
                     raise InputError(f"{path}: cannot resume: it was made with "
-                                     f"{_difference(key, stored, attrs[key])}")
+                                     f"{_difference(key, stored, attrs.get(key, ATTR_DEFAULTS.get(key)))}")
             results.chunk_done[:] = fh["grid/chunk_done"][()]
             _read_samples(fh, results)
     except OSError as err:
@@ -423,6 +448,10 @@ def _difference(key: str, stored, now) -> str:
                 + ("local verdicts" if stored == "local" else "searched globally")
                 + "; start a new file, or resume it with the same sampler"
                 + (" (--local-only)" if stored == "local" else ""))
+    if key in ATTR_DEFAULTS:
+        option = "--share" if key == "share" else "--min-tension-N"
+        return (f"tension sharing {key} {stored!r} (now {now!r}): its samples hold other "
+                f"tensions; start a new file, or resume it with the same {option}")
     if key == "petsc_options":
         return f"other PETSc options: {stored or '(none)'} (now {now or '(none)'})"
     return f"another {key}: {stored!r} (now {now!r})"
@@ -702,7 +731,8 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
 # --- the library entry point ------------------------------------------------------------------
 STATUS_KEYS = {NOT_DONE: "NOT_COMPUTED", REACHED: "REACHED", NEEDS_NEGATIVE: "NEEDS_NEGATIVE",
                NOT_CONVERGED: "NOT_CONVERGED", UNDECIDED: "UNDECIDED",
-               BEYOND_REACH: "BEYOND_REACH", OUTSIDE_BOUNDARY: "OUTSIDE_BOUNDARY"}
+               BEYOND_REACH: "BEYOND_REACH", OUTSIDE_BOUNDARY: "OUTSIDE_BOUNDARY",
+               BELOW_FLOOR: "BELOW_FLOOR", UNIQUE_BELOW_FLOOR: "UNIQUE_BELOW_FLOOR"}
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
@@ -718,6 +748,11 @@ class WorkspaceMap:
     W_0 (the workspace) is the set of tips of stable equilibria connected to
     the straight arm by quasi-static loading with all P_i >= 0; here: the
     targets reached by tip control with non-negative tensions (``masks["W0"]``).
+    With a pretension floor (``min_tension_N`` > 0) ``masks["W0"]`` samples
+    W_0(P_min) instead: reached with every P_i >= P_min (docs/model.md §9.3).
+    ``share``: how the tensions of a reached sample were chosen ('none': as tip
+    control found them; 'min-norm'/'min-energy': the sharing rule's, where
+    ``samples["shared"]``).
     Arrays are per sample, in grid order, read-only.  Units: ``points`` are
     targets in mm (mode ``targets``) or tensions p = P l^2/B (mode
     ``tensions``); ``samples`` holds every field of :func:`fields` under its
@@ -737,16 +772,18 @@ class WorkspaceMap:
     file: Path | None = None
     stranded: bool = False
     sampler: str = ""
+    share: str = "none"
+    min_tension_N: float = 0.0
 
     @classmethod
     def from_results(cls, results: "Results", limits: dict, ranks: int, file=None,
-                     sampler: str = ""):
+                     sampler: str = "", share: tuple[str, float] = ("none", 0.0)):
         samples = {name: _frozen(values) for name, values in results.data.items()}
         masks = {name: _frozen(mask) for name, mask in results.masks(limits).items()}
         return cls(results.grid.mode, _frozen(results.grid.points),
                    _frozen(results.chunk_done), samples, masks, dict(limits),
                    dict(results.grid.meta), ranks, None if file is None else Path(file),
-                   results.stranded, sampler)
+                   results.stranded, sampler, share[0], float(share[1]))
 
     @property
     def complete(self) -> bool:
@@ -770,7 +807,11 @@ class WorkspaceMap:
         """Per sample: REACHED; UNDECIDED (not reached after the global search:
         not proven outside W_0), BEYOND_REACH (|x_d| > l, proven) or
         OUTSIDE_BOUNDARY (outside the traced boundary of W_0, proven: docs/model.md
-        §9.1) with the global search (``sampler`` "global-search"); NEEDS_NEGATIVE (the local
+        §9.1) with the global search (``sampler`` "global-search"); with a floor
+        (``min_tension_N`` > 0) BELOW_FLOOR: reached with P >= 0 but no tensions
+        >= the floor found (not a proof, docs/model.md §9.3), and UNIQUE_BELOW_FLOOR:
+        two tendons, the target's only tensions are below the floor (proven);
+        NEEDS_NEGATIVE (the local
         tip-control solve ended on a bound P_i = 0: a local verdict, not a proof
         that the target is outside W_0) or NOT_CONVERGED with the local sampler
         ("local"); NOT_COMPUTED.  `elastica-petsc boundary` gives the edge of
@@ -809,6 +850,12 @@ class WorkspaceMap:
     def cable_lengths_mm(self) -> np.ndarray:
         return self.samples["cable_lengths"]
 
+    def _status_name(self, k: int) -> str:
+        """:data:`STATUS_NAMES` in words, REACHED with the floor when there is one."""
+        if k == REACHED and self.min_tension_N > 0:
+            return f"reached with every P >= {self.min_tension_N:g} N (W_0(P_min))"
+        return STATUS_NAMES[k]
+
     def summary(self) -> dict:
         """Counts in words (what the command line prints), JSON-ready."""
         status = self.samples["status"]
@@ -819,7 +866,10 @@ class WorkspaceMap:
             "samples_total": self.samples_total,
             "samples_done": self.samples_done,
             "sampler": self.sampler,
-            "status_counts": {STATUS_NAMES[k]: int(np.sum(status == k)) for k in STATUS_NAMES
+            "share": self.share,
+            "min_tension_floor_N": self.min_tension_N,
+            "status_counts": {self._status_name(k): int(np.sum(status == k))
+                              for k in STATUS_NAMES
                               if k == REACHED or (k != NOT_DONE and np.any(status == k))},
             "masks": {name: int(m.sum()) for name, m in self.masks.items()},
             "lambda_min_raw_min": float(np.nanmin(self.samples["lambda_min_raw"])) if w0 else None,
@@ -844,6 +894,7 @@ def read_map(path) -> WorkspaceMap:
             results.chunk_done[:] = fh["grid/chunk_done"][()]
             _read_samples(fh, results)
             sampler = sampler_of(fh.attrs, mode)
+            share = share_of(fh.attrs)
             limits = {key: fh["masks"].attrs.get(key) for key in
                       ("kappa_limit", "strain_energy_max", "max_tension")}
             ranks = int(fh["timing"].attrs.get("ranks", 1))
@@ -851,7 +902,7 @@ def read_map(path) -> WorkspaceMap:
         raise InputError(f"{path}: cannot read it as HDF5: {err}") from None
     except (KeyError, ValueError) as err:
         raise InputError(f"{path}: not a workspace file (missing or malformed {err})") from None
-    return WorkspaceMap.from_results(results, limits, ranks, path, sampler)
+    return WorkspaceMap.from_results(results, limits, ranks, path, sampler, share)
 
 
 def limits_of(arm) -> dict:
@@ -881,7 +932,8 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
             tension_spacing: float = 2.0, tension_max: float = 40.0, chunk: int = 24,
             comm=None, out=None, resume: bool = False, overwrite: bool = False,
             progress=None, checkpoint_seconds: float | None = None,
-            provenance: dict | None = None, global_search: bool = True) -> WorkspaceMap:
+            provenance: dict | None = None, global_search: bool = True,
+            share: str | None = None, min_tension_N: float = 0.0) -> WorkspaceMap:
     """Sample the workspace W_0 of ``arm`` (Eq. (18), Fig. 4) and its restrictions
     W_Y, W_S, W_E, W_P (Eqs. (19)-(22), Fig. 5) on ``disc``.
 
@@ -899,6 +951,21 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
     and is classed REACHED, UNDECIDED (no proof either way) or BEYOND_REACH
     (|x_d| > l, proven); False keeps the local classes NEEDS_NEGATIVE (ended
     on P_i = 0, a local verdict) and NOT_CONVERGED, at the old cost.
+
+    ``share`` ('min-norm', 'min-energy', 'none'; None: 'min-norm' with a floor,
+    else 'none') and ``min_tension_N`` (the floor P_min in N; mode targets):
+    the stored tensions of a reached target are the sharing rule's
+    (:class:`~elastica_petsc.solvers.share.TensionSharer`; with two tendons
+    they are unique on the branch found and only checked against the floor),
+    so the rule changes which tensions are stored, not which targets are
+    reached; with a floor the map samples W_0(P_min) = tips of stable
+    equilibria with every P_i >= P_min connected to the straight arm by
+    quasi-static loading with all P_i >= 0 (docs/model.md §9.3), and a target
+    reached with P >= 0 for which no tensions >= P_min are found is
+    BELOW_FLOOR (not a proof), or UNIQUE_BELOW_FLOOR with two tendons where
+    the traced boundary shows its tensions are its only ones (proven).  Both
+    are file attributes (``share``,
+    ``min_tension_N``, N; ``min_tension``, P l^2/B) that a resume must match.
 
     Collective over ``comm`` (default ``MPI.COMM_WORLD``; one rank runs
     serially).  With ``out`` (an ``.h5`` path) the results are checkpointed
@@ -929,6 +996,7 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
                                  tension_max, chunk)
                 if checkpoint_seconds is None:
                     checkpoint_seconds = checkpoint_interval()
+                share_attrs = _share_attrs(arm, grid.mode, share, min_tension_N)
                 path = None if out is None else _check_out(out, resume, overwrite)
                 if path is not None and comm.rank == 0:
                     from ..io.hdf5 import OutputLock
@@ -939,14 +1007,16 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
             agree(comm, error)
             sampler = SAMPLERS[grid.mode][0 if global_search else -1]
             results = _sample(arm, disc, grid, path, comm, resume, checkpoint_seconds,
-                              progress, dict(provenance or {}, sampler=sampler), stop)
+                              progress, dict(provenance or {}, sampler=sampler, **share_attrs),
+                              stop)
         finally:
             if lock is not None:
                 lock.release()
     limits = limits_of(arm)
     ws = None
     if comm.rank == 0:
-        ws = WorkspaceMap.from_results(results, limits, comm.size, path, sampler)
+        ws = WorkspaceMap.from_results(results, limits, comm.size, path, sampler,
+                                       (share_attrs["share"], share_attrs["min_tension_N"]))
         if ws.stranded:
             return ws                                # no collective: a peer is still busy
     ws, error = comm.bcast((ws, None if comm.rank else results.write_error), root=0)
@@ -961,7 +1031,8 @@ def _sample(arm, disc, grid: Grid, path, comm, resume: bool, checkpoint_seconds:
     from .sampling import TargetSampler, TensionSampler
 
     attrs = _attrs(arm, disc, grid, provenance)
-    sampler = (TargetSampler(arm, disc, global_search=attrs["sampler"] == "global-search")
+    sampler = (TargetSampler(arm, disc, global_search=attrs["sampler"] == "global-search",
+                             share=attrs["share"], min_tension=attrs["min_tension"])
                if grid.mode == "targets" else TensionSampler(arm, disc))
     try:
         return run(grid, sampler, path, attrs, limits_of(arm), comm=comm, resume=resume,
@@ -969,6 +1040,22 @@ def _sample(arm, disc, grid: Grid, path, comm, resume: bool, checkpoint_seconds:
                    progress_label=f"workspace ({grid.mode}, {comm.size} rank(s))", stop=stop)
     finally:
         sampler.destroy()
+
+
+def _share_attrs(arm, mode: str, share: str | None, min_tension_N: float) -> dict:
+    """The root attributes of the tension sharing of a map (:func:`run_map`);
+    :class:`InputError` for a bad request."""
+    from ..solvers.share import share_rule
+
+    rule = share_rule(share, float(min_tension_N))
+    if mode != "targets" and rule != "none":
+        raise InputError("--share/--min-tension-N apply to mode targets (tip control); "
+                         "mode tensions prescribes the tensions")
+    p_min = float(arm.tensions_from_N(min_tension_N))
+    if arm.max_tension is not None and p_min >= arm.max_tension:
+        raise InputError(f"--min-tension-N {min_tension_N:g} is not below the motor limit "
+                         f"{arm.motor.max_tension_N:g} N")
+    return {"share": rule, "min_tension_N": float(min_tension_N), "min_tension": p_min}
 
 
 def _check_out(out, resume: bool, overwrite: bool) -> Path:
