@@ -1,15 +1,16 @@
 """Benchmark: `boundary` (workspace boundary by continuation, issue 13) against
 an earlier revision, interleaved, median of repeats.
 
-    python scripts/bench_boundary.py [--repeats 5] [--before ea2832d] [--map MAP.h5]
+    python scripts/bench_boundary.py [--repeats 5] [--before 2b03bce] [--map MAP.h5]
 
 Each measurement is a fresh process that traces once to warm up (imports,
 PETSc start-up) and then times a second trace_boundary of the paper's arm
 (180 elements): wall and CPU seconds, and the continuation solves (each a
 nonlinear solve of the extended system).  Cases: the W_0 loop alone
-(tip_folds=False), W_0 with the tip-map folds (the default; the earlier
-revision only scanned det S on the loop), and W_0 plus the restricted
-workspace (the CLI default).  The earlier revision's code is taken with
+(tip_folds=False), W_0 with the tip-map folds and the scan rays (the
+default, and the boundary tip control uses as proof), and W_0 plus the
+restricted workspace (the CLI default).  The earlier revision's code is
+taken with
 `git archive` into a temporary directory.  With --map (a 4,202-target
 `workspace` file), the solve counts are also compared with the map's: its
 targets and its optimiser iterations (each at least one equilibrium solve).
@@ -72,7 +73,7 @@ def map_counts(path: str) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--before", default="ea2832d", help="earlier revision (git)")
+    ap.add_argument("--before", default="2b03bce", help="earlier revision (git)")
     ap.add_argument("--map", help="a workspace file (targets) to compare solve counts with")
     args = ap.parse_args()
     print(f"load average: {os.getloadavg()}")
@@ -85,6 +86,7 @@ def main() -> None:
                 for label, root in roots.items():           # interleaved
                     runs[label].append(measure(root, kwargs))
             rows[case] = runs
+    print(f"load average after: {os.getloadavg()}")
     print(f"{'case':26s} {'':6s} {'wall s':>8s} {'cpu s':>8s} {'solves':>7s} {'area mm^2':>10s}")
     for case, runs in rows.items():
         med = {k: {q: statistics.median(r[q] for r in v) for q in ("wall", "cpu", "solves", "area")}

@@ -46,6 +46,9 @@ def test_loop_closes_through_faces_collapse_and_fold(paper):
     # targets; the scan rays (evidence, not boundary) are counted apart
     assert 0 < result.scan_solves < result.solves
     assert result.solves - result.scan_solves <= 0.05 * 4202
+    # steps toward a cable collapse are cut before the predictor passes the
+    # routing point, so few correctors fail (before: 65 of 245 solves)
+    assert result.rejected_steps <= 0.1 * result.solves, result.rejected_steps
 
 
 def test_p1_zero_edge_matches_forward_solves(paper):

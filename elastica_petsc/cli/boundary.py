@@ -93,6 +93,7 @@ def _summary(result) -> dict:
         "restricted_area_mm2": result.areas_mm2.get("restricted"),
         "solves": result.solves,
         "scan_solves": result.scan_solves,
+        "rejected_steps": result.rejected_steps,
         "scan": [{"ray": ray, "sign_changes": n, "unexplained": bad}
                  for ray, n, bad in result.scan],
         "seconds": result.seconds,

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
@@ -48,6 +49,19 @@ from .model import Arm
 
 class DiscretisationError(InputError):
     """An arm that cannot be put on the requested mesh."""
+
+
+class Terms(NamedTuple):
+    """Quantities of a state (u, p) shared by the residual and its derivatives."""
+
+    theta: np.ndarray        # nodal angles, theta_0 = 0 included
+    y: np.ndarray            # attachment unknowns (n, 2)
+    lengths: np.ndarray      # cable lengths L_i (Eq. (3))
+    d: np.ndarray            # unit cable directions d_i (n, 2)
+    c: np.ndarray            # cos phi_e of the element angles
+    s: np.ndarray            # sin phi_e
+    p: np.ndarray            # tensions
+    force: np.ndarray        # sum of the tendon forces acting on each element (N, 2)
 
 
 @dataclass(frozen=True)
@@ -126,11 +140,17 @@ class Discretisation:
         steps = self.h * np.column_stack((np.cos(phi), np.sin(phi)))
         return np.vstack((np.zeros((1, 2)), np.cumsum(steps, axis=0)))
 
-    def attachment_gradients(self, theta: np.ndarray) -> np.ndarray:
-        """g[i, k-1] = d X_i / d theta_k, shape (n, N, 2)."""
+    def trig(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """cos phi_e and sin phi_e of the element angles (shared by the kernels)."""
         phi = self.element_angles(theta)
-        half_normals = 0.5 * self.h * np.column_stack((-np.sin(phi), np.cos(phi)))
-        per_element = self.support[:, :, None] * half_normals[None]        # (n, N, 2)
+        return np.cos(phi), np.sin(phi)
+
+    def attachment_gradients(self, theta: np.ndarray, cs=None) -> np.ndarray:
+        """g[i, k-1] = d X_i / d theta_k, shape (n, N, 2); ``cs``: :meth:`trig`
+        of theta if already known."""
+        c, s = self.trig(theta) if cs is None else cs
+        half_normals = 0.5 * self.h * np.column_stack((-s, c))
+        per_element = self._support_matrix[:, :, None] * half_normals[None]   # (n, N, 2)
         g = per_element.copy()                     # element k-1 = left of node k
         g[:, :-1] += per_element[:, 1:]           # element k   = right of node k
         return g
@@ -170,13 +190,20 @@ class Discretisation:
         lengths = np.linalg.norm(chord, axis=1)
         return lengths, chord / lengths[:, None]
 
-    def residual(self, u: np.ndarray, p, tip_moment: float = 0.0) -> np.ndarray:
-        """F(u) of the bordered system (Eq. (9) with the midpoint rule, plus y - X(theta))."""
+    def terms(self, u: np.ndarray, p) -> Terms:
+        """The shared quantities of (u, p) (:class:`Terms`)."""
         theta, y = self.split(u)
-        _, d = self.cables(y)
-        phi = self.element_angles(theta)
-        c, s = np.cos(phi), np.sin(phi)
-        force = self.tendon_sums(np.asarray(p, float)[:, None] * d)      # sum of F_i per element
+        lengths, d = self.cables(y)
+        c, s = self.trig(theta)
+        p = np.asarray(p, float)
+        force = self.tendon_sums(p[:, None] * d)                # sum of F_i per element
+        return Terms(theta, y, lengths, d, c, s, p, force)
+
+    def residual(self, u: np.ndarray, p, tip_moment: float = 0.0,
+                 terms: Terms | None = None) -> np.ndarray:
+        """F(u) of the bordered system (Eq. (9) with the midpoint rule, plus y - X(theta));
+        ``terms``: :meth:`terms` of (u, p) if already known."""
+        theta, y, _, _, c, s, _, force = self.terms(u, p) if terms is None else terms
         # (h/2) t_e x F on each element: the load integral of Eq. (9), midpoint rule
         q = 0.5 * self.h * (c * force[:, 1] - s * force[:, 0])
         jump = np.diff(theta)                                   # h * theta' per element
@@ -230,13 +257,17 @@ class Discretisation:
         (one border column per tendon)."""
         return self.bordered_pattern(np.asarray(self.attach_nodes), upper=True)
 
-    def band(self, theta, d, p) -> np.ndarray:
-        """Tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper)."""
+    def band(self, theta, d, p, terms: Terms | None = None) -> np.ndarray:
+        """Tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper);
+        ``terms``: :meth:`terms` of the state if already known."""
         N, h = self.n_elements, self.h
-        phi = self.element_angles(theta)
-        force = self.tendon_sums(p[:, None] * d)
+        if terms is None:
+            c, s = self.trig(theta)
+            force = self.tendon_sums(p[:, None] * d)
+        else:
+            c, s, force = terms.c, terms.s, terms.force
         # d/dtheta of -(h/2) t_e x F on element e: (h/4) t_e.F on its two nodes
-        w = 0.25 * h * (np.cos(phi) * force[:, 0] + np.sin(phi) * force[:, 1])
+        w = 0.25 * h * (c * force[:, 0] + s * force[:, 1])
         band = np.empty((N, 3))
         band[:, 0], band[:, 2] = -1.0 / h, -1.0 / h
         band[:, 1] = 2.0 / h
@@ -246,19 +277,20 @@ class Discretisation:
         band[1:, 0] += w[1:]
         return band
 
-    def jacobian_values(self, u: np.ndarray, p) -> np.ndarray:
-        """Entries of dF/du in the order of :attr:`pattern` (consistent tangent)."""
+    def jacobian_values(self, u: np.ndarray, p, terms: Terms | None = None,
+                        g=None) -> np.ndarray:
+        """Entries of dF/du in the order of :attr:`pattern` (consistent tangent);
+        ``terms``, ``g``: :meth:`terms` and :meth:`attachment_gradients` if known."""
         N, n = self.n_elements, self.n_tendons
-        p = np.asarray(p, float)
-        theta, y = self.split(u)
-        lengths, d = self.cables(y)
-        g = self.attachment_gradients(theta)                    # (n, N, 2)
+        t = self.terms(u, p) if terms is None else terms
+        theta, lengths, d, p = t.theta, t.lengths, t.d, t.p
+        g = self.attachment_gradients(theta, (t.c, t.s)) if g is None else g   # (n, N, 2)
         # dF_theta/dy_i = p_i/L_i (I - d d^T) g = p_i/L_i (d_perp . g) d_perp   (Eq. (17))
         d_perp = np.column_stack((-d[:, 1], d[:, 0]))
         lever = (p / lengths)[:, None] * self.transverse_gradients(g, d)
         border = (lever[:, :, None] * d_perp[:, None, :]).transpose(1, 0, 2).reshape(N, 2 * n)
         yrows = -g.transpose(0, 2, 1).reshape(2 * n, N)        # dF_y/dtheta = -dX/dtheta
-        source = np.concatenate((self.band(theta, d, p).ravel(), border.ravel(),
+        source = np.concatenate((self.band(theta, d, p, t).ravel(), border.ravel(),
                                  yrows.ravel(), np.ones(2 * n)))
         return source[self.pattern[2]]
 
@@ -291,11 +323,23 @@ class Discretisation:
         weights = np.sqrt(np.maximum(np.asarray(p, float), 0.0) / lengths)
         return weights[:, None] * self.transverse_gradients(self.attachment_gradients(theta), d)
 
-    def load_derivative(self, u: np.ndarray) -> np.ndarray:
-        """dF/dp, shape (n, size): row i is dF/dp_i (right-hand sides of Eq. (14))."""
-        theta, y = self.split(u)
-        _, d = self.cables(y)
-        g = self.attachment_gradients(theta)
+    def load_derivative(self, u: np.ndarray, g=None, d=None) -> np.ndarray:
+        """dF/dp, shape (n, size): row i is dF/dp_i (right-hand sides of Eq. (14));
+        ``g``, ``d``: :meth:`attachment_gradients` and cable directions if known."""
+        if g is None or d is None:
+            theta, y = self.split(u)
+            d = self.cables(y)[1]
+            g = self.attachment_gradients(theta)
         out = np.zeros((self.n_tendons, self.size))
         out[:, : self.n_elements] = -(g[..., 0] * d[:, :1] + g[..., 1] * d[:, 1:])
         return out
+
+    def linearisation(self, u: np.ndarray, p, residual: bool = True) -> tuple:
+        """F (:meth:`residual`), the entries of dF/du (:meth:`jacobian_values`) and
+        dF/dp (:meth:`load_derivative`) at (u, p) in one pass: the element
+        angles' cosines and sines and the attachment gradients are shared.
+        With ``residual=False`` only (dF/du, dF/dp)."""
+        t = self.terms(u, p)
+        g = self.attachment_gradients(t.theta, (t.c, t.s))
+        out = (self.jacobian_values(u, p, t, g), self.load_derivative(u, g, t.d))
+        return ((self.residual(u, p, terms=t),) + out) if residual else out

@@ -27,7 +27,14 @@ here on a plain SNES (Newton with line search, options prefix ``cont_``).
 Step control: the step doubles after a corrector of at most 3 Newton
 iterations and halves on failure, on a corrector that moved any angle by
 more than ``jump_tol`` from the predictor (a jump to another branch) or on a
-tip step longer than ``max_tip_step``.
+tip step longer than ``max_tip_step``.  Before the corrector the step is
+capped so that the predicted tip step is 0.8 ``max_tip_step``
+(:meth:`CurveTracer.step_limit`) and, on the boundary tracer's walks, so that
+the predictor at most halves a cable that shortens (past its routing point
+the cable direction of Eq. (3) flips and no corrector converges;
+``studies/boundary.py``, ``Walker._collapse_limit``).  Within a corrector,
+once the residual is below ``lag_below`` the factored Jacobian of the
+previous iterate is kept (a chord step; the stopping tests are unchanged).
 
 Test functions along a curve (evaluated at every accepted point):
 stability (negative eigenvalues of K by Sylvester inertia: a change is a
@@ -56,7 +63,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
-from scipy.linalg import lu_factor
 
 from ..core.fem import Discretisation
 from .equilibrium import SNES_REASONS
@@ -67,7 +73,7 @@ from .options import set_from_options
 # LU with partial pivoting for the extended systems: their leading block J is
 # singular on the fold and their last rows have no diagonal entry, so the
 # natural-order LU without pivoting of linalg.use_bordered_lu would break down.
-PIVOTING_LU = ("umfpack", "superlu", "mumps")
+PIVOTING_LU = ("klu", "umfpack", "superlu", "mumps")
 
 
 def use_pivoting_lu(ksp: PETSc.KSP) -> PETSc.KSP:
@@ -105,7 +111,7 @@ class BorderedPattern:
         new_idx[self.row_pos] = np.arange(size + k)
         self.csr = (new_ptr, new_idx)
         self.n = size + k
-        self._rows = np.repeat(np.arange(self.n), np.diff(new_ptr))
+        self._transpose = None
 
     def values(self, base_values, columns, rows) -> np.ndarray:
         out = np.empty(self.csr[0][-1])
@@ -114,23 +120,41 @@ class BorderedPattern:
         out[self.row_pos] = rows
         return out
 
-    def determinant_sign(self, values) -> float:
-        """Sign of det of the matrix with these values, from a dense LAPACK LU
-        (m ~ 200: cheaper than extracting U from a sparse factorisation)."""
-        dense = np.zeros((self.n, self.n))
-        dense[self._rows, self.csr[1]] = values
-        lu, piv = lu_factor(dense, check_finite=False)
-        swaps = np.count_nonzero(piv != np.arange(len(piv)))
-        return float(np.prod(np.sign(np.diag(lu)))) * (-1.0) ** swaps
+    @staticmethod
+    def determinant_sign(lu) -> float:
+        """Sign of det B from the SuperLU factors of B^T (:meth:`lu_of_transpose`):
+        P_r B^T P_c = L U with L unit lower triangular, so
+        sign det B = sign(P_r) sign(P_c) prod sign(U_kk) (no dense LU needed)."""
+        sign = float(np.prod(np.sign(lu.U.diagonal())))
+        for perm in (lu.perm_r, lu.perm_c):         # perm_c: the identity in natural order
+            if np.any(perm != np.arange(len(perm))):
+                sign *= permutation_sign(perm)
+        return sign
 
     def lu_of_transpose(self, values):
         """SuperLU (scipy, partial pivoting) of B^T, B the CSR matrix with these
         values (its CSR arrays are the CSC arrays of B^T): B x = b is
         ``lu.solve(b, trans="T")``, B^T y = c is ``lu.solve(c)``."""
         from scipy.sparse.linalg import splu
-        Bt = sp.csc_matrix((values, self.csr[1], self.csr[0]), shape=(self.n, self.n))
+        if self._transpose is None:            # built (and checked) once, values reset
+            self._transpose = sp.csc_matrix((values, self.csr[1], self.csr[0]),
+                                            shape=(self.n, self.n))
+        self._transpose.data[:] = values
         # natural order: the dense border is last, so its fill stays in the border
-        return splu(Bt, permc_spec="NATURAL")
+        return splu(self._transpose, permc_spec="NATURAL")
+
+
+def permutation_sign(perm: np.ndarray) -> float:
+    """Sign (+1 or -1) of a permutation, (-1)^(n - number of cycles): each
+    element's cycle is labelled by its smallest member by pointer doubling
+    (log2 n rounds of indexing, no Python loop over the elements)."""
+    perm = np.asarray(perm)
+    label, step = np.minimum(np.arange(len(perm)), perm), perm
+    for _ in range(max(int(np.ceil(np.log2(max(len(perm), 2)))), 1)):
+        label = np.minimum(label, label[step])
+        step = step[step]
+    cycles = np.count_nonzero(label == np.arange(len(perm)))
+    return -1.0 if (len(perm) - cycles) % 2 else 1.0
 
 
 class BorderedAIJ:
@@ -155,6 +179,13 @@ class BorderedAIJ:
         self.mat.destroy()
 
 
+def _remember(cache: dict, key, value, size: int = 4) -> None:
+    """Keep ``value`` under ``key`` in a small cache (the oldest entry goes)."""
+    if key not in cache and len(cache) >= size:
+        cache.pop(next(iter(cache)))
+    cache[key] = value
+
+
 class Manifold:
     """F(u, p) = 0 of one discretised arm as functions of w = (u, p)."""
 
@@ -176,19 +207,29 @@ class Manifold:
         return w[: self.size], w[self.size:]
 
     def residual(self, w: np.ndarray) -> np.ndarray:
+        """F at w; J and dF/dp at w are computed in the same pass
+        (:meth:`Discretisation.linearisation`) and cached: Newton, the tangent
+        and the test functions ask for them at the iterates it evaluates."""
         u, p = self.split(w)
-        return self.disc.residual(u, p)
+        F, J, L = self.disc.linearisation(u, p)
+        _remember(self._jac_cache, w.tobytes(), J)
+        _remember(self._load_cache, u.tobytes(), L.T)
+        return F
 
     def jacobian_values(self, w: np.ndarray) -> np.ndarray:
         """Entries of J = dF/du at w (pattern ``csr``); the last few w are cached
         (the corrector, the tangent and the fold test functions ask at the same w)."""
         key = w.tobytes()
         if key not in self._jac_cache:
-            if len(self._jac_cache) >= 4:
-                self._jac_cache.pop(next(iter(self._jac_cache)))
-            u, p = self.split(w)
-            self._jac_cache[key] = self.disc.jacobian_values(u, p)
+            self._linearise(w)
         return self._jac_cache[key]
+
+    def _linearise(self, w: np.ndarray) -> None:
+        """Cache J and dF/dp at w, computed together (shared kernels)."""
+        u, p = self.split(w)
+        J, L = self.disc.linearisation(u, p, residual=False)
+        _remember(self._jac_cache, w.tobytes(), J)
+        _remember(self._load_cache, u.tobytes(), L.T)
 
     def jacobian(self, w: np.ndarray) -> sp.csr_matrix:
         return sp.csr_matrix((self.jacobian_values(w), self.csr[1], self.csr[0]),
@@ -204,12 +245,9 @@ class Manifold:
     def load_columns(self, w: np.ndarray) -> np.ndarray:
         """dF/dp, (size, n): the tensions' columns (Eq. (14)); F is linear in p.
         Depends on u only; the last few are cached like :meth:`jacobian_values`."""
-        u = self.split(w)[0]
-        key = u.tobytes()
+        key = self.split(w)[0].tobytes()
         if key not in self._load_cache:
-            if len(self._load_cache) >= 4:
-                self._load_cache.pop(next(iter(self._load_cache)))
-            self._load_cache[key] = self.disc.load_derivative(u).T
+            self._linearise(w)
         return self._load_cache[key]
 
     def route_derivative(self, w: np.ndarray, i: int) -> np.ndarray:
@@ -612,7 +650,8 @@ class Curve:
 class CurveTracer:
     """Pseudo-arclength continuation on M with one active constraint and SNES
     as the corrector (options prefix ``cont_``).  ``solves`` counts the
-    corrector solves (each one nonlinear solve of the extended system)."""
+    corrector solves (each one nonlinear solve of the extended system),
+    ``rejected`` the steps among them that were not accepted."""
 
     def __init__(self, disc: Discretisation, *, jump_tol: float = 0.5,
                  max_tip_step: float = 0.2, ds_max: float = 4.0, prefix: str = "cont_"):
@@ -636,6 +675,7 @@ class CurveTracer:
         set_from_options(snes, prefix, {"snes_linesearch_type": "basic"})
         self.rtol, self.atol, self.stol, _ = snes.getTolerances()
         self.contraction = 0.5
+        self.lag_below = 1e-7          # residual norm below which the Jacobian is kept
         self._fnorms = []
         snes.setConvergenceTest(self._converged)
         self.snes = snes
@@ -645,6 +685,7 @@ class CurveTracer:
         self.ksp.setFromOptions()
         self.inertia = InertiaCounter(disc)
         self.solves = 0
+        self.rejected = 0            # steps whose corrector failed or was rejected (halved)
         self._rows = None            # the two scalar equations: callables (value, gradient)
 
     # --- the extended system G(w) = [F; r_1; r_2] -----------------------------
@@ -656,6 +697,13 @@ class CurveTracer:
         self.A.fill(self.mf.jacobian_values(w), self.mf.load_columns(w), rows)
 
     def _form_jacobian(self, snes, X, J, P) -> None:
+        """The extended Jacobian at the iterate, except once Newton is within
+        ``lag_below`` of the root: then the previous iterate's (already
+        factored) matrix is kept (PETSc does not refactor an unchanged
+        operator), a chord step from an O(|dx|)-accurate Jacobian; the stopping
+        tests on the residual are unchanged."""
+        if snes.getIterationNumber() > 0 and self._fnorms and self._fnorms[-1] < self.lag_below:
+            return
         w = X.getArray(readonly=True)
         self._fill(w, np.array([gradient(w) for _, gradient in self._rows]))
 
@@ -725,7 +773,7 @@ class CurveTracer:
         rhs = np.zeros((mf.m, 2))
         rhs[-1, 0] = rhs[-2, 1] = 1.0
         sol = lu.solve(rhs, trans="T")
-        sign = self.A.pattern.determinant_sign(values)
+        sign = self.A.pattern.determinant_sign(lu)
         scale = mf.norm(sol[:, 0])
         t, tau = sol[:, 0] / scale, sol[:, 1]
         T = mf.tip_gradient(w)
@@ -793,12 +841,10 @@ class CurveTracer:
         w_pred = pt.w + ds * pt.t
         w, ok, its = self._solve(w_pred, [self._row(constraint), self._arclength_row(pt.t, w_pred)],
                                  max_it=self.step_max_it)
-        if not ok:
-            return None, its
         n_angles = self.mf.disc.n_elements
-        if np.max(np.abs(w[:n_angles] - w_pred[:n_angles])) > self.jump_tol:
-            return None, its
-        if np.linalg.norm(self.mf.tip(w) - pt.tip) > self.max_tip_step:
+        if (not ok or np.max(np.abs(w[:n_angles] - w_pred[:n_angles])) > self.jump_tol
+                or np.linalg.norm(self.mf.tip(w) - pt.tip) > self.max_tip_step):
+            self.rejected += 1
             return None, its
         t, det_sign, tip_det = self.tangent(w, constraint, pt.t)
         return self.point(w, t, det_sign, its, tip_det, self.last_inward), its

@@ -119,6 +119,7 @@ class BoundaryResult:
     faces: list = field(default_factory=list)            # classify_faces (W0)
     scan: list = field(default_factory=list)             # scan_rays: (ray, changes, unexplained)
     scan_solves: int = 0                                 # of ``solves``, spent on the scan
+    rejected_steps: int = 0                              # of ``solves``, steps not accepted
     area_bounds_mm2: tuple = (np.nan, np.nan)            # W0: (proven in, not proven out)
     _outside: object = field(default=None, repr=False)
 
@@ -251,13 +252,28 @@ class Walker:
             hits.append(self.fold)
         return hits
 
+    def _collapse_limit(self, pt, active) -> float:
+        """The step length at which the predictor w + ds t brings a cable to half
+        the collapse length eps (linearised; a cable's length is convex along the
+        predictor's line, so the predicted length stays above eps/2).  Past its
+        routing point the cable direction of Eq. (3) flips, and a corrector
+        started there fails whatever the step: the step is cut to reach the
+        event (L_i = eps) instead of being halved after failed correctors."""
+        limit = np.inf
+        for c in self.constraints:
+            if isinstance(c, CableCollapse) and c is not active:
+                rate = float(c.gradient(pt.w) @ pt.t)
+                if rate < 0:
+                    limit = min(limit, 0.5 * (c.value(pt.w) + c.eps) / -rate)
+        return limit
+
     def follow(self, start, active) -> tuple[Curve, object, np.ndarray | None]:
         """Follow ``active`` from the point ``start`` until another constraint
         becomes active: (curve, the new constraint, the corner state w)."""
         curve = Curve(active.name, [start], active=active)
         pt, ds = start, self.ds0
         while len(curve.points) < self.max_points:
-            ds = min(ds, self.tr.step_limit(pt))
+            ds = min(ds, self.tr.step_limit(pt), self._collapse_limit(pt, active))
             new, its = self.tr.step(pt, active, ds)
             if self.progress is not None:
                 self.progress(self.tr.solves, f"along {active.name}, point {len(curve.points)}")
@@ -531,8 +547,11 @@ class OutsideMap:
             a, b = line[:-1], line[1:]
             self.segments.append((a, b))
             n = np.maximum(np.ceil(np.linalg.norm(b - a, axis=1) / (0.5 * self.cell)), 1)
-            seg = np.repeat(np.arange(len(a)), n.astype(int) + 1)
-            frac = np.concatenate([np.linspace(0.0, 1.0, m + 1) for m in n.astype(int)])
+            n = n.astype(int)
+            seg = np.repeat(np.arange(len(a)), n + 1)
+            # samples k / n_seg, k = 0..n_seg, of every segment (as np.linspace rounds them)
+            k = np.arange(len(seg)) - np.repeat(np.cumsum(n + 1) - (n + 1), n + 1)
+            frac = np.where(k == n[seg], 1.0, k * (1.0 / n[seg]))
             ij = np.floor((a[seg] + frac[:, None] * (b - a)[seg] - self.origin)
                           / self.cell).astype(int)
             for di in (-1, 0, 1):
@@ -541,7 +560,9 @@ class OutsideMap:
                          np.clip(ij[:, 1] + dj, 0, shape[1] - 1)] = True
         labels, self.n_labels = ndimage.label(~wall)
         border = np.unique(np.concatenate((labels[0], labels[-1], labels[:, 0], labels[:, -1])))
-        self.outside_cells = np.isin(labels, border[border > 0])
+        on_border = np.zeros(self.n_labels + 1, bool)
+        on_border[border[border > 0]] = True
+        self.outside_cells = on_border[labels]
         self.labels, self.border_labels, self.shape = labels, border[border > 0], shape
 
     def bounded_faces(self) -> list[tuple[np.ndarray, float]]:
@@ -554,7 +575,13 @@ class OutsideMap:
             return []
         depth = ndimage.distance_transform_edt(free)
         ids = [k for k in range(1, self.n_labels + 1) if k not in set(self.border_labels)]
-        where = ndimage.maximum_position(depth, self.labels, ids)
+        boxes = ndimage.find_objects(self.labels)
+        where = []
+        for k in ids:                           # of the deepest cells, the first in C order
+            box = boxes[k - 1]
+            hit = np.argmax(np.where(self.labels[box] == k, depth[box], -1.0))
+            where.append(tuple(int(i) + sl.start for i, sl in
+                               zip(np.unravel_index(hit, self.labels[box].shape), box)))
         sizes = ndimage.sum(free, self.labels, ids)
         return [(self.origin + (np.array(ij) + 0.5) * self.cell, float(n) * self.cell**2, k)
                 for ij, n, k in zip(where, sizes, ids)]
@@ -689,25 +716,28 @@ def union_area(poly: np.ndarray, step: float | None = None) -> float:
     (the region W_0 when the loop crosses itself; the shoelace area would
     count a doubly wound part twice).  Scan lines at the midpoints of strips
     of height ``step`` (default 1/2000 of the height): on each, the crossings
-    are sorted and the winding number accumulated (all lines at once)."""
+    are sorted and the winding number accumulated.  Only the (line, edge)
+    pairs that cross are formed (each edge spans a range of lines), then
+    sorted together by line and abscissa."""
     a, b = poly, np.roll(poly, -1, axis=0)
     y0, y1 = float(np.min(poly[:, 1])), float(np.max(poly[:, 1]))
     step = (y1 - y0) / 2000 if step is None else step
-    total = 0.0
+    ys = np.arange(y0 + step / 2, y1, step)
     lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
+    first = np.searchsorted(ys, lo, side="left")                 # lines with lo <= y < hi
+    count = np.searchsorted(ys, hi, side="left") - first
+    edge = np.repeat(np.arange(len(a)), count)
+    line = np.arange(len(edge)) - np.repeat(np.cumsum(count) - count - first, count)
     dy = np.where(b[:, 1] != a[:, 1], b[:, 1] - a[:, 1], 1.0)
-    direction = np.where(b[:, 1] > a[:, 1], 1, -1)
-    for ys in np.array_split(np.arange(y0 + step / 2, y1, step), 8):
-        y = ys[:, None]
-        hit = (lo <= y) & (hi > y)                                   # (lines, edges)
-        x = np.where(hit, a[:, 0] + (y - a[:, 1]) / dy * (b[:, 0] - a[:, 0]), 1e300)
-        order = np.argsort(x, axis=1)
-        xs = np.take_along_axis(x, order, axis=1)
-        winding = np.cumsum(np.take_along_axis(np.where(hit, direction, 0), order, axis=1),
-                            axis=1)[:, :-1]
-        gaps = np.diff(xs, axis=1)
-        total += float(np.sum(np.where(winding != 0, gaps, 0.0)))
-    return total * step
+    x = a[edge, 0] + (ys[line] - a[edge, 1]) / dy[edge] * (b[edge, 0] - a[edge, 0])
+    order = np.lexsort((x, line))
+    x, line = x[order], line[order]
+    up = np.where(b[:, 1] > a[:, 1], 1, -1)[edge][order]       # crossing direction
+    winding = np.cumsum(up)
+    starts = np.flatnonzero(np.diff(line, prepend=-1))          # first crossing of each line
+    winding -= np.repeat(winding[starts] - up[starts], np.diff(np.append(starts, len(line))))
+    same = line[1:] == line[:-1]
+    return float(np.sum(np.where(same & (winding[:-1] != 0), np.diff(x), 0.0))) * step
 
 
 def union_area_gradient(nodes: np.ndarray, velocity: np.ndarray,
@@ -748,22 +778,24 @@ def shoelace(poly: np.ndarray) -> float:
 
 def hermite_densify(tip, velocity, per_segment: int = 8) -> np.ndarray:
     """Cubic Hermite curve through the nodes with their tip velocities d x_t/ds
-    (per unit of the curve's arclength parameter), ``per_segment`` points each."""
-    out = [tip[:1]]
-    for a in range(len(tip) - 1):
-        b = a + 1
-        chord = np.linalg.norm(tip[b] - tip[a])
-        va, vb = velocity[a], velocity[b]
-        na, nb = np.linalg.norm(va), np.linalg.norm(vb)
-        if chord == 0 or na == 0 or nb == 0:
-            out.append(tip[b:b + 1])
-            continue
-        ma, mb = va / na * chord, vb / nb * chord      # tangents scaled to the chord
-        s = np.linspace(0, 1, per_segment + 1)[1:, None]
-        h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
-        h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
-        out.append(h00 * tip[a] + h10 * ma + h01 * tip[b] + h11 * mb)
-    return np.vstack(out)
+    (per unit of the curve's arclength parameter), ``per_segment`` points each
+    (a segment with a zero chord or velocity keeps only its end node)."""
+    tip, velocity = np.asarray(tip, float), np.asarray(velocity, float)
+    a, b = tip[:-1], tip[1:]
+    chord = np.linalg.norm(b - a, axis=1)
+    na, nb = np.linalg.norm(velocity[:-1], axis=1), np.linalg.norm(velocity[1:], axis=1)
+    smooth = (chord != 0) & (na != 0) & (nb != 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ma = velocity[:-1] / na[:, None] * chord[:, None]       # tangents scaled to the chord
+        mb = velocity[1:] / nb[:, None] * chord[:, None]
+    s = np.linspace(0, 1, per_segment + 1)[1:, None]
+    h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
+    h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+    curve = (h00[None] * a[:, None] + h10[None] * ma[:, None] + h01[None] * b[:, None]
+             + h11[None] * mb[:, None])                          # (segments, per_segment, 2)
+    keep = np.where(smooth[:, None], True, np.arange(per_segment)[None] == per_segment - 1)
+    curve[~smooth, -1] = b[~smooth]
+    return np.vstack((tip[:1], curve[keep]))
 
 
 def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
@@ -798,11 +830,21 @@ def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
 
 
 def self_intersections(poly: np.ndarray) -> int:
-    """Number of crossings between non-adjacent edges of a closed polygon."""
+    """Number of crossings between non-adjacent edges of a closed polygon.
+    Only pairs whose x-ranges overlap are tested (a crossing inside both edges
+    needs it): edges sorted by their left end, each against the later ones
+    starting left of its right end."""
     a, b = poly, np.roll(poly, -1, axis=0)
     n = len(a)
-    i, j = np.triu_indices(n, k=2)
-    keep = ~((i == 0) & (j == n - 1))                      # the closing edge meets edge 0
+    left, right = np.minimum(a[:, 0], b[:, 0]), np.maximum(a[:, 0], b[:, 0])
+    order = np.argsort(left, kind="stable")
+    stop = np.searchsorted(left[order], right[order], side="right")
+    count = np.maximum(stop - np.arange(n) - 1, 0)
+    first = np.repeat(np.arange(n), count)
+    second = np.arange(len(first)) - np.repeat(np.cumsum(count) - count, count) + first + 1
+    i, j = order[first], order[second]
+    i, j = np.minimum(i, j), np.maximum(i, j)
+    keep = (j - i >= 2) & ~((i == 0) & (j == n - 1))      # adjacent edges share a vertex
     i, j = i[keep], j[keep]
     p, r = a[i], b[i] - a[i]
     q, s = a[j], b[j] - a[j]
@@ -882,12 +924,13 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
                 messages.append(f"{name}: the loop's image crosses itself {crossings} times "
                                 "(the tip map is not one-to-one on the region); the area is "
                                 "that of the set it winds around")
-        solves = tracer.solves
+        solves, rejected = tracer.solves, tracer.rejected
     folds = np.array([x.tip for x in fold_crossings]).reshape(-1, 2) * arm.length_mm
     result = BoundaryResult(arm, regions, polygons, areas, folds, solves,
                             time.perf_counter() - t0, messages, gradients, fold_curves,
                             [curve_polyline(c, arm.length_mm) for c in fold_curves], fold_crossings,
-                            cell_mm=arm.length_mm / 500, scan=scan, scan_solves=scan_solves)
+                            cell_mm=arm.length_mm / 500, scan=scan, scan_solves=scan_solves,
+                            rejected_steps=rejected)
     messages += [f"W0: tip-map fold not traced: {why} (no OUTSIDE_BOUNDARY verdicts)"
                  for why in result.untraced_folds]
     if tip_folds and regions["W0"].closed and not result.untraced_folds:
@@ -930,13 +973,24 @@ def curve_polyline(curve: Curve, length_mm: float) -> np.ndarray:
 
 
 def winding_number(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Winding number of the closed polygon around each point (Sunday's rule)."""
+    """Winding number of the closed polygon around each point (Sunday's rule:
+    an upward edge with the point on its left counts +1, a downward edge with
+    the point on its right -1, each edge half-open in y).  Only the (edge,
+    point) pairs whose y-ranges match are formed (points sorted by y)."""
     a, b = poly, np.roll(poly, -1, axis=0)
-    x, y = points[:, 0][:, None], points[:, 1][:, None]
+    points = np.atleast_2d(points)
+    order = np.argsort(points[:, 1], kind="stable")
+    ys = points[order, 1]
+    first = np.searchsorted(ys, np.minimum(a[:, 1], b[:, 1]), side="left")
+    count = np.searchsorted(ys, np.maximum(a[:, 1], b[:, 1]), side="left") - first
+    edge = np.repeat(np.arange(len(a)), count)
+    point = order[np.arange(len(edge)) - np.repeat(np.cumsum(count) - count - first, count)]
+    a, b = a[edge], b[edge]
+    x, y = points[point, 0], points[point, 1]
     cross = (b[:, 0] - a[:, 0]) * (y - a[:, 1]) - (x - a[:, 0]) * (b[:, 1] - a[:, 1])
     up = (a[:, 1] <= y) & (b[:, 1] > y) & (cross > 0)
     down = (a[:, 1] > y) & (b[:, 1] <= y) & (cross < 0)
-    return np.sum(up, axis=1) - np.sum(down, axis=1)
+    return np.bincount(point, weights=up.astype(float) - down, minlength=len(points)).astype(int)
 
 
 def _inside(poly: np.ndarray, points: np.ndarray) -> np.ndarray:

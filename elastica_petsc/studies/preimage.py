@@ -65,7 +65,7 @@ class SearchTracer(CurveTracer):
     def __init__(self, disc, **kw):
         super().__init__(disc, prefix="curve_", **kw)
         set_from_options(self.snes, "curve_", CURVE_OPTIONS)
-        self.A.pattern.determinant_sign = lambda values: 1.0   # det sign unused: no dense LU
+        self.A.pattern.determinant_sign = lambda lu: 1.0       # det sign unused
 
     def point(self, w, t, det_sign, iterations, tip_det: float = np.nan,
               tip_inward=None) -> CurvePoint:
