@@ -161,31 +161,43 @@ class BoundaryResult:
             inside |= np.isin(self.outside_map.label(pts), twice)
         return inside
 
-    def outside(self, target_mm, margin_mm: float | None = None) -> tuple[str, float]:
-        """(evidence, distance in mm): evidence is '' unless ``target_mm`` is
-        proven outside W_0 by docs/model.md §9.1: the loop is closed, every
-        fold of the tip map meeting it is traced to the region's boundary, the
-        target lies farther than ``margin_mm`` (default 3 cells) from the
-        loop's and the folds' images, and in a face of the plane minus them
-        with no preimage: the unbounded face, or a bounded face whose
-        preimage count N (:func:`classify_faces`) is decided, 0 and
-        consistent with its winding number 0.  The distance is to the
-        nearest traced curve."""
+    def preimages(self, target_mm, margin_mm: float | None = None) -> tuple[int | None, float]:
+        """(N, distance in mm): the number N of states of D whose tip is
+        ``target_mm``, when the traced boundary decides it (docs/model.md
+        §9.1): the loop is closed, every fold of the tip map meeting it is
+        traced to the region's boundary, the target lies farther than
+        ``margin_mm`` (default 3 cells) from the loop's and the folds'
+        images, and its face of the plane minus them is the unbounded one
+        (N = 0) or a bounded face whose preimage count (:func:`classify_faces`)
+        is decided and consistent with its winding number (N >= |w|,
+        N = w mod 2).  N is None otherwise.  The distance is to the nearest
+        traced curve."""
         target = np.asarray(target_mm, float).reshape(1, 2)
         margin = 3 * self.cell_mm if margin_mm is None else margin_mm
         dist = float(self.outside_map.distance(target)[0])
         if not self.regions["W0"].closed or self.untraced_folds or dist <= margin:
+            return None, dist
+        if self.outside_map.outside(target)[0]:
+            return 0, dist
+        label = int(self.outside_map.label(target)[0])
+        for f in self.faces:
+            n, w = f["preimages"], f["winding"]
+            if f["label"] == label and n is not None and n >= abs(w) and (n - w) % 2 == 0:
+                return n, dist
+        return None, dist
+
+    def outside(self, target_mm, margin_mm: float | None = None) -> tuple[str, float]:
+        """(evidence, distance in mm): evidence is '' unless ``target_mm`` is
+        proven outside W_0 by docs/model.md §9.1, i.e. :meth:`preimages` is 0:
+        the target lies in the unbounded face or in a hole of W_0."""
+        n, dist = self.preimages(target_mm, margin_mm)
+        if n != 0:
             return "", dist
         curves = (f"loop of {len(self.regions['W0'].curves)} curves and "
                   f"{len(self.fold_curves)} tip-map fold curves")
-        if self.outside_map.outside(target)[0]:
+        if self.outside_map.outside(np.asarray(target_mm, float).reshape(1, 2))[0]:
             return (f"OUTSIDE_BOUNDARY: the target lies outside the traced boundary of W_0 "
                     f"({curves}), {dist:.3g} mm from it (docs/model.md §9.1)"), dist
-        label = int(self.outside_map.label(target)[0])
-        empty = [f for f in self.faces if f["label"] == label
-                 and f["preimages"] == 0 and f["winding"] == 0]
-        if not empty:
-            return "", dist
         return (f"OUTSIDE_BOUNDARY: the target lies in a hole of W_0, a bounded face of the "
                 f"plane minus the traced boundary ({curves}) with no preimage, counted along "
                 f"a ray to infinity; {dist:.3g} mm from the boundary (docs/model.md §9.1)"), dist
@@ -1081,25 +1093,31 @@ def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np
     }
 
 
-_PROOFS: dict = {}          # boundary per arm and mesh, in-process (boundary_proof)
+_TRACED: dict = {}          # W_0 boundary per arm and mesh, in-process (traced_w0)
+
+
+def traced_w0(arm: Arm, disc: Discretisation) -> BoundaryResult:
+    """The W_0 boundary of a two-tendon arm (no restricted level curves),
+    traced on the first call and kept per arm and mesh for the process: the
+    one trace that tip control's proof and the sampled map share."""
+    key = (arm.length_mm, disc.n_elements, disc.attach_nodes, np.asarray(disc.routes).tobytes(),
+           arm.max_tension)
+    if key not in _TRACED:
+        _TRACED[key] = trace_boundary(arm, disc, restricted=False)
+    return _TRACED[key]
 
 
 def boundary_proof(arm: Arm, disc: Discretisation | None = None):
     """A callable for :class:`~elastica_petsc.solvers.reach.Reacher`'s ``boundary``:
     target (units of l) -> (evidence, distance in units of l), from
-    :meth:`BoundaryResult.outside`.  The boundary is traced on the first
-    call (W_0 only, folds traced) and kept per arm and mesh for the process;
-    arms with other than two tendons give no evidence ('')."""
+    :meth:`BoundaryResult.outside` on :func:`traced_w0` (traced on the first
+    call); arms with other than two tendons give no evidence ('')."""
     disc = Discretisation.from_arm(arm) if disc is None else disc
-    key = (arm.length_mm, disc.n_elements, disc.attach_nodes, np.asarray(disc.routes).tobytes(),
-           arm.max_tension)
 
     def outside(target: np.ndarray) -> tuple[str, float]:
         if disc.n_tendons != 2:
             return "", float("nan")
-        if key not in _PROOFS:
-            _PROOFS[key] = trace_boundary(arm, disc, restricted=False)
-        evidence, dist = _PROOFS[key].outside(np.asarray(target, float) * arm.length_mm)
+        evidence, dist = traced_w0(arm, disc).outside(np.asarray(target, float) * arm.length_mm)
         return evidence, dist / arm.length_mm
 
     return outside

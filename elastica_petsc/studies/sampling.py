@@ -209,7 +209,6 @@ class TargetSampler(_Sampler):
             from ..solvers.share import TensionSharer
             self.sharer = TensionSharer(self.controller, share, self.min_tension)
         self._reached = {}                 # sample -> ControlResult that reached it (a chunk)
-        self._faces = None                 # two tendons with a floor: the traced boundary
 
     @property
     def library(self):
@@ -467,20 +466,12 @@ class TargetSampler(_Sampler):
 
     def _unique(self, target_mm) -> bool:
         """Two tendons: whether ``target_mm`` has one preimage in the region D of the
-        traced boundary of W_0 (docs/model.md §9.1: a bounded face with N = 1, the
-        loop closed, every fold traced, the target more than 3 cells from every
-        traced curve), so that the state reached is its only one (§9.3).  The
-        boundary is traced on first need, once per process."""
-        if self._faces is None:
-            from .boundary import trace_boundary
-            self._faces = trace_boundary(self.arm, self.disc, restricted=False)
-        res, point = self._faces, np.asarray(target_mm, float).reshape(1, 2)
-        if not res.regions["W0"].closed or res.untraced_folds or not res.faces:
-            return False
-        if res.outside_map.distance(point)[0] <= 3 * res.cell_mm:
-            return False
-        label = int(res.outside_map.label(point)[0])
-        return any(f["label"] == label and f["preimages"] == 1 for f in res.faces)
+        traced boundary of W_0 (:meth:`~elastica_petsc.studies.boundary.BoundaryResult.preimages`
+        is 1: docs/model.md §9.1), so that the state reached is its only one (§9.3).
+        The boundary is the process's one trace (:func:`~elastica_petsc.studies.boundary.traced_w0`)."""
+        from .boundary import traced_w0
+
+        return traced_w0(self.arm, self.disc).preimages(target_mm)[0] == 1
 
     def _share_one(self, target_mm, k: int, out: dict, starts: tuple):
         """Track the shared tensions at sample ``k`` from each of ``starts`` (an
