@@ -76,3 +76,20 @@ def test_pretension_floor(shared):
     arm3 = three_tendon_arm(load_config())
     assert res.converged and np.min(res.tensions_N) >= 1.0 - 1e-9
 
+
+
+@pytest.mark.parametrize("share", ["min-norm", "min-energy"])
+def test_tao_almm_agrees_with_the_sqp(shared, share):
+    """The first sharer, TAO ALMM (method="almm", kept for comparison: docs/model.md
+    §4.4), is an independent solver of the same problem: from the same reached
+    state it ends on the target with the SQP's tensions and satisfies the KKT
+    conditions."""
+    sqp = shared[share][0]
+    arm3 = three_tendon_arm(load_config())
+    with TipController(arm3, n_elements=ELEMENTS) as ctl:
+        reached = Reacher(ctl).reach(shared[share][3])
+        almm = TensionSharer(ctl, share, method="almm").solve(reached)
+        ev = ctl.evaluate(almm.p, start=almm.equilibrium)
+    assert almm.converged and almm.tip_error_mm < 1e-5
+    assert kkt_residual(share, ev) < 1e-7
+    np.testing.assert_allclose(almm.p, sqp.p, atol=1e-6)
