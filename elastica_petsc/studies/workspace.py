@@ -423,6 +423,8 @@ def read_results(path: Path, grid: Grid, n_tendons: int, attrs: dict,
                                      f"{_difference(key, stored, attrs.get(key, ATTR_DEFAULTS.get(key)))}")
             results.chunk_done[:] = fh["grid/chunk_done"][()]
             _read_samples(fh, results)
+    except InputError:
+        raise                                   # a mismatch found above, already in words
     except OSError as err:
         raise InputError(f"{path}: cannot resume from this file: {err}") from None
     except (KeyError, ValueError, TypeError) as err:
@@ -449,9 +451,10 @@ def _difference(key: str, stored, now) -> str:
                 + "; start a new file, or resume it with the same sampler"
                 + (" (--local-only)" if stored == "local" else ""))
     if key in ATTR_DEFAULTS:
-        option = "--share" if key == "share" else "--min-tension-N"
-        return (f"tension sharing {key} {stored!r} (now {now!r}): its samples hold other "
-                f"tensions; start a new file, or resume it with the same {option}")
+        option, what = (("--share", "the sharing rule") if key == "share" else
+                        ("--min-tension-N", "the tension floor [N]"))
+        return (f"{what} {option} {stored} (now {now}): its samples hold other tensions; "
+                f"start a new file, or resume it with the same {option}")
     if key == "petsc_options":
         return f"other PETSc options: {stored or '(none)'} (now {now or '(none)'})"
     return f"another {key}: {stored!r} (now {now!r})"
