@@ -187,6 +187,27 @@ def test_hole_around_r1_is_proven_outside(paper):
     assert np.isin(labels, one).sum() > 0.5 * len(tips)
 
 
+def test_plot_shading_is_w0_from_the_file(paper, tmp_path):
+    """The boundary plot shades W_0 from the file alone (plots/boundary.w0_mask):
+    its area is the traced one to grid accuracy, and it agrees with
+    BoundaryResult.contains point by point off the curves' cells (the hole
+    around r_1 stays white)."""
+    from elastica_petsc.io.boundary import read_boundary, write_boundary
+    from elastica_petsc.plots.boundary import w0_mask
+
+    arm, disc, result = paper
+    write_boundary(tmp_path / "b.h5", result)
+    region = read_boundary(tmp_path / "b.h5")["regions"]["W0"]
+    step = 2.0
+    X, Y, inside = w0_mask(region, step)
+    assert inside.sum() * step**2 == pytest.approx(result.area_mm2, rel=5e-3)
+    points = np.column_stack((X.ravel(), Y.ravel()))
+    off_walls = result.outside_map.label(points) != 0          # cells no curve touches
+    assert np.array_equal(inside.ravel()[off_walls], result.contains(points[off_walls]))
+    hole = next(f for f in region["faces"] if f["preimages"] == 0)
+    assert not result.contains(hole["point_mm"])[0]
+
+
 def _p1_edge_point(result, arm):
     """A node of the upper P_1 = 0 edge (y > 200 mm) and the outward unit normal
     of its tip image (mm)."""

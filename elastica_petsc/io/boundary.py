@@ -79,7 +79,8 @@ def _write_folds(group, result) -> None:
 
 
 def read_boundary(path) -> dict:
-    """{region: {polygon, area_mm2, closed, tip, tensions, curve, names}} and tip_folds."""
+    """{region: {polygon, area_mm2, closed, tip, tensions, curve, names, folds,
+    faces}} and tip_folds."""
     import h5py
 
     from ..core.errors import InputError
@@ -99,7 +100,8 @@ def read_boundary(path) -> dict:
                     "tensions": g["nodes/tensions"][()], "curve": g["nodes/curve"][()],
                     "names": json.loads(g["curves"].attrs["names_json"]),
                     "folds": [g["folds"][k]["tip"][()] for k in sorted(g["folds"], key=int)]
-                    if "folds" in g else []}
+                    if "folds" in g else [],
+                    "faces": json.loads(g.attrs.get("faces_json", "[]"))}
     except OSError as err:
         raise InputError(f"{path}: cannot read it as HDF5: {err}") from None
     return out

@@ -23,6 +23,10 @@ def plot_boundary(data: dict, path, *, arm_length_mm: float, routes_mm: np.ndarr
         ax.plot(arm_length_mm * np.cos(a), arm_length_mm * np.sin(a), "k--", lw=0.8,
                 label=f"rigid link of length l = {arm_length_mm:g} mm")
         ax.plot(routes_mm[:, 0], routes_mm[:, 1], "k^", ms=6, ls="none", label="routing points")
+    if "W0" in data["regions"] and samples is None:
+        shade_w0(ax, data["regions"]["W0"], arm_length_mm / 300)
+        ax.set_xlim(-1.08 * arm_length_mm, 1.08 * arm_length_mm)     # the reach, whole
+        ax.set_ylim(-1.08 * arm_length_mm, 1.08 * arm_length_mm)
     for name, region in data["regions"].items():
         colour, style, label = REGION_STYLE[name]
         poly = np.vstack((region["polygon"], region["polygon"][:1]))
@@ -46,3 +50,31 @@ def plot_boundary(data: dict, path, *, arm_length_mm: float, routes_mm: np.ndarr
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     save(fig, path)
 
+
+
+def shade_w0(ax, region: dict, step_mm: float) -> None:
+    """Shade W_0 (:func:`w0_mask`); holes stay white."""
+    X, Y, inside = w0_mask(region, step_mm)
+    ax.contourf(X, Y, inside.astype(float), levels=[0.5, 1.5], colors=["tab:blue"],
+                alpha=0.12, zorder=1)
+    ax.fill([], [], color="tab:blue", alpha=0.12, label="W_0 (holes white)")
+
+
+def w0_mask(region: dict, step_mm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(X, Y, inside) on a grid of ``step_mm`` over the W0 loop's box: W_0 as
+    assembled (docs/model.md §9.1), the points the loop winds around plus the
+    faces of winding number 0 covered twice (N > 0).  ``region`` as read by
+    :func:`elastica_petsc.io.boundary.read_boundary`."""
+    from ..studies.boundary import OutsideMap, winding_number
+
+    poly = region["polygon"]
+    lo, hi = poly.min(axis=0) - step_mm, poly.max(axis=0) + step_mm
+    X, Y = np.meshgrid(np.arange(lo[0], hi[0], step_mm), np.arange(lo[1], hi[1], step_mm))
+    points = np.column_stack((X.ravel(), Y.ravel()))
+    inside = winding_number(poly, points) != 0
+    twice = [f["point_mm"] for f in region.get("faces", [])
+             if f["winding"] == 0 and (f["preimages"] or 0) > 0]
+    if twice:
+        faces = OutsideMap([poly, *region.get("folds", [])], step_mm, closed=(0,))
+        inside |= np.isin(faces.label(points), faces.label(np.array(twice)))
+    return X, Y, inside.reshape(X.shape)
