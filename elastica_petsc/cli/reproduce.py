@@ -14,7 +14,7 @@ def add_parser(sub) -> None:
                     "the aluminium thought experiment of Sec. 4.3) on the paper's arm: an HDF5 "
                     "file per experiment, a PNG per figure and REPORT.md, a table of every "
                     "reference number with the paper's value beside ours. --quick uses coarse "
-                    "grids (about 15 s on an idle 2-core machine, longer on a busy one); the full run uses the paper's resolution (about "
+                    "grids (about 30 s on an idle 2-core machine, longer on a busy one); the full run uses the paper's resolution (about "
                     "4201 workspace samples). Under mpiexec, or with --jobs > 1, the workspace "
                     "sampling runs on several MPI ranks.")
     parser.add_argument("--out", default="results", metavar="DIR",
