@@ -933,9 +933,11 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
                                 f"{region.message}")
             crossings = self_intersections(poly)
             if crossings:
+                faces = (", plus the faces of winding number 0 covered twice (docs/model.md "
+                         "§9.1)") if name == "W0" and tip_folds else ""
                 messages.append(f"{name}: the loop's image crosses itself {crossings} times "
                                 "(the tip map is not one-to-one on the region); the area is "
-                                "that of the set it winds around")
+                                f"that of the set it winds around{faces}")
         solves, rejected = tracer.solves, tracer.rejected
     folds = np.array([x.tip for x in fold_crossings]).reshape(-1, 2) * arm.length_mm
     result = BoundaryResult(arm, regions, polygons, areas, folds, solves,
