@@ -158,7 +158,7 @@ class TargetSampler(_Sampler):
     the unbounded component of the plane minus the images of the tension
     region's boundary and of the tip map's folds, farther than 3 cells from
     them; docs/model.md §9.1) is classed ``OUTSIDE_BOUNDARY`` and not
-    searched: a proof, paid once per process (one boundary trace, about 2 s
+    searched: a proof, paid once per process (one boundary trace, about 1 s
     on the paper's arm), which spares the search its most expensive
     samples.  Arms with other than two tendons give no such proof.
     The samples still not reached are classed ``UNDECIDED``; a target beyond
@@ -180,8 +180,9 @@ class TargetSampler(_Sampler):
     redundancy: the tensions of the state reached are kept and checked against
     the floor; one below it is ``UNIQUE_BELOW_FLOOR`` (proven) where the traced
     boundary shows the target has no other preimage (:meth:`_unique`).  A
-    sample reached with P >= 0 whose sharing fails is ``BELOW_FLOOR`` with a floor (reason: how the sharer stopped; its P >= 0
-    state is kept: it is in W_0, undecided for W_0(p_min)), and stays
+    sample reached with P >= 0 whose sharing fails is ``BELOW_FLOOR`` with a
+    floor (reason: how the sharer stopped; its P >= 0 state is kept: it is in
+    W_0, undecided for W_0(p_min)), and stays
     ``REACHED`` without one (``shared`` False).  No sharing, no floor: nothing
     of this runs (the maps are those of before).
     """
@@ -202,7 +203,6 @@ class TargetSampler(_Sampler):
                                         stationary_rtol=self.stationary_rtol)
         self.global_search = global_search
         self._library = None
-        self._outside = None
         self.share, self.min_tension = share, float(min_tension)
         self.sharer = None
         if share != "none" and disc.n_tendons >= 3:
@@ -310,13 +310,13 @@ class TargetSampler(_Sampler):
     def _prove_outside(self, points, out: dict) -> None:
         """Class ``OUTSIDE_BOUNDARY`` the not-reached samples the traced boundary
         of W_0 proves outside (class doc); the boundary is traced on first need."""
+        from .boundary import boundary_proof
+
+        outside = boundary_proof(self.arm, self.disc)     # one trace per process, on first need
         for k, target in enumerate(points):
             if out["status"][k] in (REACHED, BEYOND_REACH):
                 continue
-            if self._outside is None:
-                from .boundary import boundary_proof
-                self._outside = boundary_proof(self.arm, self.disc)
-            if self._outside(target / self.arm.length_mm)[0]:
+            if outside(target / self.arm.length_mm)[0]:
                 out["status"][k] = OUTSIDE_BOUNDARY     # reason: how its local solve ended
 
     def _search(self, points, out: dict, states: dict, runs: dict, stop) -> bool:

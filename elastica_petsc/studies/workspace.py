@@ -418,9 +418,10 @@ def read_results(path: Path, grid: Grid, n_tendons: int, attrs: dict,
                     stored = stored.decode()
                 if key == "sampler":
                     stored = sampler_of(fh.attrs, attrs["mode"])
-                if stored != attrs.get(key, ATTR_DEFAULTS.get(key)):
+                now = attrs.get(key, ATTR_DEFAULTS.get(key))
+                if stored != now:
                     raise InputError(f"{path}: cannot resume: it was made with "
-                                     f"{_difference(key, stored, attrs.get(key, ATTR_DEFAULTS.get(key)))}")
+                                     f"{_difference(key, stored, now)}")
             results.chunk_done[:] = fh["grid/chunk_done"][()]
             _read_samples(fh, results)
     except InputError:
