@@ -1,6 +1,8 @@
 """``elastica-petsc boundary``: the workspace boundary by continuation (two tendons)."""
 from __future__ import annotations
 
+from pathlib import Path
+
 from . import common
 
 
@@ -47,10 +49,8 @@ def run(args) -> int:
         write_boundary(args.out, result, args.overwrite)
         summary["file"] = args.out
     if args.plot:
-        from ..io.boundary import read_boundary
         from ..plots.boundary import plot_boundary
-        data = read_boundary(args.out) if args.out else _as_data(result)
-        plot_boundary(data, args.plot, arm_length_mm=arm.length_mm,
+        plot_boundary(_as_data(result), args.plot, arm_length_mm=arm.length_mm,
                       routes_mm=arm.routes() * arm.length_mm, samples=samples)
     if args.json:
         summary["polygons"] = {k: [p.tolist() for p in v] for k, v in result.polygons_mm.items()}
@@ -67,6 +67,8 @@ def _read_samples(path):
     from ..core.errors import InputError
     from ..plots.workspace import read_workspace
 
+    if not Path(path).is_file():
+        raise InputError(f"--overlay {path}: no such file")
     try:
         data = read_workspace(path)
     except (OSError, KeyError) as err:
@@ -83,7 +85,8 @@ def _as_data(result) -> dict:
         regions[name] = {"polygon": result.polygons_mm[name][0],
                          "area_mm2": result.areas_mm2[name],
                          "tip": nodes["tip"] * result.arm.length_mm,
-                         "folds": result.fold_polylines_mm if name == "W0" else []}
+                         "folds": result.fold_polylines_mm if name == "W0" else [],
+                         "faces": result.faces if name == "W0" else []}
     return {"regions": regions, "tip_folds": result.tip_folds_mm}
 
 
