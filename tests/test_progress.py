@@ -83,9 +83,9 @@ def test_under_mpi_a_rank_terminal_is_not_enough(monkeypatch):
     assert progress._terminal() is sys.stdout              # no launcher: the stream decides
 
 
-def run_in_pty(cmd, cwd=None, limit: float = 240.0):
+def run_in_pty(cmd, cwd=None, limit: float = 240.0, env: dict | None = None):
     """Run ``cmd`` with stdin, stdout and stderr on a pseudo-terminal: (exit
-    status, [(seconds since the start, text read)])."""
+    status, [(seconds since the start, text read)]); ``env``: variables added."""
     import pty
 
     master, slave = pty.openpty()
@@ -94,7 +94,7 @@ def run_in_pty(cmd, cwd=None, limit: float = 240.0):
     # Open MPI's singleton initialisation (any test that imported mpi4py) has written
     # variables that make a child mpiexec exit 1 without a word
     proc = subprocess.Popen(cmd, stdin=slave, stdout=slave, stderr=slave, close_fds=True,
-                            env=dict(os.environ), cwd=cwd)
+                            env={**os.environ, **(env or {})}, cwd=cwd)
     os.close(slave)
     events = []
     try:

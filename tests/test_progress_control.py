@@ -2,7 +2,8 @@
 with the search steps, the elapsed time and the stage appears once the run has
 lasted 1 s, is redrawn at least every 5 s and ends on 'done'; a fast control
 draws nothing (checked on the bar itself: a command's run time depends on the
-machine's load); ``--quiet`` silences it; not a terminal: at most a line every
+machine's load, so the terminal test sets the delay to 0 and does not depend on
+how fast the machine finds the target); ``--quiet`` silences it; not a terminal: at most a line every
 10 s (core/progress.py), none for a run shorter than that."""
 from __future__ import annotations
 
@@ -29,7 +30,9 @@ BAR = re.compile(r"control: (\d+) search steps  (\d+) s  ([^\r\n]*)")
 
 
 def test_global_search_shows_its_stage_in_a_terminal():
-    status, events = run_in_pty(SLOW)
+    # no delay: the bar is drawn from the start and each new stage at once, however fast the
+    # machine (a 1 s delay outlasted the whole search on fast idle machines)
+    status, events = run_in_pty(SLOW, env={"ELASTICA_PETSC_PROGRESS_DELAY_S": "0"})
     text = "".join(d for _, d in events)
     assert status == 0 and "target reached" in text, text
     draws = [(t, int(m.group(1)), m.group(3).strip()) for t, d in events
@@ -62,6 +65,7 @@ def test_delayed_bar_draws_only_after_its_delay():
     quick = Tty()
     with Progress(None, "control", stream=quick, unit="search steps", delay=1.0) as bar:
         bar(1, "local tip control")
+        bar(2, "global search: seed library")              # a new stage, but not yet due
     assert quick.getvalue() == ""
     slow = Tty()
     with Progress(None, "control", stream=slow, unit="search steps", delay=0.3,
@@ -71,3 +75,21 @@ def test_delayed_bar_draws_only_after_its_delay():
     lines = slow.getvalue()
     assert "control: 1 search steps  0 s  global search" in lines, repr(lines)
     assert lines.rstrip().endswith("done") and lines.endswith("\n"), repr(lines)
+
+
+def test_a_new_stage_is_drawn_at_once():
+    """Once due, a stage (a note's text before its first comma) is drawn when it starts,
+    not at the next tick; counts within a stage wait for the tick."""
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    out = Tty()
+    with Progress(None, "control", stream=out, unit="search steps", delay=0.0,
+                  interval=60.0) as bar:
+        bar(1, "local tip control")
+        bar(2, "global search: seed library, 1 equilibria")
+        bar(2, "global search: seed library, 2 equilibria")
+        text = out.getvalue()
+    assert "local tip control" in text and "seed library, 1 equilibria" in text, repr(text)
+    assert "2 equilibria" not in text, repr(text)

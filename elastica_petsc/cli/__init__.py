@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import signal
 import sys
 
@@ -109,7 +110,7 @@ def _main(argv: list[str] | None) -> int:
     # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     signal.signal(signal.SIGTERM, _interrupt)   # again: PETSc's initialisation may take it
-    progress.configure(quiet=getattr(args, "quiet", False))
+    progress.configure(quiet=getattr(args, "quiet", False), delay=_progress_delay())
     try:
         status = args.run(args)
     except InputError as err:
@@ -135,6 +136,16 @@ def _main(argv: list[str] | None) -> int:
         return _petsc_error(what, petsc_options)
     warn_unused(petsc_options)
     return status
+
+
+def _progress_delay() -> float | None:
+    """``ELASTICA_PETSC_PROGRESS_DELAY_S``: seconds before any bar is drawn (None: each
+    command's own; 0 draws at once, as the progress tests do)."""
+    text = os.environ.get("ELASTICA_PETSC_PROGRESS_DELAY_S", "").strip()
+    try:
+        return max(float(text), 0.0) if text else None
+    except ValueError:
+        return None
 
 
 def _petsc_error(what: str, petsc_options: list[str]) -> int:

@@ -26,6 +26,11 @@
 * ``delay`` (seconds): a bar is drawn only once the work has lasted that
   long, so a command that is usually fast (``control``: its global search
   runs only when the local solve stalls) prints nothing when it is.
+  :func:`configure` (``delay=``) overrides every bar's delay for the process
+  (the command line reads it from ``ELASTICA_PETSC_PROGRESS_DELAY_S``).
+* Once a bar is due, a new stage of open-ended work (a ``note`` whose text
+  before its first comma differs from the last one drawn) is drawn at once,
+  not at the next tick: a short stage is never missed.
 """
 from __future__ import annotations
 
@@ -35,13 +40,15 @@ import sys
 import threading
 import time
 
-_SETTINGS = {"quiet": False}
+_SETTINGS: dict = {"quiet": False, "delay": None}
 _OPEN: set = set()
 
 
-def configure(*, quiet: bool = False) -> None:
-    """Process-wide switch: ``quiet=True`` turns every later Progress off."""
+def configure(*, quiet: bool = False, delay: float | None = None) -> None:
+    """Process-wide switches: ``quiet=True`` turns every later Progress off;
+    ``delay`` (seconds, None: each bar's own) replaces every later bar's delay."""
     _SETTINGS["quiet"] = bool(quiet)
+    _SETTINGS["delay"] = None if delay is None else float(delay)
 
 
 def quiet() -> bool:
@@ -92,6 +99,11 @@ def _terminal():
     return None
 
 
+def _stage(note: str) -> str:
+    """The stage a note names: its text before the first comma (a count may follow)."""
+    return note.split(",", 1)[0]
+
+
 class Progress:
     """``update(done)`` after each unit of work; ``close(done)`` at the end
     (or use it as a context manager).  ``already``: units done before this
@@ -104,9 +116,10 @@ class Progress:
         self.total = None if total is None else int(total)
         self.label, self.unit, self.note = label, unit, ""
         self.interval, self.log_percent, self.log_seconds = interval, log_percent, log_seconds
-        self.delay = float(delay)
+        self.delay = float(delay if _SETTINGS["delay"] is None else _SETTINGS["delay"])
         self.open_log_seconds = open_log_seconds
         self._drawn = 0
+        self._drawn_stage = ""
         self.already = self.done = already
         self.start = time.monotonic()
         self.mode = "off"
@@ -138,7 +151,8 @@ class Progress:
             self.total = int(total)
         if note is not None:
             self.note = note
-        if self.mode == "bar" and force and self._due():
+        new_stage = self.total is None and _stage(self.note) != self._drawn_stage
+        if self.mode == "bar" and (force or new_stage) and self._due():
             self._draw()
         elif self.mode == "log":
             self._log(force)
@@ -237,6 +251,7 @@ class Progress:
             self.stream.write(f"\r{text}{' ' * pad}")
             self.stream.flush()
             self._drawn = len(text)
+            self._drawn_stage = _stage(self.note)
 
     def _log_open(self, force: bool) -> None:
         """Open-ended work in a log: one line every ``open_log_seconds`` of work."""
