@@ -53,7 +53,7 @@ def add_tension_option(parser: argparse.ArgumentParser, flag: str, *, help: str,
 
 def newton_forms(args, arm: Arm) -> None:
     """Replace every given ``--X-N`` value (newtons) by ``--X`` in p = P l^2/B."""
-    import math
+    from ..core.inputs import tensions as check
 
     for key in list(vars(args)):
         value = getattr(args, key)
@@ -61,9 +61,7 @@ def newton_forms(args, arm: Arm) -> None:
             continue
         flag = "--" + key[:-2].replace("_", "-") + "-N"
         values = value if isinstance(value, list) else [value]
-        if not all(math.isfinite(v) and v >= 0 for v in values):
-            raise InputError(f"{flag}: tensions must be finite and >= 0 N, got {value}")
-        p = [float(v) for v in arm.tensions_from_N(values)]
+        p = [float(v) for v in arm.tensions_from_N(check(values, len(values), flag, "N"))]
         setattr(args, key[:-2], p if isinstance(value, list) else p[0])
 
 
@@ -77,18 +75,23 @@ def load_arm(args) -> tuple[Arm, "Discretisation"]:
     """The configured arm and its mesh (``--config``, ``--elements``)."""
     from ..core.fem import Discretisation
 
+    from ..core import inputs
+
+    elements = inputs.elements(args.elements, "--elements")
     arm = load_config(args.config)
     newton_forms(args, arm)
-    if args.elements is not None and args.elements < 2:
-        raise InputError(f"--elements must be at least 2, got {args.elements}")
-    return arm, Discretisation.from_arm(arm, args.elements)
+    return arm, Discretisation.from_arm(arm, elements)
 
 
 def tensions(args, arm: Arm):
-    """Non-dimensional tensions from --tensions or --tensions-N (validated later)."""
+    """Non-dimensional tensions from --tensions or --tensions-N, checked in the
+    unit given."""
+    from ..core.inputs import tensions as check
+
     if getattr(args, "tensions_N", None) is not None:
-        return list(arm.tensions_from_N(args.tensions_N))
-    return args.tensions
+        return list(arm.tensions_from_N(check(args.tensions_N, arm.n_tendons, "--tensions-N",
+                                              "N")))
+    return list(check(args.tensions, arm.n_tendons, "--tensions", "P l^2/B"))
 
 
 def guess(args, disc):
@@ -96,8 +99,8 @@ def guess(args, disc):
     ``--guess-N`` (newtons, converted by :func:`load_arm`), or None."""
     if args.guess is None:
         return None
-    from ..solvers.equilibrium import check_tensions
-    return check_tensions(args.guess, disc.n_tendons)
+    from ..core.inputs import tensions as check
+    return check(args.guess, disc.n_tendons, "--guess", "P l^2/B")
 
 
 def order(args) -> tuple[int, ...] | None:
@@ -108,47 +111,6 @@ def order(args) -> tuple[int, ...] | None:
     except ValueError:
         raise InputError(f"--order {args.order!r}: expected tendon numbers separated by commas, "
                          "e.g. 2,1") from None
-
-
-def check_cable_lengths(arm: Arm, lengths_mm) -> None:
-    """Refuse a cable length no state of the arm can have taut: the attachment x_i
-    lies within s_i of the clamp (inextensible arm), so |r_i - x_i| <= |r_i| + s_i.
-    A longer cable is slack in every state (and the continuation towards it would
-    take a number of steps that grows with the length)."""
-    import math
-
-    for i, (tendon, L) in enumerate(zip(arm.tendons, lengths_mm), 1):
-        longest = math.hypot(*tendon.route_mm) + tendon.attach_mm
-        if L > longest:
-            raise InputError(f"--lengths: cable {i} cannot be {L:g} mm long and taut: its "
-                             f"longest possible span is |r_{i}| + s_{i} = {longest:.1f} mm")
-
-
-MAX_TARGET_DISTANCE = 100.0      # arm lengths
-MAX_PATH_POINTS = 1_000_000
-
-
-def check_target_mm(arm: Arm, target, option: str = "--target") -> None:
-    """A target in mm: finite, and within 100 arm lengths of the clamp (farther,
-    E of Eq. (10) would overflow; nothing there is reachable anyway)."""
-    import math
-
-    if not all(math.isfinite(v) for v in target):
-        raise InputError(f"{option} must be two finite numbers in mm")
-    if math.hypot(*target) > MAX_TARGET_DISTANCE * arm.length_mm:
-        raise InputError(f"{option} ({target[0]:g}, {target[1]:g}) mm lies more than "
-                         f"{MAX_TARGET_DISTANCE:g} arm lengths from the clamp; the arm reaches "
-                         f"{arm.length_mm:g} mm")
-
-
-def check_path_points(points, step_mm: float) -> None:
-    """Refuse a path that ``step_mm`` would cut into more than a million targets."""
-    import numpy as np
-
-    length = float(np.sum(np.linalg.norm(np.diff(np.asarray(points, float), axis=0), axis=1)))
-    if not (np.isfinite(length) and length / step_mm <= MAX_PATH_POINTS):
-        raise InputError(f"--step {step_mm:g} mm would cut the {length:.6g} mm path into more "
-                         f"than {MAX_PATH_POINTS:,} targets; use a larger --step")
 
 
 def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None:
@@ -171,7 +133,7 @@ def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None
         check_output_path(path, args.overwrite, None, option)
         paths[option] = path
     check_distinct(paths)
-    if getattr(args, "vtk", None):
+    if getattr(args, "vtk", None) is not None:
         from ..io.vtk import check_directory
         check_directory(args.vtk, args.overwrite)
 

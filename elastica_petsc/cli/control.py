@@ -159,7 +159,8 @@ def run(args) -> int:
     if not args.tol_mm > 0:
         raise InputError(f"--tol-mm must be positive, got {args.tol_mm}")
     guess = common.guess(args, disc)
-    common.check_target_mm(arm, args.target)
+    from ..core.inputs import target_mm
+    target_mm(arm, args.target, "--target")
     if args.animate:
         from ..plots.animate import check_animation_path
         check_animation_path(args.animate, args.overwrite)

@@ -92,12 +92,15 @@ def run(args) -> int:
 
 def _path_targets(objective: str):
     from ..core.errors import InputError
+    from ..core.inputs import design_points
     from ..studies.trace import read_csv
 
     kind, _, source = objective.partition(":")
     if kind != "path" or not source:
         raise InputError(f"--objective {objective!r}: expected area or path:FILE.csv")
-    return read_csv(source)
+    targets = read_csv(source)
+    design_points(targets, f"--objective path:{source}")
+    return targets
 
 
 def _tension_max(args, arm) -> float:

@@ -80,22 +80,6 @@ def add_vtk_option(parser) -> None:
 
 
 # --- validation ------------------------------------------------------------------------
-def check_lengths_mm(values, n_tendons: int):
-    import numpy as np
-
-    from ..core.errors import InputError
-
-    L = np.asarray(values, dtype=float).ravel()
-    if L.size != n_tendons:
-        raise InputError(f"--lengths: expected {n_tendons} cable lengths in mm (one per "
-                         f"tendon), got {L.size}")
-    for i, v in enumerate(L, 1):
-        if not (math.isfinite(v) and v > 0):
-            raise InputError(f"--lengths: cable length of tendon {i} must be a positive "
-                             f"number of mm, got {v:g}")
-    return L
-
-
 def check_search_options(args) -> dict:
     """Validated search settings (studies.search.effort_settings) from the options."""
     from ..core.errors import InputError
@@ -332,8 +316,8 @@ def run(args) -> int:
     from ..io.summary import rounded
 
     arm, disc = common.load_arm(args)
-    L_mm = check_lengths_mm(args.lengths, disc.n_tendons)
-    common.check_cable_lengths(arm, L_mm)
+    from ..core.inputs import cable_lengths_mm
+    L_mm = cable_lengths_mm(arm, args.lengths, "--lengths")
     settings = check_search_options(args)
     common.check_outputs(args)
     data = {"control": "length", "lengths_mm": rounded(L_mm), "elements": disc.n_elements}

@@ -69,13 +69,12 @@ def add_parser(sub) -> None:
 
 
 def targets(args):
-    from ..studies import trace as paths
     from ..core.errors import InputError
+    from ..core.inputs import path_step_mm
+    from ..studies import trace as paths
 
     if not args.amplitude_mm > 0:
         raise InputError(f"--amplitude-mm must be positive, got {args.amplitude_mm}")
-    if not args.step > 0:
-        raise InputError(f"--step must be positive, got {args.step}")
     if args.path:
         points = paths.read_csv(args.path)
     elif args.shape == "paper-triangle":
@@ -88,7 +87,7 @@ def targets(args):
         if args.end is None:
             raise InputError("--shape line needs --end X Y (it runs from --center)")
         points = paths.line(args.center, args.end)
-    common.check_path_points(points, args.step)
+    path_step_mm(points, args.step, "path", "--step")
     return paths.densify(points, args.step)
 
 

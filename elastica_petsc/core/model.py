@@ -144,10 +144,17 @@ def validate(arm: Arm) -> None:
         positive("arm.mass_per_length_kg_m", arm.mass_per_length_kg_m)
     if not isinstance(arm.elements, int) or isinstance(arm.elements, bool) or arm.elements < 2:
         raise ModelError(f"arm.elements must be an integer >= 2, got {arm.elements!r}")
-    if len(arm.tendons) < 1:
-        raise ModelError("tendon: at least one [[tendon]] is needed")
+    if not isinstance(arm.tendons, (tuple, list)) or len(arm.tendons) < 1:
+        raise ModelError("tendon: at least one [[tendon]] (an ep.Tendon) is needed")
+    if arm.thickness_mm >= arm.length_mm:
+        raise ModelError(f"arm.length_mm = {arm.length_mm:g} is not longer than the strip's "
+                         f"thickness_mm = {arm.thickness_mm:g}: lengths are in millimetres "
+                         "(typed in metres?)")
     for i, tendon in enumerate(arm.tendons, start=1):
         key = f"tendon[{i}]"
+        if not isinstance(tendon, Tendon):
+            raise ModelError(f"{key} must be an ep.Tendon(attach_mm, route_mm), got "
+                             f"{type(tendon).__name__}")
         positive(f"{key}.attach_mm", tendon.attach_mm)
         if tendon.attach_mm > arm.length_mm * (1 + 1e-12):
             raise ModelError(
@@ -164,6 +171,7 @@ def validate(arm: Arm) -> None:
             raise ModelError(
                 f"{key}.route_mm coincides with its attachment point on the straight arm "
                 "(a cable of zero length)")
+    _distinct_tendons(arm)
     motor = arm.motor
     positive("motor.spool_radius_mm", motor.spool_radius_mm)
     for name in ("steps_per_rev", "microsteps"):
@@ -174,3 +182,17 @@ def validate(arm: Arm) -> None:
         positive("motor.max_tension_N", motor.max_tension_N)
     positive("limits.failure_strain", arm.limits.failure_strain)
     positive("limits.strain_energy_max_SE0", arm.limits.strain_energy_max_SE0)
+
+
+def _distinct_tendons(arm: Arm) -> None:
+    """Two tendons with one attachment and one routing point pull as one: the
+    tip map's Jacobian (Eq. (13)) is singular everywhere; refuse them."""
+    seen = {}
+    for i, t in enumerate(arm.tendons, start=1):
+        key = (round(t.attach_mm / arm.length_mm, 9),
+               *(round(c / arm.length_mm, 9) for c in t.route_mm))
+        if key in seen:
+            raise ModelError(f"tendon[{i}] is the same as tendon[{seen[key]}] (attach_mm "
+                             f"{t.attach_mm:g}, route_mm {list(t.route_mm)}): two identical "
+                             "tendons act as one; merge them")
+        seen[key] = i
