@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
 from ..core.config import load_config
@@ -139,5 +138,7 @@ def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None
 
 
 def print_json(data: dict) -> None:
-    json.dump(data, sys.stdout, indent=2)
+    from ..core import jsontext
+
+    jsontext.dump(data, sys.stdout, indent=2)
     sys.stdout.write("\n")

@@ -230,8 +230,7 @@ def format_states(arm, data: dict) -> str:
 
 # --- HDF5 ------------------------------------------------------------------------------
 def write_states(path, overwrite: bool, arm, data: dict, states, kind: str) -> None:
-    import json
-
+    from ..core import jsontext as json
     from ..io.hdf5 import atomic_h5, provenance, put, write_attrs, write_equilibrium
 
     l_mm = arm.length_mm
