@@ -154,6 +154,9 @@ def _main(argv: list[str] | None) -> int:
             raise
         progress.close_all()
         return _petsc_error(what, petsc_options)
+    finally:
+        from .common import release_outputs
+        release_outputs()
     warn_unused(petsc_options)
     return status
 

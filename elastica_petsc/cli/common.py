@@ -112,7 +112,11 @@ def order(args) -> tuple[int, ...] | None:
                          "e.g. 2,1") from None
 
 
-def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None:
+_LOCKS: list = []          # the outputs' locks, held until the command ends (release_outputs)
+
+
+def check_outputs(args, extra: dict | None = None, resume: bool = False,
+                  lock: bool = True) -> None:
     """Fail early, before any computing, on output paths that would be refused:
     --out (.h5), --plot (.png/.pdf/.svg), --schedule (.csv), the --vtk folder
     and ``extra`` ({option: path}); two options naming one file are refused too.  With
@@ -135,6 +139,22 @@ def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None
     if getattr(args, "vtk", None) is not None:
         from ..io.vtk import check_directory
         check_directory(args.vtk, args.overwrite)
+    if lock:
+        lock_outputs(paths.values())
+
+
+def lock_outputs(paths) -> None:
+    """Own the output files until the command ends: another run on one of them
+    is refused now, before computing (the lock rules of io/exclusive.py);
+    ``lock=False`` on the ranks other than 0 under mpiexec."""
+    from ..io.exclusive import lock_outputs as take
+
+    _LOCKS.extend(take(paths))
+
+
+def release_outputs() -> None:
+    while _LOCKS:
+        _LOCKS.pop().release()
 
 
 def print_json(data: dict) -> None:

@@ -155,7 +155,6 @@ def run(args) -> int:
     from ..core.errors import InputError
 
     arm, disc = common.load_arm(args)
-    common.check_outputs(args)
     if not args.tol_mm > 0:
         raise InputError(f"--tol-mm must be positive, got {args.tol_mm}")
     guess = common.guess(args, disc)
@@ -164,6 +163,7 @@ def run(args) -> int:
     if args.animate:
         from ..plots.animate import check_animation_path
         check_animation_path(args.animate, args.overwrite)
+    common.check_outputs(args, {"--animate": args.animate} if args.animate else None)
     result = api.control(arm, args.target, guess=guess, method=args.method, tol_mm=args.tol_mm,
                          global_search=not args.local, cables=args.cables, share=args.share,
                          min_tension_N=args.min_tension_N, animate=args.animate,

@@ -85,6 +85,7 @@ def run(args) -> int:
         if args.objective != "area":
             raise InputError("--plot draws an area design; use it with --objective area")
         check_output_path(args.plot, args.overwrite, PLOT_SUFFIXES, "--plot")
+    common.lock_outputs([args.out, args.plot])
     if args.objective == "area":
         return _run_area(args)
     return _run_path(args)
@@ -231,7 +232,7 @@ def _run_sweep(args) -> int:
 
     comm = MPI.COMM_WORLD
     try:                       # input errors agreed on by all ranks (one line, exit 2)
-        common.check_outputs(args, resume=args.resume)
+        common.check_outputs(args, resume=args.resume, lock=comm.rank == 0)
         arm, disc = common.load_arm(args)
         axes = [parse_axis(text, disc.n_tendons) for text in args.sweep]
         targets = None

@@ -222,17 +222,11 @@ def schedule_summary(planned, guessed: bool) -> dict:
 def check_options(args) -> None:
     """Refuse, before any computing, options and output paths that cannot work."""
     from ..core.errors import InputError
-    from ..io.hdf5 import check_output_path
 
-    common.check_outputs(args)
-    if args.schedule:
-        check_output_path(args.schedule, args.overwrite)
     if args.animate:
         from ..plots.animate import check_animation_path
         check_animation_path(args.animate, args.overwrite)
-    if args.vtk:
-        from ..io.vtk import check_directory
-        check_directory(args.vtk, args.overwrite)
+    common.check_outputs(args, {"--animate": args.animate} if args.animate else None)
     if args.per_point and not args.json:
         raise InputError("--per-point adds per-point results to the JSON output: use it with "
                          "--json")

@@ -134,7 +134,9 @@ def _check_inputs(args):
     if args.overlay:
         from ..plots.workspace import read_overlays
         read_overlays(args.overlay)                 # refuse a bad file before computing
-    common.check_outputs(args, _derived_plots(args), resume=args.resume)
+    from mpi4py import MPI
+    common.check_outputs(args, _derived_plots(args), resume=args.resume,
+                         lock=MPI.COMM_WORLD.rank == 0)
     return arm, disc
 
 

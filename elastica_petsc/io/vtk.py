@@ -118,13 +118,9 @@ def write_pvd(path, entries) -> Path:
 
 
 def _write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    from .exclusive import replace_file
+
+    replace_file(path, text.encode())
 
 
 # --- states and paths -----------------------------------------------------------------------
