@@ -144,6 +144,8 @@ def validate(arm: Arm) -> None:
         positive("arm.mass_per_length_kg_m", arm.mass_per_length_kg_m)
     if not isinstance(arm.elements, int) or isinstance(arm.elements, bool) or arm.elements < 2:
         raise ModelError(f"arm.elements must be an integer >= 2, got {arm.elements!r}")
+    from .inputs import elements
+    elements(arm.elements, "arm.elements")
     if not isinstance(arm.tendons, (tuple, list)) or len(arm.tendons) < 1:
         raise ModelError("tendon: at least one [[tendon]] (an ep.Tendon) is needed")
     if arm.thickness_mm >= arm.length_mm:
