@@ -151,3 +151,26 @@ def test_the_json_encoder_takes_numpy_values():
                                                 "nested": [{"k": -1}]}
     with pytest.raises(TypeError, match="object"):
         jsontext.dumps({"x": object()})
+
+
+T3 = ["--config", THREE, "--elements", 30]
+
+
+@pytest.mark.parametrize("command", [
+    ["solve", "--tensions-N", 5, 0, 5, *T3],
+    ["stability", "--tensions-N", 5, 0, 5, *T3],
+    ["trace", "--shape", "line", "--center", 450, 250, "--end", 455, 250, "--step", 5,
+     "--share", "min-norm", "--min-tension-N", 1, "--per-point", *T3],
+    ["lengths", "--lengths", 120, 320, 460, *T3],          # tendon 3 slack: P_3 = 0
+    ["workspace", "--box", 400, 480, 200, 260, "--spacing", 40, "--share", "min-energy",
+     "--min-tension-N", 1, *T3, "--out", "w.h5"],
+    ["boundary", "--elements", 30],
+], ids=lambda c: c[0])
+def test_every_command_json_with_three_tendons_and_a_tension_on_a_bound(command, tmp_path,
+                                                                        monkeypatch, capsys):
+    """--json of every command that computes (control: above) is valid JSON with 3
+    tendons (2 for boundary, which needs two) and a tension on a bound."""
+    monkeypatch.chdir(tmp_path)
+    status, out, err, _ = run_main(command + ["--json"], capsys)
+    assert status == 0, err[-2000:]
+    assert isinstance(json.loads(out), dict)
