@@ -23,7 +23,7 @@ from .core import inputs
 from .core.errors import InputError
 from .core.fem import Discretisation
 from .core.model import Arm
-from .solvers.equilibrium import Equilibrium, EquilibriumSolver, check_order, check_tensions
+from .solvers.equilibrium import Equilibrium, EquilibriumSolver, check_order
 
 
 @dataclass(frozen=True)
@@ -118,7 +118,8 @@ def _tensions(arm: Arm, tensions_N, tensions, names=("tensions_N", "tensions")) 
         raise InputError(f"give exactly one of {names[0]}= (newtons) or {names[1]}= "
                          "(p = P l^2/B)")
     if tensions is None:
-        return arm.tensions_from_N(inputs.tensions(tensions_N, arm.n_tendons, names[0], "N"))
+        return arm.tensions_from_N(inputs.tensions(tensions_N, arm.n_tendons, names[0], "N",
+                                                   arm.force_scale_N))
     return inputs.tensions(tensions, arm.n_tendons, names[1], "P l^2/B")
 
 
@@ -211,7 +212,9 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
     elements = _mesh(arm, elements).n_elements
     target = inputs.target_mm(arm, target_mm, "target_mm")
     p0 = _guess(arm, guess_N, guess)
-    inputs.positive(tol_mm, "tol_mm", "mm")
+    inputs.tip_tolerance_mm(arm, tol_mm, "tol_mm")
+    inputs.choice(cables, "cables", ("prefer", "require", "ignore"))
+    inputs.choice(method, "method", ("blmvm", "gd"))
     sharer_asked = share_rule(share, _floor_N(min_tension_N))   # bad input before any solve
     if animate:
         from .plots.animate import check_animation_path
@@ -244,8 +247,8 @@ def _sharer(arm: Arm, controller, share: str | None, min_tension_N: float):
     return TensionSharer(controller, share, float(arm.tensions_from_N(min_tension_N)))
 
 
-def _points(points_mm) -> np.ndarray:
-    return inputs.points_mm(points_mm, "points_mm")
+def _points(points_mm, arm: Arm | None = None, name: str = "points_mm") -> np.ndarray:
+    return inputs.points_mm(points_mm, name, arm)
 
 
 def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | None = None,
@@ -263,7 +266,7 @@ def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | Non
     from .studies import trace as paths
 
     elements = _mesh(arm, elements).n_elements
-    points = _points(points_mm)
+    points = _points(points_mm, arm)
     if step_mm is not None:
         points = paths.densify(points, inputs.path_step_mm(points, step_mm, "path", "step_mm"))
     with TipController(arm, n_elements=elements) as ctl:
@@ -292,11 +295,11 @@ def schedule(arm: Arm, points_mm, *, step_mm: float = 1.0, speed_mm_s: float | N
 
     elements = _mesh(arm, elements).n_elements
     p0 = _guess(arm, guess_N, guess)
-    points = _points(points_mm)
+    points = _points(points_mm, arm)
     points = paths.densify(points, inputs.path_step_mm(points, step_mm, "path", "step_mm"))
     if speed_mm_s is not None:
-        inputs.positive(speed_mm_s, "speed_mm_s", "mm/s")
-    inputs.positive(amplitude_mm, "amplitude_mm", "mm")
+        inputs.positive(speed_mm_s, "speed_mm_s", "mm/s", at_least=1e-6)
+    inputs.positive(amplitude_mm, "amplitude_mm", "mm", at_least=1e-6)
     with TipController(arm, n_elements=elements) as ctl:
         return trace_schedule(ctl, points, step_mm=step_mm, speed_mm_s=speed_mm_s,
                               amplitude_mm=amplitude_mm, approach=approach, p0=p0,
@@ -377,6 +380,9 @@ def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None
                                progress=bar)
 
 
+MIN_SPACING_MM = 1e-6          # finer: the grid's size overflows before its limit is checked
+
+
 def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",
               out: str | Path | None = None, overwrite: bool = False, comm=None,
               elements: int | None = None, global_search: bool = True,
@@ -402,7 +408,7 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
     from .studies.workspace import run_map
 
     disc = _mesh(arm, elements)
-    inputs.positive(spacing_mm, "spacing_mm", "mm")
+    inputs.positive(spacing_mm, "spacing_mm", "mm", at_least=MIN_SPACING_MM)
     if box_mm is not None:
         box_mm = tuple(inputs.box_mm(box_mm, "box_mm"))
     if out is not None:
@@ -445,13 +451,24 @@ def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
 
     elements = _mesh(arm, elements).n_elements
     tendons = parse_vary(list(vary), arm.n_tendons)
-    points = _points(points_mm)
+    points = _points(points_mm, arm)
     inputs.design_points(points, "points_mm")
-    inputs.positive(reach_mm, "reach_mm", "mm")
-    inputs.positive(margin, "margin")
+    inputs.design_options(DESIGN_NAMES, reach_mm=reach_mm, margin=margin)
     with _progress(progress, "design", "path traces") as bar:
         return design_for_path(arm, tendons, points, elements=elements,
                                reach_mm=reach_mm, margin=margin, progress=bar)
+
+
+DESIGN_NAMES = {k: k for k in ("iterations", "reach_mm", "clearance_mm", "margin",
+                                "resample_cells")}
+
+
+def _tension_max(arm: Arm, tension_max_N) -> float:
+    """The motor limit of an area design, N -> p (a box of tensions with an area)."""
+    value = inputs.tensions([inputs.number(tension_max_N, "tension_max_N", "N")], 1,
+                            "tension_max_N", "N", arm.force_scale_N)[0]
+    return float(arm.tensions_from_N([inputs.positive(value, "tension_max_N", "N",
+                                                      at_least=1e-3)])[0])
 
 
 def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
@@ -473,11 +490,9 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
 
     elements = _mesh(arm, elements).n_elements
     tendons, attaches = parse_design_variables(list(vary), arm.n_tendons)
-    p_max = float(arm.tensions_from_N([inputs.positive(tension_max_N, "tension_max_N", "N")])[0])
-    inputs.positive(reach_mm, "reach_mm", "mm")
-    inputs.integer(iterations, "iterations", 1)
-    if resample_cells is not None:
-        inputs.integer(resample_cells, "resample_cells", 2)
+    p_max = _tension_max(arm, tension_max_N)
+    inputs.design_options(DESIGN_NAMES, reach_mm=reach_mm, iterations=iterations,
+                          resample_cells=resample_cells)
     return design_for_area(arm, tendons, p_max, elements=elements, attaches=attaches,
                            reach_mm=reach_mm, max_iterations=iterations,
                            resample_cells=resample_cells)
@@ -497,9 +512,9 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
 
     disc = _mesh(arm, elements)
     parsed = [parse_axis(text, disc.n_tendons) for text in axes]
-    p_max = float(arm.tensions_from_N([inputs.positive(tension_max_N, "tension_max_N", "N")])[0])
+    p_max = _tension_max(arm, tension_max_N)
     if path_mm is not None:
-        inputs.design_points(_points(path_mm), "path_mm")
+        inputs.design_points(_points(path_mm, arm, "path_mm"), "path_mm")
     return run_sweep(arm, disc.n_elements, parsed, p_max,
                      targets_mm=None if path_mm is None else _points(path_mm), comm=comm,
                      out=out, resume=resume, overwrite=overwrite, progress=False)

@@ -83,6 +83,19 @@ def bad_inputs(tmp: Path) -> list[tuple[list, list[str]]]:
           tmp / "rep"], ["missing.toml"]),
         (["reproduce", "--quick", "--config", tmp / "missing.toml", "--out", tmp / "rep2"],
          ["missing.toml"]),
+        # found by scripts/bad_inputs_study.py (tracebacks, or minutes of work, before)
+        (["control", "--target", 500, 100, "--tol-mm", 1e300], ["--tol-mm", "at most 600"]),
+        (["equilibria", "--tensions", 1e300, 5], ["--tensions", "exceeds"]),
+        (["lengths", "--lengths", 147.1, 472.5, "--effort", 99999999], ["--effort", "<= 16"]),
+        (ws + ["--spacing", 1e-300], ["--spacing", "at least"]),
+        (ws + ["--mode", "tensions", "--tension-max", 1e300], ["--tension-max", "exceeds"]),
+        (["trace", "--shape", "circle", "--center", 1e300, 200], ["the path", "arm lengths"]),
+        (["trace", "--shape", "circle", "--center", 400, 200, "--radius", 1e300],
+         ["the path", "arm lengths"]),
+        (["design", "--vary", "tendon1.route", "--objective", "area", "--tension-max-N",
+          1e-300], ["--tension-max"]),
+        (["design", "--vary", "tendon1.route", "--objective", "area", "--margin", "nan"],
+         ["--margin"]),
     ]
 
 

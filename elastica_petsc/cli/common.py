@@ -60,7 +60,8 @@ def newton_forms(args, arm: Arm) -> None:
             continue
         flag = "--" + key[:-2].replace("_", "-") + "-N"
         values = value if isinstance(value, list) else [value]
-        p = [float(v) for v in arm.tensions_from_N(check(values, len(values), flag, "N"))]
+        p = [float(v) for v in arm.tensions_from_N(check(values, len(values), flag, "N",
+                                                         arm.force_scale_N))]
         setattr(args, key[:-2], p if isinstance(value, list) else p[0])
 
 
@@ -89,7 +90,7 @@ def tensions(args, arm: Arm):
 
     if getattr(args, "tensions_N", None) is not None:
         return list(arm.tensions_from_N(check(args.tensions_N, arm.n_tendons, "--tensions-N",
-                                              "N")))
+                                              "N", arm.force_scale_N)))
     return list(check(args.tensions, arm.n_tendons, "--tensions", "P l^2/B"))
 
 

@@ -152,13 +152,11 @@ def format_control(s: dict) -> str:
 
 def run(args) -> int:
     from .. import api
-    from ..core.errors import InputError
 
     arm, disc = common.load_arm(args)
-    if not args.tol_mm > 0:
-        raise InputError(f"--tol-mm must be positive, got {args.tol_mm}")
+    from ..core.inputs import target_mm, tip_tolerance_mm
+    tip_tolerance_mm(arm, args.tol_mm, "--tol-mm")
     guess = common.guess(args, disc)
-    from ..core.inputs import target_mm
     target_mm(arm, args.target, "--target")
     if args.animate:
         from ..plots.animate import check_animation_path

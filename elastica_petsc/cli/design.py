@@ -74,10 +74,11 @@ def run(args) -> int:
     if not args.vary or not args.objective:
         raise InputError("design needs --vary and --objective (area or path:FILE.csv), "
                          "or --sweep")
-    if args.iterations < 1:
-        raise InputError(f"--iterations must be at least 1, got {args.iterations}")
-    if not (args.reach > 0 and args.clearance >= 0):
-        raise InputError("--reach must be positive and --clearance non-negative")
+    from ..core.inputs import design_options
+    design_options({k: "--" + k.removesuffix("_mm").replace("_", "-") for k in
+                    ("iterations", "reach_mm", "clearance_mm", "margin", "resample_cells")},
+                   iterations=args.iterations, reach_mm=args.reach, clearance_mm=args.clearance,
+                   margin=args.margin, resample_cells=args.resample_cells)
     from ..io.hdf5 import PLOT_SUFFIXES, check_output_path
     if args.out:
         check_output_path(args.out, args.overwrite, (".toml",))
@@ -105,9 +106,13 @@ def _path_targets(objective: str):
 
 
 def _tension_max(args, arm) -> float:
-    if args.tension_max is not None:
-        return float(args.tension_max)
-    return float(arm.tensions_from_N([DEFAULT_TENSION_MAX_N])[0])
+    """--tension-max (p; --tension-max-N was converted by load_arm) or the default."""
+    from ..core.inputs import positive, tensions
+
+    if args.tension_max is None:
+        return float(arm.tensions_from_N([DEFAULT_TENSION_MAX_N])[0])
+    p = tensions([args.tension_max], 1, "--tension-max", "P l^2/B")[0]
+    return positive(p, "--tension-max", "P l^2/B", at_least=1e-3 / arm.force_scale_N)
 
 
 def _write(args, arm, summary: dict, lines) -> None:
@@ -149,8 +154,6 @@ def _run_area(args) -> int:
     from ..studies.design import parse_design_variables
     from ..studies.design_area import design_for_area
 
-    if args.resample_cells < 2:
-        raise InputError(f"--resample-cells must be at least 2, got {args.resample_cells}")
     arm, disc = common.load_arm(args)
     if disc.n_tendons != 2:
         raise InputError("--objective area needs exactly two tendons")

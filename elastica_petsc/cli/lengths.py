@@ -25,7 +25,6 @@ HDF5 layout (``--out``), besides the provenance attributes of every file::
 """
 from __future__ import annotations
 
-import math
 import sys
 
 from . import common
@@ -83,15 +82,15 @@ def add_vtk_option(parser) -> None:
 def check_search_options(args) -> dict:
     """Validated search settings (studies.search.effort_settings) from the options."""
     from ..core.errors import InputError
+    from ..core.inputs import integer, tensions
     from ..studies.search import effort_settings
 
-    if args.effort < 1:
-        raise InputError(f"--effort must be an integer >= 1, got {args.effort}")
-    if args.deflation_rounds is not None and args.deflation_rounds < 0:
-        raise InputError(f"--deflation-rounds must be >= 0, got {args.deflation_rounds}")
-    if args.levels is not None and not all(math.isfinite(v) and v > 0 for v in args.levels):
+    if args.deflation_rounds is not None:
+        integer(args.deflation_rounds, "--deflation-rounds", 0, 1000)
+    if args.levels is not None and not all(v > 0 for v in tensions(
+            args.levels, len(args.levels), "--levels", "P l^2/B")):
         raise InputError("--levels: tension levels must be positive numbers")
-    settings = effort_settings(args.effort, args.levels)
+    settings = effort_settings(args.effort, args.levels, name="--effort")
     if args.deflation_rounds is not None:
         settings["deflation_rounds"] = args.deflation_rounds
     return dict(settings, effort=args.effort)

@@ -32,12 +32,11 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from .. import api
-    from ..core.errors import InputError
     from ..core.inputs import modes as check_modes
+    from ..core.inputs import positive
     from ..io.summary import format_stability, stability_summary
 
-    if not args.amplitude_mm > 0:
-        raise InputError(f"--amplitude-mm must be positive, got {args.amplitude_mm}")
+    positive(args.amplitude_mm, "--amplitude-mm", "mm", at_least=1e-6)
     arm, disc = common.load_arm(args)
     check_modes(args.modes, disc.n_elements, "--modes")
     common.check_outputs(args)

@@ -68,13 +68,14 @@ def add_parser(sub) -> None:
     parser.set_defaults(run=run)
 
 
-def targets(args):
+def targets(args, arm):
     from ..core.errors import InputError
-    from ..core.inputs import path_step_mm
+    from ..core.inputs import path_step_mm, points_mm, positive
     from ..studies import trace as paths
 
-    if not args.amplitude_mm > 0:
-        raise InputError(f"--amplitude-mm must be positive, got {args.amplitude_mm}")
+    positive(args.amplitude_mm, "--amplitude-mm", "mm", at_least=1e-6)
+    if args.speed_mm_s is not None:
+        positive(args.speed_mm_s, "--speed-mm-s", "mm/s", at_least=1e-6)
     if args.path:
         points = paths.read_csv(args.path)
     elif args.shape == "paper-triangle":
@@ -87,6 +88,7 @@ def targets(args):
         if args.end is None:
             raise InputError("--shape line needs --end X Y (it runs from --center)")
         points = paths.line(args.center, args.end)
+    points = points_mm(points, "the path", arm)
     path_step_mm(points, args.step, "path", "--step")
     return paths.densify(points, args.step)
 
@@ -230,8 +232,6 @@ def check_options(args) -> None:
     if args.per_point and not args.json:
         raise InputError("--per-point adds per-point results to the JSON output: use it with "
                          "--json")
-    if args.speed_mm_s is not None and not args.speed_mm_s > 0:
-        raise InputError(f"--speed-mm-s must be positive, got {args.speed_mm_s}")
 
 
 def write_outputs(args, arm, disc, planned) -> None:
@@ -267,7 +267,7 @@ def run(args) -> int:
 
     arm, disc = common.load_arm(args)
     check_options(args)
-    points = targets(args)
+    points = targets(args, arm)
     guess = common.guess(args, disc)
     with Progress(len(points), "trace") as bar:
         planned = api.schedule(arm, points, step_mm=args.step, speed_mm_s=args.speed_mm_s,

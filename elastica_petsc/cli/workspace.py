@@ -127,10 +127,15 @@ def _check_inputs(args):
 
     if not args.out:
         raise InputError("workspace needs --out FILE.h5 (results are written as they come)")
+    from ..api import MIN_SPACING_MM
+    from ..core.inputs import positive, tensions
+    positive(args.spacing, "--spacing", "mm", at_least=MIN_SPACING_MM)
+    arm, disc = common.load_arm(args)             # --tension-max-N etc. now in p
+    for flag in ("--tension-max", "--tension-spacing"):
+        tensions([getattr(args, flag[2:].replace("-", "_"))], 1, flag, "P l^2/B")
     if args.vtk:
         from ..io.vtk import check_directory
         check_directory(args.vtk, args.overwrite)
-    arm, disc = common.load_arm(args)
     if args.overlay:
         from ..plots.workspace import read_overlays
         read_overlays(args.overlay)                 # refuse a bad file before computing

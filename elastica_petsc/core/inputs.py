@@ -22,6 +22,10 @@ MAX_ELEMENTS_ENV = "ELASTICA_PETSC_MAX_ELEMENTS"
 MAX_ELEMENTS = 100_000            # ~1 kB per element for a solve, ~2 kB for stability
 MAX_DESIGN_POINTS_ENV = "ELASTICA_PETSC_MAX_DESIGN_POINTS"
 MAX_DESIGN_POINTS = 2_000         # path targets per design: each is traced per evaluation
+MAX_TENSION = 1e4                 # p = P l^2/B: far beyond a cable's collapse (p ~ 140 on the
+                                  # paper's arm) and any motor; load stepping grows with p
+MAX_ITERATIONS = 1_000            # optimiser iterations (a design's default: 20)
+MAX_CELLS = 1_000                 # re-sampling cells per tension axis ((K+1)^2 solves)
 
 
 def limit(env: str, default: int) -> int:
@@ -58,14 +62,30 @@ def numbers(values, name: str, unit: str = "", count: int | None = None) -> np.n
 
 
 def number(value, name: str, unit: str = "") -> float:
+    """One finite real number (not a list of one)."""
+    if np.ndim(value) != 0:
+        raise InputError(f"{name}: expected one number{' in ' + unit if unit else ''}, got "
+                         f"{value!r}")
     return float(numbers([value], name, unit, count=1)[0])
 
 
-def positive(value, name: str, unit: str = "") -> float:
+def positive(value, name: str, unit: str = "", at_least: float = 0.0,
+             at_most: float = math.inf) -> float:
+    """A finite number > 0 (>= ``at_least`` if given) and <= ``at_most``."""
     v = number(value, name, unit)
-    if not v > 0:
-        raise InputError(f"{name} must be positive, got {v:g}{' ' + unit if unit else ''}")
+    u = " " + unit if unit else ""
+    if not v > 0 or v < at_least:
+        least = f"at least {at_least:g}{u}" if at_least else "positive"
+        raise InputError(f"{name} must be {least}, got {v:g}{u}")
+    if v > at_most:
+        raise InputError(f"{name} must be at most {at_most:g}{u}, got {v:g}{u}")
     return v
+
+
+def choice(value, name: str, allowed) -> str:
+    if value not in allowed:
+        raise InputError(f"{name} must be one of {', '.join(map(repr, allowed))}, got {value!r}")
+    return value
 
 
 def integer(value, name: str, minimum: int, maximum: int | None = None,
@@ -95,9 +115,10 @@ def modes(value, n_elements: int, name: str) -> int:
                                                f"has {n_elements} eigenvalues)")
 
 
-def tensions(values, n_tendons: int, name: str, unit: str) -> np.ndarray:
-    """One finite non-negative tension per tendon, in the user's ``unit``
-    (``"N"`` or ``"P l^2/B"``); returned as given (not converted)."""
+def tensions(values, n_tendons: int, name: str, unit: str, scale: float = 1.0) -> np.ndarray:
+    """One finite non-negative tension per tendon, at most :data:`MAX_TENSION`
+    (p; ``scale``: the user's unit per unit p, B/l^2 in N), in the user's
+    ``unit`` (``"N"`` or ``"P l^2/B"``); returned as given (not converted)."""
     out = numbers(values, name, unit)
     if out.size != n_tendons:
         raise InputError(f"{name}: expected {n_tendons} tensions in {unit} (one per tendon), "
@@ -106,6 +127,12 @@ def tensions(values, n_tendons: int, name: str, unit: str) -> np.ndarray:
         i = int(np.argmax(out < 0))
         raise InputError(f"{name}: tension of tendon {i + 1} is negative ({out[i]:g} {unit}): "
                          "a cable cannot push")
+    most = MAX_TENSION * scale
+    if np.any(out > most):
+        i = int(np.argmax(out > most))
+        raise InputError(f"{name}: tension of tendon {i + 1} ({out[i]:g} {unit}) exceeds "
+                         f"{most:.4g} {unit} (p = {MAX_TENSION:g}), far beyond a cable's "
+                         "collapse onto its routing point")
     return out
 
 
@@ -125,7 +152,10 @@ def cable_lengths_mm(arm, values, name: str) -> np.ndarray:
     some state: the attachment x_i lies within s_i of the clamp (inextensible
     arm), so |r_i - x_i| <= |r_i| + s_i; a longer cable is slack in every state
     (and the continuation towards it would take steps growing with the length)."""
-    L = numbers(values, name, "mm", count=arm.n_tendons)
+    L = numbers(values, name, "mm")
+    if L.size != arm.n_tendons:
+        raise InputError(f"{name}: expected {arm.n_tendons} cable lengths in mm (one per "
+                         f"tendon), got {L.size}")
     for i, (tendon, v) in enumerate(zip(arm.tendons, L), 1):
         if not v > 0:
             raise InputError(f"{name}: cable length of tendon {i} must be a positive number "
@@ -137,8 +167,9 @@ def cable_lengths_mm(arm, values, name: str) -> np.ndarray:
     return L
 
 
-def points_mm(values, name: str) -> np.ndarray:
-    """Path points, shape (K, 2), finite, in mm."""
+def points_mm(values, name: str, arm=None) -> np.ndarray:
+    """Path points, shape (K, 2), finite, in mm (with ``arm``: each within
+    :data:`MAX_TARGET_DISTANCE` arm lengths of the clamp, as a target)."""
     try:
         points = values if isinstance(values, np.ndarray) else np.asarray(values, dtype=object)
     except ValueError:
@@ -146,14 +177,23 @@ def points_mm(values, name: str) -> np.ndarray:
     if points.ndim != 2 or points.shape[1] != 2 or len(points) < 1:
         raise InputError(f"{name} must be an array of shape (K, 2) in mm, got shape "
                          f"{points.shape}")
-    return numbers(points, name, "mm").reshape(-1, 2)
+    out = numbers(points, name, "mm").reshape(-1, 2)
+    if arm is not None:
+        far = np.hypot(out[:, 0], out[:, 1]) > MAX_TARGET_DISTANCE * arm.length_mm
+        if np.any(far):
+            k = int(np.argmax(far))
+            raise InputError(f"{name}: point {k + 1} ({out[k, 0]:g}, {out[k, 1]:g}) mm lies "
+                             f"more than {MAX_TARGET_DISTANCE:g} arm lengths from the clamp; "
+                             f"the arm reaches {arm.length_mm:g} mm")
+    return out
 
 
 def path_step_mm(points, step_mm, name: str, step_name: str) -> float:
     """A positive step that cuts the path into at most the limit's targets."""
     step = positive(step_mm, step_name, "mm")
     most = limit(MAX_PATH_POINTS_ENV, MAX_PATH_POINTS)
-    length = float(np.sum(np.linalg.norm(np.diff(np.asarray(points, float), axis=0), axis=1)))
+    steps = np.diff(np.asarray(points, float), axis=0)
+    length = float(np.sum(np.hypot(steps[:, 0], steps[:, 1])))
     if not (np.isfinite(length) and length / step + len(points) <= most):
         raise InputError(f"{step_name} {step:g} mm would cut the {length:.6g} mm {name} into "
                          f"more than {most:,} targets; use a larger {step_name} (or set "
@@ -177,3 +217,25 @@ def box_mm(values, name: str) -> np.ndarray:
         raise InputError(f"{name} ({', '.join(f'{v:g}' for v in box)}): need xmin < xmax and "
                          "ymin < ymax")
     return box
+
+
+def tip_tolerance_mm(arm, value, name: str) -> float:
+    """A tip tolerance: positive and below the arm's length (larger is meaningless,
+    and its square, the TAO stopping test, would overflow)."""
+    return positive(value, name, "mm", at_most=arm.length_mm)
+
+
+def design_options(names: dict, *, iterations=None, reach_mm=None, clearance_mm=None,
+                   margin=None, resample_cells=None) -> None:
+    """The settings of a design (``names``: what the user calls each)."""
+    if iterations is not None:
+        integer(iterations, names["iterations"], 1, MAX_ITERATIONS)
+    if reach_mm is not None:
+        positive(reach_mm, names["reach_mm"], "mm", at_most=1e6)
+    if clearance_mm is not None and number(clearance_mm, names["clearance_mm"], "mm") < 0:
+        raise InputError(f"{names['clearance_mm']} must be >= 0 mm, got {clearance_mm:g}")
+    if margin is not None:
+        positive(margin, names["margin"], at_most=100.0)
+    if resample_cells is not None:
+        integer(resample_cells, names["resample_cells"], 2, MAX_CELLS,
+                 " ((K+1)^2 forward solves)")
