@@ -80,7 +80,7 @@ def cases(state, tmp):
         (lambda: ep.schedule(ARM, tri, speed_mm_s=-1, elements=E), ["speed_mm_s"]),
         (lambda: ep.workspace(ARM, box_mm=[0, 100, 50, 10], elements=E), ["box_mm", "ymin"]),
         (lambda: ep.workspace(ARM, spacing_mm="5", elements=E), ["spacing_mm", "'5'"]),
-        (lambda: ep.workspace(ARM, spacing_mm=0, elements=E), ["spacing_mm", "positive"]),
+        (lambda: ep.workspace(ARM, spacing_mm=0, elements=E), ["spacing_mm", "at least"]),
         (lambda: ep.equilibria(ARM, ["a", 1], elements=E), ["tensions_N"]),
         (lambda: ep.design(ARM, np.zeros((3000, 2)), elements=E),
          ["points_mm", "3,000", "ELASTICA_PETSC_MAX_DESIGN_POINTS"]),
