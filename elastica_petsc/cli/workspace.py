@@ -133,6 +133,7 @@ def _check_inputs(args):
     arm, disc = common.load_arm(args)             # --tension-max-N etc. now in p
     for flag in ("--tension-max", "--tension-spacing"):
         tensions([getattr(args, flag[2:].replace("-", "_"))], 1, flag, "P l^2/B")
+    positive(args.tension_spacing, "--tension-spacing", "P l^2/B", at_least=1e-9)
     if args.vtk:
         from ..io.vtk import check_directory
         check_directory(args.vtk, args.overwrite)
