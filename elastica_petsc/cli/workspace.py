@@ -89,6 +89,8 @@ def _run(args, comm) -> int:
         comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
         global_search=not args.local_only, share=args.share, min_tension_N=args.min_tension_N)
     if comm.rank != 0:
+        if comm.size > 1 and not result.complete:
+            _exit_without_finalize(130, None)       # as rank 0 below
         return 0
     summary = result.summary()
     if args.json:
@@ -98,7 +100,10 @@ def _run(args, comm) -> int:
     if not summary["complete"]:
         message = (f"interrupted: {summary['samples_done']} of {summary['samples_total']} "
                    f"samples saved in {args.out}; continue with --resume")
-        if result.stranded:
+        if result.stranded or comm.size > 1:
+            # after a stop under mpiexec, MPI's finalisation waits on a launcher that is
+            # tearing the job down (measured: every rank held there until killed ~2 s
+            # after the signal, exit status 1): every rank ends here, status 130
             _exit_without_finalize(130, message)
         print(f"elastica-petsc: {message}", file=sys.stderr)
         return 130
@@ -111,12 +116,13 @@ def _run(args, comm) -> int:
     return 0
 
 
-def _exit_without_finalize(status: int, message: str) -> None:
+def _exit_without_finalize(status: int, message: str | None) -> None:
     """End this rank now: another rank is busy and will never join MPI's
     finalisation; the launcher ends the others once this one is gone."""
     import os
 
-    print(f"elastica-petsc: {message}", file=sys.stderr, flush=True)
+    if message:
+        print(f"elastica-petsc: {message}", file=sys.stderr, flush=True)
     sys.stdout.flush()
     os._exit(status)
 
