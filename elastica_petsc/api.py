@@ -479,9 +479,9 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
     arc lengths on mesh nodes, by a pattern search) maximising the area A
     [mm^2] of the workspace W_0 within 0 <= P_i <= ``tension_max_N`` (tips of stable equilibria connected
     to the straight arm by quasi-static loading; the motor limit of Eq. (22)):
-    A is the shoelace area of the image of the tension box's boundary, dA/dq
-    the boundary integral of the normal component of the tip derivative
-    (TAO BLMVM).  Both arms are then re-sampled on a tension grid; the gain
+    A is the area of its traced boundary (as :func:`boundary` measures it for
+    the arm with that motor limit), dA/dq the boundary integral of the normal
+    component of the tip derivative (TAO BLMVM).  Both arms are then re-sampled on a tension grid; the gain
     is ``confirmed`` only if the re-sampled areas differ by more than their
     errors.  Returns an ``AreaDesign`` (``arm_after``, ``before``/``after``,
     ``resampled_before``/``resampled_after``, ``confirmed``, ``history``)."""
