@@ -124,6 +124,7 @@ def _exit_without_finalize(status: int, message: str | None) -> None:
     if message:
         print(f"elastica-petsc: {message}", file=sys.stderr, flush=True)
     sys.stdout.flush()
+    common.release_outputs()                   # no lock file left beside the output
     os._exit(status)
 
 
