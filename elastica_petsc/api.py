@@ -380,7 +380,7 @@ def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None
                                progress=bar)
 
 
-MIN_SPACING_MM = 1e-6          # finer: the grid's size overflows before its limit is checked
+MIN_SPACING_MM = 1e-100        # finer: the count of grid points overflows before its limit is checked
 
 
 def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",

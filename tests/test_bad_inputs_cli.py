@@ -88,6 +88,7 @@ def bad_inputs(tmp: Path) -> list[tuple[list, list[str]]]:
         (["equilibria", "--tensions", 1e300, 5], ["--tensions", "exceeds"]),
         (["lengths", "--lengths", 147.1, 472.5, "--effort", 99999999], ["--effort", "<= 16"]),
         (ws + ["--spacing", 1e-300], ["--spacing", "at least"]),
+        (ws + ["--spacing", 1e-9], ["--spacing", "samples"]),
         (ws + ["--mode", "tensions", "--tension-max", 1e300], ["--tension-max", "exceeds"]),
         (["trace", "--shape", "circle", "--center", 1e300, 200], ["the path", "arm lengths"]),
         (["trace", "--shape", "circle", "--center", 400, 200, "--radius", 1e300],

@@ -130,7 +130,7 @@ def bad_inputs(tmp: Path) -> list[tuple[list, list[str]]]:
         (["lengths", "--lengths", 1e6, 472], ["cable 1", "longest possible"]),
         (["lengths", "--lengths", 1e300, 472], ["cable 1", "longest possible"]),
         (ws + ["--out", tmp / "w.h5", "--spacing", 1e-9], ["--spacing", "samples"]),
-        (ws + ["--out", tmp / "w.h5", "--spacing", "inf"], ["--spacing", "positive number"]),
+        (ws + ["--out", tmp / "w.h5", "--spacing", "inf"], ["--spacing", "finite"]),
         (ws + ["--out", tmp / "w.h5", "--box", 0, "inf", 0, 100], ["--box", "finite"]),
         (ws + ["--mode", "tensions", "--out", tmp / "w.h5", "--tension-spacing", 1e-9],
          ["--tension-spacing", "samples"]),
