@@ -72,7 +72,10 @@ def trial(folder: Path, reference: Path, k: int, victim: str, sig: int, delay: f
     time.sleep(delay)
     ended_before = proc.poll() is not None
     t0 = time.monotonic()
-    fs.send(proc, pids, victim, sig)
+    try:
+        fs.send(proc, pids, victim, sig)
+    except ProcessLookupError:                     # the map ended just before
+        ended_before = True
     ranks_s = _ranks_end(pids, t0)
     try:
         _, stderr = proc.communicate(timeout=HANG_SECONDS)
