@@ -35,6 +35,10 @@ SCHEMA: dict[str, dict[str, tuple[type | tuple, object, str]]] = {
         "steps_per_rev": (int, 200, "full steps per motor revolution"),
         "microsteps": (int, 16, "microsteps per full step"),
         "max_tension_N": (float, None, "motor force limit P_crit [N], Eq. (22)"),
+        "max_speed_steps_s": ((float, list), None,
+                              "motor speed limit [microsteps/s], one or one per tendon"),
+        "max_accel_steps_s2": ((float, list), None,
+                               "motor acceleration limit [microsteps/s^2], one or per tendon"),
     },
     "limits": {
         "failure_strain": (float, 0.025, "failure strain eps_Y, Eq. (19)"),
@@ -87,14 +91,20 @@ def _section(data: dict, name: str, where: str) -> dict:
                 raise ConfigError(f"{where}.{key}: missing required key")
             out[key] = default
             continue
-        value = data[key]
-        if kind is float and isinstance(value, int) and not isinstance(value, bool):
-            value = float(value)
-        if isinstance(value, bool) or not isinstance(value, kind):
-            raise ConfigError(
-                f"{where}.{key}: expected {kind.__name__}, got {type(value).__name__} {value!r}")
-        out[key] = value
+        out[key] = _typed(data[key], kind, f"{where}.{key}")
     return out
+
+
+def _typed(value, kind, where: str):
+    """``value`` as ``kind`` (an int is a float; (float, list): a number or a list of them)."""
+    if kind == (float, list) and isinstance(value, list):
+        return tuple(_typed(v, float, where) for v in value)
+    kind = float if kind == (float, list) else kind
+    if kind is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if isinstance(value, bool) or not isinstance(value, kind):
+        raise ConfigError(f"{where}: expected {kind.__name__}, got {type(value).__name__} {value!r}")
+    return value
 
 
 def arm_from_dict(data: dict) -> Arm:
@@ -130,7 +140,8 @@ def arm_to_dict(arm: Arm) -> dict:
     data["tendon"] = [dict(attach_mm=t["attach_mm"], route_mm=list(t["route_mm"]))
                       for t in data.pop("tendons")]
     def given(section: dict) -> dict:      # an unset optional key is left out, as in TOML
-        return {k: v for k, v in section.items() if v is not None}
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in section.items()
+                if v is not None}
 
     return {"arm": given({k: data[k] for k in SCHEMA["arm"]}), "tendon": data["tendon"],
             "motor": given(data["motor"]), "limits": given(data["limits"])}

@@ -36,6 +36,9 @@ class Motor:
     steps_per_rev: int = 200
     microsteps: int = 16
     max_tension_N: float | None = None  # P_crit of Eq. (22); None: no upper bound
+    # stepper limits in microsteps/s and /s^2: one number, or one per tendon (core/motion.py)
+    max_speed_steps_s: float | tuple[float, ...] | None = None
+    max_accel_steps_s2: float | tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -172,5 +175,10 @@ def validate(arm: Arm) -> None:
             raise ModelError(f"motor.{name} must be a positive integer, got {value!r}")
     if motor.max_tension_N is not None:
         positive("motor.max_tension_N", motor.max_tension_N)
+    from .motion import MotorLimits
+    try:
+        MotorLimits.of(motor, len(arm.tendons))
+    except InputError as err:
+        raise ModelError(str(err)) from None
     positive("limits.failure_strain", arm.limits.failure_strain)
     positive("limits.strain_energy_max_SE0", arm.limits.strain_energy_max_SE0)
