@@ -20,10 +20,12 @@ REQUIRED = object()
 SCHEMA: dict[str, dict[str, tuple[type | tuple, object, str]]] = {
     "arm": {
         "length_mm": (float, REQUIRED, "arm length l [mm]"),
-        "bending_stiffness_Nm2": (float, REQUIRED, "bending stiffness B [N m^2]"),
+        "bending_stiffness_Nm2": (float, None, "bending stiffness B [N m^2] (or the material)"),
+        "youngs_modulus_Pa": (float, None, "Young's modulus E [Pa]: B = E w h^3 / 12"),
+        "density_kg_m3": (float, None, "density rho [kg/m^3]: mass per length rho w h"),
         "elements": (int, 180, "number of P1 elements"),
         "thickness_mm": (float, 3.0, "thickness h [mm], for the strain limit Eq. (19)"),
-        "width_mm": (float, 40.0, "width [mm] (documentation only)"),
+        "width_mm": (float, 40.0, "width w [mm], for B and mass from the material"),
         "mass_per_length_kg_m": (float, None, "mass per length [kg/m], for eigenfrequencies"),
     },
     "tendon": {
@@ -103,8 +105,38 @@ def _typed(value, kind, where: str):
     if kind is float and isinstance(value, int) and not isinstance(value, bool):
         value = float(value)
     if isinstance(value, bool) or not isinstance(value, kind):
-        raise ConfigError(f"{where}: expected {kind.__name__}, got {type(value).__name__} {value!r}")
+        raise ConfigError(
+            f"{where}: expected {kind.__name__}, got {type(value).__name__} {value!r}")
     return value
+
+
+MATERIAL_TOLERANCE = 1e-3       # relative: a value given and the material's must agree
+
+
+def _materials(arm: dict, given: dict) -> dict:
+    """B = E w h^3 / 12 and mass per length rho w h (w, h in m) where the material
+    is given; a value given as well must agree with it (docs/model.md §12)."""
+    derived = {"bending_stiffness_Nm2": ("youngs_modulus_Pa", 3, "E w h^3 / 12", 1 / 12),
+               "mass_per_length_kg_m": ("density_kg_m3", 1, "rho w h", 1.0)}
+    for key, (material, power, formula, factor) in derived.items():
+        if arm[material] is None:
+            continue
+        if not arm[material] > 0:
+            raise ConfigError(f"arm.{material} must be positive, got {arm[material]!r}")
+        for size in ("width_mm", "thickness_mm"):
+            if size not in given:
+                raise ConfigError(f"arm.{material} needs arm.{size} (the cross-section)")
+        w_m, h_m = arm["width_mm"] * 1e-3, arm["thickness_mm"] * 1e-3
+        value = factor * arm[material] * w_m * h_m ** power
+        if arm[key] is None:
+            arm[key] = value
+        elif abs(arm[key] - value) > MATERIAL_TOLERANCE * value:
+            raise ConfigError(f"arm.{key} = {arm[key]:g} disagrees with arm.{material} "
+                              f"({formula} = {value:.6g}): give one of them")
+    if arm["bending_stiffness_Nm2"] is None:
+        raise ConfigError("arm.bending_stiffness_Nm2: missing required key (or give "
+                          "youngs_modulus_Pa with width_mm and thickness_mm)")
+    return arm
 
 
 def arm_from_dict(data: dict) -> Arm:
@@ -114,7 +146,7 @@ def arm_from_dict(data: dict) -> Arm:
         raise ConfigError(f"{unknown[0]}: unknown section (known: {', '.join(SCHEMA)})")
     if "arm" not in data:
         raise ConfigError("arm: missing required section [arm]")
-    arm = _section(data["arm"], "arm", "arm")
+    arm = _materials(_section(data["arm"], "arm", "arm"), data["arm"])
     raw_tendons = data.get("tendon")
     if not raw_tendons:
         raise ConfigError("tendon: missing required [[tendon]] entries")

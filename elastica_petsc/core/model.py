@@ -60,6 +60,8 @@ class Arm:
     thickness_mm: float = 3.0
     width_mm: float = 40.0
     mass_per_length_kg_m: float | None = None
+    youngs_modulus_Pa: float | None = None   # the material, when B came from it
+    density_kg_m3: float | None = None       # the material, when the mass came from it
     motor: Motor = field(default_factory=Motor)
     limits: Limits = field(default_factory=Limits)
 
@@ -143,8 +145,9 @@ def validate(arm: Arm) -> None:
     positive("arm.bending_stiffness_Nm2", arm.bending_stiffness_Nm2)
     positive("arm.thickness_mm", arm.thickness_mm)
     positive("arm.width_mm", arm.width_mm)
-    if arm.mass_per_length_kg_m is not None:
-        positive("arm.mass_per_length_kg_m", arm.mass_per_length_kg_m)
+    for key in ("mass_per_length_kg_m", "youngs_modulus_Pa", "density_kg_m3"):
+        if getattr(arm, key) is not None:
+            positive(f"arm.{key}", getattr(arm, key))
     if not isinstance(arm.elements, int) or isinstance(arm.elements, bool) or arm.elements < 2:
         raise ModelError(f"arm.elements must be an integer >= 2, got {arm.elements!r}")
     if len(arm.tendons) < 1:

@@ -139,8 +139,8 @@ class MotorSchedule:
         return np.flatnonzero(self.phase == "path")
 
     def columns(self) -> list[str]:
-        cols = ["row", "phase", "point", "time_s", "duration_s", "limited_by", "reached", "target_x_mm", "target_y_mm",
-                "tip_x_mm", "tip_y_mm"]
+        cols = ["row", "phase", "point", "time_s", "duration_s", "limited_by", "reached",
+                "target_x_mm", "target_y_mm", "tip_x_mm", "tip_y_mm"]
         for i in range(1, self.n_tendons + 1):
             cols += [f"tension_{i}_N", f"tension_{i}_p", f"length_{i}_mm", f"revolutions_{i}",
                      f"steps_{i}", f"step_increment_{i}", f"rounding_error_{i}_mm"]
@@ -150,7 +150,8 @@ class MotorSchedule:
         out = []
         for k in range(self.n_rows):
             row = [k, str(self.phase[k]), int(self.point[k]), self.time_s[k],
-                   self.durations_s[k], str(self.limited_by[k]), "true" if self.reached[k] else "false", *self.targets_mm[k], *self.tips_mm[k]]
+                   self.durations_s[k], str(self.limited_by[k]),
+                   "true" if self.reached[k] else "false", *self.targets_mm[k], *self.tips_mm[k]]
             for i in range(self.n_tendons):
                 row += [self.tensions_N[k, i], self.p[k, i], self.lengths_mm[k, i],
                         self.revolutions[k, i], int(self.steps[k, i]),
