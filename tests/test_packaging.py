@@ -49,6 +49,7 @@ def test_every_config_is_shipped_in_the_wheel(tmp_path):
     for name in shipped:
         assert f"elastica_petsc/configs/{name}" in names
     assert any(n.endswith("dist-info/LICENSE") for n in names)
+    assert "elastica_petsc/schema/output.schema.json" in names     # docs/json.md
 
 
 def test_readme_says_what_the_model_covers_on_its_first_screen():

@@ -190,6 +190,12 @@ def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None
         check_directory(args.vtk, args.overwrite)
 
 
-def print_json(data: dict) -> None:
-    json.dump(data, sys.stdout, indent=2)
+JSON_SCHEMA_VERSION = 1     # elastica_petsc/schema/output.schema.json, docs/json.md
+
+
+def print_json(kind: str, data: dict) -> None:
+    """One JSON object on stdout: ``kind`` (the command, or ``error``),
+    ``schema_version``, then ``data`` (docs/json.md)."""
+    json.dump({"kind": kind, "schema_version": JSON_SCHEMA_VERSION, **data}, sys.stdout,
+              indent=2)
     sys.stdout.write("\n")

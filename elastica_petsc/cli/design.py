@@ -167,7 +167,7 @@ def path_outcome(result) -> str:
 def _show(args, summary: dict, history, lines) -> None:
     if args.json:
         summary["history"] = history
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print("\n".join(lines(summary)))
 
@@ -312,7 +312,7 @@ def _run_sweep(args) -> int:
         return 0
     summary = sweep_summary(sweep, arm)
     if args.json:
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print("\n".join(sweep_lines(summary)))
     return 0 if sweep.complete else 130
@@ -321,7 +321,8 @@ def _run_sweep(args) -> int:
 def sweep_summary(sweep, arm) -> dict:
     v = sweep.values
     best = sweep.best()
-    return {"designs": int(len(sweep.designs)), "done": int(sweep.done.sum()),
+    return {"objective": "sweep", "designs": int(len(sweep.designs)),
+            "done": int(sweep.done.sum()),
             "complete": sweep.complete, "ranks": sweep.ranks, "axes": sweep.names,
             "file": sweep.file,
             "errors": int(np.sum(v["error"][sweep.done] != b"")),

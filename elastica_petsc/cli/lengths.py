@@ -308,7 +308,7 @@ def plot(arm, data: dict, states, path, title: str) -> None:
 def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
     """Print, write, plot; exit 1 if no state converged."""
     if args.json:
-        common.print_json(data)
+        common.print_json(args.command, data)
     else:
         print(format_states(arm, data))
     if args.out:

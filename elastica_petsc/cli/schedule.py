@@ -133,7 +133,7 @@ def run(args) -> int:
     violations = schedule.motor_check()
     s = summary(schedule, violations, bool(args.retime))
     if args.json:
-        common.print_json(s)
+        common.print_json(args.command, s)
     else:
         print(format_summary(s))
     return 0 if s["playable"] else 1

@@ -334,7 +334,7 @@ def run(args) -> int:
     if args.json:
         if args.per_point:
             summary["per_point"] = point_entries(result, planned.schedule)
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print(format_trace(summary))
     write_outputs(args, arm, disc, planned)
