@@ -233,6 +233,10 @@ def format_states(arm, data: dict) -> str:
                          + (f"{s['lengths_requested_mm'][i]:>11.3f} {s['slack_mm'][i]:>11.3f} "
                             if by_length else "")
                          + f"{'yes' if s['taut'][i] else 'no':>5}")
+        for i, clear in enumerate(s["cable_clear"], start=1):
+            if not clear:
+                lines.append(f"  note: cable {i} crosses the arm (a straight cable through the "
+                             "arm: this state needs a guide or is not physical; core/clearance.py)")
         if s["kappa_max"] > s["kappa_limit"]:
             lines.append(f"  note: l*kappa_max = {s['kappa_max']:.4g} exceeds the strain limit "
                          f"{s['kappa_limit']:.4g} (Eq. (19))")
