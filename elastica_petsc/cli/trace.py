@@ -50,6 +50,9 @@ def add_parser(sub) -> None:
     parser.add_argument("--animate", metavar="GIF|MP4",
                         help="write an animation of the arm, its cables and the tip trail along "
                              "the path (.gif with Pillow; .mp4 needs ffmpeg)")
+    parser.add_argument("--slow-motion", type=float, default=1.0, metavar="K",
+                        help="--animate: play the schedule K times slower than real time "
+                             "(default 1: real time, frames timed to the schedule)")
     parser.add_argument("--vtk", metavar="DIR",
                         help="write ParaView files into this folder: trace.pvd (the arm and "
                              "cables at every point of the approach and the path, timed as the "
@@ -280,6 +283,8 @@ def check_options(args) -> None:
                          "--json")
     if args.speed_mm_s is not None and not args.speed_mm_s > 0:
         raise InputError(f"--speed-mm-s must be positive, got {args.speed_mm_s}")
+    if not args.slow_motion > 0:
+        raise InputError(f"--slow-motion must be positive, got {args.slow_motion}")
 
 
 def write_outputs(args, arm, disc, planned) -> None:
@@ -308,7 +313,8 @@ def write_outputs(args, arm, disc, planned) -> None:
                   approach=planned.approach, approach_times_s=schedule.time_s[:rows[0]])
     if args.animate:
         from ..plots.animate import animate_trace
-        animate_trace(arm, result, args.animate, approach=planned.approach)
+        animate_trace(arm, result, args.animate, approach=planned.approach,
+                      times_s=schedule.time_s, slow_motion=args.slow_motion)
 
 
 def run(args) -> int:
