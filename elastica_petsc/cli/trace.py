@@ -211,10 +211,15 @@ def format_trace(s: dict) -> str:
                          "max_accel_steps_s2 in the config, so nothing checks that the motors "
                          "can play them (`elastica-petsc schedule CSV` checks and re-times)")
         else:
-            by = ", ".join(f"{k} {v}" for k, v in s["slowed_by"].items()) or "none"
+            runs = ", ".join(f"{a}" + (f"-{b}" if b > a else "") + f" ({code})"
+                             for a, b, code in s["slowed_rows"][:8])
+            more = len(s["slowed_rows"]) - 8
             lines.append(f"motor peaks {peaks}, within the [motor] limits; rows where a motor "
-                         f"slowed the tip: {s['rows_slowed_by_motor']} ({by}); no schedule "
-                         f"under the limits is shorter than {s['time_bound_s']:.1f} s")
+                         f"slowed the tip: {s['rows_slowed_by_motor']}"
+                         + (f": {runs}" + (f" and {more} more runs" if more > 0 else "")
+                            if runs else "")
+                         + f"; no schedule under the limits is shorter than "
+                           f"{s['time_bound_s']:.1f} s")
     if s.get("max_tracing_speed_mm_s") is not None:
         lines.append(f"lowest natural frequency along the path {s['f1_min_hz']:.3g} Hz (tensions "
                      f"held): suggested max tracing speed {s['max_tracing_speed_mm_s']:.3g} mm/s, "
@@ -250,14 +255,29 @@ def motor_summary(sched) -> dict:
 
     if math.isnan(sched.duration_s) or sched.n_rows < 2:
         return {"motor_limits": None, "peak_speed_steps_s": None, "peak_accel_steps_s2": None,
-                "rows_slowed_by_motor": 0, "slowed_by": {}, "time_bound_s": None}
+                "rows_slowed_by_motor": 0, "slowed_by": {}, "slowed_rows": [],
+                "time_bound_s": None}
     r, a = rates_and_accelerations(sched.positions_steps, sched.durations_s[1:])
-    slowed = [str(x) for x in sched.limited_by if str(x).startswith(("speed_", "accel_"))]
+    labels = [str(x) for x in sched.limited_by]
+    slowed = [x for x in labels if x.startswith(("speed_", "accel_"))]
     return {"motor_limits": None if sched.limits is None else sched.limits.to_json(),
             "peak_speed_steps_s": rounded(abs(r).max(axis=0)),
             "peak_accel_steps_s2": rounded(abs(a).max(axis=0)),
             "rows_slowed_by_motor": len(slowed), "slowed_by": dict(sorted(Counter(slowed).items())),
-            "time_bound_s": round(sched.speed_bound_s, 6)}
+            "slowed_rows": slowed_runs(labels), "time_bound_s": round(sched.speed_bound_s, 6)}
+
+
+def slowed_runs(labels: list[str]) -> list[list]:
+    """[first row, last row, limit code] of each run of rows a motor limit slowed."""
+    runs = []
+    for k, label in enumerate(labels):
+        if not label.startswith(("speed_", "accel_")):
+            continue
+        if runs and runs[-1][1] == k - 1 and runs[-1][2] == label:
+            runs[-1][1] = k
+        else:
+            runs.append([k, k, label])
+    return runs
 
 
 def check_options(args) -> None:
