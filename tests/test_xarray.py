@@ -23,8 +23,9 @@ def test_label_gives_named_dimensions_shared_by_name(tmp_path):
         label(grid.create_dataset("W0", data=np.zeros((2, 3), bool)), ("y", "x"),
               coords={"x": (np.array([0.0, 10.0, 20.0]), "mm", "target x"),
                       "y": (np.array([0.0, 10.0]), "mm", "target y")})
-        with pytest.raises(ValueError, match="length"):
+        with pytest.raises(ValueError, match="length"):       # "point" has length 4 here
             label(g.create_dataset("bad", data=np.zeros(5)), ("point",))
+        del g["bad"]
     ds = xr.open_dataset(path, engine="h5netcdf", group="path")
     assert ds["tip"].dims == ("point", "component") and ds["tensions"].dims == ("point", "tendon")
     assert list(ds["component"].values) == ["x", "y"] and list(ds["tendon"].values) == [1, 2, 3]
