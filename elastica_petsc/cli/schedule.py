@@ -27,8 +27,9 @@ def add_parser(sub) -> None:
     parser.add_argument("--retime", metavar="CSV",
                         help="write the re-timed schedule here (then check that one)")
     parser.add_argument("--speed-mm-s", type=float, metavar="V",
-                        help="with --retime: the tip is never faster than this (default: as "
-                             "fast as the motors allow)")
+                        help="with --retime: the tip is never faster than this (default: the "
+                             "fastest tip speed of the CSV's own timing, so only the rows a "
+                             "motor cannot play slow down; none if it has no time column)")
     parser.add_argument("--step-table", metavar="STEM",
                         help="write one step/direction timing table per motor, STEM_motorI.csv "
                              "(time_s, direction +1 out / -1 in, position_steps)")
@@ -58,6 +59,18 @@ def motor_of(args, arm):
     return motor
 
 
+def own_tip_speed(schedule) -> float | None:
+    """The fastest tip speed [mm/s] of a schedule's own time column (None: untimed)."""
+    import numpy as np
+
+    d = np.diff(schedule.time_s)
+    step = np.linalg.norm(np.diff(schedule.tips_mm, axis=0), axis=1)
+    moving = d > 0
+    if not np.all(np.isfinite(d)) or not moving.any():
+        return None
+    return float(np.max(step[moving] / d[moving]))
+
+
 def check_options(args, n_tendons: int) -> None:
     from ..core.errors import InputError
     from ..io.hdf5 import check_distinct, check_output_path
@@ -85,6 +98,7 @@ def summary(schedule, violations, retimed: bool) -> dict:
     r, a = rates_and_accelerations(schedule.positions_steps, schedule.durations_s[1:])
     rows = sorted({v.row for v in violations})
     return {"rows": int(schedule.n_rows), "retimed": retimed,
+            "tip_speed_max_mm_s": own_tip_speed(schedule),
             "duration_s": round(schedule.duration_s, 6),
             "limits": schedule.limits.to_json(),
             "peak_speed_steps_s": rounded(abs(r).max(axis=0)) if len(r) else [],
@@ -94,8 +108,10 @@ def summary(schedule, violations, retimed: bool) -> dict:
 
 
 def format_summary(s: dict) -> str:
+    speed = s["tip_speed_max_mm_s"]
     lines = [f"{s['rows']} rows, {s['duration_s']:.3f} s"
-             + (" (re-timed)" if s["retimed"] else "")]
+             + (" (re-timed)" if s["retimed"] else "")
+             + ("" if speed is None else f", tip at most {speed:.4g} mm/s")]
     for i, (v, a) in enumerate(zip(s["peak_speed_steps_s"], s["peak_accel_steps_s2"]), 1):
         V, A = s["limits"]["max_speed_steps_s"][i - 1], s["limits"]["max_accel_steps_s2"][i - 1]
         lines.append(f"motor {i}: peak {v:.6g} microsteps/s (limit {V if V else 'none'}), "
@@ -123,10 +139,11 @@ def run(args) -> int:
     check_options(args, arm.n_tendons)
     schedule = read_schedule_csv(args.csv, motor)
     if args.retime:
+        speed = args.speed_mm_s if args.speed_mm_s is not None else own_tip_speed(schedule)
         schedule = motor_schedule(schedule.lengths_mm, motor, targets_mm=schedule.targets_mm,
                                   tips_mm=schedule.tips_mm, tensions_N=schedule.tensions_N,
                                   p=schedule.p, reached=schedule.reached, phase=schedule.phase,
-                                  point=schedule.point, speed_mm_s=args.speed_mm_s)
+                                  point=schedule.point, speed_mm_s=speed)
         schedule.write_csv(args.retime)
     if args.step_table:
         schedule.write_step_tables(args.step_table)
