@@ -135,7 +135,7 @@ def test_bifurcation_side_and_its_record(tmp_path):
 def test_boundary_in_one_call():
     """ep.boundary: the W_0 polygon of the paper's arm contains the tips of forward
     solves at admissible tensions (coarse mesh: a quick check of the wiring)."""
-    from elastica_petsc.studies.boundary import winding_number
+    from elastica_petsc.core.geometry import winding_number
 
     arm = ep.Arm.paper()
     b = ep.boundary(arm, restricted=False, elements=60)
