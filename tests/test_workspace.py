@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 MPIEXEC = shutil.which("mpiexec")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1")
-# checkpoint after every chunk (workspace.CHECKPOINT_ENV), so an interruption finds a file early
+# checkpoint after every chunk (chunks.CHECKPOINT_ENV), so an interruption finds a file early
 FAST_CHECKPOINTS = dict(ENV, ELASTICA_PETSC_CHECKPOINT_SECONDS="0")
 
 ELEMENTS = 60                                                  # multiple of 3: s_1 = l/3 on a node
@@ -399,8 +399,8 @@ def test_backward_sweep_reaches_targets_behind_a_collapse():
     from elastica_petsc.core.config import load_config
     from elastica_petsc.solvers.control import CABLE_COLLAPSE
     from elastica_petsc.core.fem import Discretisation
-    from elastica_petsc.studies.sampling import TargetSampler
-    from elastica_petsc.studies.workspace import NOT_CONVERGED, REACHED
+    from elastica_petsc.studies.workspace import Status
+    from elastica_petsc.studies.workspace.samplers import TargetSampler
 
     arm = load_config(ROOT / "configs" / "paper.toml")
     sampler = TargetSampler(arm, Discretisation.from_arm(arm, 60), global_search=False)
@@ -411,7 +411,7 @@ def test_backward_sweep_reaches_targets_behind_a_collapse():
     finally:
         sampler.destroy()
     assert forward.reason == CABLE_COLLAPSE
-    np.testing.assert_array_equal(out["status"], [NOT_CONVERGED] * 3 + [REACHED] * 6)
+    np.testing.assert_array_equal(out["status"], [Status.NOT_CONVERGED] * 3 + [Status.REACHED] * 6)
     assert np.all(out["tip_error"][3:] < 1e-5)
     assert [r.decode() for r in out["reason"][:3]] == [CABLE_COLLAPSE] * 3
 

@@ -48,7 +48,7 @@ def run(args) -> int:
     comm = MPI.COMM_WORLD
     if args.jobs < 1:
         raise InputError(f"--jobs must be at least 1, got {args.jobs}")
-    from ..studies.workspace import agree
+    from ..studies.chunks import agree
 
     out, error = Path(args.out), None
     try:

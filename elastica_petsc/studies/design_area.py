@@ -171,7 +171,7 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
     cells against 58472 mm^2 for the loop's shoelace at 48 nodes per edge."""
     from mpi4py import MPI
 
-    from .workspace import REACHED, run_map
+    from .workspace import Status, run_map
 
     disc = Discretisation.from_arm(arm, elements)
     spacing = p_max / cells
@@ -182,7 +182,7 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
     n = cells + 1
     tips = np.full((n, n, 2), np.nan)
     good = np.zeros((n, n), bool)
-    reached = s["status"] == REACHED
+    reached = s["status"] == Status.REACHED
     with np.errstate(invalid="ignore"):
         stable = reached & (s["lambda_min"] > 0)
     tips[index[:, 0], index[:, 1]] = s["tip"]
