@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .core.config import load_config
+from .core.model import load_config
 from .core.model import Arm
 
 PAPER_P = np.array([25.2, 10.8])                # Fig. 8 tensions

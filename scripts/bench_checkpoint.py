@@ -39,7 +39,7 @@ def main() -> None:
     args = parser.parse_args()
     import petsc4py
     petsc4py.init([])
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.io import hdf5
     from elastica_petsc.io.workspace import write_results
     from elastica_petsc.studies.workspace import driver

@@ -48,7 +48,7 @@ def fingerprint(wmap) -> bytes:
 
 
 def main() -> None:
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.studies.workspace import Status
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

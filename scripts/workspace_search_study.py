@@ -105,7 +105,7 @@ def against_tension_grid(maps, tens, h: float, length_mm: float) -> None:
 def against_boundary(old, new, h: float, elements: int) -> None:
     """Sections 2 and 4 of the module doc."""
     import elastica_petsc as ep
-    from elastica_petsc.core.config import arm_from_dict
+    from elastica_petsc.core.model import arm_from_dict
     from elastica_petsc.core.geometry import distance_to_edges, inside_polygon
     from elastica_petsc.studies.boundary import compare_with_samples
     import json

@@ -11,7 +11,7 @@ import sys
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.continuation import FoldSystem, Manifold
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver

@@ -12,7 +12,7 @@ import h5py
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.studies.design import DesignError, with_routes
 from elastica_petsc.core.geometry import shoelace, triangles_union_area
 from elastica_petsc.studies.design_area import box_area, box_loop, resampled_area

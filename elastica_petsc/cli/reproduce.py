@@ -41,7 +41,7 @@ def run(args) -> int:
 
     from mpi4py import MPI
 
-    from ..core.config import load_config
+    from ..core.model import load_config
     from ..core.errors import InputError
     from ..reproduce import Context, check_output_folder, run as run_all
 
