@@ -121,7 +121,8 @@ def rows_to_chunks(rows: list[np.ndarray], chunk: int) -> tuple[np.ndarray, ...]
 
 def empty_fields(schema: dict, count: int) -> dict[str, np.ndarray]:
     """Arrays for ``count`` samples of every field of ``schema`` (name -> (shape per
-    sample, dtype, units, description), e.g. :func:`~elastica_petsc.studies.workspace.schema.fields`):
+    sample, dtype, units, description), e.g.
+    :func:`~elastica_petsc.studies.workspace.schema.fields`):
     NaN for floats, 0 for integers, b"" for strings (not computed yet)."""
     out = {}
     for name, (shape, dtype, _, _) in schema.items():
@@ -269,8 +270,8 @@ class _Collector:
     """Rank 0's side: stores chunks (its own and those other ranks send), writes
     checkpoints, and knows how many ranks have finished."""
 
-    def __init__(self, comm, counter, results: ChunkResults, out, attrs, limits, checkpoint_seconds,
-                 bar):
+    def __init__(self, comm, counter, results: ChunkResults, out, attrs, limits,
+                 checkpoint_seconds, bar):
         self.comm, self.counter, self.results, self.out = comm, counter, results, out
         self.attrs, self.limits, self.bar = attrs, limits, bar
         self.checkpoint_seconds = checkpoint_seconds

@@ -187,7 +187,8 @@ class Walker:
         Corners (the ends of each curve, and the start, where ``start_rows``
         are active) move with both of their constraints; a node inside a curve
         slides orthogonally (metric D) to the curve's tangent.  Only the normal
-        component of the tip motion matters for the area (:func:`~elastica_petsc.core.geometry.union_area_gradient`)."""
+        component of the tip motion matters for the area
+        (:func:`~elastica_petsc.core.geometry.union_area_gradient`)."""
         mf, out = self.tr.mf, []
         for k, curve in enumerate(region.curves):
             for j, pt in enumerate(curve.points):

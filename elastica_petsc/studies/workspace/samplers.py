@@ -397,7 +397,8 @@ class TargetSampler(_Sampler):
         one reached) until one is not reached; False if stopped."""
         for step in (1, -1):
             j, start = k + step, states[k]
-            while 0 <= j < len(points) and out["status"][j] not in (Status.REACHED, Status.BEYOND_REACH,
+            while 0 <= j < len(points) and out["status"][j] not in (Status.REACHED,
+                                                                     Status.BEYOND_REACH,
                                                                      Status.OUTSIDE_BOUNDARY):
                 if stop():
                     return False

@@ -13,18 +13,21 @@ from ...io.workspace import write_results
 from ..chunks import ChunkResults, Grid
 
 
-# The status of a sample (the integers stored in samples/status).  With the global search (the default, sampler
-# "global-search"), a target is REACHED, UNDECIDED (not reached after the global
-# search: no proof either way), BEYOND_REACH (|x_d| > l: proven) or OUTSIDE_BOUNDARY
-# (outside the traced boundary of W_0, docs/model.md §9.1: proven).  NEEDS_NEGATIVE
-# and NOT_CONVERGED are the local verdicts of sampler "local" (``global_search=False``
-# and files written before the global search).  With a pretension floor P_min
-# (``--min-tension-N``) REACHED means reached with every P_i >= P_min (W_0(P_min),
-# docs/model.md §9.3), and BELOW_FLOOR: reached with P >= 0 (in W_0), but no tension
-# set with every P_i >= P_min was found (not a proof that there is none);
-# UNIQUE_BELOW_FLOOR (two tendons): the tensions found are below the floor and they
-# are the target's only ones (a face of the traced boundary with one preimage): proven.
 class Status(IntEnum):
+    """The status of a sample (the integers stored in ``samples/status``).
+
+    With the global search (the default, sampler "global-search"), a target is REACHED,
+    UNDECIDED (not reached after the global search: no proof either way), BEYOND_REACH
+    (|x_d| > l: proven) or OUTSIDE_BOUNDARY (outside the traced boundary of W_0,
+    docs/model.md §9.1: proven).  NEEDS_NEGATIVE and NOT_CONVERGED are the local
+    verdicts of sampler "local" (``global_search=False`` and files written before the
+    global search).  With a pretension floor P_min (``--min-tension-N``) REACHED means
+    reached with every P_i >= P_min (W_0(P_min), docs/model.md §9.3), and BELOW_FLOOR:
+    reached with P >= 0 (in W_0), but no tension set with every P_i >= P_min was found
+    (not a proof that there is none); UNIQUE_BELOW_FLOOR (two tendons): the tensions
+    found are below the floor and they are the target's only ones (a face of the traced
+    boundary with one preimage): proven."""
+
     NOT_COMPUTED = 0
     REACHED = 1
     NEEDS_NEGATIVE = 2
@@ -37,9 +40,11 @@ class Status(IntEnum):
 
 
 STATUS_NAMES = {Status.NOT_COMPUTED: "not computed", Status.REACHED: "reached with P >= 0",
-                Status.NEEDS_NEGATIVE: "tip control ended on P_i = 0 (would need a negative tension locally; not a proof of outside W_0)",
+                Status.NEEDS_NEGATIVE: "tip control ended on P_i = 0 (would need a negative "
+                                       "tension locally; not a proof of outside W_0)",
                 Status.NOT_CONVERGED: "not converged",
-                Status.UNDECIDED: "not reached after the global search (undecided: not proven outside W_0)",
+                Status.UNDECIDED: "not reached after the global search (undecided: not proven "
+                                  "outside W_0)",
                 Status.BEYOND_REACH: "beyond reach |x| > l (proven unreachable)",
                 Status.OUTSIDE_BOUNDARY: "outside the traced W_0 boundary (proven unreachable, "
                                   "docs/model.md §9.1)",
@@ -262,7 +267,8 @@ class WorkspaceMap:
             "min_tension_floor_N": self.min_tension_N,
             "status_counts": {self._status_name(k): int(np.sum(status == k))
                               for k in STATUS_NAMES
-                              if k == Status.REACHED or (k != Status.NOT_COMPUTED and np.any(status == k))},
+                              if k == Status.REACHED
+                              or (k != Status.NOT_COMPUTED and np.any(status == k))},
             "masks": {name: int(m.sum()) for name, m in self.masks.items()},
             "lambda_min_raw_min": float(np.nanmin(self.samples["lambda_min_raw"])) if w0 else None,
             "kappa_max_max": float(np.nanmax(self.samples["kappa_max"])) if w0 else None,
