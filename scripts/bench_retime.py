@@ -36,7 +36,7 @@ def main(argv=None) -> None:
     ap.add_argument("--max-accel", type=float, default=5000.0)
     args = ap.parse_args(argv)
 
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.core.motion import MotorLimits, retime
     from elastica_petsc.core.schedule import read_schedule_csv, schedule_from_trace
     from elastica_petsc.solvers.control import TipController

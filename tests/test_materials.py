@@ -9,9 +9,9 @@ import sys
 
 import pytest
 
-from elastica_petsc.core.config import ConfigError, load_config
+from elastica_petsc.core.config import ConfigError
 from elastica_petsc.core.fem import Discretisation, nearest_element_count
-from elastica_petsc.core.model import Arm, Tendon
+from elastica_petsc.core.model import Arm, Tendon, load_config
 
 TENDONS = """
 [[tendon]]

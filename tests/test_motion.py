@@ -20,7 +20,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.motion import MotorLimits, check, retime, step_events
 from elastica_petsc.core.schedule import motor_schedule
 from elastica_petsc.solvers.control import TipController

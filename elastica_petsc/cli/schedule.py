@@ -131,7 +131,7 @@ def format_summary(s: dict) -> str:
 
 
 def run(args) -> int:
-    from ..core.config import load_config
+    from ..core.model import load_config
     from ..core.schedule import motor_schedule, read_schedule_csv
 
     arm = load_config(args.config)

@@ -1,4 +1,7 @@
-"""TOML configuration files into an :class:`~elastica_petsc.core.model.Arm`.
+"""TOML configuration files of an arm: the schema, the file read and its values
+checked (:func:`read_config`, :func:`config_values`), and an arm back into the
+same layout (:func:`arm_to_dict`).  The :class:`~elastica_petsc.core.model.Arm`
+is built from the values in core/model.py (:func:`~elastica_petsc.core.model.load_config`).
 
 The schema below is the single place where keys, units and defaults are
 listed.  A missing required key, an unknown key or a value of the wrong type
@@ -12,7 +15,6 @@ from importlib import resources
 from pathlib import Path
 
 from .errors import InputError
-from .model import Arm, Limits, ModelError, Motor, Tendon
 
 REQUIRED = object()
 
@@ -58,8 +60,8 @@ def paper_config_path() -> Path:
     return Path(str(resources.files("elastica_petsc") / "configs" / "paper.toml"))
 
 
-def load_config(path: str | Path | None = None) -> Arm:
-    """Read a TOML file (default: the paper's arm) into a validated Arm."""
+def read_config(path: str | Path | None = None) -> tuple[Path, dict]:
+    """(path, parsed TOML) of a config file (default: the paper's arm)."""
     path = Path(path) if path is not None else paper_config_path()
     try:
         with open(path, "rb") as fh:
@@ -72,10 +74,7 @@ def load_config(path: str | Path | None = None) -> Arm:
         raise ConfigError(f"{path}: cannot read it ({err.strerror})") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
         raise ConfigError(f"{path}: not valid TOML: {err}") from None
-    try:
-        return arm_from_dict(data)
-    except (ConfigError, ModelError) as err:
-        raise ConfigError(f"{path}: {err}") from None
+    return path, data
 
 
 def _section(data: dict, name: str, where: str) -> dict:
@@ -139,8 +138,10 @@ def _materials(arm: dict, given: dict) -> dict:
     return arm
 
 
-def arm_from_dict(data: dict) -> Arm:
-    """Build an Arm from parsed TOML (mm, N m^2, N)."""
+def config_values(data: dict) -> dict:
+    """The checked values of parsed TOML (mm, N m^2, N), defaults filled in:
+    {"arm": keyword arguments of Arm, "tendons": [{"attach_mm", "route_mm"}],
+    "motor": ..., "limits": ...}."""
     unknown = sorted(set(data) - set(SCHEMA))
     if unknown:
         raise ConfigError(f"{unknown[0]}: unknown section (known: {', '.join(SCHEMA)})")
@@ -159,15 +160,16 @@ def arm_from_dict(data: dict) -> Arm:
         if len(route) != 2 or not all(
                 isinstance(c, (int, float)) and not isinstance(c, bool) for c in route):
             raise ConfigError(f"tendon[{i}].route_mm: expected two numbers [x, y], got {route!r}")
-        tendons.append(Tendon(attach_mm=values["attach_mm"],
-                              route_mm=(float(route[0]), float(route[1]))))
-    motor = Motor(**_section(data.get("motor", {}), "motor", "motor"))
-    limits = Limits(**_section(data.get("limits", {}), "limits", "limits"))
-    return Arm(tendons=tuple(tendons), motor=motor, limits=limits, **arm)
+        tendons.append({"attach_mm": values["attach_mm"],
+                        "route_mm": (float(route[0]), float(route[1]))})
+    return {"arm": arm, "tendons": tendons,
+            "motor": _section(data.get("motor", {}), "motor", "motor"),
+            "limits": _section(data.get("limits", {}), "limits", "limits")}
 
 
-def arm_to_dict(arm: Arm) -> dict:
-    """The resolved configuration as plain data (for HDF5 attributes and JSON)."""
+def arm_to_dict(arm) -> dict:
+    """The resolved configuration of an :class:`~elastica_petsc.core.model.Arm` as
+    plain data in this file's layout (for HDF5 attributes and JSON)."""
     data = asdict(arm)
     data["tendon"] = [dict(attach_mm=t["attach_mm"], route_mm=list(t["route_mm"]))
                       for t in data.pop("tendons")]

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .config import ConfigError, config_values, read_config
 from .errors import InputError
 
 
@@ -71,13 +72,11 @@ class Arm:
     @classmethod
     def paper(cls) -> "Arm":
         """The arm of the paper's Fig. 1 (``configs/paper.toml``)."""
-        from .config import load_config
         return load_config(None)
 
     @classmethod
     def from_toml(cls, path) -> "Arm":
         """An arm from a TOML configuration file (layout: ``configs/paper.toml``)."""
-        from .config import load_config
         return load_config(path)
 
     # --- unit conversions (docs/model.md §3) -------------------------------------
@@ -185,3 +184,20 @@ def validate(arm: Arm) -> None:
         raise ModelError(str(err)) from None
     positive("limits.failure_strain", arm.limits.failure_strain)
     positive("limits.strain_energy_max_SE0", arm.limits.strain_energy_max_SE0)
+
+
+def arm_from_dict(data: dict) -> Arm:
+    """Build an Arm from parsed TOML (mm, N m^2, N; layout of core/config.py)."""
+    values = config_values(data)
+    return Arm(tendons=tuple(Tendon(**t) for t in values["tendons"]),
+               motor=Motor(**values["motor"]), limits=Limits(**values["limits"]),
+               **values["arm"])
+
+
+def load_config(path=None) -> Arm:
+    """Read a TOML file (default: the paper's arm) into a validated Arm."""
+    path, data = read_config(path)
+    try:
+        return arm_from_dict(data)
+    except (ConfigError, ModelError) as err:
+        raise ConfigError(f"{path}: {err}") from None
