@@ -37,8 +37,10 @@ def test_infeasible_start_says_what_fails_and_writes_nothing(tmp_path):
     run = design(tmp_path)
     assert run.returncode == 1, run.stderr
     text = run.stdout
-    assert "the starting design is infeasible: a cable crosses the arm" in text
-    assert "move the routing points farther from the arm" in text
+    assert "the starting design is infeasible" in text
+    # which cable, at which tensions, and what to change
+    assert "tendon 1's cable crosses the arm at 1 of the 96 nodes, P = (10, 0.833) N" in text
+    assert "move r_1 farther from the arm" in text and "lower --tension-max-N below 10 N" in text
     assert "TAO:" not in text and "%" not in text       # no optimiser "result" of 0 iterations
     assert "designed.toml not written" in text
     assert not (tmp_path / "designed.toml").exists()
@@ -46,6 +48,9 @@ def test_infeasible_start_says_what_fails_and_writes_nothing(tmp_path):
     data = json.loads(run.stdout)
     assert data["outcome"] == "INFEASIBLE_START" and data["file"] is None
     assert data["start"]["cables_clear"] is False and data["iterations"] == 0
+    crossing, = data["start"]["crossings"]
+    assert crossing["tendon"] == 1 and crossing["first_tensions_N"] == [10.0, 0.8333]
+    assert data["resampled_before"] is None          # no re-sampling of an infeasible start
 
 
 def test_fold_note_is_a_whole_sentence():

@@ -201,7 +201,7 @@ def _run_area(args) -> int:
 
 
 def area_outcome(r) -> str:
-    if not r.history[0]["feasible"]:
+    if not r.before.feasible:
         return INFEASIBLE_START
     if r.arm_after == r.arm_before:
         return UNCHANGED
@@ -209,21 +209,38 @@ def area_outcome(r) -> str:
 
 
 def infeasible_start_lines(start: dict, tension_max_N: float) -> list[str]:
-    """What fails at the starting design of an area objective and what to change."""
-    if not start["converged"]:
-        what = (f"some equilibria along the edge of the tension box 0 <= P_i <= "
-                f"{tension_max_N:.3g} N could not be solved")
-    else:
-        what = (f"a cable crosses the arm at some tensions on the edge of the box 0 <= P_i <= "
-                f"{tension_max_N:.3g} N (core/clearance.py)")
-    return [f"  the starting design is infeasible: {what}; the optimiser cannot start from it",
-            "  move the routing points farther from the arm (or their cables' attachments), or "
-            "lower --tension-max, and run design again"]
+    """What fails at the starting design of an area objective and what to change
+    (``start``: :func:`~elastica_petsc.studies.design_area.infeasibility`)."""
+    lines = [f"  the starting design is infeasible on the edge of the tension box 0 <= P_i <= "
+             f"{tension_max_N:.3g} N, so the optimiser cannot start from it:"]
+    for c in start["crossings"]:
+        first, last = c["first_tensions_N"], c["last_tensions_N"]
+        where = f"P = ({first[0]:.3g}, {first[1]:.3g}) N"
+        if c["nodes"] > 1:
+            where = f"from {where} to ({last[0]:.3g}, {last[1]:.3g}) N along the edge"
+        lines.append(f"  - tendon {c['tendon']}'s cable crosses the arm at {c['nodes']} of the "
+                     f"{c['of']} nodes, {where} (core/clearance.py)")
+    if start["unsolved_tensions_N"]:
+        P = start["unsolved_tensions_N"][0]
+        lines.append(f"  - {len(start['unsolved_tensions_N'])} equilibria along the edge were "
+                     f"not solved, the first at P = ({P[0]:.3g}, {P[1]:.3g}) N")
+    fixes = [f"move r_{c['tendon']} farther from the arm" for c in start["crossings"]]
+    lowest = min((c["lowest_max_tension_N"] for c in start["crossings"]), default=None)
+    if lowest is not None:
+        fixes.append(f"lower --tension-max-N below {lowest:.3g} N (where the first crossing is)")
+    lines.append("  to change: " + ("; or ".join(fixes) if fixes else
+                                    "a smaller --tension-max or other routing points")
+                 + ", and run design again")
+    return lines
 
 
 def area_summary(r, elements: int) -> dict:
     """The JSON summary of an area design (mm, mm^2, N)."""
+    from ..studies.design_area import infeasibility
+
     def sampled(s):
+        if s is None:                            # not re-sampled (an infeasible start)
+            return None
         return {"area_mm2": s.area_mm2, "error_mm2": s.error_mm2, "samples": s.samples,
                 "reached": s.reached, "stable": s.stable, "cables_clear": s.cables_clear}
     force = r.arm_before.force_scale_N
@@ -241,7 +258,8 @@ def area_summary(r, elements: int) -> dict:
         "attach_before_mm": [t.attach_mm for t in r.arm_before.tendons],
         "attach_after_mm": [t.attach_mm for t in r.arm_after.tendons],
         "iterations": r.iterations, "evaluations": len(r.history), "seconds": r.seconds,
-        "tao_reason": r.reason, "outcome": area_outcome(r), "start": r.history[0],
+        "tao_reason": r.reason, "outcome": area_outcome(r),
+        "start": r.history[0] | infeasibility(r.before, force),
     }
 
 
