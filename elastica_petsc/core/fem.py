@@ -72,9 +72,17 @@ class Discretisation:
     attach_nodes: tuple[int, ...]   # m_i: node index of tendon i's attachment
     routes: np.ndarray              # (n, 2) routing points r_i / l
 
+    # cables through guides, offsets or weight (core/guided.py, docs/model.md §11)
+    has_paths = False
+
     @classmethod
     def from_arm(cls, arm: Arm, n_elements: int | None = None) -> "Discretisation":
-        """Put ``arm`` on a uniform mesh; attachments must fall on nodes."""
+        """Put ``arm`` on a uniform mesh; attachments must fall on nodes.  An arm
+        with guides, offsets or weight gets :class:`~.guided.GuidedDiscretisation`;
+        the paper's cables keep this kernel."""
+        if cls is Discretisation and arm.has_paths:
+            from .guided import GuidedDiscretisation
+            return GuidedDiscretisation.from_arm(arm, n_elements)
         n = arm.elements if n_elements is None else n_elements
         if n < 2:
             raise DiscretisationError(f"need at least 2 elements, got {n}")
@@ -104,6 +112,11 @@ class Discretisation:
         """Unknowns of the bordered system: N angles + 2 per tendon."""
         return self.n_elements + 2 * self.n_tendons
 
+    @property
+    def stability_border(self) -> int:
+        """Border columns of the stability matrix H: one per tendon."""
+        return self.n_tendons
+
     @cached_property
     def support(self) -> np.ndarray:
         """(n, N) mask: element e lies before tendon i's attachment (e < m_i)."""
@@ -127,6 +140,14 @@ class Discretisation:
     def consistent_state(self, theta: np.ndarray) -> np.ndarray:
         """Bordered state with y_i = X_i(theta) exactly."""
         return self.join(theta, self.node_positions(theta)[list(self.attach_nodes)])
+
+    def attachment_points(self, theta: np.ndarray) -> np.ndarray:
+        """Where each cable ends, (n, 2)."""
+        return self.node_positions(theta)[list(self.attach_nodes)]
+
+    def cable_lengths_of(self, theta: np.ndarray) -> np.ndarray:
+        """L_i = |r_i - x_i| of the state ``theta`` (Eq. (3))."""
+        return np.linalg.norm(self.routes - self.attachment_points(theta), axis=1)
 
     # --- geometry (Eqs. (1)-(2)) -------------------------------------------------
     @staticmethod
@@ -189,6 +210,18 @@ class Discretisation:
         chord = self.routes - y
         lengths = np.linalg.norm(chord, axis=1)
         return lengths, chord / lengths[:, None]
+
+    def shortest_segments(self, y: np.ndarray) -> np.ndarray:
+        """The shortest straight segment of each cable (here: the whole cable)."""
+        return self.cables(y)[0]
+
+    def length_gradients(self, y: np.ndarray) -> np.ndarray:
+        """dL_i/dy, shape (n, 2n): -d_i in tendon i's two columns."""
+        d = self.cables(y)[1]
+        out = np.zeros((self.n_tendons, 2 * self.n_tendons))
+        for i in range(self.n_tendons):
+            out[i, 2 * i: 2 * i + 2] = -d[i]
+        return out
 
     def terms(self, u: np.ndarray, p) -> Terms:
         """The shared quantities of (u, p) (:class:`Terms`)."""

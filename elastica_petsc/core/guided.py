@@ -1,0 +1,362 @@
+"""Kernels for cables through guides, offset end points and the arm's weight
+(docs/model.md §11).  Numpy only, non-dimensional (l = 1, B = 1).
+
+Each tendon i is a path of points: its fixed routing point r_i (the motor
+end), then its guides and finally its end point, the last two on the arm:
+point a sits at node m_a with offset delta_a along the left normal
+n(theta_m) = (-sin theta_m, cos theta_m):
+
+    X_a(theta) = x_{m_a}(theta) + delta_a n(theta_{m_a})
+
+The cable is straight between consecutive points, so its length is the sum
+of its segments and the potential of its tension is p_i L_i.  The weight of
+the arm and of a tip mass is a dead load with potential -sum_k w_k g.x_k
+(nodal trapezoid weights w_k), which puts the force G_e = q (1 - s_e) + q_tip
+on element e (s_e its midpoint).  The total potential
+
+    Pi = sum_e (theta_{e+1} - theta_e)^2/(2h) + sum_i p_i L_i(X(theta)) - sum_k w_k g.x_k
+
+is the paper's for one point per tendon at zero offset without weight.  As in
+:mod:`.fem` every arm point carries its position y_a as a border unknown,
+u = (theta_1..theta_N, y_1..y_P), so the Jacobian is tridiagonal with 2P
+dense border columns (O(P^2 N) per Newton step) and its Schur complement is
+the Hessian of Pi.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import NamedTuple
+
+import numpy as np
+from scipy.linalg import solve_banded
+
+from .fem import Discretisation, DiscretisationError
+from .model import Arm
+
+
+class PathTerms(NamedTuple):
+    """Quantities of a state (u, p) shared by the residual and its derivatives."""
+
+    theta: np.ndarray        # nodal angles, theta_0 = 0 included
+    y: np.ndarray            # arm-point unknowns (P, 2)
+    seg_len: np.ndarray      # length of segment a, from point a back to its predecessor
+    e: np.ndarray            # unit vector of segment a, from point a to its predecessor
+    point_force: np.ndarray  # f_a = p_i (e_a - e_{a+1}): the cable's pull on point a
+    c: np.ndarray            # cos phi_e
+    s: np.ndarray            # sin phi_e
+    p: np.ndarray            # tension of each tendon
+    force: np.ndarray        # sum of the forces acting beyond each element (N, 2)
+
+
+def on_node(s: float, n: int, what: str, length_mm: float) -> int:
+    """The node of arc length ``s`` (units of l) on the n-element mesh, or refuse."""
+    k = int(round(s * n))
+    if abs(k - s * n) > 1e-9 * n:
+        h_mm = length_mm / n
+        raise DiscretisationError(
+            f"{what} s = {s * length_mm:g} mm is not on a node of the {n}-element mesh "
+            f"(spacing {h_mm:g} mm); choose an element count that makes s / l * N an "
+            f"integer (nearest node: {k * h_mm:g} mm)")
+    return k
+
+
+@dataclass(frozen=True)
+class GuidedDiscretisation(Discretisation):
+    """:class:`Discretisation` with cables through guides, offsets and weight."""
+
+    point_nodes: tuple[int, ...] = ()          # m_a of every arm point, tendon by tendon
+    point_offsets: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    path_starts: tuple[int, ...] = ()          # tendon i owns points path_starts[i]:[i+1]
+    gravity: np.ndarray = field(default_factory=lambda: np.zeros(2))      # rho_A g l^3/B
+    tip_weight: np.ndarray = field(default_factory=lambda: np.zeros(2))   # m_tip g l^2/B
+
+    has_paths = True
+
+    @classmethod
+    def from_arm(cls, arm: Arm, n_elements: int | None = None) -> "GuidedDiscretisation":
+        n = arm.elements if n_elements is None else n_elements
+        if n < 2:
+            raise DiscretisationError(f"need at least 2 elements, got {n}")
+        nodes, offsets, starts, attach = [], [], [0], []
+        for i, t in enumerate(arm.tendons, start=1):
+            for j, g in enumerate(t.guides, start=1):
+                nodes.append(on_node(g.s_mm / arm.length_mm, n, f"tendon {i}: guide {j} at",
+                                     arm.length_mm))
+                offsets.append(g.offset_mm / arm.length_mm)
+            attach.append(on_node(t.attach_mm / arm.length_mm, n, f"tendon {i}: attachment",
+                                  arm.length_mm))
+            nodes.append(attach[-1])
+            offsets.append(t.attach_offset_mm / arm.length_mm)
+            starts.append(len(nodes))
+        return cls(n, tuple(attach), arm.routes(), tuple(nodes), np.array(offsets),
+                   tuple(starts), arm.gravity_load(), arm.tip_weight())
+
+    # --- layout ------------------------------------------------------------------------
+    @property
+    def n_points(self) -> int:
+        return len(self.point_nodes)
+
+    @property
+    def size(self) -> int:
+        return self.n_elements + 2 * self.n_points
+
+    @property
+    def stability_border(self) -> int:
+        """Border columns of H: one per cable segment (docs/model.md §11)."""
+        return self.n_points
+
+    @cached_property
+    def point_tendon(self) -> np.ndarray:
+        """Tendon index of each arm point."""
+        return np.repeat(np.arange(self.n_tendons), np.diff(self.path_starts))
+
+    @cached_property
+    def first_point(self) -> np.ndarray:
+        """True where a point follows the routing point (its segment starts at r_i)."""
+        out = np.zeros(self.n_points, bool)
+        out[list(self.path_starts[:-1])] = True
+        return out
+
+    @cached_property
+    def last_point(self) -> np.ndarray:
+        """True at each tendon's end point (no segment beyond it)."""
+        out = np.zeros(self.n_points, bool)
+        out[np.asarray(self.path_starts[1:]) - 1] = True
+        return out
+
+    @cached_property
+    def support(self) -> np.ndarray:
+        """(P, N) mask: element e lies before arm point a (e < m_a)."""
+        e = np.arange(self.n_elements)
+        return e[None, :] < np.asarray(self.point_nodes)[:, None]
+
+    @cached_property
+    def segment_support(self) -> np.ndarray:
+        """Rows reached by the gradient of segment a: max(m_a, m_{a-1})."""
+        m = np.asarray(self.point_nodes)
+        prev = np.where(self.first_point, 0, np.roll(m, 1))
+        return np.maximum(m, prev)
+
+    @cached_property
+    def pattern(self):
+        """Border column of y_b: segments b and b+1 reach max(m_{b-1}, m_b, m_{b+1})."""
+        nxt = np.where(self.last_point, 0, np.roll(self.segment_support, -1))
+        return self.bordered_pattern(np.repeat(np.maximum(self.segment_support, nxt), 2))
+
+    @cached_property
+    def stability_pattern(self):
+        return self.bordered_pattern(self.segment_support, upper=True)
+
+    @cached_property
+    def element_weight(self) -> np.ndarray:
+        """G_e = q (1 - s_e) + q_tip: the weight beyond element e's midpoint (N, 2)."""
+        mid = (np.arange(self.n_elements) + 0.5) * self.h
+        return (1.0 - mid)[:, None] * self.gravity[None] + self.tip_weight[None]
+
+    # --- geometry -------------------------------------------------------------------------
+    def point_positions(self, theta: np.ndarray) -> np.ndarray:
+        """X_a = x_{m_a} + delta_a n(theta_{m_a}), shape (P, 2)."""
+        m = np.asarray(self.point_nodes)
+        normal = np.column_stack((-np.sin(theta[m]), np.cos(theta[m])))
+        return self.node_positions(theta)[m] + self.point_offsets[:, None] * normal
+
+    def attachment_points(self, theta: np.ndarray) -> np.ndarray:
+        return self.point_positions(theta)[np.asarray(self.path_starts[1:]) - 1]
+
+    def consistent_state(self, theta: np.ndarray) -> np.ndarray:
+        return self.join(theta, self.point_positions(theta))
+
+    def point_gradients(self, theta: np.ndarray, cs=None) -> np.ndarray:
+        """G[a, k-1] = dX_a/dtheta_k, shape (P, N, 2): the centreline's midpoint rule
+        plus the turning offset, -delta_a t(theta_m) at k = m_a."""
+        g = self.attachment_gradients(theta, cs)          # per point (support is per point)
+        m = np.asarray(self.point_nodes)
+        tangent = np.column_stack((np.cos(theta[m]), np.sin(theta[m])))
+        g[np.arange(self.n_points), m - 1] -= self.point_offsets[:, None] * tangent
+        return g
+
+    def segment_gradients(self, g: np.ndarray) -> np.ndarray:
+        """D_a = G_a - G_{a-1} (G of a routing point = 0), shape (P, N, 2)."""
+        d = g.copy()
+        inner = ~self.first_point
+        d[inner] -= g[np.flatnonzero(inner) - 1]
+        return d
+
+    def segments(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Length and unit vector (point a to its predecessor) of every segment."""
+        prev = np.where(self.first_point[:, None], self.routes[self.point_tendon],
+                        np.roll(y, 1, axis=0))
+        chord = prev - y
+        lengths = np.linalg.norm(chord, axis=1)
+        return lengths, chord / lengths[:, None]
+
+    def cables(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Whole-path lengths L_i and the unit direction of each tendon's last
+        segment (from its end point toward the previous point)."""
+        lengths, e = self.segments(y)
+        ends = np.asarray(self.path_starts[1:]) - 1
+        return np.add.reduceat(lengths, list(self.path_starts[:-1])), e[ends]
+
+    def shortest_segments(self, y: np.ndarray) -> np.ndarray:
+        """The shortest segment of each tendon (a cable collapses segment by segment)."""
+        return np.minimum.reduceat(self.segments(y)[0], list(self.path_starts[:-1]))
+
+    def cable_lengths_of(self, theta: np.ndarray) -> np.ndarray:
+        return self.cables(self.point_positions(theta))[0]
+
+    def potential(self, theta: np.ndarray, p, tip_moment: float = 0.0) -> float:
+        """Pi of docs/model.md §11 (weight: trapezoid nodal masses, tip mass at the tip)."""
+        lengths = self.cable_lengths_of(theta)
+        x = self.node_positions(theta)
+        weights = np.full(self.n_elements + 1, self.h)
+        weights[0] = weights[-1] = 0.5 * self.h
+        weight = -np.sum(weights * (x @ self.gravity)) - x[-1] @ self.tip_weight
+        return (self.strain_energy(theta) + float(np.dot(p, lengths)) + weight
+                - tip_moment * theta[-1])
+
+    # --- residual and tangent ----------------------------------------------------------------
+    def terms(self, u: np.ndarray, p) -> PathTerms:
+        theta, y = self.split(u)
+        seg_len, e = self.segments(y)
+        p = np.asarray(p, float)
+        pull = p[self.point_tendon][:, None] * e
+        f = pull.copy()
+        inner = np.flatnonzero(~self.first_point)
+        f[inner - 1] -= pull[inner]                        # f_a = p (e_a - e_{a+1})
+        c, s = self.trig(theta)
+        force = self.tendon_sums(f) + self.element_weight
+        return PathTerms(theta, y, seg_len, e, f, c, s, p, force)
+
+    def _offset_moment(self, t: PathTerms) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Row m_a - 1, delta_a f_a.t(theta_m) (the offset's moment, with the sign of
+        the residual) and its derivative delta_a f_a.n(theta_m)."""
+        m = np.asarray(self.point_nodes)
+        cm, sm = np.cos(t.theta[m]), np.sin(t.theta[m])
+        f = t.point_force
+        value = self.point_offsets * (f[:, 0] * cm + f[:, 1] * sm)
+        slope = self.point_offsets * (-f[:, 0] * sm + f[:, 1] * cm)
+        return m - 1, value, slope
+
+    def residual(self, u: np.ndarray, p, tip_moment: float = 0.0,
+                 terms: PathTerms | None = None) -> np.ndarray:
+        t = self.terms(u, p) if terms is None else terms
+        q = 0.5 * self.h * (t.c * t.force[:, 1] - t.s * t.force[:, 0])   # (h/2) n_e . F_e
+        jump = np.diff(t.theta)
+        f_theta = (jump - np.append(jump[1:], 0.0)) / self.h
+        f_theta -= q
+        f_theta[:-1] -= q[1:]
+        f_theta[-1] -= tip_moment
+        rows, value, _ = self._offset_moment(t)
+        np.add.at(f_theta, rows, value)
+        return np.concatenate((f_theta, (t.y - self.point_positions(t.theta)).ravel()))
+
+    def band(self, theta, d, p, terms: PathTerms | None = None) -> np.ndarray:
+        """Tridiagonal part T of the tangent (``d`` unused: the forces come from
+        ``terms``, or from the consistent state of ``theta``)."""
+        if terms is None:
+            terms = self.terms(self.consistent_state(theta), p)
+        band = super().band(theta, None, p, terms)
+        rows, _, slope = self._offset_moment(terms)
+        np.add.at(band[:, 1], rows, slope)
+        return band
+
+    def _levers(self, t: PathTerms, dg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(D_a . e_a^perp) (P, N) and e_a^perp (P, 2) of every segment."""
+        e_perp = np.column_stack((-t.e[:, 1], t.e[:, 0]))
+        return dg[..., 0] * e_perp[:, :1] + dg[..., 1] * e_perp[:, 1:], e_perp
+
+    def jacobian_values(self, u: np.ndarray, p, terms: PathTerms | None = None,
+                        g=None) -> np.ndarray:
+        """dF/du in the order of :attr:`pattern`: column y_b = D_b^T S_b - D_{b+1}^T S_{b+1},
+        S_a = (p/L_a) e_a^perp e_a^perp^T (docs/model.md §11)."""
+        N, P = self.n_elements, self.n_points
+        t = self.terms(u, p) if terms is None else terms
+        g = self.point_gradients(t.theta, (t.c, t.s)) if g is None else g
+        lever, e_perp = self._levers(t, self.segment_gradients(g))
+        lever *= (t.p[self.point_tendon] / t.seg_len)[:, None]
+        cols = lever[:, :, None] * e_perp[:, None, :]              # D_a^T S_a, (P, N, 2)
+        inner = np.flatnonzero(~self.first_point)
+        cols[inner - 1] -= cols[inner]
+        border = cols.transpose(1, 0, 2).reshape(N, 2 * P)
+        yrows = -g.transpose(0, 2, 1).reshape(2 * P, N)
+        source = np.concatenate((self.band(t.theta, None, t.p, t).ravel(), border.ravel(),
+                                 yrows.ravel(), np.ones(2 * P)))
+        return source[self.pattern[2]]
+
+    def stiffness_border(self, theta: np.ndarray, y: np.ndarray, p) -> np.ndarray:
+        """W (P, N), one row per segment: sqrt(p/L_a) D_a^T e_a^perp, K = T + W^T W."""
+        t = self.terms(self.join(theta, y), p)
+        lever, _ = self._levers(t, self.segment_gradients(self.point_gradients(theta)))
+        weights = np.sqrt(np.maximum(t.p[self.point_tendon], 0.0) / t.seg_len)
+        return weights[:, None] * lever
+
+    def stability_values(self, u: np.ndarray, p) -> np.ndarray:
+        p = np.asarray(p, float)
+        theta, y = self.split(u)
+        t = self.terms(u, p)
+        w = self.stiffness_border(theta, y, p)
+        source = np.concatenate((self.band(theta, None, p, t).ravel(), w.T.ravel(), w.ravel(),
+                                 -np.ones(self.n_points)))
+        return source[self.stability_pattern[2]]
+
+    def load_derivative(self, u: np.ndarray, g=None, d=None) -> np.ndarray:
+        """dF/dp_i = grad_theta L_i = -sum_a D_a^T e_a over tendon i's segments."""
+        theta, y = self.split(u)
+        e = self.segments(y)[1]
+        g = self.point_gradients(theta) if g is None else g
+        dg = self.segment_gradients(g)
+        per_segment = -(dg[..., 0] * e[:, :1] + dg[..., 1] * e[:, 1:])      # (P, N)
+        out = np.zeros((self.n_tendons, self.size))
+        np.add.at(out[:, : self.n_elements], self.point_tendon, per_segment)
+        return out
+
+    def length_gradients(self, y: np.ndarray) -> np.ndarray:
+        """dL_i/dy, shape (n, 2P): -e_a + e_{a+1} at point a of tendon i."""
+        e = self.segments(y)[1]
+        grad = -e.copy()
+        inner = np.flatnonzero(~self.first_point)
+        grad[inner - 1] += e[inner]
+        out = np.zeros((self.n_tendons, 2 * self.n_points))
+        rows = np.repeat(self.point_tendon, 2)
+        out[rows, np.arange(2 * self.n_points)] = grad.ravel()
+        return out
+
+    def linearisation(self, u: np.ndarray, p, residual: bool = True) -> tuple:
+        t = self.terms(u, p)
+        g = self.point_gradients(t.theta, (t.c, t.s))
+        out = (self.jacobian_values(u, p, t, g), self.load_derivative(u, g))
+        return ((self.residual(u, p, terms=t),) + out) if residual else out
+
+    # --- the unloaded state under weight ---------------------------------------------------
+    def straight(self) -> np.ndarray:
+        """The state at p = 0: straight without weight, else the arm sagging under its
+        weight, reached by continuation in the weight from the straight arm."""
+        return self.consistent_state(self.rest_angles())
+
+    def rest_angles(self, steps: int | None = None) -> np.ndarray:
+        """Nodal angles at p = 0 (Newton on the tridiagonal angle block)."""
+        theta = np.zeros(self.n_elements + 1)
+        load = float(np.abs(self.element_weight).max())
+        if load == 0.0:
+            return theta
+        steps = steps or max(1, int(np.ceil(load)))
+        p0 = np.zeros(self.n_tendons)
+        for k in range(1, steps + 1):
+            scaled = _scaled(self, k / steps)
+            for _ in range(50):
+                u = scaled.consistent_state(theta)
+                r = scaled.residual(u, p0)[: self.n_elements]
+                band = scaled.band(theta, None, p0)
+                ab = np.vstack((np.append(0.0, band[:-1, 2]), band[:, 1],
+                                np.append(band[1:, 0], 0.0)))
+                theta[1:] -= solve_banded((1, 1), ab, r)
+                if np.linalg.norm(r) < 1e-13 * max(1.0, load) * self.n_elements:
+                    break
+        return theta
+
+
+def _scaled(disc: GuidedDiscretisation, factor: float) -> GuidedDiscretisation:
+    """The same arm with its weight scaled by ``factor`` (continuation)."""
+    from dataclasses import replace
+    return replace(disc, gravity=factor * disc.gravity, tip_weight=factor * disc.tip_weight)
