@@ -134,7 +134,7 @@ class SensitivitySolver:
             raise SensitivityError("non-finite sensitivities: the tangent is singular")
         alpha = np.zeros((n, N + 1))
         alpha[:, 1:] = du[:, :N]
-        border = du[:, N:].reshape(n, n, 2)
+        border = du[:, N:].reshape(n, -1, 2)
         theta = eq.theta
         phi = disc.element_angles(theta)
         normals = np.column_stack((-np.sin(phi), np.cos(phi)))          # n_e, (N, 2)
@@ -142,10 +142,13 @@ class SensitivitySolver:
         steps = self._h * dphi[:, :, None] * normals[None]              # (n, N, 2)
         cumulative = np.cumsum(steps, axis=1)                           # d x_{k+1} / dp_i
         tip = cumulative[:, -1]                                         # Eq. (13)
-        nodes = np.asarray(disc.attach_nodes)
-        attach = cumulative[:, nodes - 1]                               # (n, n, 2)
-        d = eq.directions                                               # (n, 2)
-        dL = -np.einsum("ijc,jc->ij", attach, d)
+        if disc.has_paths:       # dL_j/dp_i = grad_theta L_j . alpha_i (docs/model.md §11)
+            attach = border[:, np.asarray(disc.path_starts[1:]) - 1]   # end points, offsets in
+            dL = du[:, :N] @ dFdp[:, :N].T
+        else:
+            attach = cumulative[:, np.asarray(disc.attach_nodes) - 1]   # (n, n, 2)
+            d = eq.directions                                           # (n, 2)
+            dL = -np.einsum("ijc,jc->ij", attach, d)
         return Sensitivity(p=p.copy(), alpha=alpha, tip=tip, attachments=attach,
                            attachments_border=border, cable_lengths=dL)
 
