@@ -215,6 +215,15 @@ class Discretisation:
         """The shortest straight segment of each cable (here: the whole cable)."""
         return self.cables(y)[0]
 
+    @property
+    def length_supports(self) -> np.ndarray:
+        """Rows of grad_theta L_i that can be nonzero: 0..length_supports[i]-1."""
+        return np.asarray(self.attach_nodes)
+
+    def length_columns(self, i: int) -> np.ndarray:
+        """Columns of y (0-based in the border) that cable i's length depends on."""
+        return 2 * i + np.arange(2)
+
     def length_gradients(self, y: np.ndarray) -> np.ndarray:
         """dL_i/dy, shape (n, 2n): -d_i in tendon i's two columns."""
         d = self.cables(y)[1]
@@ -284,11 +293,16 @@ class Discretisation:
         """CSR structure of the bordered Jacobian (2 border columns per tendon)."""
         return self.bordered_pattern(np.repeat(self.attach_nodes, 2))
 
+    @property
+    def stability_pattern_supports(self) -> np.ndarray:
+        """Rows reached by each border column of H (W's columns)."""
+        return np.asarray(self.attach_nodes)
+
     @cached_property
     def stability_pattern(self):
         """Upper-triangle CSR structure of the symmetric stability matrix H
         (one border column per tendon)."""
-        return self.bordered_pattern(np.asarray(self.attach_nodes), upper=True)
+        return self.bordered_pattern(self.stability_pattern_supports, upper=True)
 
     def band(self, theta, d, p, terms: Terms | None = None) -> np.ndarray:
         """Tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper);

@@ -144,9 +144,9 @@ class GuidedDiscretisation(Discretisation):
         nxt = np.where(self.last_point, 0, np.roll(self.segment_support, -1))
         return self.bordered_pattern(np.repeat(np.maximum(self.segment_support, nxt), 2))
 
-    @cached_property
-    def stability_pattern(self):
-        return self.bordered_pattern(self.segment_support, upper=True)
+    @property
+    def stability_pattern_supports(self) -> np.ndarray:
+        return self.segment_support
 
     @cached_property
     def element_weight(self) -> np.ndarray:
@@ -310,6 +310,14 @@ class GuidedDiscretisation(Discretisation):
         out = np.zeros((self.n_tendons, self.size))
         np.add.at(out[:, : self.n_elements], self.point_tendon, per_segment)
         return out
+
+    @property
+    def length_supports(self) -> np.ndarray:
+        """Rows of grad_theta L_i: up to the farthest node of cable i's points."""
+        return np.maximum.reduceat(np.asarray(self.point_nodes), list(self.path_starts[:-1]))
+
+    def length_columns(self, i: int) -> np.ndarray:
+        return np.arange(2 * self.path_starts[i], 2 * self.path_starts[i + 1])
 
     def length_gradients(self, y: np.ndarray) -> np.ndarray:
         """dL_i/dy, shape (n, 2P): -e_a + e_{a+1} at point a of tendon i."""
