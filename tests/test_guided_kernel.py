@@ -157,3 +157,56 @@ def test_guide_free_arm_matches_paper_kernel(paper_arm):
     assert np.allclose(Jg, Jp, rtol=0, atol=1e-12)
     assert np.allclose(stability_dense(guided, u, p), stability_dense(plain, u, p), atol=1e-12)
     assert np.allclose(guided.load_derivative(u), plain.load_derivative(u), atol=1e-13)
+
+
+def test_design_derivatives_of_offsets_and_routes(disc):
+    """dF/ddelta_a and dF_theta/dr_i against the residual of a perturbed arm."""
+    from dataclasses import replace
+    u = next(states(disc, 10))
+    rng = np.random.default_rng(11)
+    for a in (0, 2, 3, 6):
+        v = 1.0
+        step = np.zeros(disc.n_points)
+        step[a] = v
+
+        def F(eps):
+            return replace(disc, point_offsets=disc.point_offsets + eps * step).residual(u, P)
+        orders, rem = taylor_orders(F, disc.offset_derivative(u, P, a), 0.0, 1.0,
+                                    eps=(1e-2, 5e-3, 2.5e-3))
+        assert np.all(orders > 1.9) or max(rem) < 1e-13, (a, orders, rem)
+    for i in range(disc.n_tendons):
+        v = rng.standard_normal(2)
+
+        def F(eps):
+            routes = disc.routes.copy()
+            routes[i] += eps * v
+            return replace(disc, routes=routes).residual(u, P)[: disc.n_elements]
+        orders, rem = taylor_orders(F, disc.route_derivative(u, P, i) @ v, 0.0, 1.0)
+        assert np.all(orders > 1.9), (i, orders, rem)
+
+
+def test_tip_sensitivity_to_guide_offsets_taylor():
+    """d x_t/d delta_a from one more right-hand side of the tangent (J du = -dF/ddelta)
+    against equilibria re-solved with the offset changed: remainder O(eps^2)."""
+    import dataclasses
+    from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+    from elastica_petsc.solvers.sensitivity import SensitivitySolver
+    arm = guided_arm(elements=24)
+    disc = Discretisation.from_arm(arm)
+    with EquilibriumSolver(disc) as solver, SensitivitySolver(disc) as sens:
+        eq = solver.solve(P)
+        assert eq.converged
+        for a in (1, 5):
+            du, dtip = sens.parameter_derivative(eq, disc.offset_derivative(eq.u, P, a))
+            rem = []
+            for eps in (4e-3, 2e-3, 1e-3):
+                offsets = disc.point_offsets.copy()
+                offsets[a] += eps
+                moved = dataclasses.replace(disc, point_offsets=offsets)
+                with EquilibriumSolver(moved) as other:
+                    u, _, _ = other.newton(eq.u, P)
+                tip = moved.node_positions(moved.split(u)[0])[-1]
+                rem.append(np.linalg.norm(tip - eq.tip - eps * dtip))
+            orders = np.log2(np.array(rem[:-1]) / rem[1:])
+            assert np.all(orders > 1.9), (a, orders, rem)
+            assert np.linalg.norm(dtip) > 1e-3            # the offset moves the tip

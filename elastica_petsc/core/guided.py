@@ -319,6 +319,28 @@ class GuidedDiscretisation(Discretisation):
     def length_columns(self, i: int) -> np.ndarray:
         return np.arange(2 * self.path_starts[i], 2 * self.path_starts[i + 1])
 
+    def route_derivative(self, u: np.ndarray, p, i: int) -> np.ndarray:
+        """dF_theta/dr_i, (N, 2): r_i enters through the first segment a of cable i
+        only, -D_a^T S_a (docs/model.md §11.3)."""
+        t = self.terms(u, p)
+        a = self.path_starts[i]
+        g = self.point_gradients(t.theta, (t.c, t.s))[a]                 # D_a = G_a
+        e_perp = np.array([-t.e[a, 1], t.e[a, 0]])
+        lever = (t.p[i] / t.seg_len[a]) * (g @ e_perp)
+        return -lever[:, None] * e_perp[None, :]
+
+    def offset_derivative(self, u: np.ndarray, p, a: int) -> np.ndarray:
+        """dF/ddelta_a, (size,), at fixed u and p: the offset's moment f_a . t(theta_m)
+        on row m_a and -n(theta_m) on point a's border rows (docs/model.md §11.7)."""
+        t = self.terms(u, p)
+        m = self.point_nodes[a]
+        tangent = np.array([np.cos(t.theta[m]), np.sin(t.theta[m])])
+        out = np.zeros(self.size)
+        out[m - 1] = t.point_force[a] @ tangent
+        out[self.n_elements + 2 * a:self.n_elements + 2 * a + 2] = -np.array(
+            [-tangent[1], tangent[0]])
+        return out
+
     def length_gradients(self, y: np.ndarray) -> np.ndarray:
         """dL_i/dy, shape (n, 2P): -e_a + e_{a+1} at point a of tendon i."""
         e = self.segments(y)[1]

@@ -152,6 +152,26 @@ class SensitivitySolver:
         return Sensitivity(p=p.copy(), alpha=alpha, tip=tip, attachments=attach,
                            attachments_border=border, cable_lengths=dL)
 
+    def parameter_derivative(self, eq: Equilibrium, dFdq: np.ndarray):
+        """du/dq and d x_t/dq at fixed tensions for a design parameter q whose
+        dF/dq (size,) is given (a routing point's coordinate, a guide's offset:
+        docs/model.md §11.7): J du/dq = -dF/dq, then Eq. (13)."""
+        disc = self.disc
+        self.J.setValuesCSR(*self._csr, disc.jacobian_values(eq.u, np.asarray(eq.p, float)))
+        self.J.assemble()
+        self.ksp.setOperators(self.J)
+        self.rhs.setArray(-np.asarray(dFdq, float))
+        self.ksp.solve(self.rhs, self.sol)
+        if self.ksp.getConvergedReason() < 0:
+            raise SensitivityError(f"design sensitivity solve failed, KSP reason "
+                                   f"{self.ksp.getConvergedReason()}")
+        du = self.sol.getArray(readonly=True).copy()
+        dtheta = np.concatenate(([0.0], du[: disc.n_elements]))
+        phi = disc.element_angles(eq.theta)
+        dphi = disc.element_angles(dtheta)
+        dtip = self._h * np.array([np.sum(-np.sin(phi) * dphi), np.sum(np.cos(phi) * dphi)])
+        return du, dtip
+
     def destroy(self) -> None:
         for obj in (self.ksp, self.J, self.rhs, self.sol):
             obj.destroy()
