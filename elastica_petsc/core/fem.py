@@ -257,10 +257,10 @@ class Discretisation:
         x_attach = self.h * np.column_stack((support @ c, support @ s))   # Eq. (2) at s_i
         return np.concatenate((f_theta, (y - x_attach).ravel()))
 
-    def bordered_pattern(self, supports, upper: bool = False):
+    def bordered_pattern(self, supports, upper: bool = False, starts=None):
         """CSR structure of a tridiagonal N x N block bordered by one column and
         one row per entry of ``supports`` (column b is nonzero in rows
-        0..supports[b]-1), with a diagonal corner block.
+        starts[b]..supports[b]-1, ``starts`` default 0), with a diagonal corner block.
 
         Returns (indptr, indices, src): ``src`` maps each stored entry to the flat
         source array concatenating band (N, 3), border columns (N, nb), border
@@ -274,10 +274,12 @@ class Discretisation:
             ok = (k + off >= 0) & (k + off < N)
             rows.append(k[ok]); cols.append(k[ok] + off); src.append(3 * k[ok] + off + 1)
         col_base, row_base, corner_base = 3 * N, 3 * N + nb * N, 3 * N + 2 * nb * N
-        for b, m in enumerate(supports):
-            r = np.arange(m)
-            rows.append(r); cols.append(np.full(m, N + b)); src.append(col_base + r * nb + b)
-            rows.append(np.full(m, N + b)); cols.append(r); src.append(row_base + b * N + r)
+        starts = np.zeros(nb, int) if starts is None else starts
+        for b, (lo, m) in enumerate(zip(starts, supports)):
+            r = np.arange(lo, m)
+            rows.append(r); cols.append(np.full(len(r), N + b))
+            src.append(col_base + r * nb + b)
+            rows.append(np.full(len(r), N + b)); cols.append(r); src.append(row_base + b * N + r)
             rows.append(np.array([N + b])); cols.append(np.array([N + b]))
             src.append(np.array([corner_base + b]))
         rows, cols, src = (np.concatenate(a) for a in (rows, cols, src))
@@ -295,8 +297,13 @@ class Discretisation:
 
     @property
     def stability_pattern_supports(self) -> np.ndarray:
-        """Rows reached by each border column of H (W's columns)."""
+        """Rows reached by each border column of H (W's columns): up to this one."""
         return np.asarray(self.attach_nodes)
+
+    @property
+    def stability_pattern_starts(self) -> np.ndarray:
+        """The first row reached by each border column of H."""
+        return np.zeros(self.n_tendons, int)
 
     @cached_property
     def stability_pattern(self):

@@ -16,11 +16,12 @@ on element e (s_e its midpoint).  The total potential
 
     Pi = sum_e (theta_{e+1} - theta_e)^2/(2h) + sum_i p_i L_i(X(theta)) - sum_k w_k g.x_k
 
-is the paper's for one point per tendon at zero offset without weight.  As in
-:mod:`.fem` every arm point carries its position y_a as a border unknown,
-u = (theta_1..theta_N, y_1..y_P), so the Jacobian is tridiagonal with 2P
-dense border columns (O(P^2 N) per Newton step) and its Schur complement is
-the Hessian of Pi.
+is the paper's for one point per tendon at zero offset without weight.  Each
+cable segment carries its chord z_a = X_{a-1} - X_a (X_0 = r_i) as a border
+unknown, u = (theta_1..theta_N, z_1..z_P).  The chord depends only on the angles
+between its two points, so every border row and column is local (rows between
+m_{a-1} and m_a); the Schur complement of the Jacobian on z is the Hessian of Pi
+(docs/model.md §11.3).
 """
 from __future__ import annotations
 
@@ -39,7 +40,7 @@ class PathTerms(NamedTuple):
     """Quantities of a state (u, p) shared by the residual and its derivatives."""
 
     theta: np.ndarray        # nodal angles, theta_0 = 0 included
-    y: np.ndarray            # arm-point unknowns (P, 2)
+    y: np.ndarray            # chord unknowns z_a = X_{a-1} - X_a (P, 2)
     seg_len: np.ndarray      # length of segment a, from point a back to its predecessor
     e: np.ndarray            # unit vector of segment a, from point a to its predecessor
     point_force: np.ndarray  # f_a = p_i (e_a - e_{a+1}): the cable's pull on point a
@@ -132,21 +133,38 @@ class GuidedDiscretisation(Discretisation):
         return e[None, :] < np.asarray(self.point_nodes)[:, None]
 
     @cached_property
-    def segment_support(self) -> np.ndarray:
-        """Rows reached by the gradient of segment a: max(m_a, m_{a-1})."""
+    def previous_node(self) -> np.ndarray:
+        """Node of each point's predecessor (1 for a routing point: G_0 = 0)."""
         m = np.asarray(self.point_nodes)
-        prev = np.where(self.first_point, 0, np.roll(m, 1))
-        return np.maximum(m, prev)
+        prev = np.ones_like(m)
+        inner = np.flatnonzero(~self.first_point)
+        prev[inner] = m[inner - 1]
+        return prev
+
+    @cached_property
+    def segment_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """Angle rows [lo, hi) of D_a = G_a - G_{a-1}: the nodes from m_{a-1} to m_a."""
+        m = np.asarray(self.point_nodes)
+        return np.minimum(m, self.previous_node) - 1, np.maximum(m, self.previous_node)
 
     @cached_property
     def pattern(self):
-        """Border column of y_b: segments b and b+1 reach max(m_{b-1}, m_b, m_{b+1})."""
-        nxt = np.where(self.last_point, 0, np.roll(self.segment_support, -1))
-        return self.bordered_pattern(np.repeat(np.maximum(self.segment_support, nxt), 2))
+        """Two local border columns and rows per chord z_a (rows of D_a)."""
+        lo, hi = self.segment_range
+        return self.bordered_pattern(np.repeat(hi, 2), starts=np.repeat(lo, 2))
 
     @property
     def stability_pattern_supports(self) -> np.ndarray:
-        return self.segment_support
+        return self.segment_range[1]
+
+    @property
+    def stability_pattern_starts(self) -> np.ndarray:
+        return self.segment_range[0]
+
+    @cached_property
+    def _inner(self) -> np.ndarray:
+        """Points that follow another arm point (not the routing point)."""
+        return np.flatnonzero(~self.first_point)
 
     @cached_property
     def element_weight(self) -> np.ndarray:
@@ -164,8 +182,14 @@ class GuidedDiscretisation(Discretisation):
     def attachment_points(self, theta: np.ndarray) -> np.ndarray:
         return self.point_positions(theta)[np.asarray(self.path_starts[1:]) - 1]
 
+    def chords(self, points: np.ndarray) -> np.ndarray:
+        """z_a = X_{a-1} - X_a (X_0 = r_i) of the arm points' positions (P, 2)."""
+        prev = self.routes[self.point_tendon].copy()
+        prev[self._inner] = points[self._inner - 1]
+        return prev - points
+
     def consistent_state(self, theta: np.ndarray) -> np.ndarray:
-        return self.join(theta, self.point_positions(theta))
+        return self.join(theta, self.chords(self.point_positions(theta)))
 
     def point_gradients(self, theta: np.ndarray, cs=None) -> np.ndarray:
         """G[a, k-1] = dX_a/dtheta_k, shape (P, N, 2): the centreline's midpoint rule
@@ -179,17 +203,13 @@ class GuidedDiscretisation(Discretisation):
     def segment_gradients(self, g: np.ndarray) -> np.ndarray:
         """D_a = G_a - G_{a-1} (G of a routing point = 0), shape (P, N, 2)."""
         d = g.copy()
-        inner = ~self.first_point
-        d[inner] -= g[np.flatnonzero(inner) - 1]
+        d[self._inner] -= g[self._inner - 1]
         return d
 
-    def segments(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def segments(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Length and unit vector (point a to its predecessor) of every segment."""
-        prev = np.where(self.first_point[:, None], self.routes[self.point_tendon],
-                        np.roll(y, 1, axis=0))
-        chord = prev - y
-        lengths = np.linalg.norm(chord, axis=1)
-        return lengths, chord / lengths[:, None]
+        lengths = np.sqrt(z[:, 0] ** 2 + z[:, 1] ** 2)
+        return lengths, z / lengths[:, None]
 
     def cables(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Whole-path lengths L_i and the unit direction of each tendon's last
@@ -203,7 +223,7 @@ class GuidedDiscretisation(Discretisation):
         return np.minimum.reduceat(self.segments(y)[0], list(self.path_starts[:-1]))
 
     def cable_lengths_of(self, theta: np.ndarray) -> np.ndarray:
-        return self.cables(self.point_positions(theta))[0]
+        return self.cables(self.chords(self.point_positions(theta)))[0]
 
     def potential(self, theta: np.ndarray, p, tip_moment: float = 0.0) -> float:
         """Pi of docs/model.md §11 (weight: trapezoid nodal masses, tip mass at the tip)."""
@@ -222,8 +242,7 @@ class GuidedDiscretisation(Discretisation):
         p = np.asarray(p, float)
         pull = p[self.point_tendon][:, None] * e
         f = pull.copy()
-        inner = np.flatnonzero(~self.first_point)
-        f[inner - 1] -= pull[inner]                        # f_a = p (e_a - e_{a+1})
+        f[self._inner - 1] -= pull[self._inner]             # f_a = p (e_a - e_{a+1})
         c, s = self.trig(theta)
         force = self.tendon_sums(f) + self.element_weight
         return PathTerms(theta, y, seg_len, e, f, c, s, p, force)
@@ -248,8 +267,8 @@ class GuidedDiscretisation(Discretisation):
         f_theta[:-1] -= q[1:]
         f_theta[-1] -= tip_moment
         rows, value, _ = self._offset_moment(t)
-        np.add.at(f_theta, rows, value)
-        return np.concatenate((f_theta, (t.y - self.point_positions(t.theta)).ravel()))
+        f_theta += np.bincount(rows, value, self.n_elements)
+        return np.concatenate((f_theta, (t.y - self.chords(self.point_positions(t.theta))).ravel()))
 
     def band(self, theta, d, p, terms: PathTerms | None = None) -> np.ndarray:
         """Tridiagonal part T of the tangent (``d`` unused: the forces come from
@@ -258,7 +277,7 @@ class GuidedDiscretisation(Discretisation):
             terms = self.terms(self.consistent_state(theta), p)
         band = super().band(theta, None, p, terms)
         rows, _, slope = self._offset_moment(terms)
-        np.add.at(band[:, 1], rows, slope)
+        band[:, 1] += np.bincount(rows, slope, self.n_elements)
         return band
 
     def _levers(self, t: PathTerms, dg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -268,18 +287,17 @@ class GuidedDiscretisation(Discretisation):
 
     def jacobian_values(self, u: np.ndarray, p, terms: PathTerms | None = None,
                         g=None) -> np.ndarray:
-        """dF/du in the order of :attr:`pattern`: column y_b = D_b^T S_b - D_{b+1}^T S_{b+1},
-        S_a = (p/L_a) e_a^perp e_a^perp^T (docs/model.md §11)."""
+        """dF/du in the order of :attr:`pattern`: column z_a = -D_a^T S_a,
+        S_a = (p/L_a) e_a^perp e_a^perp^T, row z_a = D_a (docs/model.md §11.3)."""
         N, P = self.n_elements, self.n_points
         t = self.terms(u, p) if terms is None else terms
         g = self.point_gradients(t.theta, (t.c, t.s)) if g is None else g
-        lever, e_perp = self._levers(t, self.segment_gradients(g))
-        lever *= (t.p[self.point_tendon] / t.seg_len)[:, None]
-        cols = lever[:, :, None] * e_perp[:, None, :]              # D_a^T S_a, (P, N, 2)
-        inner = np.flatnonzero(~self.first_point)
-        cols[inner - 1] -= cols[inner]
+        dg = self.segment_gradients(g)
+        lever, e_perp = self._levers(t, dg)
+        lever *= (-t.p[self.point_tendon] / t.seg_len)[:, None]
+        cols = lever[:, :, None] * e_perp[:, None, :]              # -D_a^T S_a, (P, N, 2)
         border = cols.transpose(1, 0, 2).reshape(N, 2 * P)
-        yrows = -g.transpose(0, 2, 1).reshape(2 * P, N)
+        yrows = dg.transpose(0, 2, 1).reshape(2 * P, N)
         source = np.concatenate((self.band(t.theta, None, t.p, t).ravel(), border.ravel(),
                                  yrows.ravel(), np.ones(2 * P)))
         return source[self.pattern[2]]
@@ -308,7 +326,7 @@ class GuidedDiscretisation(Discretisation):
         dg = self.segment_gradients(g)
         per_segment = -(dg[..., 0] * e[:, :1] + dg[..., 1] * e[:, 1:])      # (P, N)
         out = np.zeros((self.n_tendons, self.size))
-        np.add.at(out[:, : self.n_elements], self.point_tendon, per_segment)
+        out[:, : self.n_elements] = np.add.reduceat(per_segment, list(self.path_starts[:-1]))
         return out
 
     @property
@@ -320,33 +338,31 @@ class GuidedDiscretisation(Discretisation):
         return np.arange(2 * self.path_starts[i], 2 * self.path_starts[i + 1])
 
     def route_derivative(self, u: np.ndarray, p, i: int) -> np.ndarray:
-        """dF_theta/dr_i, (N, 2): r_i enters through the first segment a of cable i
-        only, -D_a^T S_a (docs/model.md §11.3)."""
-        t = self.terms(u, p)
+        """dF/dr_i, (size, 2), at fixed u and p: r_i enters only the first chord's
+        equation z_a - (r_i - X_a) = 0 (docs/model.md §11.7)."""
         a = self.path_starts[i]
-        g = self.point_gradients(t.theta, (t.c, t.s))[a]                 # D_a = G_a
-        e_perp = np.array([-t.e[a, 1], t.e[a, 0]])
-        lever = (t.p[i] / t.seg_len[a]) * (g @ e_perp)
-        return -lever[:, None] * e_perp[None, :]
+        out = np.zeros((self.size, 2))
+        out[self.n_elements + 2 * a:self.n_elements + 2 * a + 2] = -np.eye(2)
+        return out
 
     def offset_derivative(self, u: np.ndarray, p, a: int) -> np.ndarray:
         """dF/ddelta_a, (size,), at fixed u and p: the offset's moment f_a . t(theta_m)
-        on row m_a and -n(theta_m) on point a's border rows (docs/model.md §11.7)."""
+        on row m_a, +n(theta_m) on chord a's rows and -n(theta_m) on the next
+        chord's (docs/model.md §11.7)."""
         t = self.terms(u, p)
         m = self.point_nodes[a]
         tangent = np.array([np.cos(t.theta[m]), np.sin(t.theta[m])])
+        normal = np.array([-tangent[1], tangent[0]])
         out = np.zeros(self.size)
         out[m - 1] = t.point_force[a] @ tangent
-        out[self.n_elements + 2 * a:self.n_elements + 2 * a + 2] = -np.array(
-            [-tangent[1], tangent[0]])
+        out[self.n_elements + 2 * a:self.n_elements + 2 * a + 2] = normal
+        if not self.last_point[a]:
+            out[self.n_elements + 2 * a + 2:self.n_elements + 2 * a + 4] = -normal
         return out
 
     def length_gradients(self, y: np.ndarray) -> np.ndarray:
-        """dL_i/dy, shape (n, 2P): -e_a + e_{a+1} at point a of tendon i."""
-        e = self.segments(y)[1]
-        grad = -e.copy()
-        inner = np.flatnonzero(~self.first_point)
-        grad[inner - 1] += e[inner]
+        """dL_i/dz, shape (n, 2P): e_a on chord a of tendon i."""
+        grad = self.segments(y)[1]
         out = np.zeros((self.n_tendons, 2 * self.n_points))
         rows = np.repeat(self.point_tendon, 2)
         out[rows, np.arange(2 * self.n_points)] = grad.ravel()

@@ -256,11 +256,9 @@ class Manifold:
         angle rows (the border columns of tendon i of the Jacobian) and 0 on the
         attachment rows (y - X(theta) does not involve r_i)."""
         N = self.disc.n_elements
+        if self.disc.has_paths:          # the first chord's equation (docs/model.md §11.7)
+            return self.disc.route_derivative(*self.split(w), i)
         out = np.zeros((self.size, 2))
-        if self.disc.has_paths:          # the first segment only (docs/model.md §11)
-            u, p = self.split(w)
-            out[:N] = self.disc.route_derivative(u, p, i)
-            return out
         cols = N + 2 * i + np.arange(2)
         out[:N] = -self.jacobian(w)[:N][:, cols].toarray()
         return out
@@ -387,13 +385,12 @@ class CableCollapse(Constraint):
         return self.mf.disc.n_elements + 2 * self.i
 
     def _segment(self, w):
-        """(length, its unit vector from a toward its predecessor, a, predecessor or -1)."""
+        """(length, unit vector, index) of the cable's shortest chord z_a."""
         disc = self.mf.disc
-        y = disc.split(self.mf.split(w)[0])[1]
-        lengths, e = disc.segments(y)
+        lengths, e = disc.segments(disc.split(self.mf.split(w)[0])[1])
         first, last = disc.path_starts[self.i], disc.path_starts[self.i + 1]
         a = first + int(np.argmin(lengths[first:last]))
-        return lengths[a], e[a], a, (a - 1 if a > first else -1)
+        return lengths[a], e[a], a
 
     def value(self, w):
         if self.mf.disc.has_paths:
@@ -403,12 +400,10 @@ class CableCollapse(Constraint):
 
     def gradient(self, w):
         g = np.zeros(self.mf.m)
-        if self.mf.disc.has_paths:
-            _, e, a, prev = self._segment(w)
+        if self.mf.disc.has_paths:                     # d|z_a|/dz_a = e_a
+            _, e, a = self._segment(w)
             N = self.mf.disc.n_elements
-            g[N + 2 * a:N + 2 * a + 2] = -e
-            if prev >= 0:
-                g[N + 2 * prev:N + 2 * prev + 2] = e
+            g[N + 2 * a:N + 2 * a + 2] = e
             return g
         y = w[self._offset():self._offset() + 2]
         chord = self.mf.disc.routes[self.i] - y
@@ -418,9 +413,8 @@ class CableCollapse(Constraint):
     def route_gradient(self, w, i):
         if i != self.i:
             return np.zeros(2)
-        if self.mf.disc.has_paths:
-            _, e, _, prev = self._segment(w)
-            return e if prev < 0 else np.zeros(2)
+        if self.mf.disc.has_paths:          # |z_a| does not involve r_i (F does)
+            return np.zeros(2)
         y = w[self._offset():self._offset() + 2]
         chord = self.mf.disc.routes[self.i] - y
         return chord / np.linalg.norm(chord)                      # d|r_i - y_i|/dr_i

@@ -379,7 +379,8 @@ class LengthInertia(BorderedInertia):
         self.disc, self.taut_tol = disc, taut_tol
         w_supports = disc.stability_pattern_supports
         supports = np.concatenate((w_supports, disc.length_supports))        # W cols, C cols
-        pattern = disc.bordered_pattern(supports, upper=True)
+        starts = np.concatenate((disc.stability_pattern_starts, np.zeros(disc.n_tendons, int)))
+        pattern = disc.bordered_pattern(supports, upper=True, starts=starts)
         self._src = pattern[2]
         super().__init__(pattern, disc.n_elements + len(supports),
                          self.values(disc.straight(), np.zeros(disc.n_tendons))[0])

@@ -143,7 +143,11 @@ class SensitivitySolver:
         cumulative = np.cumsum(steps, axis=1)                           # d x_{k+1} / dp_i
         tip = cumulative[:, -1]                                         # Eq. (13)
         if disc.has_paths:       # dL_j/dp_i = grad_theta L_j . alpha_i (docs/model.md §11)
-            attach = border[:, np.asarray(disc.path_starts[1:]) - 1]   # end points, offsets in
+            ends = np.asarray(disc.path_starts[1:]) - 1
+            m = np.asarray(disc.point_nodes)[ends]
+            turn = disc.point_offsets[ends] * alpha[:, m]                 # delta dtheta_m
+            attach = cumulative[:, m - 1] - turn[..., None] * np.column_stack(
+                (np.cos(theta[m]), np.sin(theta[m])))[None]              # end points (n, n, 2)
             dL = du[:, :N] @ dFdp[:, :N].T
         else:
             attach = cumulative[:, np.asarray(disc.attach_nodes) - 1]   # (n, n, 2)
