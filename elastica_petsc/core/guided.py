@@ -48,6 +48,8 @@ class PathTerms(NamedTuple):
     s: np.ndarray            # sin phi_e
     p: np.ndarray            # tension of each tendon
     force: np.ndarray        # sum of the forces acting beyond each element (N, 2)
+    moment: np.ndarray       # delta_a f_a . t(theta_m): the offsets' moments (residual's sign)
+    moment_slope: np.ndarray  # its derivative in theta_m: delta_a f_a . n(theta_m)
 
 
 def on_node(s: float, n: int, what: str, length_mm: float) -> int:
@@ -127,12 +129,6 @@ class GuidedDiscretisation(Discretisation):
         return out
 
     @cached_property
-    def support(self) -> np.ndarray:
-        """(P, N) mask: element e lies before arm point a (e < m_a)."""
-        e = np.arange(self.n_elements)
-        return e[None, :] < np.asarray(self.point_nodes)[:, None]
-
-    @cached_property
     def previous_node(self) -> np.ndarray:
         """Node of each point's predecessor (1 for a routing point: G_0 = 0)."""
         m = np.asarray(self.point_nodes)
@@ -167,6 +163,32 @@ class GuidedDiscretisation(Discretisation):
         return np.flatnonzero(~self.first_point)
 
     @cached_property
+    def entries(self):
+        """The stored rows of every D_a = G_a - G_{a-1} (docs/model.md §11.3), flat:
+        (chord a, angle row k-1, weight of n_{k-1}, weight of n_k, element k clipped)
+        with the weights [k-1 < m_a] - [k-1 < m_{a-1}] and [k < m_a] - [k < m_{a-1}]
+        of the midpoint rule; plus, per chord, the entry of row m_a (offset -delta_a)
+        and of row m_{a-1} (offset +delta_{a-1}, inner chords only)."""
+        lo, hi = self.segment_range
+        chord = np.repeat(np.arange(self.n_points), hi - lo)
+        rows = np.concatenate([np.arange(a, b) for a, b in zip(lo, hi)])
+        k = rows + 1
+        m = np.asarray(self.point_nodes)[chord]
+        mp = np.where(self.first_point[chord], 0, self.previous_node[chord])
+        w_left = (k - 1 < m).astype(float) - (k - 1 < mp)
+        w_right = (k < m).astype(float) - (k < mp)
+        start = np.concatenate(([0], np.cumsum(hi - lo)[:-1]))
+        own = start + np.asarray(self.point_nodes) - 1 - lo
+        inner = self._inner
+        prev = start[inner] + self.previous_node[inner] - 1 - lo[inner]
+        return (chord, rows, w_left, w_right, np.minimum(k, self.n_elements - 1), own, prev)
+
+    @cached_property
+    def _deposit(self) -> np.ndarray:
+        """Element m_a - 1 of each point: its force acts on the elements before it."""
+        return np.asarray(self.point_nodes) - 1
+
+    @cached_property
     def element_weight(self) -> np.ndarray:
         """G_e = q (1 - s_e) + q_tip: the weight beyond element e's midpoint (N, 2)."""
         mid = (np.arange(self.n_elements) + 0.5) * self.h
@@ -191,19 +213,19 @@ class GuidedDiscretisation(Discretisation):
     def consistent_state(self, theta: np.ndarray) -> np.ndarray:
         return self.join(theta, self.chords(self.point_positions(theta)))
 
-    def point_gradients(self, theta: np.ndarray, cs=None) -> np.ndarray:
-        """G[a, k-1] = dX_a/dtheta_k, shape (P, N, 2): the centreline's midpoint rule
-        plus the turning offset, -delta_a t(theta_m) at k = m_a."""
-        g = self.attachment_gradients(theta, cs)          # per point (support is per point)
+    def segment_gradients(self, theta: np.ndarray, cs=None) -> np.ndarray:
+        """The stored entries of D_a = G_a - G_{a-1}, (M, 2) (:attr:`entries`), with
+        G_a = dX_a/dtheta: the midpoint rule plus the turning offset -delta_a t(theta_m)."""
+        chord, rows, w_left, w_right, right, own, prev = self.entries
+        c, s = self.trig(theta) if cs is None else cs
+        half = 0.5 * self.h
+        d = np.empty((len(rows), 2))
+        d[:, 0] = -half * (w_left * s[rows] + w_right * s[right])
+        d[:, 1] = half * (w_left * c[rows] + w_right * c[right])
         m = np.asarray(self.point_nodes)
-        tangent = np.column_stack((np.cos(theta[m]), np.sin(theta[m])))
-        g[np.arange(self.n_points), m - 1] -= self.point_offsets[:, None] * tangent
-        return g
-
-    def segment_gradients(self, g: np.ndarray) -> np.ndarray:
-        """D_a = G_a - G_{a-1} (G of a routing point = 0), shape (P, N, 2)."""
-        d = g.copy()
-        d[self._inner] -= g[self._inner - 1]
+        turn = self.point_offsets[:, None] * np.column_stack((np.cos(theta[m]), np.sin(theta[m])))
+        d[own] -= turn
+        d[prev] += turn[self._inner - 1]
         return d
 
     def segments(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -237,6 +259,17 @@ class GuidedDiscretisation(Discretisation):
 
     # --- residual and tangent ----------------------------------------------------------------
     def terms(self, u: np.ndarray, p) -> PathTerms:
+        """The shared quantities of (u, p); the last state's are kept (the residual,
+        the Jacobian and the inertia count ask at the same state)."""
+        key = (np.asarray(u, float).tobytes(), np.asarray(p, float).tobytes())
+        cached = self.__dict__.get("_last_terms")
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        t = self._terms(u, p)
+        self.__dict__["_last_terms"] = (key, t)
+        return t
+
+    def _terms(self, u: np.ndarray, p) -> PathTerms:
         theta, y = self.split(u)
         seg_len, e = self.segments(y)
         p = np.asarray(p, float)
@@ -244,18 +277,19 @@ class GuidedDiscretisation(Discretisation):
         f = pull.copy()
         f[self._inner - 1] -= pull[self._inner]             # f_a = p (e_a - e_{a+1})
         c, s = self.trig(theta)
-        force = self.tendon_sums(f) + self.element_weight
-        return PathTerms(theta, y, seg_len, e, f, c, s, p, force)
-
-    def _offset_moment(self, t: PathTerms) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Row m_a - 1, delta_a f_a.t(theta_m) (the offset's moment, with the sign of
-        the residual) and its derivative delta_a f_a.n(theta_m)."""
-        m = np.asarray(self.point_nodes)
-        cm, sm = np.cos(t.theta[m]), np.sin(t.theta[m])
-        f = t.point_force
-        value = self.point_offsets * (f[:, 0] * cm + f[:, 1] * sm)
-        slope = self.point_offsets * (-f[:, 0] * sm + f[:, 1] * cm)
-        return m - 1, value, slope
+        # F_e = sum of f_a over the points beyond element e: reverse cumulative sums
+        force = np.empty((self.n_elements, 2))
+        for j in range(2):
+            force[:, j] = np.bincount(self._deposit, f[:, j], self.n_elements)[::-1].cumsum()[::-1]
+        force += self.element_weight
+        # the offsets' moments at rows m_a - 1 and their derivatives (docs/model.md §11.2)
+        m = self._deposit + 1
+        cm, sm = np.cos(theta[m]), np.sin(theta[m])
+        moment = np.bincount(self._deposit, self.point_offsets * (f[:, 0] * cm + f[:, 1] * sm),
+                             self.n_elements)
+        slope = np.bincount(self._deposit, self.point_offsets * (f[:, 1] * cm - f[:, 0] * sm),
+                            self.n_elements)
+        return PathTerms(theta, y, seg_len, e, f, c, s, p, force, moment, slope)
 
     def residual(self, u: np.ndarray, p, tip_moment: float = 0.0,
                  terms: PathTerms | None = None) -> np.ndarray:
@@ -266,8 +300,7 @@ class GuidedDiscretisation(Discretisation):
         f_theta -= q
         f_theta[:-1] -= q[1:]
         f_theta[-1] -= tip_moment
-        rows, value, _ = self._offset_moment(t)
-        f_theta += np.bincount(rows, value, self.n_elements)
+        f_theta += t.moment
         return np.concatenate((f_theta, (t.y - self.chords(self.point_positions(t.theta))).ravel()))
 
     def band(self, theta, d, p, terms: PathTerms | None = None) -> np.ndarray:
@@ -276,38 +309,47 @@ class GuidedDiscretisation(Discretisation):
         if terms is None:
             terms = self.terms(self.consistent_state(theta), p)
         band = super().band(theta, None, p, terms)
-        rows, _, slope = self._offset_moment(terms)
-        band[:, 1] += np.bincount(rows, slope, self.n_elements)
+        band[:, 1] += terms.moment_slope
         return band
 
     def _levers(self, t: PathTerms, dg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(D_a . e_a^perp) (P, N) and e_a^perp (P, 2) of every segment."""
-        e_perp = np.column_stack((-t.e[:, 1], t.e[:, 0]))
-        return dg[..., 0] * e_perp[:, :1] + dg[..., 1] * e_perp[:, 1:], e_perp
+        """D_a . e_a^perp at the stored entries (M,) and e_a^perp per entry (M, 2)."""
+        chord = self.entries[0]
+        e_perp = np.column_stack((-t.e[chord, 1], t.e[chord, 0]))
+        return dg[:, 0] * e_perp[:, 0] + dg[:, 1] * e_perp[:, 1], e_perp
+
+    def _border_source(self, per_entry: np.ndarray, width: int) -> np.ndarray:
+        """(N, width * P) border columns from per-entry values (M, width)."""
+        chord, rows = self.entries[:2]
+        out = np.zeros((self.n_elements, width * self.n_points))
+        for j in range(width):
+            out[rows, width * chord + j] = per_entry[:, j]
+        return out
 
     def jacobian_values(self, u: np.ndarray, p, terms: PathTerms | None = None,
                         g=None) -> np.ndarray:
         """dF/du in the order of :attr:`pattern`: column z_a = -D_a^T S_a,
-        S_a = (p/L_a) e_a^perp e_a^perp^T, row z_a = D_a (docs/model.md §11.3)."""
-        N, P = self.n_elements, self.n_points
+        S_a = (p/L_a) e_a^perp e_a^perp^T, row z_a = D_a (docs/model.md §11.3);
+        ``g``: :meth:`segment_gradients` if known."""
         t = self.terms(u, p) if terms is None else terms
-        g = self.point_gradients(t.theta, (t.c, t.s)) if g is None else g
-        dg = self.segment_gradients(g)
+        dg = self.segment_gradients(t.theta, (t.c, t.s)) if g is None else g
         lever, e_perp = self._levers(t, dg)
-        lever *= (-t.p[self.point_tendon] / t.seg_len)[:, None]
-        cols = lever[:, :, None] * e_perp[:, None, :]              # -D_a^T S_a, (P, N, 2)
-        border = cols.transpose(1, 0, 2).reshape(N, 2 * P)
-        yrows = dg.transpose(0, 2, 1).reshape(2 * P, N)
+        chord = self.entries[0]
+        lever *= -t.p[self.point_tendon][chord] / t.seg_len[chord]
+        border = self._border_source(lever[:, None] * e_perp, 2)
         source = np.concatenate((self.band(t.theta, None, t.p, t).ravel(), border.ravel(),
-                                 yrows.ravel(), np.ones(2 * P)))
+                                 border.T.ravel(), np.ones(2 * self.n_points)))
+        source[3 * self.n_elements + border.size:-2 * self.n_points] = \
+            self._border_source(dg, 2).T.ravel()
         return source[self.pattern[2]]
 
     def stiffness_border(self, theta: np.ndarray, y: np.ndarray, p) -> np.ndarray:
         """W (P, N), one row per segment: sqrt(p/L_a) D_a^T e_a^perp, K = T + W^T W."""
         t = self.terms(self.join(theta, y), p)
-        lever, _ = self._levers(t, self.segment_gradients(self.point_gradients(theta)))
+        lever, _ = self._levers(t, self.segment_gradients(theta))
+        chord = self.entries[0]
         weights = np.sqrt(np.maximum(t.p[self.point_tendon], 0.0) / t.seg_len)
-        return weights[:, None] * lever
+        return self._border_source((weights[chord] * lever)[:, None], 1).T
 
     def stability_values(self, u: np.ndarray, p) -> np.ndarray:
         p = np.asarray(p, float)
@@ -319,14 +361,16 @@ class GuidedDiscretisation(Discretisation):
         return source[self.stability_pattern[2]]
 
     def load_derivative(self, u: np.ndarray, g=None, d=None) -> np.ndarray:
-        """dF/dp_i = grad_theta L_i = -sum_a D_a^T e_a over tendon i's segments."""
+        """dF/dp_i = grad_theta L_i = -sum_a D_a^T e_a over tendon i's segments;
+        ``g``: :meth:`segment_gradients` if known."""
         theta, y = self.split(u)
         e = self.segments(y)[1]
-        g = self.point_gradients(theta) if g is None else g
-        dg = self.segment_gradients(g)
-        per_segment = -(dg[..., 0] * e[:, :1] + dg[..., 1] * e[:, 1:])      # (P, N)
+        dg = self.segment_gradients(theta) if g is None else g
+        chord, rows = self.entries[:2]
+        values = -(dg[:, 0] * e[chord, 0] + dg[:, 1] * e[chord, 1])
         out = np.zeros((self.n_tendons, self.size))
-        out[:, : self.n_elements] = np.add.reduceat(per_segment, list(self.path_starts[:-1]))
+        flat = self.point_tendon[chord] * self.size + rows
+        out.ravel()[:] = np.bincount(flat, values, out.size)
         return out
 
     @property
@@ -370,7 +414,7 @@ class GuidedDiscretisation(Discretisation):
 
     def linearisation(self, u: np.ndarray, p, residual: bool = True) -> tuple:
         t = self.terms(u, p)
-        g = self.point_gradients(t.theta, (t.c, t.s))
+        g = self.segment_gradients(t.theta, (t.c, t.s))
         out = (self.jacobian_values(u, p, t, g), self.load_derivative(u, g))
         return ((self.residual(u, p, terms=t),) + out) if residual else out
 
