@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from timing import median_time

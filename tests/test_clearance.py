@@ -10,7 +10,7 @@ import h5py
 import numpy as np
 
 from elastica_petsc.core.clearance import cable_clear, crossing_elements, segment_hits
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.core.loading import Loading
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver

@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import arm_from_dict, arm_to_dict, load_config
+from elastica_petsc.core.config import arm_to_dict
+from elastica_petsc.core.model import arm_from_dict, load_config
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.io.design import config_toml

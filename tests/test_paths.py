@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from elastica_petsc.studies import trace as paths
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.solvers.control import TipController
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.core.schedule import motor_schedule, schedule_from_trace, write_schedule_csv

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.plots.animate import animate_trace, check_animation_path, trace_frames
 from elastica_petsc.solvers.control import TipController

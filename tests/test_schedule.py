@@ -17,7 +17,7 @@ import h5py
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.core.schedule import motor_schedule
 from elastica_petsc.solvers.control import TipController

@@ -165,7 +165,7 @@ def _interrupt(signum, frame):
 
 def _first_to_say(err: InputError) -> bool:
     """An error every rank raised alike is printed by rank 0 only."""
-    from ..studies.workspace import CollectiveInputError
+    from ..studies.chunks import CollectiveInputError
 
     if not isinstance(err, CollectiveInputError):
         return True

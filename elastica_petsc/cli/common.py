@@ -5,7 +5,7 @@ import argparse
 import json
 import sys
 
-from ..core.config import load_config
+from ..core.model import load_config
 from ..core.errors import InputError
 from ..core.model import Arm
 

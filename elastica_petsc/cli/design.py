@@ -223,7 +223,7 @@ def _run_sweep(args) -> int:
     from mpi4py import MPI
 
     from ..core.errors import InputError
-    from ..studies import workspace
+    from ..studies.chunks import agree
     from ..studies.design_sweep import parse_axis, run_sweep
 
     comm = MPI.COMM_WORLD
@@ -237,7 +237,7 @@ def _run_sweep(args) -> int:
         error = None
     except InputError as err:
         error = str(err)
-    workspace.agree(comm, error)
+    agree(comm, error)
     sweep = run_sweep(arm, disc.n_elements, axes, _tension_max(args, arm), targets_mm=targets,
                       comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
                       provenance={"command_line": " ".join(sys.argv)})

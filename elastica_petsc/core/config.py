@@ -1,4 +1,7 @@
-"""TOML configuration files into an :class:`~elastica_petsc.core.model.Arm`.
+"""TOML configuration files of an arm: the schema, the file read and its values
+checked (:func:`read_config`, :func:`config_values`), and an arm back into the
+same layout (:func:`arm_to_dict`).  The :class:`~elastica_petsc.core.model.Arm`
+is built from the values in core/model.py (:func:`~elastica_petsc.core.model.load_config`).
 
 The schema below is the single place where keys, units and defaults are
 listed.  A missing required key, an unknown key or a value of the wrong type
@@ -12,7 +15,6 @@ from importlib import resources
 from pathlib import Path
 
 from .errors import InputError
-from .model import Arm, Guide, Limits, ModelError, Motor, Tendon
 
 REQUIRED = object()
 
@@ -65,8 +67,8 @@ def paper_config_path() -> Path:
     return Path(str(resources.files("elastica_petsc") / "configs" / "paper.toml"))
 
 
-def load_config(path: str | Path | None = None) -> Arm:
-    """Read a TOML file (default: the paper's arm) into a validated Arm."""
+def read_config(path: str | Path | None = None) -> tuple[Path, dict]:
+    """(path, parsed TOML) of a config file (default: the paper's arm)."""
     path = Path(path) if path is not None else paper_config_path()
     try:
         with open(path, "rb") as fh:
@@ -79,10 +81,7 @@ def load_config(path: str | Path | None = None) -> Arm:
         raise ConfigError(f"{path}: cannot read it ({err.strerror})") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
         raise ConfigError(f"{path}: not valid TOML: {err}") from None
-    try:
-        return arm_from_dict(data)
-    except (ConfigError, ModelError) as err:
-        raise ConfigError(f"{path}: {err}") from None
+    return path, data
 
 
 def _section(data: dict, name: str, where: str) -> dict:
@@ -120,8 +119,11 @@ def _pair(value, where: str):
     return (float(value[0]), float(value[1]))
 
 
-def arm_from_dict(data: dict) -> Arm:
-    """Build an Arm from parsed TOML (mm, N m^2, N)."""
+def config_values(data: dict) -> dict:
+    """The checked values of parsed TOML (mm, N m^2, N), defaults filled in:
+    {"arm": keyword arguments of Arm, "tendons": [{"attach_mm", "route_mm",
+    "attach_offset_mm", "guides": ({"s_mm", "offset_mm"}, ...)}], "motor": ...,
+    "limits": ...}."""
     unknown = sorted(set(data) - set(SECTIONS))
     if unknown:
         raise ConfigError(f"{unknown[0]}: unknown section (known: {', '.join(SECTIONS)})")
@@ -138,17 +140,18 @@ def arm_from_dict(data: dict) -> Arm:
     for i, raw in enumerate(raw_tendons, start=1):
         values = _section(raw, "tendon", f"tendon[{i}]")
         route = _pair(values["route_mm"], f"tendon[{i}].route_mm")
-        guides = tuple(Guide(**_section(g, "guide", f"tendon[{i}].guides[{j}]"))
+        guides = tuple(_section(g, "guide", f"tendon[{i}].guides[{j}]")
                        for j, g in enumerate(values["guides"], start=1))
-        tendons.append(Tendon(attach_mm=values["attach_mm"], route_mm=route,
-                              attach_offset_mm=values["attach_offset_mm"], guides=guides))
-    motor = Motor(**_section(data.get("motor", {}), "motor", "motor"))
-    limits = Limits(**_section(data.get("limits", {}), "limits", "limits"))
-    return Arm(tendons=tuple(tendons), motor=motor, limits=limits, **arm)
+        tendons.append({"attach_mm": values["attach_mm"], "route_mm": route,
+                        "attach_offset_mm": values["attach_offset_mm"], "guides": guides})
+    return {"arm": arm, "tendons": tendons,
+            "motor": _section(data.get("motor", {}), "motor", "motor"),
+            "limits": _section(data.get("limits", {}), "limits", "limits")}
 
 
-def arm_to_dict(arm: Arm) -> dict:
-    """The resolved configuration as plain data (for HDF5 attributes and JSON)."""
+def arm_to_dict(arm) -> dict:
+    """The resolved configuration of an :class:`~elastica_petsc.core.model.Arm` as
+    plain data in this file's layout (for HDF5 attributes and JSON)."""
     data = asdict(arm)
     data["tendon"] = [_tendon_dict(t) for t in data.pop("tendons")]
     if data["gravity_m_s2"] is not None:

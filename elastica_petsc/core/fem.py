@@ -74,15 +74,21 @@ class Discretisation:
 
     # cables through guides, offsets or weight (core/guided.py, docs/model.md §11)
     has_paths = False
+    _path_kernels = []            # the subclass with has_paths, registered on definition
+
+    def __init_subclass__(cls, **kw):
+        super().__init_subclass__(**kw)
+        if cls.has_paths:
+            Discretisation._path_kernels[:] = [cls]
 
     @classmethod
     def from_arm(cls, arm: Arm, n_elements: int | None = None) -> "Discretisation":
         """Put ``arm`` on a uniform mesh; attachments must fall on nodes.  An arm
-        with guides, offsets or weight gets :class:`~.guided.GuidedDiscretisation`;
-        the paper's cables keep this kernel."""
+        with guides, offsets or weight gets the kernel of docs/model.md §11
+        (:class:`~.guided.GuidedDiscretisation`, registered when the package
+        ``core`` is imported); the paper's cables keep this kernel."""
         if cls is Discretisation and arm.has_paths:
-            from .guided import GuidedDiscretisation
-            return GuidedDiscretisation.from_arm(arm, n_elements)
+            return cls._path_kernels[0].from_arm(arm, n_elements)
         n = arm.elements if n_elements is None else n_elements
         if n < 2:
             raise DiscretisationError(f"need at least 2 elements, got {n}")

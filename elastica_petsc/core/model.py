@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .config import ConfigError, config_values, read_config
 from .errors import InputError
 
 
@@ -87,13 +88,11 @@ class Arm:
     @classmethod
     def paper(cls) -> "Arm":
         """The arm of the paper's Fig. 1 (``configs/paper.toml``)."""
-        from .config import load_config
         return load_config(None)
 
     @classmethod
     def from_toml(cls, path) -> "Arm":
         """An arm from a TOML configuration file (layout: ``configs/paper.toml``)."""
-        from .config import load_config
         return load_config(path)
 
     # --- unit conversions (docs/model.md §3) -------------------------------------
@@ -266,3 +265,22 @@ def _distinct(arm: Arm, a, b) -> None:
     if abs(s0 - s1) <= 1e-9 * arm.length_mm and abs(d0 - d1) <= 1e-9 * arm.length_mm:
         raise ModelError(f"{w0} and {w1} are at one point (s = {s0:g} mm, offset "
                          f"{d0:g} mm): two points of one cable must differ")
+
+
+def arm_from_dict(data: dict) -> Arm:
+    """Build an Arm from parsed TOML (mm, N m^2, N; layout of core/config.py)."""
+    values = config_values(data)
+    tendons = tuple(Tendon(**{**t, "guides": tuple(Guide(**g) for g in t["guides"])})
+                    for t in values["tendons"])
+    return Arm(tendons=tendons,
+               motor=Motor(**values["motor"]), limits=Limits(**values["limits"]),
+               **values["arm"])
+
+
+def load_config(path=None) -> Arm:
+    """Read a TOML file (default: the paper's arm) into a validated Arm."""
+    path, data = read_config(path)
+    try:
+        return arm_from_dict(data)
+    except (ConfigError, ModelError) as err:
+        raise ConfigError(f"{path}: {err}") from None

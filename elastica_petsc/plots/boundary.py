@@ -65,7 +65,8 @@ def w0_mask(region: dict, step_mm: float) -> tuple[np.ndarray, np.ndarray, np.nd
     assembled (docs/model.md §9.1), the points the loop winds around plus the
     faces of winding number 0 covered twice (N > 0).  ``region`` as read by
     :func:`elastica_petsc.io.boundary.read_boundary`."""
-    from ..studies.boundary import OutsideMap, winding_number
+    from ..core.geometry import winding_number
+    from ..studies.boundary.faces import OutsideMap
 
     poly = region["polygon"]
     lo, hi = poly.min(axis=0) - step_mm, poly.max(axis=0) + step_mm

@@ -9,9 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from .common import figure, save
-from ..studies.workspace import (BELOW_FLOOR, BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED,
-                                 OUTSIDE_BOUNDARY, REACHED, UNDECIDED, UNIQUE_BELOW_FLOOR,
-                                 reason_counts, share_of)
+from ..io.workspace import share_of
+from ..studies.workspace import Status, reason_counts
 
 
 def read_workspace(path) -> dict:
@@ -74,22 +73,22 @@ def _classes(data: dict) -> list[tuple[np.ndarray, str, str, str]]:
     status = data["status"]
     strategy = data.get("strategy", np.full(status.shape, b""))
     found = np.array([s.startswith((b"seed", b"neighbour")) for s in strategy], bool)
-    reached = status == REACHED
+    reached = status == Status.REACHED
     floor = data.get("min_tension_N", 0.0)
     w0 = f"P >= {floor:g} N (W_0(P_min))" if floor > 0 else "P >= 0 (W_0)"
     return [(reached & ~found, "tab:green", "o", f"reached, {w0}"),
             (reached & found, "darkgreen", "D", f"reached, {w0}, by the global search"),
-            (status == BELOW_FLOOR, "gold", "s",
+            (status == Status.BELOW_FLOOR, "gold", "s",
              "reached with P >= 0, no tensions >= the floor found (undecided)"),
-            (status == UNIQUE_BELOW_FLOOR, "tab:brown", "s",
+            (status == Status.UNIQUE_BELOW_FLOOR, "tab:brown", "s",
              "reached with P >= 0, its only tensions below the floor (proven)"),
-            (status == UNDECIDED, "tab:orange", "o",
+            (status == Status.UNDECIDED, "tab:orange", "o",
              "not reached after the global search (undecided)"),
-            (status == OUTSIDE_BOUNDARY, "tab:purple", ".",
+            (status == Status.OUTSIDE_BOUNDARY, "tab:purple", ".",
              "outside the traced W_0 boundary (proven)"),
-            (status == BEYOND_REACH, "k", ".", "beyond reach |x| > l (proven)"),
-            (status == NEEDS_NEGATIVE, "tab:red", "o", "ended on P_i = 0 (local verdict)"),
-            (status == NOT_CONVERGED, "0.6", "x", "not converged")]
+            (status == Status.BEYOND_REACH, "k", ".", "beyond reach |x| > l (proven)"),
+            (status == Status.NEEDS_NEGATIVE, "tab:red", "o", "ended on P_i = 0 (local verdict)"),
+            (status == Status.NOT_CONVERGED, "0.6", "x", "not converged")]
 
 
 def plot_samples(data: dict, ax, paths=None) -> None:
@@ -100,7 +99,7 @@ def plot_samples(data: dict, ax, paths=None) -> None:
     where = target if data["mode"] == "targets" else tip
     for sel, colour, marker, label in _classes(data):
         if sel.any():
-            pts = tip[sel] if data["status"][sel][0] == REACHED else where[sel]
+            pts = tip[sel] if data["status"][sel][0] == Status.REACHED else where[sel]
             count = f"{int(sel.sum())}"
             if colour == "0.6":
                 count += f": {reason_counts(data['reason'][sel])}"
@@ -157,7 +156,7 @@ def _contour(fig, ax, xy, values, title, label, levels=12, limit=None, paths=Non
 def plot_restrictions(data: dict, path, paths=None) -> None:
     """Fig. 5a-d over the reached samples: curvature, smallest eigenvalue,
     strain energy and every tension."""
-    reached = data["status"] == REACHED
+    reached = data["status"] == Status.REACHED
     xy = data["tip"][reached]
     n = data["tensions"].shape[1]
     panels = [("kappa_max", "(a) max curvature l*kappa_max", "l kappa_max",

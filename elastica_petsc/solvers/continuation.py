@@ -32,7 +32,7 @@ capped so that the predicted tip step is 0.8 ``max_tip_step``
 (:meth:`CurveTracer.step_limit`) and, on the boundary tracer's walks, so that
 the predictor at most halves a cable that shortens (past its routing point
 the cable direction of Eq. (3) flips and no corrector converges;
-``studies/boundary.py``, ``Walker._collapse_limit``).  Within a corrector,
+``studies/boundary/walker.py``, ``Walker._collapse_limit``).  Within a corrector,
 once the residual is below ``lag_below`` the factored Jacobian of the
 previous iterate is kept (a chord step; the stopping tests are unchanged).
 

@@ -54,6 +54,7 @@ import scipy.sparse.linalg as spla
 
 from ..core.clearance import state_cable_clear
 from ..core.fem import Discretisation
+from ..core.geometry import shoelace, shoelace_normals, triangles_union_area
 from ..core.model import Arm
 from ..solvers.continuation import Manifold
 from ..solvers.equilibrium import EquilibriumSolver
@@ -67,19 +68,6 @@ def box_loop(p_max: float, nodes_per_edge: int) -> np.ndarray:
     zero, top = np.zeros_like(t), np.full_like(t, p_max)
     return np.concatenate([np.column_stack((t, zero)), np.column_stack((top, t)),
                            np.column_stack((p_max - t, top)), np.column_stack((zero, p_max - t))])
-
-
-def shoelace_signed(loop: np.ndarray) -> float:
-    """1/2 sum (x_k y_{k+1} - x_{k+1} y_k) of a closed polygon (last joined to first)."""
-    x, y = loop[:, 0], loop[:, 1]
-    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
-
-
-def shoelace_normals(loop: np.ndarray) -> np.ndarray:
-    """d(signed shoelace)/d x_k, (K, 2): half the chord across node k turned by
-    -90 degrees, the discrete outward normal times the node's share of length."""
-    nxt, prv = np.roll(loop, -1, axis=0), np.roll(loop, 1, axis=0)
-    return 0.5 * np.column_stack((nxt[:, 1] - prv[:, 1], prv[:, 0] - nxt[:, 0]))
 
 
 @dataclass
@@ -133,7 +121,7 @@ def box_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
             dets.append(np.linalg.det(d[:, :2]))
             dtip.append(d[:, 2:])                      # mm per mm: x_t/l per r/l
     loop = np.array(tips)
-    signed = shoelace_signed(loop)
+    signed = shoelace(loop)
     sigma = 1.0 if signed >= 0 else -1.0
     normals = shoelace_normals(loop)
     grad = sigma * np.einsum("ka,kaj->j", normals, np.array(dtip))
@@ -168,34 +156,6 @@ def _triangles(tips: np.ndarray, good: np.ndarray) -> np.ndarray:
     return np.concatenate((t1, t2))
 
 
-def union_area(triangles: np.ndarray, h: float) -> float:
-    """Area (mm^2) of the union of triangles, counted on a square lattice of
-    spacing ``h`` mm (a point counts once however many triangles hold it)."""
-    if len(triangles) == 0:
-        return 0.0
-    lo = triangles.reshape(-1, 2).min(axis=0)
-    hi = triangles.reshape(-1, 2).max(axis=0)
-    shape = np.ceil((hi - lo) / h).astype(int) + 1
-    covered = np.zeros(shape, bool)
-    for tri in triangles:
-        i0, j0 = np.floor((tri.min(axis=0) - lo) / h).astype(int)
-        i1, j1 = np.ceil((tri.max(axis=0) - lo) / h).astype(int) + 1
-        gx, gy = np.meshgrid(lo[0] + h * np.arange(i0, i1), lo[1] + h * np.arange(j0, j1),
-                             indexing="ij")
-        covered[i0:i1, j0:j1] |= _inside_triangle(tri, gx, gy)
-    return float(covered.sum()) * h * h
-
-
-def _inside_triangle(tri: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
-    (x0, y0), (x1, y1), (x2, y2) = tri
-    det = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
-    if det == 0.0:
-        return np.zeros(gx.shape, bool)
-    l1 = ((gx - x0) * (y2 - y0) - (x2 - x0) * (gy - y0)) / det
-    l2 = ((x1 - x0) * (gy - y0) - (gx - x0) * (y1 - y0)) / det
-    return (l1 >= 0) & (l2 >= 0) & (l1 + l2 <= 1)
-
-
 def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells: int = 20,
                    lattice_mm: float = 0.25) -> Resampled:
     """Re-sample the workspace of ``arm`` within 0 <= p_i <= ``p_max``: forward
@@ -211,7 +171,7 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
     cells against 58472 mm^2 for the loop's shoelace at 48 nodes per edge."""
     from mpi4py import MPI
 
-    from .workspace import REACHED, run_map
+    from .workspace import Status, run_map
 
     disc = Discretisation.from_arm(arm, elements)
     spacing = p_max / cells
@@ -222,13 +182,13 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
     n = cells + 1
     tips = np.full((n, n, 2), np.nan)
     good = np.zeros((n, n), bool)
-    reached = s["status"] == REACHED
+    reached = s["status"] == Status.REACHED
     with np.errstate(invalid="ignore"):
         stable = reached & (s["lambda_min"] > 0)
     tips[index[:, 0], index[:, 1]] = s["tip"]
     good[index[:, 0], index[:, 1]] = stable
-    fine = union_area(_triangles(tips, good), lattice_mm)
-    coarse = union_area(_triangles(tips[::2, ::2], good[::2, ::2]), lattice_mm)
+    fine = triangles_union_area(_triangles(tips, good), lattice_mm)
+    coarse = triangles_union_area(_triangles(tips[::2, ::2], good[::2, ::2]), lattice_mm)
     edge = np.concatenate([tips[:, 0], tips[-1, 1:], tips[-2::-1, -1], tips[0, -2:0:-1]])
     perimeter = float(np.nansum(np.linalg.norm(np.diff(edge, axis=0), axis=1)))
     seconds = float(np.nansum(s["seconds_control"]) + np.nansum(s["seconds_eigen"]))
