@@ -32,7 +32,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.fem import Discretisation
-from ..core.model import Arm, Tendon
+from ..core.model import Arm
 from .design import DesignError, path_misfit
 from .design_area import box_area
 from .chunks import ChunkResults, Grid, Stop, agree, check_out, empty_fields, run
@@ -85,7 +85,9 @@ def design_arm(arm: Arm, axes, values) -> Arm:
             tendons[axis.tendon][0] = float(v)
         else:
             tendons[axis.tendon][1]["xy".index(axis.kind[-1])] = float(v)
-    return dataclasses.replace(arm, tendons=tuple(Tendon(a, tuple(r)) for a, r in tendons))
+    return dataclasses.replace(arm, tendons=tuple(     # guides and offsets kept
+        dataclasses.replace(t, attach_mm=a, route_mm=tuple(r))
+        for t, (a, r) in zip(arm.tendons, tendons)))
 
 
 def sweep_grid(arm: Arm, elements: int, axes) -> Grid:
