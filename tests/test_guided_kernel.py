@@ -213,3 +213,28 @@ def test_tip_sensitivity_to_guide_offsets_taylor():
             orders = np.log2(np.array(rem[:-1]) / rem[1:])
             assert np.all(orders > 1.9), (a, orders, rem)
             assert np.linalg.norm(dtip) > 1e-3            # the offset moves the tip
+
+
+def test_cable_length_sensitivities_through_guides():
+    """dL/dp from the sensitivities (docs/model.md §11.3) is symmetric (reciprocity),
+    negative definite at a stable state, and matches re-solved cable lengths; the
+    end points' derivatives match too."""
+    from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+    from elastica_petsc.solvers.sensitivity import SensitivitySolver
+    disc = Discretisation.from_arm(guided_arm(elements=24))
+    with EquilibriumSolver(disc) as solver, SensitivitySolver(disc) as sens:
+        eq = solver.solve(P)
+        s = sens.compute(eq)
+        assert eq.converged and eq.stable
+        assert np.allclose(s.cable_lengths, s.cable_lengths.T, atol=1e-12)
+        assert np.all(np.linalg.eigvalsh(s.cable_lengths) < 0)
+        eps = 1e-5
+        for i in range(2):
+            dp = np.zeros(2)
+            dp[i] = eps
+            hi, lo = (solver.newton(eq.u, P + sgn * dp)[0] for sgn in (1, -1))
+            th = [disc.split(u)[0] for u in (hi, lo)]
+            dL = (disc.cable_lengths_of(th[0]) - disc.cable_lengths_of(th[1])) / (2 * eps)
+            dX = (disc.attachment_points(th[0]) - disc.attachment_points(th[1])) / (2 * eps)
+            assert np.allclose(s.cable_lengths[i], dL, atol=1e-7)
+            assert np.allclose(s.attachments[i], dX, atol=1e-7)
