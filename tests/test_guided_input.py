@@ -85,3 +85,17 @@ def test_bad_input_on_the_command_line_one_line_exit_2(tmp_path, case):
     assert message in run.stderr, run.stderr
     assert "Traceback" not in run.stderr
     assert len(run.stderr.strip().splitlines()) == 1
+
+
+def test_sweep_axis_offset_moves_guides_and_end_point():
+    from elastica_petsc.studies.design_sweep import design_arm, parse_axis
+    arm = load_config(ROOT / "configs" / "guided3.toml")
+    axis = parse_axis("tendon2.offset=-9:-5:2", arm.n_tendons)
+    assert axis.values == (-9.0, -7.0, -5.0)
+    moved = design_arm(arm, [axis], [-5.0])
+    t = moved.tendons[1]
+    assert t.attach_offset_mm == -5.0 and all(g.offset_mm == -5.0 for g in t.guides)
+    assert [g.s_mm for g in t.guides] == [g.s_mm for g in arm.tendons[1].guides]
+    assert moved.tendons[0] == arm.tendons[0]
+    with pytest.raises(InputError, match="larger than half the arm's width"):
+        design_arm(arm, [axis], [-11.0])
