@@ -37,6 +37,10 @@ from ..core.calibration_params import ParameterModel
 from ..core.errors import InputError
 from ..solvers.calibration import RowError, RowSolver, RowState
 
+# Convergence: no scaled parameter moved by more in one Gauss-Newton iteration.
+STEP_TOL = 1e-7
+# Residual [mm] reported for a trial point at which some row has no equilibrium.
+FAILED_RESIDUAL_MM = 1e6
 TAO_REASONS = {v: k for k, v in vars(PETSc.TAO.Reason).items() if not k.startswith("_")}
 
 
@@ -160,9 +164,14 @@ class CalibrationProblem:
 
 # --- the least-squares solve ------------------------------------------------------------------
 def brgn(problem: CalibrationProblem, theta0, weights, *, max_iterations: int = 50,
-         prefix: str = "calib_") -> tuple[np.ndarray, str, int]:
+         step_tol: float = STEP_TOL, prefix: str = "calib_") -> tuple[np.ndarray, str, int]:
     """TAO BRGN on X = (theta - theta0) / scale within the bounds; ``weights``
-    (M,) multiply the squared residuals.  Returns (theta, TAO's reason, iterations)."""
+    (M,) multiply the squared residuals.  Converged (CONVERGED_USER) when an
+    iteration moves no scaled parameter by more than ``step_tol`` (the
+    gradient cannot fall below the round-off of the equilibria, ~1e-9 mm).
+    A trial point whose rows cannot be solved gets residuals of
+    FAILED_RESIDUAL_MM, so the line search steps back.
+    Returns (theta, TAO's reason, iterations)."""
     model = problem.model
     scale = model.scales()
     lo, hi = model.bounds()
@@ -179,13 +188,22 @@ def brgn(problem: CalibrationProblem, theta0, weights, *, max_iterations: int = 
         return cache
 
     def residual(tao, X, R):
-        R.setArray(at(X)["r"])
+        try:
+            R.setArray(at(X)["r"])
+        except (RowError, CalibrationError):   # a trial step too far: make it look bad
+            failures.append(X.getArray(readonly=True).copy())
+            R.setArray(np.full(M, FAILED_RESIDUAL_MM))
 
     def jacobian(tao, X, J, P):
-        J.setValues(range(M), range(P_), at(X)["J"].ravel())
+        try:
+            values = at(X)["J"].ravel()
+        except (RowError, CalibrationError):   # the failed trial point of residual()
+            values = np.zeros(M * P_)
+        J.setValues(range(M), range(P_), values)
         J.assemble()
 
     M, P_ = len(weights), model.size
+    failures: list = []
     x = PETSc.Vec().createSeq(P_, comm=PETSc.COMM_SELF)
     x.setArray(0.0)
     R = PETSc.Vec().createSeq(M, comm=PETSc.COMM_SELF)
@@ -202,6 +220,15 @@ def brgn(problem: CalibrationProblem, theta0, weights, *, max_iterations: int = 
     tao.setVariableBounds(xl, xu)
     tao.setTolerances(gatol=1e-12, grtol=1e-14, gttol=0.0)
     tao.setMaximumIterations(max_iterations)
+    previous = {}
+
+    def monitor(t) -> None:
+        X = t.getSolution().getArray(readonly=True)
+        if "X" in previous and np.max(np.abs(X - previous["X"])) <= step_tol:
+            t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
+        previous["X"] = X.copy()
+
+    tao.setMonitor(monitor)
     tao.setFromOptions()
     try:
         tao.solve(x)
