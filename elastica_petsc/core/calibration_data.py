@@ -176,9 +176,11 @@ def _header(names, n_tendons: int) -> tuple[dict, list[float]]:
 
 
 def read_calibration_csv(path, n_tendons: int, kind: str | None = None,
-                         arm_length_mm: float | None = None) -> CalibrationData:
+                         arm_length_mm: float | None = None,
+                         measured: bool = True) -> CalibrationData:
     """Parse and validate a calibration CSV (module docstring) for an arm of
-    ``n_tendons`` tendons; ``kind`` reads only that input group."""
+    ``n_tendons`` tendons; ``kind`` reads only that input group.  With
+    ``measured=False`` (candidate commands) the tip columns may be missing or empty."""
     path = Path(path)
     if kind is not None and kind not in KINDS:
         raise DataError(f"input kind must be one of {', '.join(KINDS)}, got {kind!r}")
@@ -195,13 +197,14 @@ def read_calibration_csv(path, n_tendons: int, kind: str | None = None,
         raise DataError(f"{path}: empty file (need a header line and rows)")
     names = [c.strip() for c in table[0][1]]
     try:
-        groups, marker_s = _header(names, n_tendons)
+        groups, marker_s = _header(names if measured else names + [
+            c for c in ("tip_x_mm", "tip_y_mm") if c not in names], n_tendons)
         if kind is not None:
             if kind not in groups:
                 raise DataError(f"--input {kind}: the file has no "
                                 f"{INPUT_COLUMNS[kind].format('K')} columns")
             groups = (kind,)
-        rows = _rows(table[1:], names, groups, marker_s, n_tendons, arm_length_mm)
+        rows = _rows(table[1:], names, groups, marker_s, n_tendons, arm_length_mm, measured)
     except DataError as err:
         raise DataError(f"{path}: {err}") from None
     if not rows[0]:
@@ -213,7 +216,7 @@ def read_calibration_csv(path, n_tendons: int, kind: str | None = None,
                            tuple(loading), tuple(lines), str(path))
 
 
-def _rows(body, names, groups, marker_s, n_tendons, arm_length_mm):
+def _rows(body, names, groups, marker_s, n_tendons, arm_length_mm, measured=True):
     col = {c: j for j, c in enumerate(names)}
     kinds, inputs, tips, marks, loading, lines = [], [], [], [], [], []
     for number, raw in body:
@@ -236,8 +239,11 @@ def _rows(body, names, groups, marker_s, n_tendons, arm_length_mm):
         _check_inputs(kind, values, number)
         kinds.append(kind)
         inputs.append(values)
-        tips.append([_number(cells[col[c]], number, c) if cells[col[c]] else
-                     _missing(number, c) for c in ("tip_x_mm", "tip_y_mm")])
+        if measured:
+            tips.append([_number(cells[col[c]], number, c) if cells[col[c]] else
+                         _missing(number, c) for c in ("tip_x_mm", "tip_y_mm")])
+        else:
+            tips.append([0.0, 0.0])
         for s in marker_s:
             pair = [cells[col[f"marker_{s:g}_{a}_mm"]] for a in "xy"]
             if arm_length_mm is not None and not 0 < s <= arm_length_mm:

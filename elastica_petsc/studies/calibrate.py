@@ -36,9 +36,12 @@ from ..core.calibration_data import CalibrationData
 from ..core.calibration_params import ParameterModel
 from ..core.errors import InputError
 from ..solvers.calibration import RowError, RowSolver, RowState
+from ..solvers.lengths import SAME_SHAPE_TOL
 
 # Convergence: no scaled parameter moved by more in one Gauss-Newton iteration.
 STEP_TOL = 1e-7
+# ... or the objective fell by less than this fraction of itself (its round-off floor).
+F_RTOL = 1e-10
 # Residual [mm] reported for a trial point at which some row has no equilibrium.
 FAILED_RESIDUAL_MM = 1e6
 TAO_REASONS = {v: k for k, v in vars(PETSc.TAO.Reason).items() if not k.startswith("_")}
@@ -103,7 +106,7 @@ class CalibrationProblem:
         """Fix the loading order of every row without one (module docstring);
         returns one label per row ("given: order 2,1", "matched: proportional")."""
         arm = self.model.arm(theta)
-        n = arm.n_tendons
+        n, N = arm.n_tendons, self.elements or arm.elements
         candidates = [None] + (list(itertools.permutations(range(1, n + 1))) if n <= 3 else [])
         with RowSolver(arm, self.elements) as rs:
             for r in range(self.data.n_rows):
@@ -118,7 +121,8 @@ class CalibrationProblem:
                     pts = self.model.measure(theta, rs.points_mm(state.u,
                                                                  self.data.marker_s_mm))[0]
                     err = float(np.sum(((pts - self.measured[r]) ** 2)[self.observed[r]]))
-                    if best is None or err < best[0] - 1e-9:
+                    if best is None or (err < best[0] and np.max(np.abs(
+                            state.u - best[2].u)[:N]) > SAME_SHAPE_TOL):
                         best = (err, order, state)
                 if best is None:
                     raise CalibrationError(f"line {self.data.lines[r]}: no loading path from "
@@ -224,17 +228,22 @@ def brgn(problem: CalibrationProblem, theta0, weights, *, max_iterations: int = 
 
     def monitor(t) -> None:
         X = t.getSolution().getArray(readonly=True)
-        if "X" in previous and np.max(np.abs(X - previous["X"])) <= step_tol:
+        f = t.getObjectiveValue()
+        if "X" in previous and (np.max(np.abs(X - previous["X"])) <= step_tol
+                                or previous["f"] - f <= F_RTOL * previous["f"]):
             t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
-        previous["X"] = X.copy()
+        previous.update(X=X.copy(), f=f)
 
-    tao.setMonitor(monitor)
     tao.setFromOptions()
+    inner = tao.getBRGNSubsolver()          # BRGN iterates in its subsolver
+    inner.setTolerances(gatol=1e-12, grtol=1e-14, gttol=0.0)
+    inner.setMaximumIterations(max_iterations)
+    inner.setMonitor(monitor)
     try:
         tao.solve(x)
         theta = theta0 + scale * x.getArray(readonly=True)
-        return theta, TAO_REASONS.get(tao.getConvergedReason(),
-                                      str(tao.getConvergedReason())), tao.getIterationNumber()
+        reason = inner.getConvergedReason()
+        return theta, TAO_REASONS.get(reason, str(reason)), inner.getIterationNumber()
     finally:
         for obj in (tao, x, R, Jm, xl, xu):
             obj.destroy()

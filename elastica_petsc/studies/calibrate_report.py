@@ -18,6 +18,8 @@ adding c is log det(F + J_c^T J_c / s^2) - log det F, F = J_w^T J_w / s^2
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..core.calibration_data import CalibrationData
@@ -167,3 +169,93 @@ def next_measurements(problem: CalibrationProblem, result: Fit, report: dict,
         out.append({"line": shaped.lines[c], "kind": str(shaped.kinds[c]),
                     "inputs": shaped.inputs[c].tolist(), "log_det_gain": float(gains[c])})
     return out
+
+
+@dataclass
+class CalibrationResult:
+    """Everything a calibration produced (mm, N, N m^2, degrees)."""
+
+    problem: CalibrationProblem
+    fit: Fit
+    report: dict
+    stats: dict
+    cross_validation: dict | None
+    tip_covariance_mm2: np.ndarray          # (m, 2, 2): predicted tips' covariance
+    next_measurements: list | None = None
+
+    @property
+    def model(self):
+        return self.problem.model
+
+    @property
+    def arm(self):
+        """The fitted arm in its own frame (what the TOML holds)."""
+        return self.model.arm(self.fit.theta)
+
+    def parameters(self) -> list[dict]:
+        start = self.model.start()
+        return [{"name": p.name, "unit": p.unit, "start": float(s), "value": float(v),
+                 "sigma": sd, "lower": p.lower, "upper": p.upper}
+                for p, s, v, sd in zip(self.model.params, start, self.fit.theta,
+                                       self.report["sigma"])]
+
+    def summary(self) -> dict:
+        """JSON-ready summary."""
+        rep, cv = self.report, self.cross_validation
+        corr = np.where(np.isfinite(rep["correlation"]), rep["correlation"], np.nan)
+        data = self.problem.data
+        return {
+            "parameters": self.parameters(),
+            "correlation": [[None if not np.isfinite(c) else round(float(c), 6) for c in row]
+                            for row in corr],
+            "singular_values_scaled": [float(s) for s in rep["singular_values"]],
+            "undetermined": rep["undetermined"],
+            "undetermined_combinations": rep["undetermined_combinations"],
+            "residual": {"rms_mm": self.stats["rms_mm"], "max_mm": self.stats["max_mm"],
+                         "sigma_mm": float(np.sqrt(rep["residual_variance_mm2"])),
+                         "dof": rep["dof"]},
+            "rows": [{"line": data.lines[r], "kind": str(data.kinds[r]),
+                      "branch": self.fit.branches[r],
+                      "error_mm": float(self.stats["per_row_mm"][r]),
+                      "weight": float(self.fit.row_weights[r]),
+                      "taut": self.fit.evaluation.taut[r].tolist()}
+                     for r in range(data.n_rows)],
+            "down_weighted_lines": [data.lines[r] for r in
+                                    np.flatnonzero(self.fit.row_weights < 1.0)],
+            "cross_validation": None if cv is None else
+            {k: v for k, v in cv.items() if k != "per_row_mm"},
+            "solver": {"tao_reason": self.fit.reason, "iterations": self.fit.iterations,
+                       "evaluations": self.fit.evaluations, "seconds": self.fit.seconds,
+                       "remaining_step_sigma": rep["remaining_step_sigma"]},
+            "next_measurements": self.next_measurements,
+        }
+
+
+def tip_covariance(problem: CalibrationProblem, result: Fit, cov) -> np.ndarray:
+    """Covariance [mm^2] of every predicted tip from the parameters' covariance."""
+    J = result.evaluation.jacobian
+    obs = problem.observed
+    starts = np.concatenate(([0], np.cumsum(obs.sum(axis=1))[:-1])) * 2
+    out = np.empty((problem.data.n_rows, 2, 2))
+    for r, s in enumerate(starts):
+        Jt = J[s:s + 2]
+        out[r] = Jt @ cov @ Jt.T
+    return out
+
+
+def calibrate(model, data: CalibrationData, *, elements: int | None = None,
+              huber_mm: float | None = None, folds: int = 5, candidates=None,
+              next_count: int = 5, progress=None) -> CalibrationResult:
+    """Fit ``model``'s parameters to ``data`` and report (module docstring)."""
+    problem = CalibrationProblem(model, data, elements)
+    if progress is not None:
+        progress(0, "fitting")
+    result = fit(problem, huber_mm=huber_mm)
+    report = uncertainty(problem, result)
+    stats = residual_stats(problem, result)
+    cov = np.where(np.isfinite(report["covariance"]), report["covariance"], 0.0)
+    tips = tip_covariance(problem, result, cov)
+    cv = cross_validate(problem, result, folds, huber_mm, progress) if folds >= 2 else None
+    nxt = (next_measurements(problem, result, report, candidates, next_count)
+           if candidates is not None else None)
+    return CalibrationResult(problem, result, report, stats, cv, tips, nxt)
