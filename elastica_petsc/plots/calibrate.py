@@ -30,7 +30,7 @@ def plot_calibration(result, path) -> None:
     ax.plot(*predicted.T, ".", ms=4, color="tab:blue", label="fitted model")
     d = (measured - predicted) * gain
     ax.quiver(predicted[:, 0], predicted[:, 1], d[:, 0], d[:, 1], angles="xy",
-              scale_units="xy", scale=1, width=0.003, color="tab:red",
+              scale_units="xy", scale=1, width=0.004, color="tab:red",
               label=f"residual x {gain:.3g}")
     scale_ell = max(1.0, gain)
     for r in range(data.n_rows):
@@ -40,7 +40,7 @@ def plot_calibration(result, path) -> None:
     down = result.fit.row_weights < 1.0
     if np.any(down):
         ax.plot(*measured[down].T, "x", ms=8, color="tab:red", label="down-weighted")
-    ax.set_aspect("equal")
+    ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_title(f"Tips: {data.n_rows} rows, RMS {result.stats['rms_mm']:.3g} mm")
