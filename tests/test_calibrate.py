@@ -208,3 +208,45 @@ def test_two_branches_and_matching():
     assert result.branches[12] == "matched: proportional"   # = order 2,1's state 1
     assert result.branches[0] == "given: order 2,1"
     np.testing.assert_allclose(result.theta, truth, rtol=1e-6)
+
+
+def test_huber_down_weights_the_outlier_row():
+    """One tip off by 32 mm: the Huber fit reports that row and keeps the
+    parameters within 3 of its standard deviations; plain least squares does not."""
+    rng = np.random.default_rng(6)
+    P = np.column_stack((rng.uniform(1, 9, 16), rng.uniform(0.5, 5, 16)))
+    vary = ["bending_stiffness", "tendon1.route"]
+    model = ParameterModel(ARM, vary)
+    truth = model.start() * [1.1, 1.0, 1.0] + [0.0, 3.0, -2.0]
+    data = synthesize(ARM, vary, truth, command_rows(ARM, P, "tension"), noise_mm=0.2, seed=2)
+    tips = data.tips_mm.copy()
+    tips[5] += [30.0, -10.0]
+    data = dataclasses.replace(data, tips_mm=tips)
+    plain = fit(CalibrationProblem(model, data))
+    problem = CalibrationProblem(model, data)
+    robust = fit(problem, huber_mm=1.0)
+    assert np.flatnonzero(robust.row_weights < 0.5).tolist() == [5]
+    assert np.all(robust.row_weights[np.arange(16) != 5] > 0.5)
+    sigma = np.array(uncertainty(problem, robust)["sigma"], float)
+    assert np.all(np.abs(robust.theta - truth) < 3 * sigma)
+    assert np.max(np.abs(plain.theta - truth) / sigma) > 3     # the outlier biases plain LS
+
+
+def test_next_measurements_prefer_rows_that_load_tendon_2():
+    """With tendon 2 slack in every row, the D-optimal choice among candidates is a
+    command that tensions tendon 2 (the only one that informs its routing point)."""
+    from elastica_petsc.studies.calibrate_report import next_measurements
+
+    rng = np.random.default_rng(7)
+    P = np.column_stack((rng.uniform(1, 9, 12), np.zeros(12)))
+    vary = ["tendon1.route", "tendon2.route"]
+    model = ParameterModel(ARM, vary)
+    data = synthesize(ARM, vary, model.start(), command_rows(ARM, P, "tension"),
+                      noise_mm=0.2, seed=4)
+    problem = CalibrationProblem(model, data)
+    result = fit(problem)
+    report = uncertainty(problem, result)
+    candidates = command_rows(ARM, [[5.0, 0.0], [3.0, 0.0], [4.0, 3.0], [8.0, 0.0]], "tension")
+    chosen = next_measurements(problem, result, report, candidates, count=2)
+    assert chosen[0]["inputs"] == [4.0, 3.0]
+    assert chosen[0]["log_det_gain"] > 10 * max(chosen[1]["log_det_gain"], 1e-3)

@@ -11,7 +11,9 @@ s^2 = |W^(1/2) r|^2 / (M - rank), is
     C = s^2 D V_r S_r^-2 V_r^T D;
 
 a parameter with a component of more than ``UNDETERMINED_SHARE`` in the
-undetermined directions gets no standard deviation (None).  D-optimal
+undetermined directions gets no standard deviation (None).  After a Huber
+fit (some weights < 1) s is the robust scale 1.4826 median |r| instead (the
+down-weighted rows would inflate s^2).  D-optimal
 design: for candidate commands c with tip Jacobians J_c (2 x P), the gain of
 adding c is log det(F + J_c^T J_c / s^2) - log det F, F = J_w^T J_w / s^2
 (on the determined subspace); commands are picked greedily.
@@ -26,6 +28,8 @@ from ..core.calibration_data import CalibrationData
 from .calibrate import CalibrationProblem, Fit, fit
 
 RANK_TOL = 1e-6
+# sigma = 1.4826 median |r| for Gaussian residuals (the robust scale of a Huber fit)
+MAD_TO_SIGMA = 1.4826
 UNDETERMINED_SHARE = 0.1
 
 
@@ -63,6 +67,8 @@ def uncertainty(problem: CalibrationProblem, result: Fit) -> dict:
     M = len(ev.residual)
     dof = max(M - rank, 1)
     s2 = float(np.sum((sqrt_w * ev.residual) ** 2)) / dof
+    if np.any(result.weights < 1.0):        # Huber: a robust scale, not the outliers'
+        s2 = (MAD_TO_SIGMA * float(np.median(np.abs(ev.residual)))) ** 2
     Vr, Vn = Vt[:rank].T, Vt[rank:].T
     cov_scaled = Vr @ np.diag(1.0 / S[:rank] ** 2) @ Vr.T * s2
     cov = cov_scaled * np.outer(scale, scale)
