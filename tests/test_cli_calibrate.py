@@ -3,6 +3,8 @@ input reported in one line with exit status 2 and nothing written."""
 from __future__ import annotations
 
 import json
+import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -65,6 +67,27 @@ def test_calibrate_writes_loadable_toml_h5_plot_json(data_csv, tmp_path):
         assert fh.attrs["kind"] == "calibration"
         assert fh["parameters/sigma"].shape == (2,)
     assert png.stat().st_size > 10_000
+
+
+@pytest.mark.skipif(shutil.which("mpiexec") is None, reason="needs mpiexec")
+def test_rows_over_two_ranks_give_the_same_fit(data_csv, tmp_path):
+    path, _ = data_csv
+    keep = ("OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM",
+            "OMPI_MCA_rmaps_base_oversubscribe")
+    env = {k: v for k, v in os.environ.items()
+           if k in keep or not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
+    runs = []
+    for launch in ([], ["mpiexec", "-n", "2"]):
+        done = subprocess.run(launch + [sys.executable, "-m", "elastica_petsc.cli", "calibrate",
+                                        "--elements", "30", "--data", str(path), "--vary",
+                                        "tendon1.route", "--folds", "0", "--json", "--quiet"],
+                              capture_output=True, text=True, timeout=300, env=env,
+                              cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        runs.append(json.loads(done.stdout))
+    assert [r["ranks"] for r in runs] == [1, 2]
+    for a, b in zip(runs[0]["parameters"], runs[1]["parameters"]):
+        assert abs(a["value"] - b["value"]) < 1e-9 and abs(a["sigma"] - b["sigma"]) < 1e-9
 
 
 def _csv(tmp_path, text):

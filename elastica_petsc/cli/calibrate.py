@@ -92,22 +92,39 @@ def run(args) -> int:
     model = ParameterModel(arm, args.vary, parse_bounds(args.bounds))
     CalibrationProblem(model, data, disc.n_elements)          # too few rows: refused here
     check_options(args)
+    comm = world()
+    root = comm is None or comm.rank == 0
     with Progress(None, "calibrate", unit="stages") as bar:
         try:
             result = calibrate(model, data, elements=disc.n_elements, huber_mm=args.huber,
                                folds=args.folds, candidates=candidates, next_count=args.next,
-                               progress=bar)
+                               progress=bar, comm=comm)
         except RowError as err:
             bar.close()
-            print(f"elastica-petsc: error: calibration stopped: {err}", file=sys.stderr)
+            if root:
+                print(f"elastica-petsc: error: calibration stopped: {err}", file=sys.stderr)
             return 1
-    return finish(args, result)
+    return finish(args, result, root)
 
 
-def finish(args, result) -> int:
+def world():
+    """MPI.COMM_WORLD under mpiexec with more than one rank, else None."""
+    from mpi4py import MPI
+
+    return MPI.COMM_WORLD if MPI.COMM_WORLD.size > 1 else None
+
+
+def finish(args, result, root: bool = True) -> int:
+    """Write and print on rank 0 (every rank holds the same result)."""
     from ..io.calibration import write_calibration_h5, write_fitted_toml
 
     summary = result.summary()
+    summary["ranks"] = result.problem.ranks
+    converged = summary["solver"]["tao_reason"].startswith("CONVERGED") or \
+        summary["solver"]["remaining_step_sigma"] < 1e-2
+    summary["converged"] = converged
+    if not root:
+        return 0 if converged else 1
     if args.out:
         write_fitted_toml(args.out, result, args.overwrite)
     if args.h5:
@@ -115,9 +132,6 @@ def finish(args, result) -> int:
     if args.plot:
         from ..plots.calibrate import plot_calibration
         plot_calibration(result, args.plot)
-    converged = summary["solver"]["tao_reason"].startswith("CONVERGED") or \
-        summary["solver"]["remaining_step_sigma"] < 1e-2
-    summary["converged"] = converged
     if args.json:
         common.print_json(summary)
     else:

@@ -68,10 +68,13 @@ class Evaluation:
 
 class CalibrationProblem:
     """Rows of ``data`` and the parameters of ``model``: residuals and their
-    Jacobian at any theta, with each row warm-started from its last state."""
+    Jacobian at any theta, with each row warm-started from its last state.
+    With ``comm`` (mpi4py) the rows are dealt round-robin to its ranks (each
+    keeps its rows' states) and the results shared with every rank, which all
+    run the same (small) TAO iteration on identical data."""
 
     def __init__(self, model: ParameterModel, data: CalibrationData,
-                 elements: int | None = None, progress=None):
+                 elements: int | None = None, comm=None):
         if data.n_tendons != model.arm0.n_tendons:
             raise CalibrationError(f"the data have {data.n_tendons} tendons, the arm "
                                    f"{model.arm0.n_tendons}")
@@ -87,8 +90,9 @@ class CalibrationProblem:
         self.orders = list(data.loading)
         self.matched = [order is None for order in data.loading]
         self.row_of = np.repeat(np.nonzero(self.observed)[0], 2)
-        self.progress = progress
         self.evaluations = 0
+        self.comm = comm                    # mpi4py communicator: rows dealt to its ranks
+        self.rank, self.ranks = (0, 1) if comm is None else (comm.rank, comm.size)
 
     # --- rows --------------------------------------------------------------------------
     def _drive(self, theta, r: int):
@@ -102,32 +106,56 @@ class CalibrationProblem:
         l_mm = self.model.arm0.length_mm
         return "length", L / l_mm, dL, L / l_mm
 
+    def _over_rows(self, arm, work) -> dict:
+        """{row: work(rs, row)} for every row; rows are dealt round-robin to the
+        ranks of ``comm`` and the results shared (an error on any rank is
+        raised on every rank)."""
+        results, error = {}, None
+        with RowSolver(arm, self.elements) as rs:
+            try:
+                for r in range(self.rank, self.data.n_rows, self.ranks):
+                    results[r] = work(rs, r)
+            except (RowError, CalibrationError) as err:
+                error = err
+        if self.comm is not None and self.ranks > 1:
+            gathered = self.comm.allgather((results, error))
+            errors = [e for _, e in gathered if e is not None]
+            error = errors[0] if errors else None
+            results = {r: v for part, _ in gathered for r, v in part.items()}
+        if error is not None:
+            raise error
+        return results
+
     def match_branches(self, theta) -> list[str]:
         """Fix the loading order of every row without one (module docstring);
         returns one label per row ("given: order 2,1", "matched: proportional")."""
         arm = self.model.arm(theta)
         n, N = arm.n_tendons, self.elements or arm.elements
         candidates = [None] + (list(itertools.permutations(range(1, n + 1))) if n <= 3 else [])
-        with RowSolver(arm, self.elements) as rs:
-            for r in range(self.data.n_rows):
-                if not self.matched[r]:
+
+        def match(rs, r):
+            if not self.matched[r]:
+                return self.orders[r], self.states[r]
+            mode, drive, _, _ = self._drive(theta, r)
+            best = None
+            for order in candidates:
+                state = rs.solve(mode, drive, order)
+                if not state.converged:
                     continue
-                mode, drive, _, _ = self._drive(theta, r)
-                best = None
-                for order in candidates:
-                    state = rs.solve(mode, drive, order)
-                    if not state.converged:
-                        continue
-                    pts = self.model.measure(theta, rs.points_mm(state.u,
-                                                                 self.data.marker_s_mm))[0]
-                    err = float(np.sum(((pts - self.measured[r]) ** 2)[self.observed[r]]))
-                    if best is None or (err < best[0] and np.max(np.abs(
-                            state.u - best[2].u)[:N]) > SAME_SHAPE_TOL):
-                        best = (err, order, state)
-                if best is None:
-                    raise CalibrationError(f"line {self.data.lines[r]}: no loading path from "
-                                           "the straight arm reaches this row's equilibrium")
-                self.orders[r], self.states[r] = best[1], best[2]
+                pts = self.model.measure(theta, rs.points_mm(state.u, self.data.marker_s_mm))[0]
+                err = float(np.sum(((pts - self.measured[r]) ** 2)[self.observed[r]]))
+                if best is None or (err < best[0] and np.max(np.abs(
+                        state.u - best[2].u)[:N]) > SAME_SHAPE_TOL):
+                    best = (err, order, state)
+            if best is None:
+                raise CalibrationError(f"line {self.data.lines[r]}: no loading path from "
+                                       "the straight arm reaches this row's equilibrium")
+            return best[1], best[2]
+
+        for r, (order, state) in self._over_rows(arm, match).items():
+            self.orders[r] = order
+            if r % self.ranks == self.rank:
+                self.states[r] = state
         return [("matched: " if m else "given: ") + order_label(o)
                 for m, o in zip(self.matched, self.orders)]
 
@@ -142,27 +170,28 @@ class CalibrationProblem:
             raise CalibrationError(f"the parameters left the valid arms: {err}") from None
         rho_d = model.arm_routes(theta)[1].reshape(-1, model.size)
         n = arm.n_tendons
-        pts_all = np.full(self.measured.shape, np.nan)
-        taut = np.zeros((data.n_rows, n), bool)
-        J = []
-        with RowSolver(arm, self.elements) as rs:
-            for r in range(data.n_rows):
-                mode, drive, d_drive, L = self._drive(theta, r)
-                state = rs.solve(mode, drive, self.orders[r], warm=self.states[r])
-                if not state.converged:
-                    raise RowError(f"line {data.lines[r]}: equilibrium not reached "
-                                   f"({state.message})")
-                self.states[r] = state
-                taut[r] = state.p > 1e-8
-                x = rs.points_mm(state.u, data.marker_s_mm)
-                m, A, explicit = model.measure(theta, x)
-                pts_all[r] = m
-                if jacobian:
-                    dq = rs.derivatives(mode, state, L, data.marker_s_mm)
-                    dx = dq[:, :, : 2 * n] @ rho_d + dq[:, :, 2 * n:] @ d_drive
-                    J.append((np.einsum("ab,kbp->kap", A, dx) + explicit)[self.observed[r]])
+
+        def row(rs, r):
+            mode, drive, d_drive, L = self._drive(theta, r)
+            state = rs.solve(mode, drive, self.orders[r], warm=self.states[r])
+            if not state.converged:
+                raise RowError(f"line {data.lines[r]}: equilibrium not reached "
+                               f"({state.message})")
+            self.states[r] = state
+            m, A, explicit = model.measure(theta, rs.points_mm(state.u, data.marker_s_mm))
+            if not jacobian:
+                return m, None, state.p > 1e-8
+            dq = rs.derivatives(mode, state, L, data.marker_s_mm)
+            dx = dq[:, :, : 2 * n] @ rho_d + dq[:, :, 2 * n:] @ d_drive
+            return m, (np.einsum("ab,kbp->kap", A, dx) + explicit)[self.observed[r]], \
+                state.p > 1e-8
+
+        rows = self._over_rows(arm, row)
+        pts_all = np.array([rows[r][0] for r in range(data.n_rows)])
+        taut = np.array([rows[r][2] for r in range(data.n_rows)])
         residual = (pts_all - self.measured)[self.observed].ravel()
-        jac = np.concatenate(J).reshape(-1, model.size) if jacobian else None
+        jac = (np.concatenate([rows[r][1] for r in range(data.n_rows)]).reshape(-1, model.size)
+               if jacobian else None)
         return Evaluation(residual, jac, pts_all, taut)
 
 

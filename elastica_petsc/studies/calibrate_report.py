@@ -251,9 +251,10 @@ def tip_covariance(problem: CalibrationProblem, result: Fit, cov) -> np.ndarray:
 
 def calibrate(model, data: CalibrationData, *, elements: int | None = None,
               huber_mm: float | None = None, folds: int = 5, candidates=None,
-              next_count: int = 5, progress=None) -> CalibrationResult:
-    """Fit ``model``'s parameters to ``data`` and report (module docstring)."""
-    problem = CalibrationProblem(model, data, elements)
+              next_count: int = 5, progress=None, comm=None) -> CalibrationResult:
+    """Fit ``model``'s parameters to ``data`` and report (module docstring);
+    ``comm``: rows over its ranks (:class:`CalibrationProblem`)."""
+    problem = CalibrationProblem(model, data, elements, comm)
     if progress is not None:
         progress(0, "fitting")
     result = fit(problem, huber_mm=huber_mm)
