@@ -132,3 +132,22 @@ def test_bad_parameters_exit_2(args, message, data_csv, tmp_path):
     assert run.returncode == 2, run.stderr
     assert message in run.stderr and len(run.stderr.strip().splitlines()) == 1, run.stderr
     assert not (tmp_path / "fit.toml").exists()
+
+
+def test_a_schedule_csv_reads_with_input_steps(tmp_path):
+    """The schedule CSV of `trace --schedule` carries all three input groups: --input
+    picks one; its other columns are ignored; without --input a row is ambiguous."""
+    from elastica_petsc.core.calibration_data import DataError, read_calibration_csv
+    from elastica_petsc.core.model import Motor
+    from elastica_petsc.core.schedule import motor_schedule
+
+    lengths = [[150.0, 560.0], [148.0, 555.0], [146.5, 552.0]]
+    sched = motor_schedule(lengths, Motor(), tips_mm=[[590, -50], [580, -80], [570, -100]],
+                           tensions_N=[[1, 1], [2, 1], [3, 1]])
+    path = sched.write_csv(tmp_path / "s.csv")
+    data = read_calibration_csv(path, 2, kind="steps")
+    assert list(data.kinds) == ["steps"] * 3
+    np.testing.assert_array_equal(data.inputs, sched.steps)
+    np.testing.assert_allclose(data.tips_mm, [[590, -50], [580, -80], [570, -100]])
+    with pytest.raises(DataError, match="inputs of several kinds"):
+        read_calibration_csv(path, 2)

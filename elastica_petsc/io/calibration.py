@@ -32,7 +32,8 @@ def toml_header(result) -> list[str]:
     rms = result.stats["rms_mm"]
     lines = [f"Calibrated by elastica-petsc calibrate from {data.source or 'data'} "
              f"({data.n_rows} rows): RMS point error {rms:.4g} mm.",
-             "Routes are in the arm's own frame (clamp at the origin along +x).",
+             f"Fitted on {result.problem.elements or result.arm.elements} elements; routes are in "
+             "the arm's own frame (clamp at the origin along +x).",
              "Fitted parameters (value +- one standard deviation):"]
     for p in result.parameters():
         lines.append(f"  {p['name']} = {_fmt(p['value'], p['sigma'])} {p['unit']}")
