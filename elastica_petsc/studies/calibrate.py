@@ -200,8 +200,10 @@ def brgn(problem: CalibrationProblem, theta0, weights, *, max_iterations: int = 
          step_tol: float = STEP_TOL, prefix: str = "calib_") -> tuple[np.ndarray, str, int]:
     """TAO BRGN on X = (theta - theta0) / scale within the bounds; ``weights``
     (M,) multiply the squared residuals.  Converged (CONVERGED_USER) when an
-    iteration moves no scaled parameter by more than ``step_tol`` (the
-    gradient cannot fall below the round-off of the equilibria, ~1e-9 mm).
+    iteration of BRGN's subsolver moves no scaled parameter by more than
+    ``step_tol`` or lowers the objective by less than F_RTOL of itself (the
+    gradient cannot fall below the round-off of the equilibria, residuals
+    ~1e-8 mm).
     A trial point whose rows cannot be solved gets residuals of
     FAILED_RESIDUAL_MM, so the line search steps back.
     Returns (theta, TAO's reason, iterations)."""
@@ -224,7 +226,6 @@ def brgn(problem: CalibrationProblem, theta0, weights, *, max_iterations: int = 
         try:
             R.setArray(at(X)["r"])
         except (RowError, CalibrationError):   # a trial step too far: make it look bad
-            failures.append(X.getArray(readonly=True).copy())
             R.setArray(np.full(M, FAILED_RESIDUAL_MM))
 
     def jacobian(tao, X, J, P):
@@ -236,7 +237,6 @@ def brgn(problem: CalibrationProblem, theta0, weights, *, max_iterations: int = 
         J.assemble()
 
     M, P_ = len(weights), model.size
-    failures: list = []
     x = PETSc.Vec().createSeq(P_, comm=PETSc.COMM_SELF)
     x.setArray(0.0)
     R = PETSc.Vec().createSeq(M, comm=PETSc.COMM_SELF)
