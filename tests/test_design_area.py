@@ -12,9 +12,10 @@ import h5py
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.geometry import triangles_union_area
+from elastica_petsc.core.model import load_config
 from elastica_petsc.studies.design import DesignError
-from elastica_petsc.studies.design_area import resampled_area, union_area
+from elastica_petsc.studies.design_area import resampled_area
 from elastica_petsc.studies.design_sweep import design_arm, parse_axis, run_sweep
 from elastica_petsc.studies.traced_area import traced_area
 
@@ -24,9 +25,9 @@ P_MAX = 18.0                                  # 10 N on the paper's arm
 
 def test_union_area_closed_forms():
     square = np.array([[[0, 0], [10, 0], [10, 10]], [[0, 0], [10, 10], [0, 10]]], float)
-    assert union_area(square, 0.05) == pytest.approx(100.0, rel=0.02)
+    assert triangles_union_area(square, 0.05) == pytest.approx(100.0, rel=0.02)
     overlapping = np.concatenate((square, square + [5.0, 0.0]))          # union: 15 x 10
-    assert union_area(overlapping, 0.05) == pytest.approx(150.0, rel=0.02)
+    assert triangles_union_area(overlapping, 0.05) == pytest.approx(150.0, rel=0.02)
 
 
 def test_resampling_agrees_with_the_traced_area():

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.studies.boundary import trace_boundary
 from elastica_petsc.studies.design import with_routes

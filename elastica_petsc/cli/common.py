@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..core.config import load_config
+from ..core.model import load_config
 from ..core.errors import InputError
 from ..core.model import Arm
 
@@ -12,8 +12,19 @@ from ..core.model import Arm
 def add_arm_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--config", metavar="TOML",
                         help="arm configuration (default: the paper's arm, configs/paper.toml)")
-    parser.add_argument("--elements", type=int, metavar="N",
-                        help="number of finite elements (overrides the config)")
+    parser.add_argument("--elements", type=elements_count, metavar="N|auto",
+                        help="number of finite elements (overrides the config); auto: the "
+                             "count nearest the config's that puts every attachment on a node")
+
+
+def elements_count(text: str):
+    """``--elements``: an integer or ``auto``."""
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer or auto, got {text!r}") from None
 
 
 def add_output_options(parser: argparse.ArgumentParser, plot: bool = True) -> None:
@@ -77,10 +88,14 @@ def load_arm(args) -> tuple[Arm, "Discretisation"]:
 
     from ..core import inputs
 
-    elements = inputs.elements(args.elements, "--elements")
+    if args.elements != "auto":
+        inputs.elements(args.elements, "--elements")       # before reading the config
     arm = load_config(args.config)
     newton_forms(args, arm)
-    return arm, Discretisation.from_arm(arm, elements)
+    if args.elements == "auto":
+        from ..core.fem import nearest_element_count
+        args.elements = nearest_element_count(arm)
+    return arm, Discretisation.from_arm(arm, inputs.elements(args.elements, "--elements"))
 
 
 def tensions(args, arm: Arm):
@@ -158,8 +173,15 @@ def release_outputs() -> None:
         _LOCKS.pop().release()
 
 
-def print_json(data: dict) -> None:
+JSON_SCHEMA_VERSION = 1     # elastica_petsc/schema/output.schema.json, docs/json.md
+
+
+def print_json(kind: str, data: dict) -> None:
+    """One JSON object on stdout: ``kind`` (the command, or ``error``),
+    ``schema_version``, then ``data`` (docs/json.md); numpy values as JSON
+    (core/jsontext.py, the one encoder)."""
     from ..core import jsontext
 
-    jsontext.dump(data, sys.stdout, indent=2)
+    jsontext.dump({"kind": kind, "schema_version": JSON_SCHEMA_VERSION, **data}, sys.stdout,
+                  indent=2)
     sys.stdout.write("\n")

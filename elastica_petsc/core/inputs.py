@@ -201,13 +201,17 @@ def path_step_mm(points, step_mm, name: str, step_name: str) -> float:
     return step
 
 
+def design_points_limit() -> int:
+    return limit(MAX_DESIGN_POINTS_ENV, MAX_DESIGN_POINTS)
+
+
 def design_points(points, name: str) -> None:
     """A path to design for: each of its targets is traced at every evaluation."""
-    most = limit(MAX_DESIGN_POINTS_ENV, MAX_DESIGN_POINTS)
+    most = design_points_limit()
     if len(points) > most:
-        raise InputError(f"{name} has {len(points):,} targets; a design traces every one at "
-                         f"each evaluation: at most {most:,} (thin the path, or set "
-                         f"{MAX_DESIGN_POINTS_ENV} to raise the limit)")
+        raise InputError(f"{name} has more than {most:,} targets; a design traces every one "
+                         f"at each evaluation (thin the path, or set {MAX_DESIGN_POINTS_ENV} "
+                         "to raise the limit)")
 
 
 def box_mm(values, name: str) -> np.ndarray:

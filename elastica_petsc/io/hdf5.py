@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import contextlib
 import datetime
-import json
 import os
 import platform
 import sys
@@ -40,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core import jsontext
 from .. import __version__
 from ..core.clearance import state_cable_clear
 from ..core.config import arm_to_dict
@@ -77,11 +77,11 @@ def check_output_path(path: str | Path, overwrite: bool, suffixes=None,
     folder = path.parent
     if not folder.is_dir():
         raise OutputError(f"{folder}: no such directory for the output file")
-    _probe_writable(folder, path)
+    probe_writable(folder, path)
     return path
 
 
-def _probe_writable(folder: Path, path: Path) -> None:
+def probe_writable(folder: Path, path: Path) -> None:
     """Create and remove a file beside ``path`` (root ignores permission bits, so
     only trying tells a read-only mount); an existing file must be replaceable."""
     probe = folder / f".{path.name}.probe-{os.getpid()}"
@@ -166,7 +166,7 @@ def provenance(arm: Arm, kind: str) -> dict:
 
     info = {
         "kind": kind,
-        "config_json": json.dumps(arm_to_dict(arm)),
+        "config_json": jsontext.dumps(arm_to_dict(arm)),
         "elastica_petsc_version": __version__,
         "petsc_version": "%d.%d.%d" % PETSc.Sys.getVersion(),
         "python_version": platform.python_version(),

@@ -40,8 +40,27 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.fem import Discretisation
+from ..core.geometry import triangles_union_area
 from ..core.model import Arm
 from .traced_area import TracedArea, traced_area
+
+
+def infeasibility(area: TracedArea, force_scale_N: float) -> dict:
+    """Which constraint a design's loop violates, in N: the tensions of the nodes
+    whose equilibrium was not solved, and per crossing tendon (numbered from 1)
+    how many nodes, the first and last along the loop, and the smallest
+    max(P_1, P_2) among them (a tension box below it avoids those nodes)."""
+    P = area.tensions * force_scale_N
+    crossings = []
+    for i in range(area.node_clear.shape[1]):
+        at = np.flatnonzero(~area.node_clear[:, i])
+        if len(at):
+            crossings.append({"tendon": i + 1, "nodes": int(len(at)), "of": int(len(P)),
+                              "first_tensions_N": P[at[0]].round(4).tolist(),
+                              "last_tensions_N": P[at[-1]].round(4).tolist(),
+                              "lowest_max_tension_N": float(P[at].max(axis=1).min().round(4))})
+    return {"unsolved_tensions_N": P[~area.node_converged].round(4).tolist(),
+            "crossings": crossings}
 
 
 # --- independent re-sampling -------------------------------------------------------------------
@@ -70,34 +89,6 @@ def _triangles(tips: np.ndarray, good: np.ndarray) -> np.ndarray:
     return np.concatenate((t1, t2))
 
 
-def union_area(triangles: np.ndarray, h: float) -> float:
-    """Area (mm^2) of the union of triangles, counted on a square lattice of
-    spacing ``h`` mm (a point counts once however many triangles hold it)."""
-    if len(triangles) == 0:
-        return 0.0
-    lo = triangles.reshape(-1, 2).min(axis=0)
-    hi = triangles.reshape(-1, 2).max(axis=0)
-    shape = np.ceil((hi - lo) / h).astype(int) + 1
-    covered = np.zeros(shape, bool)
-    for tri in triangles:
-        i0, j0 = np.floor((tri.min(axis=0) - lo) / h).astype(int)
-        i1, j1 = np.ceil((tri.max(axis=0) - lo) / h).astype(int) + 1
-        gx, gy = np.meshgrid(lo[0] + h * np.arange(i0, i1), lo[1] + h * np.arange(j0, j1),
-                             indexing="ij")
-        covered[i0:i1, j0:j1] |= _inside_triangle(tri, gx, gy)
-    return float(covered.sum()) * h * h
-
-
-def _inside_triangle(tri: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
-    (x0, y0), (x1, y1), (x2, y2) = tri
-    det = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
-    if det == 0.0:
-        return np.zeros(gx.shape, bool)
-    l1 = ((gx - x0) * (y2 - y0) - (x2 - x0) * (gy - y0)) / det
-    l2 = ((x1 - x0) * (gy - y0) - (gx - x0) * (y1 - y0)) / det
-    return (l1 >= 0) & (l2 >= 0) & (l1 + l2 <= 1)
-
-
 def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells: int = 20,
                    lattice_mm: float = 0.25) -> Resampled:
     """Re-sample the workspace of ``arm`` within 0 <= p_i <= ``p_max``: forward
@@ -114,7 +105,7 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
     (the objective before issue 21)."""
     from mpi4py import MPI
 
-    from .workspace import REACHED, run_map
+    from .workspace import Status, run_map
 
     disc = Discretisation.from_arm(arm, elements)
     spacing = p_max / cells
@@ -125,13 +116,13 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
     n = cells + 1
     tips = np.full((n, n, 2), np.nan)
     good = np.zeros((n, n), bool)
-    reached = s["status"] == REACHED
+    reached = s["status"] == Status.REACHED
     with np.errstate(invalid="ignore"):
         stable = reached & (s["lambda_min"] > 0)
     tips[index[:, 0], index[:, 1]] = s["tip"]
     good[index[:, 0], index[:, 1]] = stable
-    fine = union_area(_triangles(tips, good), lattice_mm)
-    coarse = union_area(_triangles(tips[::2, ::2], good[::2, ::2]), lattice_mm)
+    fine = triangles_union_area(_triangles(tips, good), lattice_mm)
+    coarse = triangles_union_area(_triangles(tips[::2, ::2], good[::2, ::2]), lattice_mm)
     edge = np.concatenate([tips[:, 0], tips[-1, 1:], tips[-2::-1, -1], tips[0, -2:0:-1]])
     perimeter = float(np.nansum(np.linalg.norm(np.diff(edge, axis=0), axis=1)))
     seconds = float(np.nansum(s["seconds_control"]) + np.nansum(s["seconds_eigen"]))
@@ -142,6 +133,7 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
 
 
 # --- the optimiser -----------------------------------------------------------------------------
+INFEASIBLE_START = "INFEASIBLE_START"   # AreaDesign.reason: the start violates a constraint
 STALL_GAIN = 1e-3        # relative area gain over 3 iterations below which TAO is stopped
 @dataclass
 class AreaDesign:
@@ -174,7 +166,7 @@ def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm:
     """Attachment arc lengths on mesh nodes: a pattern search (move one
     attachment by one node, keep the move if the design is feasible and the
     area grows, until no move helps), within +- ``reach_mm`` of the start and
-    on (0, l].  ``evaluate(arm) -> TracedArea``.  Returns (arm, its BoxArea)."""
+    on (0, l].  ``evaluate(arm) -> TracedArea``.  Returns (arm, its TracedArea)."""
     from .design import with_attachment
 
     h = arm.length_mm / elements
@@ -219,10 +211,13 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
         raise DesignError(f"--tension-max must be a positive force, got p = {p_max}")
     t0 = time.perf_counter()
     elements = Discretisation.from_arm(arm, elements).n_elements
-    history, best, first = [], {}, []
+    history, best, first, seen = [], {}, [], {}
 
     def evaluate(candidate):
-        a = traced_area(candidate, tendons, p_max, elements=elements)
+        key = tuple((t.attach_mm, *t.route_mm) for t in candidate.tendons)
+        if key in seen:                          # TAO's first call is the start, evaluated
+            return seen[key]
+        a = seen[key] = traced_area(candidate, tendons, p_max, elements=elements)
         if not first:
             first.append(a)
         history.append({"attach_mm": [t.attach_mm for t in candidate.tendons],
@@ -238,6 +233,9 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
         return a
 
     designed, reason, iterations = arm, "", 0
+    if not evaluate(arm).feasible:               # nothing to start from: no optimiser, no checks
+        return AreaDesign(arm, arm, list(tendons), p_max, first[0], first[0], None, None,
+                          history, INFEASIBLE_START, 0, time.perf_counter() - t0)
     if attaches:
         designed, _ = search_attachments(arm, attaches, evaluate, elements=elements,
                                          reach_mm=reach_mm)

@@ -129,11 +129,12 @@ def densify(points, step_mm: float) -> np.ndarray:
     return np.vstack(out)
 
 
-def read_csv(path) -> np.ndarray:
+def read_csv(path, max_rows: int | None = None) -> np.ndarray:
     """Points from a CSV file, shape (k, 2): columns read by the header's names
     ``x_mm`` and ``y_mm`` (in either order; any other or a missing name is
     refused), or, without a header line, ``x_mm,y_mm`` by position.  Blank
-    lines and ``#`` comments are ignored."""
+    lines and ``#`` comments are ignored.  ``max_rows``: stop after that many
+    points (a caller with a limit need not parse a huge file to refuse it)."""
     path = Path(path)
     try:
         text = path.read_text()
@@ -160,6 +161,8 @@ def read_csv(path) -> np.ndarray:
         if not (math.isfinite(x) and math.isfinite(y)):
             raise PathError(f"{path}:{lineno}: non-finite coordinate {','.join(cells)!r}")
         rows.append((x, y))
+        if max_rows is not None and len(rows) >= max_rows:
+            break
     if not rows:
         raise PathError(f"{path}: no points (expected lines x_mm,y_mm)")
     return np.array(rows)

@@ -18,7 +18,7 @@ curved inner edge with straight chords: on the paper's arm at 10 N it gave
 59,436 mm^2 against 58,330 mm^2 from ``boundary`` and a gradient 15 % off
 finite differences of ``boundary``; the traced loop agrees with ``boundary``
 by construction and its gradient with finite differences of ``boundary``
-to 2 % (within 1.3 % on the paper's arm; tests/test_traced_area.py, docs/model.md §11.3).
+to 2 % (within 1.3 % on the paper's arm; tests/test_traced_area.py, docs/model.md §15.3).
 """
 from __future__ import annotations
 
@@ -27,9 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.clearance import cable_clear
+from ..core.clearance import state_cable_clear
 from ..core.fem import Discretisation
 from ..core.model import Arm
+from ..solvers.equilibrium import Equilibrium
 
 
 @dataclass
@@ -41,8 +42,22 @@ class TracedArea:
     loop_mm: np.ndarray         # tips at the traced loop's nodes (K, 2)
     tensions: np.ndarray        # the nodes in tension space (K, 2), p = P l^2/B
     det_sign_changes: int       # sign changes of det(d x_t/d p) along the loop
-    converged: bool             # the walk around the region closed
-    cables_clear: bool          # no cable crosses the arm at any node (core/clearance.py)
+    closed: bool                # the walk around the region closed
+    node_clear: np.ndarray      # (K, n) cable i clear of the arm at the node (core/clearance.py)
+
+    @property
+    def node_converged(self) -> np.ndarray:
+        """(K,) the node's equilibrium solved: every node of a traced loop is."""
+        return np.ones(len(self.loop_mm), bool)
+
+    @property
+    def converged(self) -> bool:
+        return self.closed
+
+    @property
+    def cables_clear(self) -> bool:
+        """No cable crosses the arm at any node."""
+        return bool(self.node_clear.all())
 
     @property
     def feasible(self) -> bool:
@@ -67,8 +82,8 @@ def traced_area(arm: Arm, tendons, p_max: float, *,
                             route_gradients=tuple(tendons))
     region = traced.regions["W0"]
     points = [pt for curve in region.curves for pt in curve.points]
-    clear = all(np.all(cable_clear(disc.node_positions(disc.split(pt.w[:-2])[0]),
-                                   disc.attach_nodes, disc.routes)) for pt in points)
+    clear = np.array([state_cable_clear(Equilibrium(disc, pt.w[-2:], pt.w[:-2], True, "", 0, 0))
+                      for pt in points], bool)
     tests = np.array([pt.tip_det for pt in points])
     signs = np.sign(tests[np.isfinite(tests) & (tests != 0.0)])
     changes = int(np.sum(signs != np.roll(signs, 1))) if len(signs) > 1 else 0
@@ -76,4 +91,4 @@ def traced_area(arm: Arm, tendons, p_max: float, *,
     return TracedArea(float(traced.areas_mm2["W0"]), np.asarray(gradient, float),
                       np.array([pt.tip for pt in points]) * arm.length_mm,
                       np.array([pt.w[-2:] for pt in points]), changes, bool(region.closed),
-                      bool(clear))
+                      clear.reshape(len(points), -1))
