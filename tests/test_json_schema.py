@@ -8,11 +8,13 @@ import os
 import subprocess
 import sys
 from importlib import resources
+from pathlib import Path
 
 import pytest
 
 from schema_check import errors
 
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 SCHEMA = json.loads((resources.files("elastica_petsc") / "schema" / "output.schema.json")
                     .read_text())
 CROSSING_ARM = """
@@ -51,6 +53,8 @@ RUNS = [
     ("design-area-infeasible", ["design", "--config", "cross.toml", "--vary", "tendon1.route",
                                 "--objective", "area", "--resample-cells", "2", *Q], {1}),
     ("design-sweep", ["design", "--sweep", "tendon2.route.y=50:60:10", *E, *Q], {0}),
+    ("calibrate", ["calibrate", "--data", str(EXAMPLES / "calibration_data.csv"), "--vary",
+                   "bending_stiffness", "--folds", "0", *E, *Q], {0}),
     # exit status 2: a usage error, bad input, an output that cannot be written
     ("usage-error", ["solve", "--tensions", "x"], {2}),
     ("input-error", ["solve", "--tensions", "1"], {2}),
