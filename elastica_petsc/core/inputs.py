@@ -56,8 +56,10 @@ def numbers(values, name: str, unit: str = "", count: int | None = None) -> np.n
         raise InputError(f"{name}: expected {count} number{'s' * (count != 1)}"
                          f"{' in ' + unit if unit else ''}, got {out.size}")
     if not np.all(np.isfinite(out)):
+        k = int(np.argmin(np.isfinite(out)))
+        where = f" (value {k + 1} of {out.size})" if out.size > 1 else ""
         raise InputError(f"{name}: expected finite numbers{' in ' + unit if unit else ''}, "
-                         f"got {', '.join(f'{v:g}' for v in out)}")
+                         f"got {out[k]:g}{where}")
     return out
 
 
