@@ -40,6 +40,9 @@ def add_parser(sub) -> None:
                         help="read only this input group (e.g. of a schedule CSV)")
     parser.add_argument("--huber", type=float, metavar="MM",
                         help="robust fit: Huber loss with this threshold [mm]")
+    parser.add_argument("--method", choices=("brgn", "pounders"), default="brgn",
+                        help="TAO BRGN with the exact Jacobian (default) or POUNDERS "
+                             "(derivative-free, a check; slower)")
     parser.add_argument("--folds", type=int, default=5, metavar="K",
                         help="k-fold cross-validation (0: none; default 5)")
     parser.add_argument("--candidates", metavar="CSV",
@@ -98,7 +101,7 @@ def run(args) -> int:
         try:
             result = calibrate(model, data, elements=disc.n_elements, huber_mm=args.huber,
                                folds=args.folds, candidates=candidates, next_count=args.next,
-                               progress=bar, comm=comm)
+                               progress=bar, comm=comm, method=args.method)
         except RowError as err:
             bar.close()
             if root:
@@ -164,7 +167,7 @@ def print_summary(s: dict) -> None:
         print("Down-weighted by the Huber loss: lines "
               + ", ".join(map(str, s["down_weighted_lines"])))
     sv = s["solver"]
-    print(f"TAO BRGN: {sv['tao_reason']} after {sv['iterations']} iterations "
+    print(f"TAO {sv['method'].upper()}: {sv['tao_reason']} after {sv['iterations']} iterations "
           f"({sv['evaluations']} evaluations, {sv['seconds']:.3g} s); remaining step "
           f"{sv['remaining_step_sigma']:.2g} sigma")
     for k, nxt in enumerate(s.get("next_measurements") or (), start=1):

@@ -230,7 +230,7 @@ class CalibrationResult:
                                     np.flatnonzero(self.fit.row_weights < 1.0)],
             "cross_validation": None if cv is None else
             {k: v for k, v in cv.items() if k != "per_row_mm"},
-            "solver": {"tao_reason": self.fit.reason, "iterations": self.fit.iterations,
+            "solver": {"method": self.fit.method, "tao_reason": self.fit.reason, "iterations": self.fit.iterations,
                        "evaluations": self.fit.evaluations, "seconds": self.fit.seconds,
                        "remaining_step_sigma": rep["remaining_step_sigma"]},
             "next_measurements": self.next_measurements,
@@ -251,13 +251,14 @@ def tip_covariance(problem: CalibrationProblem, result: Fit, cov) -> np.ndarray:
 
 def calibrate(model, data: CalibrationData, *, elements: int | None = None,
               huber_mm: float | None = None, folds: int = 5, candidates=None,
-              next_count: int = 5, progress=None, comm=None) -> CalibrationResult:
+              next_count: int = 5, progress=None, comm=None,
+              method: str = "brgn") -> CalibrationResult:
     """Fit ``model``'s parameters to ``data`` and report (module docstring);
     ``comm``: rows over its ranks (:class:`CalibrationProblem`)."""
     problem = CalibrationProblem(model, data, elements, comm)
     if progress is not None:
         progress(0, "fitting")
-    result = fit(problem, huber_mm=huber_mm)
+    result = fit(problem, huber_mm=huber_mm, method=method)
     report = uncertainty(problem, result)
     stats = residual_stats(problem, result)
     cov = np.where(np.isfinite(report["covariance"]), report["covariance"], 0.0)
