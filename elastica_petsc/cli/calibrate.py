@@ -123,9 +123,7 @@ def finish(args, result, root: bool = True) -> int:
 
     summary = result.summary()
     summary["ranks"] = result.problem.ranks
-    converged = summary["solver"]["tao_reason"].startswith("CONVERGED") or \
-        summary["solver"]["remaining_step_sigma"] < 1e-2
-    summary["converged"] = converged
+    converged = summary["solver"]["converged"]
     if not root:
         return 0 if converged else 1
     if args.out:
@@ -170,6 +168,11 @@ def print_summary(s: dict) -> None:
     print(f"TAO {sv['method'].upper()}: {sv['tao_reason']} after {sv['iterations']} iterations "
           f"({sv['evaluations']} evaluations, {sv['seconds']:.3g} s); remaining step "
           f"{sv['remaining_step_sigma']:.2g} sigma")
+    if not sv["converged"]:
+        print(f"Not converged: the Gauss-Newton step still to go is {sv['remaining_step_sigma']:.2g} "
+              "standard deviations" + (f"; {sv['failed_trial_points']} trial points had a row "
+                                       "without an equilibrium (a row near a fold or snap limits "
+                                       "the steps)" if sv["failed_trial_points"] else ""))
     for k, nxt in enumerate(s.get("next_measurements") or (), start=1):
         print(f"  next measurement {k}: candidate line {nxt['line']} ({nxt['kind']} "
               f"{nxt['inputs']}), log det gain {nxt['log_det_gain']:.3g}")

@@ -46,6 +46,7 @@ F_RTOL = 1e-10
 FAILED_RESIDUAL_MM = 1e6
 # POUNDERS (derivative-free): stop on this gradient of its model (scaled units) ...
 POUNDERS_GATOL = 1e-9
+POUNDERS_GRTOL = 1e-10           # ... or on |g| / f (residuals that do not vanish)
 # ... or after max_iterations x this x parameters iterations.
 POUNDERS_ITERATIONS_PER_PARAMETER = 4
 METHODS = ("brgn", "pounders")
@@ -96,6 +97,7 @@ class CalibrationProblem:
         self.matched = [order is None for order in data.loading]
         self.row_of = np.repeat(np.nonzero(self.observed)[0], 2)
         self.evaluations = 0
+        self.failed_trials = 0              # trial points with a row out of reach
         self.comm = comm                    # mpi4py communicator: rows dealt to its ranks
         self.rank, self.ranks = (0, 1) if comm is None else (comm.rank, comm.size)
 
@@ -237,6 +239,7 @@ def least_squares(problem: CalibrationProblem, theta0, weights, *, method: str =
         try:
             R.setArray(at(X)["r"])
         except (RowError, CalibrationError):   # a trial step too far: make it look bad
+            problem.failed_trials += 1
             R.setArray(np.full(M, FAILED_RESIDUAL_MM))
 
     def jacobian(tao, X, J, P):
@@ -251,9 +254,9 @@ def least_squares(problem: CalibrationProblem, theta0, weights, *, method: str =
 
     def monitor(t) -> None:
         X = t.getSolution().getArray(readonly=True)
-        f = t.getObjectiveValue()
-        if "X" in previous and (np.max(np.abs(X - previous["X"])) <= step_tol
-                                or previous["f"] - f <= F_RTOL * previous["f"]):
+        f, step = t.getObjectiveValue(), t.getSolutionStatus()[4]
+        if "X" in previous and step > 0 and (np.max(np.abs(X - previous["X"])) <= step_tol
+                                             or previous["f"] - f <= F_RTOL * previous["f"]):
             t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
         previous.update(X=X.copy(), f=f)
 
@@ -275,11 +278,14 @@ def least_squares(problem: CalibrationProblem, theta0, weights, *, method: str =
     tao.setFromOptions()
     inner = tao.getBRGNSubsolver() if method == "brgn" else tao   # BRGN iterates inside
     if method == "brgn":
+        inner.setOptionsPrefix(prefix + "brgn_")      # PETSc 3.18 gives it no prefix of ours
+        _default_option(prefix + "brgn_tao_ls_type", "armijo")
+        inner.setFromOptions()
         inner.setTolerances(gatol=1e-12, grtol=1e-14, gttol=0.0)
         inner.setMaximumIterations(max_iterations)
         inner.setMonitor(monitor)
     else:
-        tao.setTolerances(gatol=POUNDERS_GATOL, grtol=0.0, gttol=0.0)
+        tao.setTolerances(gatol=POUNDERS_GATOL, grtol=POUNDERS_GRTOL, gttol=0.0)
         tao.setMaximumIterations(POUNDERS_ITERATIONS_PER_PARAMETER * P_ * max_iterations)
     try:
         tao.solve(x)
@@ -289,6 +295,13 @@ def least_squares(problem: CalibrationProblem, theta0, weights, *, method: str =
     finally:
         for obj in (tao, x, R, Jm, xl, xu):
             obj.destroy()
+
+
+def _default_option(name: str, value: str) -> None:
+    """Set a PETSc option unless the user gave it (read by the next setFromOptions)."""
+    options = PETSc.Options()
+    if not options.hasName(name):
+        options[name] = value
 
 
 def huber_weights(problem: CalibrationProblem, residual, delta_mm: float | None):

@@ -92,6 +92,7 @@ def uncertainty(problem: CalibrationProblem, result: Fit) -> dict:
             "undetermined_combinations": null_words, "residual_variance_mm2": s2,
             "dof": dof,
             "remaining_step_sigma": float(np.max(np.abs(step) / sd_det)) if model.size else 0.0,
+            "remaining_step_scaled": float(np.max(np.abs(step) / scale)) if model.size else 0.0,
             "fisher_scaled": Js.T @ Js / s2 if s2 > 0 else Js.T @ Js}
 
 
@@ -198,6 +199,14 @@ class CalibrationResult:
         """The fitted arm in its own frame (what the TOML holds)."""
         return self.model.arm(self.fit.theta)
 
+    @property
+    def converged(self) -> bool:
+        """The Gauss-Newton step still to go is below 0.01 standard deviations,
+        or below 1e-6 of every parameter's scale (noise-free data, where the
+        deviations themselves are round-off)."""
+        return self.report["remaining_step_sigma"] < 1e-2 or \
+            self.report["remaining_step_scaled"] < 1e-6
+
     def parameters(self) -> list[dict]:
         start = self.model.start()
         return [{"name": p.name, "unit": p.unit, "start": float(s), "value": float(v),
@@ -232,7 +241,10 @@ class CalibrationResult:
             {k: v for k, v in cv.items() if k != "per_row_mm"},
             "solver": {"method": self.fit.method, "tao_reason": self.fit.reason, "iterations": self.fit.iterations,
                        "evaluations": self.fit.evaluations, "seconds": self.fit.seconds,
-                       "remaining_step_sigma": rep["remaining_step_sigma"]},
+                       "remaining_step_sigma": rep["remaining_step_sigma"],
+                       "remaining_step_scaled": rep["remaining_step_scaled"],
+                       "failed_trial_points": self.problem.failed_trials,
+                       "converged": self.converged},
             "next_measurements": self.next_measurements,
         }
 
