@@ -431,7 +431,7 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
                  out: str | Path | None = None, overwrite: bool = False, resume: bool = False,
                  comm=None, elements: int | None = None):
     """Evaluate a grid of designs: ``axes`` are strings
-    ``"tendonK.route.x|route.y|attach=START:STOP:STEP"`` (mm; attachments on
+    ``"tendonK.route.x|route.y|attach|offset=START:STOP:STEP"`` (mm; attachments on
     mesh nodes).  Per design: the area [mm^2] of W_0 within 0 <= P_i <=
     ``tension_max_N`` (as :func:`design_area`) and, with ``path_mm``, the
     path's misfit [mm^2] and targets reached.  On every rank of ``comm``
@@ -457,7 +457,7 @@ def calibrate(arm: Arm, data, vary, *, bounds=None, input: str | None = None,
     {scalar name: (lo, hi)}; ``method``: "brgn" (exact Jacobian) or "pounders"
     (derivative-free check).  Returns a CalibrationResult: ``.arm`` the fitted
     arm, ``.parameters()`` values with standard deviations, ``.summary()``
-    (docs/model.md §11)."""
+    (docs/model.md §14)."""
     from .core.calibration_data import CalibrationData, read_calibration_csv
     from .core.calibration_params import ParameterModel
     from .studies.calibrate_report import calibrate as run_calibration

@@ -1,5 +1,5 @@
 """``elastica-petsc calibrate``: fit the arm's parameters to measured states
-(issue 23; docs/model.md §11).
+(issue 23; docs/model.md §14).
 
     elastica-petsc calibrate --config arm.toml --data data.csv \\
         --vary bending_stiffness tendon1.route tendon2.route --out fitted.toml
@@ -35,7 +35,7 @@ def add_parser(sub) -> None:
                         help=f"parameters to fit: {PARAMETER_HELP}")
     parser.add_argument("--bounds", nargs="+", metavar="NAME=LO:HI", default=[],
                         help="bounds of varied scalars, e.g. tendon1.route.x=30:60 "
-                             "(defaults: docs/model.md §11)")
+                             "(defaults: docs/model.md §14)")
     parser.add_argument("--input", choices=("tension", "length", "steps"),
                         help="read only this input group (e.g. of a schedule CSV)")
     parser.add_argument("--huber", type=float, metavar="MM",
@@ -134,7 +134,7 @@ def finish(args, result, root: bool = True) -> int:
         from ..plots.calibrate import plot_calibration
         plot_calibration(result, args.plot)
     if args.json:
-        common.print_json(summary)
+        common.print_json("calibrate", summary)
     else:
         print_summary(summary)
     return 0 if converged else 1

@@ -1,4 +1,4 @@
-"""Measured static states of an arm for calibration: the CSV format (docs/model.md §11).
+"""Measured static states of an arm for calibration: the CSV format (docs/model.md §14).
 
 One row per measured equilibrium.  Inputs, per tendon K = 1..n (the names of
 the schedule CSV that ``schedule`` writes, :mod:`elastica_petsc.core.schedule`):
@@ -36,7 +36,8 @@ _INPUT_RE = re.compile(r"^(tension_(\d+)_N|length_(\d+)_mm|steps_(\d+))$")
 _MARKER_RE = re.compile(r"^marker_([0-9.]+)_([xy])_mm$")
 _SCHEDULE_RE = re.compile(r"^(tension_\d+_p|revolutions_\d+|step_increment_\d+|"
                           r"rounding_error_\d+_mm)$")
-IGNORED = {"row", "phase", "point", "time_s", "reached", "target_x_mm", "target_y_mm", "note"}
+IGNORED = {"row", "phase", "point", "time_s", "duration_s", "limited_by", "reached",
+           "target_x_mm", "target_y_mm", "note"}
 
 
 class DataError(InputError):

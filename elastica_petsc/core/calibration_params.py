@@ -1,5 +1,5 @@
 """The parameters a calibration can vary, and how they enter the model
-(docs/model.md §11).  Numpy only; physical units (mm, N m^2, degrees).
+(docs/model.md §14).  Numpy only; physical units (mm, N m^2, degrees).
 
 Names (``--vary``), each a group of one or two scalars:
 

@@ -1,5 +1,5 @@
 """Equilibria of measured rows and their exact parameter derivatives
-(calibration, docs/model.md §11).
+(calibration, docs/model.md §14).
 
 A row is driven either by tensions p (load control, Eq. (9)) or by cable
 lengths L (length control with slack cables, :mod:`.lengths`, Eq. (23)).  Its

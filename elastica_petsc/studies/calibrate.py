@@ -1,5 +1,5 @@
 """Calibration: the parameters that make the model explain measured states
-(issue 23; docs/model.md §11).
+(issue 23; docs/model.md §14).
 
 Residuals, one pair (x, y) per measured point (tip, markers) and row [mm]:
 

@@ -1,5 +1,5 @@
 """What a calibration has determined: uncertainties, identifiability,
-cross-validation and the next measurements to make (docs/model.md §11).
+cross-validation and the next measurements to make (docs/model.md §14).
 
 With the weighted Jacobian J_w = W^(1/2) J at the fit and the column scales
 D (typical changes of each parameter), J_w D = U S V^T.  Singular values
