@@ -123,7 +123,7 @@ def finish(args, result, root: bool = True) -> int:
 
     summary = result.summary()
     summary["ranks"] = result.problem.ranks
-    converged = summary["solver"]["converged"]
+    converged = summary["converged"] = summary["solver"]["converged"]
     if not root:
         return 0 if converged else 1
     if args.out:
