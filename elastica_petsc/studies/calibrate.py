@@ -279,7 +279,6 @@ def least_squares(problem: CalibrationProblem, theta0, weights, *, method: str =
     inner = tao.getBRGNSubsolver() if method == "brgn" else tao   # BRGN iterates inside
     if method == "brgn":
         inner.setOptionsPrefix(prefix + "brgn_")      # PETSc 3.18 gives it no prefix of ours
-        _default_option(prefix + "brgn_tao_ls_type", "armijo")
         inner.setFromOptions()
         inner.setTolerances(gatol=1e-12, grtol=1e-14, gttol=0.0)
         inner.setMaximumIterations(max_iterations)
@@ -295,13 +294,6 @@ def least_squares(problem: CalibrationProblem, theta0, weights, *, method: str =
     finally:
         for obj in (tao, x, R, Jm, xl, xu):
             obj.destroy()
-
-
-def _default_option(name: str, value: str) -> None:
-    """Set a PETSc option unless the user gave it (read by the next setFromOptions)."""
-    options = PETSc.Options()
-    if not options.hasName(name):
-        options[name] = value
 
 
 def huber_weights(problem: CalibrationProblem, residual, delta_mm: float | None):
