@@ -238,3 +238,14 @@ def test_cable_length_sensitivities_through_guides():
             dX = (disc.attachment_points(th[0]) - disc.attachment_points(th[1])) / (2 * eps)
             assert np.allclose(s.cable_lengths[i], dL, atol=1e-7)
             assert np.allclose(s.attachments[i], dX, atol=1e-7)
+
+
+def test_every_stored_entry_is_written(disc):
+    """The values are written slot by slot into the CSR patterns: every stored entry
+    of the Jacobian and of H has exactly one source."""
+    for slots, pattern in ((disc._jacobian_slots, disc.pattern),
+                           (disc._stability_slots, disc.stability_pattern)):
+        band_slots, _, cols, rows, corner = slots
+        written = np.concatenate([a[a >= 0] for a in (band_slots, cols.ravel(), rows.ravel(),
+                                                      corner)])
+        assert np.array_equal(np.sort(written), np.arange(len(pattern[1])))
