@@ -249,3 +249,28 @@ def test_every_stored_entry_is_written(disc):
         written = np.concatenate([a[a >= 0] for a in (band_slots, cols.ravel(), rows.ravel(),
                                                       corner)])
         assert np.array_equal(np.sort(written), np.arange(len(pattern[1])))
+
+
+def test_length_control_inertia_through_guides():
+    """Negative eigenvalues of K on null(C^T) (taut cables; docs/model.md §4.7, §11.3)
+    from the bordered LDL^T against the dense projection."""
+    from scipy.linalg import null_space
+    from elastica_petsc.solvers.lengths import LengthInertia
+    disc = Discretisation.from_arm(guided_arm(gravity=(-9.81, 0.0)))
+    counter = LengthInertia(disc)
+    N = disc.n_elements
+    rng = np.random.default_rng(12)
+    counts = []
+    try:
+        for p in ([0.0, 0.0], [60.0, 0.0], [60.0, 50.0], [200.0, 150.0]):
+            p = np.array(p)
+            u = disc.consistent_state(np.concatenate(([0.0], 0.05 * rng.standard_normal(N))))
+            K = reduced_tangent(disc, u, p)
+            C = disc.load_derivative(u)[p > 1e-8, :N].T
+            Z = null_space(C.T) if C.shape[1] else np.eye(N)
+            expected = int(np.sum(np.linalg.eigvalsh(Z.T @ (0.5 * (K + K.T)) @ Z) < 0))
+            counts.append(expected)
+            assert counter.negative_eigenvalues(u, p) == expected
+        assert max(counts) > 0
+    finally:
+        counter.destroy()

@@ -370,24 +370,21 @@ class GuidedDiscretisation(Discretisation):
     def stiffness_border(self, theta: np.ndarray, y: np.ndarray, p) -> np.ndarray:
         """W (P, N), one row per segment: sqrt(p/L_a) D_a^T e_a^perp, K = T + W^T W."""
         t = self.terms(self.join(theta, y), p)
-        return self._stiffness_entries(t, self.segment_gradients(theta, (t.c, t.s)))[1]
-
-    def _stiffness_entries(self, t: PathTerms, dg: np.ndarray):
-        """W at the stored entries (M,) and as a dense (P, N) array."""
-        lever, _ = self._levers(t, dg)
         chord, rows = self.entries[:2]
-        weights = np.sqrt(np.maximum(t.p[self.point_tendon], 0.0) / t.seg_len)
-        w = weights[chord] * lever
         dense = np.zeros((self.n_points, self.n_elements))
-        dense[chord, rows] = w
-        return w, dense
+        dense[chord, rows] = self._stiffness_entries(t)
+        return dense
+
+    def _stiffness_entries(self, t: PathTerms) -> np.ndarray:
+        """W at the stored entries (M,): sqrt(p/L_a) D_a . e_a^perp."""
+        w = self._levers(t, self.segment_gradients(t.theta, (t.c, t.s)))[0]
+        weights = np.sqrt(np.maximum(t.p[self.point_tendon], 0.0) / t.seg_len)
+        return w * weights[self.entries[0]]
 
     def stability_values(self, u: np.ndarray, p) -> np.ndarray:
         """Upper-triangle entries of H = [[T, W], [W^T, -I]] (:attr:`stability_pattern`)."""
         t = self.terms(u, p)
-        w = self._levers(t, self.segment_gradients(t.theta, (t.c, t.s)))[0]
-        chord = self.entries[0]
-        w *= np.sqrt(np.maximum(t.p[self.point_tendon], 0.0) / t.seg_len)[chord]
+        w = self._stiffness_entries(t)
         band_slots, band, cols, rows, corner = self._stability_slots
         values = np.zeros(len(self.stability_pattern[1]))
         values[band_slots] = self.band(t.theta, None, t.p, t).ravel()[band]
