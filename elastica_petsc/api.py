@@ -447,6 +447,30 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
                      out=out, resume=resume, overwrite=overwrite, progress=False)
 
 
+def calibrate(arm: Arm, data, vary, *, bounds=None, input: str | None = None,
+              huber_mm: float | None = None, folds: int = 5, candidates=None,
+              elements: int | None = None):
+    """Fit the parameters named in ``vary`` (``bending_stiffness``,
+    ``tendonK.route``, ``motorK.offset``, ``motor.spool_radius``, ``clamp.angle``,
+    ``clamp.position``, ``frame.rotation``, ``frame.offset``) to measured states
+    ``data`` (a CSV path or a :class:`CalibrationData`); ``bounds``:
+    {scalar name: (lo, hi)}.  Returns a CalibrationResult: ``.arm`` the fitted
+    arm, ``.parameters()`` values with standard deviations, ``.summary()``
+    (docs/model.md §14)."""
+    from .core.calibration_data import CalibrationData, read_calibration_csv
+    from .core.calibration_params import ParameterModel
+    from .studies.calibrate_report import calibrate as run_calibration
+
+    if not isinstance(data, CalibrationData):
+        data = read_calibration_csv(data, arm.n_tendons, input, arm.length_mm)
+    if candidates is not None and not isinstance(candidates, CalibrationData):
+        candidates = read_calibration_csv(candidates, arm.n_tendons, input, arm.length_mm,
+                                          measured=False)
+    model = ParameterModel(arm, vary, bounds)
+    return run_calibration(model, data, elements=_mesh(arm, elements).n_elements,
+                           huber_mm=huber_mm, folds=folds, candidates=candidates)
+
+
 def read(path: str | Path):
     """Load a file written by the tool back into its result: a :class:`State`
     for ``solve``/``control``/``stability`` files (the final state), a

@@ -64,6 +64,24 @@ class Terms(NamedTuple):
     force: np.ndarray        # sum of the tendon forces acting on each element (N, 2)
 
 
+MAX_AUTO_ELEMENTS = 100_000
+
+
+def nearest_element_count(arm: Arm, near: int | None = None) -> int:
+    """The element count nearest ``near`` (default the config's ``elements``; the
+    larger one on a tie) that puts every attachment on a node: s_i / l * N an
+    integer (to 1e-9 N, as :meth:`Discretisation.from_arm` checks)."""
+    near = max(2, arm.elements if near is None else near)
+    s = np.asarray(arm.attachments(), float)
+    for gap in range(MAX_AUTO_ELEMENTS):
+        for n in (near + gap, near - gap):
+            if 2 <= n <= MAX_AUTO_ELEMENTS and np.all(np.abs(s * n - np.rint(s * n)) <= 1e-9 * n):
+                return n
+    raise DiscretisationError(
+        f"no element count up to {MAX_AUTO_ELEMENTS} puts every attachment on a node (s_i / l "
+        f"= {', '.join(f'{v:.6g}' for v in s)}); round the attachments or give --elements N")
+
+
 @dataclass(frozen=True)
 class Discretisation:
     """Mesh and tendon data of one arm, non-dimensional."""
@@ -100,7 +118,8 @@ class Discretisation:
                 raise DiscretisationError(
                     f"tendon {i}: attachment s = {s * arm.length_mm:g} mm is not on a node of "
                     f"the {n}-element mesh (spacing {h_mm:g} mm); choose an element count that "
-                    f"makes s_i / l * N an integer (nearest node: {k * h_mm:g} mm)")
+                    f"makes s_i / l * N an integer (nearest node: {k * h_mm:g} mm), or "
+                    "--elements auto")
             nodes.append(k)
         return cls(n, tuple(nodes), arm.routes())
 

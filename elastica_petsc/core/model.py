@@ -56,6 +56,9 @@ class Motor:
     steps_per_rev: int = 200
     microsteps: int = 16
     max_tension_N: float | None = None  # P_crit of Eq. (22); None: no upper bound
+    # stepper limits in microsteps/s and /s^2: one number, or one per tendon (core/motion.py)
+    max_speed_steps_s: float | tuple[float, ...] | None = None
+    max_accel_steps_s2: float | tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -77,6 +80,8 @@ class Arm:
     thickness_mm: float = 3.0
     width_mm: float = 40.0
     mass_per_length_kg_m: float | None = None
+    youngs_modulus_Pa: float | None = None   # the material, when B came from it
+    density_kg_m3: float | None = None       # the material, when the mass came from it
     gravity_m_s2: tuple[float, float] | None = None   # in the clamp's frame, arm along +x
     tip_mass_kg: float = 0.0
     motor: Motor = field(default_factory=Motor)
@@ -182,8 +187,9 @@ def validate(arm: Arm) -> None:
     positive("arm.bending_stiffness_Nm2", arm.bending_stiffness_Nm2)
     positive("arm.thickness_mm", arm.thickness_mm)
     positive("arm.width_mm", arm.width_mm)
-    if arm.mass_per_length_kg_m is not None:
-        positive("arm.mass_per_length_kg_m", arm.mass_per_length_kg_m)
+    for key in ("mass_per_length_kg_m", "youngs_modulus_Pa", "density_kg_m3"):
+        if getattr(arm, key) is not None:
+            positive(f"arm.{key}", getattr(arm, key))
     if not isinstance(arm.elements, int) or isinstance(arm.elements, bool) or arm.elements < 2:
         raise ModelError(f"arm.elements must be an integer >= 2, got {arm.elements!r}")
     if len(arm.tendons) < 1:
@@ -218,6 +224,11 @@ def validate(arm: Arm) -> None:
             raise ModelError(f"motor.{name} must be a positive integer, got {value!r}")
     if motor.max_tension_N is not None:
         positive("motor.max_tension_N", motor.max_tension_N)
+    from .motion import MotorLimits
+    try:
+        MotorLimits.of(motor, len(arm.tendons))
+    except InputError as err:
+        raise ModelError(str(err)) from None
     positive("limits.failure_strain", arm.limits.failure_strain)
     positive("limits.strain_energy_max_SE0", arm.limits.strain_energy_max_SE0)
 

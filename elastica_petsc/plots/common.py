@@ -49,12 +49,19 @@ def draw_setting(ax, arm: Arm) -> None:
 
 
 def finish_geometry(ax, title: str) -> None:
+    """Equal aspect, labels in mm, and the legend below the axes, off the drawing."""
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.grid(True, lw=0.3, alpha=0.6)
     ax.set_title(title)
-    ax.legend(loc="best", fontsize=8)
+    legend_below(ax)
+
+
+def legend_below(ax, ncol: int = 2, fontsize: float = 8) -> None:
+    """The legend under the axes (beneath the x label), where it hides no data."""
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), borderaxespad=4.6, ncol=ncol,
+              fontsize=fontsize, frameon=False)    # 4.6 font sizes below: under the x label
 
 
 def plot_equilibria(arm: Arm, states: list[tuple[Equilibrium, str]], path: str | Path,
