@@ -454,7 +454,12 @@ class GuidedDiscretisation(Discretisation):
     # --- the unloaded state under weight ---------------------------------------------------
     def straight(self) -> np.ndarray:
         """The state at p = 0: straight without weight, else the arm sagging under its
-        weight, reached by continuation in the weight from the straight arm."""
+        weight, reached by continuation in the weight from the straight arm (computed
+        once per discretisation)."""
+        return self._rest_state.copy()
+
+    @cached_property
+    def _rest_state(self) -> np.ndarray:
         return self.consistent_state(self.rest_angles())
 
     def rest_angles(self, steps: int | None = None) -> np.ndarray:
