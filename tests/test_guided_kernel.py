@@ -274,3 +274,28 @@ def test_length_control_inertia_through_guides():
         assert max(counts) > 0
     finally:
         counter.destroy()
+
+
+def test_tip_sensitivity_to_routing_points_taylor():
+    """d x_t/d r_i of a cable through guides (J du = -dF/dr_i, the first chord's rows)
+    against equilibria re-solved with the routing point moved: remainder O(eps^2)."""
+    import dataclasses
+    from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+    from elastica_petsc.solvers.sensitivity import SensitivitySolver
+    disc = Discretisation.from_arm(guided_arm(elements=24))
+    rng = np.random.default_rng(13)
+    with EquilibriumSolver(disc) as solver, SensitivitySolver(disc) as sens:
+        eq = solver.solve(P)
+        for i in range(disc.n_tendons):
+            v = rng.standard_normal(2)
+            _, dtip = sens.parameter_derivative(eq, disc.route_derivative(eq.u, P, i) @ v)
+            rem = []
+            for eps in (4e-3, 2e-3, 1e-3):
+                routes = disc.routes.copy()
+                routes[i] += eps * v
+                moved = dataclasses.replace(disc, routes=routes)
+                with EquilibriumSolver(moved) as other:
+                    u, _, _ = other.newton(eq.u, P)
+                rem.append(np.linalg.norm(moved.node_positions(moved.split(u)[0])[-1]
+                                          - eq.tip - eps * dtip))
+            assert np.all(np.log2(np.array(rem[:-1]) / rem[1:]) > 1.9), (i, rem)
