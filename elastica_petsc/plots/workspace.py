@@ -16,8 +16,10 @@ from ..studies.workspace import Status, reason_counts
 def read_workspace(path) -> dict:
     import h5py
 
+    from ..io.dims import fields
+
     with h5py.File(path, "r") as fh:
-        data = {name: fh["samples"][name][()] for name in fh["samples"]}
+        data = fields(fh["samples"])
         config = json.loads(fh.attrs["config_json"])
         data["length_mm"] = float(config["arm"]["length_mm"])
         data["routes_mm"] = np.array([t["route_mm"] for t in config["tendon"]], float)
@@ -25,7 +27,7 @@ def read_workspace(path) -> dict:
         data["share"], data["min_tension_N"] = share_of(fh.attrs)
         grid = json.loads(fh.attrs.get("grid_json", "{}"))
         data["spacing"] = grid.get("spacing") if data["mode"] == "targets" else None
-        data["masks"] = {name: fh["masks"][name][()] for name in fh["masks"]}
+        data["masks"] = fields(fh["masks"])
         data["limits"] = dict(fh["masks"].attrs)
     return data
 
