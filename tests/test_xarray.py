@@ -82,3 +82,27 @@ def test_trace_file_opens_with_point_and_tendon_dimensions(tmp_path):
     assert sched["steps"].dims == ("row", "tendon")
     assert set(sched["phase"].values) == {"approach", "path"}       # variable-length UTF-8
     assert sched["time"].attrs["units"] == "s" and sched["revolutions"].attrs["units"] == "1"
+
+
+def test_results_to_xarray_as_in_the_files(tmp_path):
+    """``to_xarray()`` of a traced path and of a workspace map: the same dimension
+    names, values and CF units as the files."""
+    from elastica_petsc.core.model import load_config
+    from elastica_petsc.solvers.control import TipController
+    from elastica_petsc.studies.trace import densify, line, trace
+    from elastica_petsc.studies.workspace import read_map
+
+    with TipController(load_config(), n_elements=30) as controller:
+        traced = trace(controller, densify(line((420.0, 200.0), (440.0, 220.0)), 10.0))
+    ds = traced.to_xarray()
+    assert ds["tensions_N"].dims == ("point", "tendon") and ds["tip"].dims == ("point", "component")
+    np.testing.assert_array_equal(ds["tensions_N"].values, traced.tensions_N)
+    assert ds["tensions"].attrs["units"] == "1" and "P l^2/B" in ds["tensions"].attrs["long_name"]
+    run_cli(tmp_path, "workspace", "--spacing", "100", "--box", "300", "500", "100", "300",
+            "--out", "w.h5")
+    mapped = read_map(tmp_path / "w.h5").to_xarray()
+    stored = xr.open_dataset(tmp_path / "w.h5", engine="h5netcdf", group="samples")
+    assert mapped["tensions_N"].dims == stored["tensions_N"].dims == ("sample", "tendon")
+    np.testing.assert_array_equal(mapped["tensions_N"].values, stored["tensions_N"].values)
+    assert mapped["lambda_min"].attrs["units"] == stored["lambda_min"].attrs["units"] == "1"
+    assert int(mapped["W0"].sum()) == int((mapped["status"] == 1).sum())

@@ -90,3 +90,26 @@ def fields(group) -> dict:
 
     return {name: d[()] for name, d in group.items()
             if isinstance(d, h5py.Dataset) and not h5py.h5ds.is_scale(d.id)}
+
+
+def xarray_dataset(variables: dict, coords: dict | None = None, attrs: dict | None = None):
+    """An ``xarray.Dataset`` (xarray is optional: InputError without it) from
+    {name: (dims, values, units, description)} in the project's units, with the
+    same dimension names, CF units and long names as the HDF5 files."""
+    from ..core.errors import InputError
+
+    try:
+        import xarray as xr
+    except ImportError:
+        raise InputError("to_xarray needs xarray (Debian: python3-xarray)") from None
+    data = {name: (dims, np.asarray(values), {**cf_attrs(units, text), "description": text})
+            for name, (dims, values, units, text) in variables.items()}
+    lengths = {d: np.shape(v[1])[k] for v in variables.values() for k, d in enumerate(v[0])}
+    coords = dict(coords or {})
+    if "tendon" in lengths and "tendon" not in coords:
+        coords["tendon"] = ("tendon", np.arange(1, lengths["tendon"] + 1),
+                            {"long_name": DIMENSION_TEXT["tendon"], "units": "1"})
+    if "component" in lengths and "component" not in coords:
+        coords["component"] = ("component", list(COMPONENTS[:lengths["component"]]),
+                               {"long_name": DIMENSION_TEXT["component"]})
+    return xr.Dataset(data, coords=coords, attrs=attrs or {})

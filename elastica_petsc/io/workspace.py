@@ -75,7 +75,7 @@ def lattice_index(grid) -> tuple[np.ndarray, list[np.ndarray]]:
 POINT_FIELDS = ("target", "tip")        # per sample a point [x, y]; other vectors: per tendon
 
 
-def _sample_dims(name: str, shape) -> tuple[str, ...]:
+def sample_dims(name: str, shape) -> tuple[str, ...]:
     """Named dimensions of a per-sample field beyond ``sample``: (), (component,)
     for a point in the plane, (tendon,) for one value per tendon."""
     if shape == ():
@@ -111,7 +111,7 @@ def write_map_grids(group, results, index, axes, limits: dict, descriptions: dic
         fill = -1 if values.dtype.kind in "iu" else np.nan
         put(group, name, grid(values, fill), units,
             description + " (on the lattice; outside the region: " + str(fill) + ")",
-            ("y", "x") + _sample_dims(name, shape_k), coords)
+            ("y", "x") + sample_dims(name, shape_k), coords)
 
 
 def write_results(path: Path, results, attrs: dict, limits: dict, timing: dict) -> None:
@@ -152,7 +152,7 @@ def write_results(path: Path, results, attrs: dict, limits: dict, timing: dict) 
         put(samples, "done", done, "1", "sample finished and stored", ("sample",))
         for name, (shape, _, units, description) in results.schema.items():
             put(samples, name, results.data[name], units, description,
-                ("sample",) + _sample_dims(name, shape))
+                ("sample",) + sample_dims(name, shape))
         masks = fh.create_group("masks")
         descriptions = {"W0": "reached with non-negative tensions (Eq. (18))",
                         "WY": "W0 and l*kappa_max below the strain limit (Eq. (19))",
