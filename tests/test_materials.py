@@ -1,4 +1,4 @@
-"""Arms described as builders know them (core/config.py, docs/model.md §12):
+"""Arms described as builders know them (core/config.py, docs/model.md §13):
 B and mass per length from the material and cross-section, and ``--elements
 auto`` for arms whose attachments are not nodes of the config's mesh."""
 from __future__ import annotations

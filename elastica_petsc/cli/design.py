@@ -33,8 +33,9 @@ def add_parser(sub) -> None:
                         help="area, or path:FILE.csv (targets x_mm,y_mm) to be made reachable")
     parser.add_argument("--sweep", nargs="+", metavar="AXIS=START:STOP:STEP",
                         help="grid of designs instead of an optimisation; AXIS is "
-                             "tendonK.route.x, tendonK.route.y or tendonK.attach (mm; "
-                             "attachments on mesh nodes)")
+                             "tendonK.route.x, tendonK.route.y, tendonK.attach (mm; "
+                             "attachments on mesh nodes) or tendonK.offset (mm: the offset "
+                             "of the cable's guides and end point)")
     common.add_tension_option(parser, "--tension-max",
                               help=f"motor limit of the area objective (default "
                                    f"{DEFAULT_TENSION_MAX_N:g} N)")

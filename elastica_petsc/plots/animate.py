@@ -34,6 +34,7 @@ class Frame:
     tip_mm: np.ndarray            # (2,)
     caption: str
     duration_s: float = 0.0       # how long it is shown (0: the animation's fps)
+    cables_mm: tuple = ()         # each cable's polyline, routing point to end (guides between)
 
 
 def check_animation_path(path, overwrite: bool = False) -> Path:
@@ -55,7 +56,8 @@ def check_animation_path(path, overwrite: bool = False) -> Path:
 
 def _frame(arm: Arm, eq, caption: str) -> Frame:
     l_mm = arm.length_mm
-    return Frame(eq.x * l_mm, eq.attachments * l_mm, eq.tip * l_mm, caption)
+    return Frame(eq.x * l_mm, eq.attachments * l_mm, eq.tip * l_mm, caption,
+                 cables_mm=tuple(c * l_mm for c in eq.cable_points))
 
 
 def _tensions(arm: Arm, p) -> str:
@@ -155,8 +157,8 @@ def animate(arm: Arm, frames: list[Frame], path, *, targets_mm=None, title: str 
         arm_line.set_data(f.x_mm[:, 0], f.x_mm[:, 1])
         tip.set_data([f.tip_mm[0]], [f.tip_mm[1]])
         trail.set_data(tips[:k + 1, 0], tips[:k + 1, 1])
-        for c, a, r in zip(cables, f.attachments_mm, routes):
-            c.set_data([a[0], r[0]], [a[1], r[1]])
+        for c, line in zip(cables, f.cables_mm):
+            c.set_data(line[:, 0], line[:, 1])
         caption.set_text(f.caption)
         return [arm_line, tip, trail, caption, *cables]
 

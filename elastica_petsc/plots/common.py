@@ -26,15 +26,15 @@ def save(fig, path: str | Path) -> None:
 
 def draw_arm(ax, arm: Arm, eq: Equilibrium, label: str | None = None, colour: str = "k",
              tendons: bool = True) -> None:
-    """The deformed centreline, its tendons as straight segments to their routing points."""
+    """The deformed centreline, its tendons as straight segments to their routing points
+    (through their guides)."""
     l_mm = arm.length_mm
     x = eq.x * l_mm
     ax.plot(x[:, 0], x[:, 1], "-", color=colour, lw=2.2, label=label, zorder=3)
     ax.plot(*x[-1], "o", color=colour, ms=5, zorder=4)
     if tendons:
-        routes = arm.routes() * l_mm
-        for i, (a, r) in enumerate(zip(eq.attachments * l_mm, routes)):
-            ax.plot([a[0], r[0]], [a[1], r[1]], "-", lw=1.0,
+        for i, line in enumerate(eq.cable_points):
+            ax.plot(line[:, 0] * l_mm, line[:, 1] * l_mm, "-", lw=1.0,
                     color=TENDON_COLOURS[i % len(TENDON_COLOURS)], zorder=2)
 
 
