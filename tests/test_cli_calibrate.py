@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from elastica_petsc.core.calibration_data import write_calibration_csv
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "configs" / "paper.toml"

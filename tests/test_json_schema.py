@@ -15,7 +15,6 @@ import pytest
 from schema_check import errors
 
 ROOT = Path(__file__).resolve().parents[1]
-
 SCHEMA = json.loads((resources.files("elastica_petsc") / "schema" / "output.schema.json")
                     .read_text())
 CROSSING_ARM = """

@@ -133,7 +133,7 @@ def finish(args, result, root: bool = True) -> int:
         from ..plots.calibrate import plot_calibration
         plot_calibration(result, args.plot)
     if args.json:
-        common.print_json(args.command, summary)
+        common.print_json("calibrate", summary)
     else:
         print_summary(summary)
     return 0 if converged else 1

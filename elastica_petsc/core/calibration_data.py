@@ -36,7 +36,8 @@ _INPUT_RE = re.compile(r"^(tension_(\d+)_N|length_(\d+)_mm|steps_(\d+))$")
 _MARKER_RE = re.compile(r"^marker_([0-9.]+)_([xy])_mm$")
 _SCHEDULE_RE = re.compile(r"^(tension_\d+_p|revolutions_\d+|step_increment_\d+|"
                           r"rounding_error_\d+_mm)$")
-IGNORED = {"row", "phase", "point", "time_s", "reached", "target_x_mm", "target_y_mm", "note"}
+IGNORED = {"row", "phase", "point", "time_s", "duration_s", "limited_by", "reached",
+           "target_x_mm", "target_y_mm", "note"}
 
 
 class DataError(InputError):
