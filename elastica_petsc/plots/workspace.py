@@ -27,6 +27,7 @@ def read_workspace(path) -> dict:
         data["share"], data["min_tension_N"] = share_of(fh.attrs)
         grid = json.loads(fh.attrs.get("grid_json", "{}"))
         data["spacing"] = grid.get("spacing") if data["mode"] == "targets" else None
+        data["region"] = grid.get("region")
         data["masks"] = fields(fh["masks"])
         data["limits"] = dict(fh["masks"].attrs)
     return data
@@ -60,8 +61,8 @@ def _paths_overlay(ax, paths) -> None:
                 label=label, zorder=6)
 
 
-def _rigid_link(ax, length_mm: float) -> None:
-    a = np.linspace(0, np.pi, 200)
+def _rigid_link(ax, length_mm: float, whole: bool = False) -> None:
+    a = np.linspace(0, 2 * np.pi if whole else np.pi, 400)
     ax.plot(length_mm * np.cos(a), length_mm * np.sin(a), "k--", lw=1.0,
             label=f"rigid link of length l = {length_mm:g} mm")
 
@@ -114,13 +115,15 @@ def plot_samples(data: dict, ax, paths=None) -> None:
             label="routing points r_" + ", r_".join(str(i) for i in range(1, len(routes) + 1)))
     for i, r in enumerate(routes, start=1):
         ax.annotate(f"r_{i}", r, xytext=(5, -3), textcoords="offset points", fontsize=9)
-    _rigid_link(ax, data["length_mm"])
+    _rigid_link(ax, data["length_mm"], whole=bool(np.any(where[:, 1] < 0)))
     _paths_overlay(ax, paths)
     ax.plot(0, 0, "ks", ms=6)
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
-    ax.set_title("Sampled workspace (Fig. 4)")
+    region = data.get("region")
+    ax.set_title("Sampled workspace (Fig. 4)" + (f"\nregion: {region}" if region else ""),
+                 fontsize=11)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))   # off the samples
 
 
