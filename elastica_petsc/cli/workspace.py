@@ -97,7 +97,8 @@ def _run(args, comm) -> int:
         region=default_region(args))
     if comm.rank != 0:
         if comm.size > 1 and not result.complete:
-            _exit_without_finalize(130, None)       # as rank 0 below
+            comm.Barrier()                          # rank 0 has printed (a rank that ends
+            _exit_without_finalize(130, None)       # first makes mpiexec kill the others)
         return 0
     from ..studies.map_area import map_json
     described = map_json(result, args.box)     # status codes, region, lattice, area
@@ -114,8 +115,14 @@ def _run(args, comm) -> int:
         if result.stranded or comm.size > 1:
             # after a stop under mpiexec, MPI's finalisation waits on a launcher that is
             # tearing the job down (measured: every rank held there until killed ~2 s
-            # after the signal, exit status 1): every rank ends here, status 130
-            _exit_without_finalize(130, message)
+            # after the signal, exit status 1): every rank ends here, status 130, once
+            # this line is out (the others wait for it at a barrier, unless stranded)
+            if result.stranded:
+                _exit_without_finalize(130, message)
+            print(f"elastica-petsc: {message}", file=sys.stderr, flush=True)
+            sys.stdout.flush()
+            comm.Barrier()
+            _exit_without_finalize(130, None)
         print(f"elastica-petsc: {message}", file=sys.stderr)
         return 130
     if args.plot:
