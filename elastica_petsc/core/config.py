@@ -12,7 +12,7 @@ from importlib import resources
 from pathlib import Path
 
 from .errors import InputError
-from .model import Arm, Limits, ModelError, Motor, Tendon
+from .model import Arm, Dynamics, Limits, ModelError, Motor, Tendon
 
 REQUIRED = object()
 
@@ -25,6 +25,7 @@ SCHEMA: dict[str, dict[str, tuple[type | tuple, object, str]]] = {
         "thickness_mm": (float, 3.0, "thickness h [mm], for the strain limit Eq. (19)"),
         "width_mm": (float, 40.0, "width [mm] (documentation only)"),
         "mass_per_length_kg_m": (float, None, "mass per length [kg/m], for eigenfrequencies"),
+        "tip_mass_kg": (float, 0.0, "point mass at the tip [kg] (pen holder), >= 0"),
     },
     "tendon": {
         "attach_mm": (float, REQUIRED, "attachment arc length s_i [mm], 0 < s_i <= l"),
@@ -39,6 +40,12 @@ SCHEMA: dict[str, dict[str, tuple[type | tuple, object, str]]] = {
     "limits": {
         "failure_strain": (float, 0.025, "failure strain eps_Y, Eq. (19)"),
         "strain_energy_max_SE0": (float, 18.0, "SE_max in units of B/(2l), Eq. (21)"),
+    },
+    "dynamics": {
+        "damping_ratio": (float, 0.0, "damping ratio zeta_1 of the unloaded first mode"),
+        "kelvin_voigt_fraction": (float, 0.5, "share of zeta_1 from Kelvin-Voigt damping, "
+                                              "the rest viscous (docs/model.md §11)"),
+        "rotary_inertia": (bool, False, "include the rotary inertia of the cross-section"),
     },
 }
 
@@ -90,7 +97,7 @@ def _section(data: dict, name: str, where: str) -> dict:
         value = data[key]
         if kind is float and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
-        if isinstance(value, bool) or not isinstance(value, kind):
+        if (isinstance(value, bool) and kind is not bool) or not isinstance(value, kind):
             raise ConfigError(
                 f"{where}.{key}: expected {kind.__name__}, got {type(value).__name__} {value!r}")
         out[key] = value
@@ -121,7 +128,8 @@ def arm_from_dict(data: dict) -> Arm:
                               route_mm=(float(route[0]), float(route[1]))))
     motor = Motor(**_section(data.get("motor", {}), "motor", "motor"))
     limits = Limits(**_section(data.get("limits", {}), "limits", "limits"))
-    return Arm(tendons=tuple(tendons), motor=motor, limits=limits, **arm)
+    dynamics = Dynamics(**_section(data.get("dynamics", {}), "dynamics", "dynamics"))
+    return Arm(tendons=tuple(tendons), motor=motor, limits=limits, dynamics=dynamics, **arm)
 
 
 def arm_to_dict(arm: Arm) -> dict:
@@ -133,4 +141,5 @@ def arm_to_dict(arm: Arm) -> dict:
         return {k: v for k, v in section.items() if v is not None}
 
     return {"arm": given({k: data[k] for k in SCHEMA["arm"]}), "tendon": data["tendon"],
-            "motor": given(data["motor"]), "limits": given(data["limits"])}
+            "motor": given(data["motor"]), "limits": given(data["limits"]),
+            "dynamics": data["dynamics"]}

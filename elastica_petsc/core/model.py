@@ -47,6 +47,15 @@ class Limits:
 
 
 @dataclass(frozen=True)
+class Dynamics:
+    """Damping and inertia options of the arm in motion (docs/model.md §11)."""
+
+    damping_ratio: float = 0.0           # zeta_1: damping ratio of the unloaded first mode
+    kelvin_voigt_fraction: float = 0.5   # share of zeta_1 from Kelvin-Voigt (stiffness) damping
+    rotary_inertia: bool = False         # add rho I theta_dot^2 / 2 (I = A h^2 / 12)
+
+
+@dataclass(frozen=True)
 class Arm:
     """A planar inextensible elastica clamped at the origin along +x (Sec. 2)."""
 
@@ -57,8 +66,10 @@ class Arm:
     thickness_mm: float = 3.0
     width_mm: float = 40.0
     mass_per_length_kg_m: float | None = None
+    tip_mass_kg: float = 0.0
     motor: Motor = field(default_factory=Motor)
     limits: Limits = field(default_factory=Limits)
+    dynamics: Dynamics = field(default_factory=Dynamics)
 
     def __post_init__(self) -> None:
         validate(self)
@@ -142,6 +153,17 @@ def validate(arm: Arm) -> None:
     positive("arm.width_mm", arm.width_mm)
     if arm.mass_per_length_kg_m is not None:
         positive("arm.mass_per_length_kg_m", arm.mass_per_length_kg_m)
+    if not (isinstance(arm.tip_mass_kg, (int, float)) and math.isfinite(arm.tip_mass_kg)
+            and arm.tip_mass_kg >= 0):
+        raise ModelError(f"arm.tip_mass_kg must be a number >= 0, got {arm.tip_mass_kg!r}")
+    dyn = arm.dynamics
+    if not (isinstance(dyn.damping_ratio, (int, float)) and math.isfinite(dyn.damping_ratio)
+            and dyn.damping_ratio >= 0):
+        raise ModelError(f"dynamics.damping_ratio must be a number >= 0, got {dyn.damping_ratio!r}")
+    if not (isinstance(dyn.kelvin_voigt_fraction, (int, float))
+            and 0 <= dyn.kelvin_voigt_fraction <= 1):
+        raise ModelError("dynamics.kelvin_voigt_fraction must lie in [0, 1], got "
+                         f"{dyn.kelvin_voigt_fraction!r}")
     if not isinstance(arm.elements, int) or isinstance(arm.elements, bool) or arm.elements < 2:
         raise ModelError(f"arm.elements must be an integer >= 2, got {arm.elements!r}")
     if len(arm.tendons) < 1:
