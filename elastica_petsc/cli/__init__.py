@@ -25,7 +25,7 @@ import sys
 from ..core.errors import InputError
 
 COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "design", "lengths",
-            "equilibria", "replay", "reproduce")
+            "equilibria", "replay", "simulate", "reproduce")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed
