@@ -53,12 +53,13 @@ Options prefix ``sim_`` (``-sim_ts_monitor``, ``-sim_snes_monitor``,
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 from petsc4py import PETSc
 
-from ..core.drive import LengthDrive
+from ..core.drive import LengthDrive, TensionDrive
 from ..core.dynamics import BandedInverse, Inertia, elastic_band
 from ..core.fem import Discretisation
 from .options import set_from_options
@@ -280,10 +281,17 @@ class DynamicsSolver:
         V.setArray(V0)
         ts.setSolution2(U, V)
         ts.setTime(t0)
-        ts.setMaxTime(t_end)
-        ts.setTimeStep(dt0)
-        ts.setMaxSteps(self.max_steps)
-        ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
+        if self.adaptive:
+            ts.setMaxTime(t_end)
+            ts.setTimeStep(dt0)
+            ts.setMaxSteps(self.max_steps)
+            ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
+        else:       # equal steps that end on t_end (no round-off sliver of a last step)
+            count = max(1, math.ceil((t_end - t0) / dt0 - 1e-9))
+            ts.setTimeStep((t_end - t0) / count)
+            ts.setMaxTime(t_end + 0.5 * (t_end - t0) / count)
+            ts.setMaxSteps(count)
+            ts.setExactFinalTime(PETSc.TS.ExactFinalTime.STEPOVER)
         ts.setMaxSNESFailures(-1)
         ts.setMaxStepRejections(-1)
         atol, rtol = U.duplicate(), U.duplicate()
@@ -297,7 +305,7 @@ class DynamicsSolver:
         pc = ksp.getPC()
         pc.setType("python")
         pc.setPythonContext(self.pc_ctx)
-        snes.setTolerances(rtol=1e-10, atol=1e-13, max_it=30)
+        snes.setTolerances(rtol=1e-12, atol=1e-14, stol=1e-14, max_it=30)
         ts.setMonitor(record)
         if (self.modes != FORCE).any():
             def events(ts_, t, U, fvalue):
@@ -309,10 +317,8 @@ class DynamicsSolver:
                 self._fired = [int(i) for i in events_fired]
 
             ts.setEventHandler([-1] * self.n, [True] * self.n, events, post)
-        alpha_m = 2.0 / (1.0 + self.radius)
         set_from_options(ts, self.prefix, {
-            "ts_alpha_alpha_m": alpha_m, "ts_alpha_alpha_f": 1.0,
-            "ts_alpha_gamma": alpha_m - 0.5, "ts_alpha_beta": 0.25 * alpha_m**2,
+            "ts_alpha_radius": self.radius,
             "ts_adapt_type": "basic" if self.adaptive else "none",
             "snes_linesearch_type": "basic"})
         return ts, (U, V, F, J, atol, rtol)
@@ -387,7 +393,9 @@ class DynamicsSolver:
         return monitor
 
     def _record(self, traj, t, U, V):
-        theta, p = self.theta_of(U), V[self.N:].copy()
+        theta = self.theta_of(U)
+        p = self.drive.tensions(t) if isinstance(self.drive, TensionDrive) else \
+            self.consistent_tensions(t, theta, V[: self.N], V[self.N:])
         lengths = self.cable_lengths(theta)
         work = 0.0
         if traj.time:
