@@ -18,14 +18,13 @@ dynamics).  A taut cable's constraint is imposed on the velocities (index
 2): then a step of any size starts from velocities that satisfy it, and the
 tension stays bounded as the step shrinks (at an event, say); imposed on the
 positions (index 3) the multiplier of a step dt grows like 1/dt.  Its
-length drifts by O(dt^2) (the trapezoidal rule integrates the rate), and the
-largest drift |L_i - Lbar_i| is reported.  Time integration: generalized-alpha for second-order systems
-(TSALPHA2) with alpha_f = 1 (the Bossak / WBZ member: forces, and the
-algebraic tension rows, at the end of the step, so a multiplier never
-oscillates from step to step), alpha_m = 2/(1+rho_inf), second order,
-spectral radius rho_inf at infinite step (``radius``; 1: no numerical
-dissipation, the trapezoidal rule).  Steps are adapted by TSAdapt ``basic``
-on the alpha method's local error estimate of the angles (the tensions are
+length drifts by O(dt^2) (the rule integrates the rate; not yet reported).
+Time integration: generalized-alpha for second-order systems (TSALPHA2) in
+PETSc's parametrisation by the spectral radius rho_inf at infinite step
+(``radius``; 1, the default: the implicit midpoint member, no numerical
+dissipation; docs/model.md §11.4 on why alpha_f = 1 is not used).  Fixed
+equal steps by default, or (``adaptive``) TSAdapt ``basic`` on the alpha
+method's local error estimate of the angles (the tension impulses are
 left out of the norm).  Newton: SNES with KSP ``preonly`` and a PC that
 solves the principal part of the Jacobian exactly in O(N):
 
