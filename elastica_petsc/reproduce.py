@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .core.config import load_config
+from .core.model import load_config
 from .core.model import Arm
 
 PAPER_P = np.array([25.2, 10.8])                # Fig. 8 tensions
@@ -247,25 +247,25 @@ def workspace(ctx: Context) -> Path:
 
 def fig4_5(ctx: Context, out: Path) -> None:
     from .plots.workspace import plot_workspace, read_workspace
-    from .studies.workspace import (NEEDS_NEGATIVE, NOT_CONVERGED, OUTSIDE_BOUNDARY, REACHED,
-                                    UNDECIDED, reason_counts)
+    from .studies.workspace import Status, reason_counts
 
     ctx.files.setdefault("Figs. 4-5", []).append(out.name)
     data = read_workspace(out)
-    reached = data["status"] == REACHED
+    reached = data["status"] == Status.REACHED
     region = f"spacing {ctx.spacing_mm:g} mm over the half-disc y >= 0 within reach l"
     ctx.add("Fig. 4", "sampled targets in y >= 0 / reached with P >= 0 (W_0)", "4201 green points",
             f"{len(reached)} targets / {int(reached.sum())} reached", "",
-            f"{region}; {int(np.sum(data['status'] == OUTSIDE_BOUNDARY))} proven outside the "
+            f"{region}; {int(np.sum(data['status'] == Status.OUTSIDE_BOUNDARY))} proven outside the "
             "traced W_0 boundary (purple); "
-            f"{int(np.sum(np.isin(data['status'], (NEEDS_NEGATIVE, UNDECIDED))))} "
+            f"{int(np.sum(np.isin(data['status'], (Status.NEEDS_NEGATIVE, Status.UNDECIDED))))} "
             "not reached after the global search (orange; no proof either way)")
-    red = data["target"][np.isin(data["status"], (NEEDS_NEGATIVE, UNDECIDED, OUTSIDE_BOUNDARY))]
+    red = data["target"][np.isin(data["status"], (Status.NEEDS_NEGATIVE, Status.UNDECIDED,
+                                                  Status.OUTSIDE_BOUNDARY))]
     side = "left of / above" if len(red) and np.median(red[:, 0]) < np.median(
         data["tip"][reached, 0]) else "elsewhere relative to"
     ctx.add("Fig. 4", "points needing P_1 < 0 bound the workspace on one side", "yes",
             f"points not reached lie {side} the reached region", "")
-    failed = data["status"] == NOT_CONVERGED
+    failed = data["status"] == Status.NOT_CONVERGED
     if failed.any():
         where = data["target"][failed]
         ours = (f"{int(failed.sum())} not converged at x = {where[:, 0].min():.0f} to "

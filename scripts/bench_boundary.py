@@ -30,7 +30,7 @@ HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 SNIPPET = r"""
 import json, sys, time
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.studies.boundary import trace_boundary
 arm = load_config()
 kw = json.loads(sys.argv[1])

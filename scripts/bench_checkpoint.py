@@ -39,33 +39,36 @@ def main() -> None:
     args = parser.parse_args()
     import petsc4py
     petsc4py.init([])
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.io import hdf5
-    from elastica_petsc.studies import workspace as ws
+    from elastica_petsc.io.workspace import write_results
+    from elastica_petsc.studies.workspace import driver
+    from elastica_petsc.studies.workspace.grids import target_grid
+    from elastica_petsc.studies.workspace.schema import Results, limits_of
 
     arm = load_config(None)
-    grid = ws.target_grid(arm.length_mm, 11.67)
-    results = ws.Results(grid, 2)
+    grid = target_grid(arm.length_mm, 11.67)
+    results = Results(grid, 2)
     rng = np.random.default_rng(1)
     for c in range(len(grid.chunks)):
         n = len(grid.chunks[c])
         results.store(c, {name: rng.random((n,) + shape).astype(dtype) if dtype[0] == "f"
                           else np.ones((n,) + shape, dtype)
                           for name, (shape, dtype, _, _) in results.schema.items()})
-    attrs = ws._attrs(arm, type("D", (), {"n_elements": 180, "n_tendons": 2})(), grid, None)
-    limits = ws.limits_of(arm)
+    attrs = driver.map_attrs(arm, type("D", (), {"n_elements": 180, "n_tendons": 2})(), grid, None)
+    limits = limits_of(arm)
     timing = {"ranks": 1, "seconds_io": 0.0, "seconds_wall": 1.0}
     with tempfile.TemporaryDirectory(dir=".") as tmp:
         out = Path(tmp) / "ws.h5"
         memory, disk = [], []
         for _ in range(args.repeats):                   # interleaved
-            memory.append(median_time(lambda: ws.write_results(out, results, attrs, limits,
-                                                               timing), 1))
+            memory.append(median_time(lambda: write_results(out, results, attrs, limits,
+                                                            timing), 1))
             real = hdf5.atomic_h5
             hdf5.atomic_h5 = h5_on_disk
             try:
-                disk.append(median_time(lambda: ws.write_results(out, results, attrs, limits,
-                                                                 timing), 1))
+                disk.append(median_time(lambda: write_results(out, results, attrs, limits,
+                                                              timing), 1))
             finally:
                 hdf5.atomic_h5 = real
         size = out.stat().st_size

@@ -60,7 +60,7 @@ def main(argv=None) -> int:
     import numpy as np
 
     from elastica_petsc.studies import trace as paths
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.solvers.control import TipController
 
     arm = load_config()

@@ -41,7 +41,7 @@ def main(argv=None) -> int:
     ap.add_argument("--interval", type=float, default=0.05, help="bar redraw interval [s]")
     args = ap.parse_args(argv)
 
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.core.progress import Progress
     from elastica_petsc.io.vtk import write_trace
     from elastica_petsc.plots.animate import animate_trace

@@ -30,7 +30,7 @@ import time
 
 import numpy as np
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.lengths import LengthSolver

@@ -57,7 +57,7 @@ def timed_trace(ctl, targets, first, sharer=None, repeat=3):
 
 
 def share_part(args) -> None:
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.solvers.control import TipController
     from elastica_petsc.solvers.share import TensionSharer
     from elastica_petsc.studies import trace as paths
@@ -93,7 +93,7 @@ def share_part(args) -> None:
 
 
 def fig3a_part(args) -> None:
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.solvers.control import TipController
     from elastica_petsc.studies import trace as paths
 

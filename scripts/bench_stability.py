@@ -32,7 +32,7 @@ def main(argv=None) -> None:
     petsc4py.init([sys.argv[0]] + petsc_args)
 
     import numpy as np
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.solvers.equilibrium import EquilibriumSolver
     from elastica_petsc.core.fem import Discretisation
     from elastica_petsc.solvers.stability import StabilitySolver

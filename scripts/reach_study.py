@@ -27,7 +27,7 @@ def main() -> int:
     args = ap.parse_args()
     import numpy as np
 
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.solvers.control import TipController
     from elastica_petsc.solvers.reach import Reacher
 

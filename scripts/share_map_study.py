@@ -48,8 +48,8 @@ def fingerprint(wmap) -> bytes:
 
 
 def main() -> None:
-    from elastica_petsc.core.config import load_config
-    from elastica_petsc.studies.workspace import BELOW_FLOOR, REACHED
+    from elastica_petsc.core.model import load_config
+    from elastica_petsc.studies.workspace import Status
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--elements", type=int, default=180)
@@ -69,18 +69,18 @@ def main() -> None:
             maps[key] = wmap
             prints[key].add(fingerprint(wmap))
             print(f"repeat {rep + 1} {key}: {wall:.1f} s", flush=True)
-    plain_reached = maps["plain"].samples["status"] == REACHED
+    plain_reached = maps["plain"].samples["status"] == Status.REACHED
     base = float(np.median(walls["plain"]))
     report = {"elements": args.elements, "spacing_mm": args.spacing, "box_mm": args.box,
               "floor_N": args.floor, "repeats": args.repeats, "variants": {}}
     for key, wmap in maps.items():
         s = wmap.samples
-        reached = s["status"] == REACHED
+        reached = s["status"] == Status.REACHED
         floor = wmap.min_tension_N
         checks = {"repeats_identical": len(prints[key]) == 1}
         if floor > 0:
             checks["reached_or_below_floor_equals_plain_reached"] = bool(np.array_equal(
-                reached | (s["status"] == BELOW_FLOOR), plain_reached))
+                reached | (s["status"] == Status.BELOW_FLOOR), plain_reached))
             checks["floor_holds"] = bool(np.all(s["tensions_N"][reached] >= floor - 1e-9))
         else:
             checks["reached_equals_plain"] = bool(np.array_equal(reached, plain_reached))

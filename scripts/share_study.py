@@ -88,7 +88,7 @@ def main() -> int:
     ap.add_argument("--radius", type=float, default=40.0)
     ap.add_argument("--picks", type=int, default=6)
     args = ap.parse_args()
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.solvers.control import TipController
     from elastica_petsc.studies import trace as paths
 

@@ -105,8 +105,9 @@ def against_tension_grid(maps, tens, h: float, length_mm: float) -> None:
 def against_boundary(old, new, h: float, elements: int) -> None:
     """Sections 2 and 4 of the module doc."""
     import elastica_petsc as ep
-    from elastica_petsc.core.config import arm_from_dict
-    from elastica_petsc.studies.boundary import _distance_to_edges, _inside, compare_with_samples
+    from elastica_petsc.core.model import arm_from_dict
+    from elastica_petsc.core.geometry import distance_to_edges, inside_polygon
+    from elastica_petsc.studies.boundary import compare_with_samples
     import json
     import h5py
 
@@ -116,7 +117,7 @@ def against_boundary(old, new, h: float, elements: int) -> None:
     polys = bd.polygons_mm["W0"]
     poly = np.asarray(max(polys, key=len), float)
     targets = new.target_mm
-    deep = _inside(poly, targets) & (_distance_to_edges(poly, targets) > h)
+    deep = inside_polygon(poly, targets) & (distance_to_edges(poly, targets) > h)
     was = (old.samples["status"] == 2) & deep
     now = new.samples["status"][was]
     print(f"\nold 'ended on P_i = 0' samples inside the W_0 polygon by more than one spacing: "
@@ -125,7 +126,7 @@ def against_boundary(old, new, h: float, elements: int) -> None:
     undecided_deep = int(np.sum((new.samples["status"] == 4) & deep))
     print(f"new map: undecided samples inside the polygon by more than one spacing: "
           f"{undecided_deep}; reached samples outside it by more than one spacing: "
-          f"{int(np.sum((new.samples['status'] == 1) & ~_inside(poly, targets) & (_distance_to_edges(poly, targets) > h)))}")
+          f"{int(np.sum((new.samples['status'] == 1) & ~inside_polygon(poly, targets) & (distance_to_edges(poly, targets) > h)))}")
     print("\n| map | reached | area from the sample count, y >= 0 | sampling error | polygon "
           "area, y >= 0 |\n|---|---|---|---|---|")
     for label, ws in (("old", old), ("new", new)):

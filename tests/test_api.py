@@ -102,7 +102,8 @@ def test_readme_python_block_runs(tmp_path):
 
 def test_read_round_trips_an_arm_without_optional_keys(tmp_path):
     """A config without mass or motor limit (None in the arm) survives config_json."""
-    from elastica_petsc.core.config import arm_from_dict, arm_to_dict
+    from elastica_petsc.core.config import arm_to_dict
+    from elastica_petsc.core.model import arm_from_dict
 
     cfg = tmp_path / "one.toml"
     cfg.write_text("[arm]\nlength_mm = 1000.0\nbending_stiffness_Nm2 = 1.0\nelements = 40\n"
@@ -135,7 +136,7 @@ def test_bifurcation_side_and_its_record(tmp_path):
 def test_boundary_in_one_call():
     """ep.boundary: the W_0 polygon of the paper's arm contains the tips of forward
     solves at admissible tensions (coarse mesh: a quick check of the wiring)."""
-    from elastica_petsc.studies.boundary import winding_number
+    from elastica_petsc.core.geometry import winding_number
 
     arm = ep.Arm.paper()
     b = ep.boundary(arm, restricted=False, elements=60)

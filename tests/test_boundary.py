@@ -11,13 +11,12 @@ import sys
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.continuation import FoldSystem, Manifold
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
-from elastica_petsc.studies.boundary import (BoundaryError, clip_half_plane, compare_with_samples,
-                                             shoelace, union_area,
-                                             trace_boundary, winding_number)
+from elastica_petsc.core.geometry import clip_half_plane, shoelace, union_area, winding_number
+from elastica_petsc.studies.boundary import BoundaryError, compare_with_samples, trace_boundary
 
 ELEMENTS = 60          # the paper's arm on a coarser mesh (attachments on nodes): fast
 
@@ -259,7 +258,7 @@ def test_outside_map_and_preimage_counts():
     """A counter-clockwise square (interior to the left): N = 1 inside, 0 out;
     a ray through a 'fold' polyline is not used; the outside map's walls
     stop the flood at the square."""
-    from elastica_petsc.studies.boundary import OutsideMap, preimage_counts
+    from elastica_petsc.studies.boundary.faces import OutsideMap, preimage_counts
 
     square = np.array([[0, 0], [10, 0], [10, 10], [0, 10]], float)
     pts = np.array([[5, 5], [15, 5], [-3, 7]], float)
@@ -415,7 +414,7 @@ def test_union_area_and_its_boundary_integral():
     """A figure of two overlapping squares traced as one loop: the region is
     their union (the shoelace area counts the overlap twice); dilating it
     changes the union area by 2A per unit of scale."""
-    from elastica_petsc.studies.boundary import union_area, union_area_gradient
+    from elastica_petsc.core.geometry import union_area_gradient
 
     a = np.array([[0, 0], [2, 0], [2, 2], [0, 2]], float)
     b = a + [1.0, 1.0]

@@ -9,12 +9,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.continuation import (CurveTracer, TensionBound, TensionRay,
                                                  permutation_sign)
-from elastica_petsc.studies.boundary import (OutsideMap, hermite_densify, self_intersections,
-                                             union_area, winding_number)
+from elastica_petsc.core.geometry import (hermite_densify, self_intersections, union_area,
+                                         winding_number)
+from elastica_petsc.studies.boundary.faces import OutsideMap
 
 
 @pytest.fixture(scope="module")

@@ -18,7 +18,7 @@ from elastica_petsc.plots.buckling import plot_fig7
 from elastica_petsc.studies.buckling import (BucklingError, Fig7Result, clamped_column_estimate,
                                              critical_configuration, fig7, segment_geometry,
                                              segment_profile)
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.core.fem import Discretisation

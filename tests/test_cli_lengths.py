@@ -20,7 +20,8 @@ import h5py
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import arm_to_dict, load_config
+from elastica_petsc.core.config import arm_to_dict
+from elastica_petsc.core.model import load_config
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.lengths import LengthSolver

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from petsc4py import PETSc
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.solvers.control import (CABLE_COLLAPSE, COLLAPSE_STOP, STATIONARY, TARGET_REACHED,
                                     TipController, default_eps)
 from elastica_petsc.solvers.equilibrium import COLLAPSE_LENGTH

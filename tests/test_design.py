@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.studies.design import (DesignError, parse_vary, path_misfit, route_bounds,
                                            with_routes)
 

@@ -12,10 +12,10 @@ import h5py
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.studies.design import DesignError, with_routes
-from elastica_petsc.studies.design_area import (box_area, box_loop, resampled_area,
-                                                shoelace_signed, union_area)
+from elastica_petsc.core.geometry import shoelace, triangles_union_area
+from elastica_petsc.studies.design_area import box_area, box_loop, resampled_area
 from elastica_petsc.studies.design_sweep import design_arm, parse_axis, run_sweep
 
 ELEMENTS = 30
@@ -44,11 +44,11 @@ def test_area_gradient_taylor_order_two():
 def test_loop_and_union_area_closed_forms():
     loop = box_loop(2.0, 4)
     assert loop.shape == (16, 2) and np.allclose(loop[0], 0) and np.allclose(loop[4], [2, 0])
-    assert shoelace_signed(loop) == pytest.approx(4.0)                  # counter-clockwise
+    assert shoelace(loop) == pytest.approx(4.0)                  # counter-clockwise
     square = np.array([[[0, 0], [10, 0], [10, 10]], [[0, 0], [10, 10], [0, 10]]], float)
-    assert union_area(square, 0.05) == pytest.approx(100.0, rel=0.02)
+    assert triangles_union_area(square, 0.05) == pytest.approx(100.0, rel=0.02)
     overlapping = np.concatenate((square, square + [5.0, 0.0]))          # union: 15 x 10
-    assert union_area(overlapping, 0.05) == pytest.approx(150.0, rel=0.02)
+    assert triangles_union_area(overlapping, 0.05) == pytest.approx(150.0, rel=0.02)
 
 
 def test_resampling_agrees_with_the_loop_area():

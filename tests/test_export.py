@@ -13,7 +13,7 @@ import h5py
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.io.vtk import lattice_quads, workspace_map, write_state, write_trace
 from elastica_petsc.solvers.control import TipController
 from elastica_petsc.studies.trace import densify, line, trace

@@ -18,7 +18,7 @@ from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
 from elastica_petsc.studies.buckling import aligned_family, critical_configuration, segment_geometry
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.deflation import Deflation
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.errors import InputError

@@ -14,7 +14,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.core.loading import Loading
 from elastica_petsc.core.model import Tendon

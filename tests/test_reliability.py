@@ -61,7 +61,7 @@ def test_unloaded_arm_every_allowed_mode_count_gives_positive_eigenvalues():
     l^2/B); every count 1..N returns exactly that many, all positive, none from the border.
     A request beyond N is clamped (the pencil's infinite eigenvalues were reported as
     -1e17 for N + 2 and more)."""
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.core.fem import Discretisation
     from elastica_petsc.solvers.stability import StabilitySolver
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.lengths import LengthSolver
 from elastica_petsc.studies.preimage import (CurveSearch, FaceChord, LengthLine, SearchTracer,

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.model import Tendon
 from elastica_petsc.solvers.control import TipController
 from elastica_petsc.solvers.reach import MAX_SEED_SOLVES, SEARCH_EXHAUSTED, Reacher, SeedLibrary

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.sensitivity import (SensitivityError, SensitivitySolver, compute_sensitivity,

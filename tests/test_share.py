@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.solvers.control import TipController
 from elastica_petsc.solvers.reach import Reacher

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.qp import LOWER, closest_in_box, solve_box_qp
 from elastica_petsc.solvers.control import Evaluation, TipController
 from elastica_petsc.solvers.share import (SHARE_INFEASIBLE, SHARE_STALLED, TensionSharer,

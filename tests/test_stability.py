@@ -17,7 +17,7 @@ import scipy.sparse as sp
 from petsc4py import PETSc
 from scipy.optimize import brentq
 
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.inertia import InertiaCounter

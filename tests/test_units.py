@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from elastica_petsc.cli import build_parser, common
-from elastica_petsc.core.config import load_config
+from elastica_petsc.core.model import load_config
 from elastica_petsc.core.errors import InputError
 
 

@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 MPIEXEC = shutil.which("mpiexec")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1")
-# checkpoint after every chunk (workspace.CHECKPOINT_ENV), so an interruption finds a file early
+# checkpoint after every chunk (chunks.CHECKPOINT_ENV), so an interruption finds a file early
 FAST_CHECKPOINTS = dict(ENV, ELASTICA_PETSC_CHECKPOINT_SECONDS="0")
 
 ELEMENTS = 60                                                  # multiple of 3: s_1 = l/3 on a node
@@ -373,7 +373,7 @@ def test_outside_tips_lie_on_the_p1_zero_locus(fixture, codes, request):
     proven-outside one whose local solve ended on P_1 = 0 (global search), is the equilibrium at p = (0, p_2) (a
     forward solve from the straight arm reproduces it): the edge of the local picture is
     x_t(0, P_2)."""
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.solvers.equilibrium import EquilibriumSolver
     from elastica_petsc.core.fem import Discretisation
 
@@ -396,11 +396,11 @@ def test_backward_sweep_reaches_targets_behind_a_collapse():
     first targets end at tendon 2's collapse (under its routing point), 105 mm is
     reached; solved again backwards from their reached neighbours, 58-93 mm are reached
     too (they are in W_0; only 23-47 mm are not reached either way)."""
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.solvers.control import CABLE_COLLAPSE
     from elastica_petsc.core.fem import Discretisation
-    from elastica_petsc.studies.sampling import TargetSampler
-    from elastica_petsc.studies.workspace import NOT_CONVERGED, REACHED
+    from elastica_petsc.studies.workspace import Status
+    from elastica_petsc.studies.workspace.samplers import TargetSampler
 
     arm = load_config(ROOT / "configs" / "paper.toml")
     sampler = TargetSampler(arm, Discretisation.from_arm(arm, 60), global_search=False)
@@ -411,7 +411,7 @@ def test_backward_sweep_reaches_targets_behind_a_collapse():
     finally:
         sampler.destroy()
     assert forward.reason == CABLE_COLLAPSE
-    np.testing.assert_array_equal(out["status"], [NOT_CONVERGED] * 3 + [REACHED] * 6)
+    np.testing.assert_array_equal(out["status"], [Status.NOT_CONVERGED] * 3 + [Status.REACHED] * 6)
     assert np.all(out["tip_error"][3:] < 1e-5)
     assert [r.decode() for r in out["reason"][:3]] == [CABLE_COLLAPSE] * 3
 
@@ -508,7 +508,7 @@ def test_fig4_legend_names_routing_points_and_reasons(targets_1):
 def test_run_map_returns_the_arrays_without_a_file(targets_1, tmp_path, monkeypatch):
     """``run_map`` in this process, no ``out``: the same samples and masks as the
     command line's file, in mm and N, status and reasons as strings; nothing written."""
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.core.fem import Discretisation
     from elastica_petsc.studies.workspace import run_map
 
@@ -584,7 +584,7 @@ def test_samples_proven_outside_are_outside_the_traced_boundary(targets_1, local
     with the boundary's own proof (docs/model.md §9.1: unbounded face, farther than 3
     cells from every traced curve), and no reached tip of the map lies in that outside
     region: the sampled map and the traced boundary do not contradict each other."""
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.core.fem import Discretisation
     from elastica_petsc.studies.boundary import trace_boundary
 
@@ -604,7 +604,7 @@ def test_targets_found_by_the_search_are_in_w0(targets_1):
     equilibrium at its tensions loaded from the straight arm (P >= 0 throughout) in some
     loading order (Fig. 8), i.e. it lies in W_0; the local sampler had said P_1 < 0."""
     import elastica_petsc as ep
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
 
     arm = load_config(ROOT / "configs" / "paper.toml")
     g = samples(targets_1)

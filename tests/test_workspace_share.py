@@ -45,7 +45,7 @@ def resolved(path):
     tip is the stored one (None if none is), with fresh sensitivities."""
     import itertools
 
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.core.loading import Loading
     from elastica_petsc.solvers.control import TipController
     from elastica_petsc.solvers.reach import replay
@@ -169,7 +169,7 @@ def test_two_tendons_the_floor_is_a_check(tmp_path):
     BELOW_FLOOR.  Probe of the proof, independent of the boundary: tip control from
     the six nearest seeds of the library (other loading orders, Fig. 8) finds no
     other tension set at those targets."""
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
     from elastica_petsc.solvers.control import TipController
     from elastica_petsc.solvers.reach import SeedLibrary
 
@@ -215,7 +215,7 @@ def test_bad_sharing_exits_2_with_one_line(args, words, tmp_path):
 
 def test_api_workspace_shares(tmp_path):
     import elastica_petsc as ep
-    from elastica_petsc.core.config import load_config
+    from elastica_petsc.core.model import load_config
 
     arm = load_config(ROOT / "configs" / "three_tendon.toml")
     wmap = ep.workspace(arm, spacing_mm=60, box_mm=(360, 420, 210, 250), elements=30,

@@ -41,14 +41,14 @@ def run(args) -> int:
 
     from mpi4py import MPI
 
-    from ..core.config import load_config
+    from ..core.model import load_config
     from ..core.errors import InputError
     from ..reproduce import Context, check_output_folder, run as run_all
 
     comm = MPI.COMM_WORLD
     if args.jobs < 1:
         raise InputError(f"--jobs must be at least 1, got {args.jobs}")
-    from ..studies.workspace import agree
+    from ..studies.chunks import agree
 
     out, error = Path(args.out), None
     try:

@@ -52,7 +52,7 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from mpi4py import MPI
 
-    from ..studies.workspace import CollectiveInputError
+    from ..studies.chunks import CollectiveInputError
 
     comm = MPI.COMM_WORLD
     try:
@@ -74,7 +74,8 @@ def run(args) -> int:
 
 def _run(args, comm) -> int:
     from ..core.errors import InputError
-    from ..studies import workspace
+    from ..studies.chunks import agree
+    from ..studies.workspace import run_map
 
     # Input errors are agreed on by all ranks before any collective work (one line, exit 2).
     try:
@@ -82,8 +83,8 @@ def _run(args, comm) -> int:
         error = None
     except InputError as err:
         error = str(err)
-    workspace.agree(comm, error)
-    result = workspace.run_map(
+    agree(comm, error)
+    result = run_map(
         arm, disc, mode=args.mode, spacing_mm=args.spacing, box_mm=args.box,
         tension_spacing=args.tension_spacing, tension_max=args.tension_max, chunk=args.chunk,
         comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
@@ -92,7 +93,8 @@ def _run(args, comm) -> int:
         return 0
     summary = result.summary()
     if args.json:
-        common.print_json(summary)
+        from ..studies.map_area import map_json
+        common.print_json(args.command, summary | map_json(result, args.box))
     else:
         print(format_summary(summary))
     if not summary["complete"]:

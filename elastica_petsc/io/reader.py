@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.config import arm_from_dict
+from ..core.model import arm_from_dict
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm

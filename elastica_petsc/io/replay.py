@@ -9,7 +9,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ..core.config import arm_from_dict
+from ..core.model import arm_from_dict
 from ..core.errors import InputError
 from .hdf5 import atomic_h5, provenance, put, write_attrs
 

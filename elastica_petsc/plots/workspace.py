@@ -9,9 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from .common import figure, save
-from ..studies.workspace import (BELOW_FLOOR, BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED,
-                                 OUTSIDE_BOUNDARY, REACHED, UNDECIDED, UNIQUE_BELOW_FLOOR,
-                                 reason_counts, share_of)
+from ..io.workspace import share_of
+from ..studies.workspace import Status, reason_counts
 
 
 def read_workspace(path) -> dict:
@@ -49,6 +48,7 @@ def read_overlays(files) -> list[tuple[str, np.ndarray]]:
     return paths
 
 
+MARKER_SIZE = 3.0            # points, every class of sample in Fig. 4
 PATH_COLOURS = ("k", "tab:purple", "tab:cyan", "tab:brown", "tab:blue")   # not orange: undecided samples
 
 
@@ -74,22 +74,22 @@ def _classes(data: dict) -> list[tuple[np.ndarray, str, str, str]]:
     status = data["status"]
     strategy = data.get("strategy", np.full(status.shape, b""))
     found = np.array([s.startswith((b"seed", b"neighbour")) for s in strategy], bool)
-    reached = status == REACHED
+    reached = status == Status.REACHED
     floor = data.get("min_tension_N", 0.0)
     w0 = f"P >= {floor:g} N (W_0(P_min))" if floor > 0 else "P >= 0 (W_0)"
     return [(reached & ~found, "tab:green", "o", f"reached, {w0}"),
             (reached & found, "darkgreen", "D", f"reached, {w0}, by the global search"),
-            (status == BELOW_FLOOR, "gold", "s",
+            (status == Status.BELOW_FLOOR, "gold", "s",
              "reached with P >= 0, no tensions >= the floor found (undecided)"),
-            (status == UNIQUE_BELOW_FLOOR, "tab:brown", "s",
+            (status == Status.UNIQUE_BELOW_FLOOR, "tab:brown", "s",
              "reached with P >= 0, its only tensions below the floor (proven)"),
-            (status == UNDECIDED, "tab:orange", "o",
+            (status == Status.UNDECIDED, "tab:orange", "o",
              "not reached after the global search (undecided)"),
-            (status == OUTSIDE_BOUNDARY, "tab:purple", ".",
+            (status == Status.OUTSIDE_BOUNDARY, "tab:purple", "o",
              "outside the traced W_0 boundary (proven)"),
-            (status == BEYOND_REACH, "k", ".", "beyond reach |x| > l (proven)"),
-            (status == NEEDS_NEGATIVE, "tab:red", "o", "ended on P_i = 0 (local verdict)"),
-            (status == NOT_CONVERGED, "0.6", "x", "not converged")]
+            (status == Status.BEYOND_REACH, "k", "o", "beyond reach |x| > l (proven)"),
+            (status == Status.NEEDS_NEGATIVE, "tab:red", "o", "ended on P_i = 0 (local verdict)"),
+            (status == Status.NOT_CONVERGED, "0.6", "x", "not converged")]
 
 
 def plot_samples(data: dict, ax, paths=None) -> None:
@@ -100,15 +100,18 @@ def plot_samples(data: dict, ax, paths=None) -> None:
     where = target if data["mode"] == "targets" else tip
     for sel, colour, marker, label in _classes(data):
         if sel.any():
-            pts = tip[sel] if data["status"][sel][0] == REACHED else where[sel]
+            pts = tip[sel] if data["status"][sel][0] == Status.REACHED else where[sel]
             count = f"{int(sel.sum())}"
             if colour == "0.6":
                 count += f": {reason_counts(data['reason'][sel])}"
-            ax.plot(pts[:, 0], pts[:, 1], marker, color=colour, ms=2.5, ls="none",
+            # one marker size for every class: only colour and shape tell them apart
+            ax.plot(pts[:, 0], pts[:, 1], marker, color=colour, ms=MARKER_SIZE, ls="none",
                     label=f"{label} ({count})")
     routes = data["routes_mm"]
     ax.plot(routes[:, 0], routes[:, 1], "k^", ms=6, ls="none",
             label="routing points r_" + ", r_".join(str(i) for i in range(1, len(routes) + 1)))
+    for i, r in enumerate(routes, start=1):
+        ax.annotate(f"r_{i}", r, xytext=(5, -3), textcoords="offset points", fontsize=9)
     _rigid_link(ax, data["length_mm"])
     _paths_overlay(ax, paths)
     ax.plot(0, 0, "ks", ms=6)
@@ -157,7 +160,7 @@ def _contour(fig, ax, xy, values, title, label, levels=12, limit=None, paths=Non
 def plot_restrictions(data: dict, path, paths=None) -> None:
     """Fig. 5a-d over the reached samples: curvature, smallest eigenvalue,
     strain energy and every tension."""
-    reached = data["status"] == REACHED
+    reached = data["status"] == Status.REACHED
     xy = data["tip"][reached]
     n = data["tensions"].shape[1]
     panels = [("kappa_max", "(a) max curvature l*kappa_max", "l kappa_max",
@@ -175,11 +178,15 @@ def plot_restrictions(data: dict, path, paths=None) -> None:
     for ax, (name, title, label, limit) in zip(axes, panels):
         _contour(fig, ax, xy, data[name][reached], title, label, limit=limit, paths=paths,
                  spacing=data.get("spacing"))
+    # tensions in N, with the non-dimensional p of the same colour in the title
+    p_max = data["limits"].get("max_tension")
     for i in range(n):
-        _contour(fig, axes[len(panels) + i], xy, data["tensions"][reached, i],
-                 f"(d) tension of tendon {i + 1}, P l^2/B", "P l^2/B",
-                 limit=data["limits"].get("max_tension"), paths=paths,
-                 spacing=data.get("spacing"))
+        P_N, p = data["tensions_N"][reached, i], data["tensions"][reached, i]
+        per_N = float(np.nanmedian(p[P_N > 0] / P_N[P_N > 0])) if np.any(P_N > 0) else np.nan
+        _contour(fig, axes[len(panels) + i], xy, P_N,
+                 f"(d) tension of tendon {i + 1} [N] (p = P l^2/B = {per_N:.3g} P/N)", "P [N]",
+                 limit=None if p_max is None or not np.isfinite(per_N) else p_max / per_N,
+                 paths=paths, spacing=data.get("spacing"))
     for ax in axes[count:]:
         ax.axis("off")
     fig.suptitle("Restrictions on the workspace (Fig. 5); red lines: limits of Eqs. (19)-(22)")

@@ -54,6 +54,7 @@ import scipy.sparse.linalg as spla
 
 from ..core.clearance import state_cable_clear
 from ..core.fem import Discretisation
+from ..core.geometry import shoelace, shoelace_normals, triangles_union_area
 from ..core.model import Arm
 from ..solvers.continuation import Manifold
 from ..solvers.equilibrium import EquilibriumSolver
@@ -69,19 +70,6 @@ def box_loop(p_max: float, nodes_per_edge: int) -> np.ndarray:
                            np.column_stack((p_max - t, top)), np.column_stack((zero, p_max - t))])
 
 
-def shoelace_signed(loop: np.ndarray) -> float:
-    """1/2 sum (x_k y_{k+1} - x_{k+1} y_k) of a closed polygon (last joined to first)."""
-    x, y = loop[:, 0], loop[:, 1]
-    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
-
-
-def shoelace_normals(loop: np.ndarray) -> np.ndarray:
-    """d(signed shoelace)/d x_k, (K, 2): half the chord across node k turned by
-    -90 degrees, the discrete outward normal times the node's share of length."""
-    nxt, prv = np.roll(loop, -1, axis=0), np.roll(loop, 1, axis=0)
-    return 0.5 * np.column_stack((nxt[:, 1] - prv[:, 1], prv[:, 0] - nxt[:, 0]))
-
-
 @dataclass
 class BoxArea:
     """The area objective of one design (module docstring), mm and mm^2."""
@@ -91,12 +79,40 @@ class BoxArea:
     loop_mm: np.ndarray         # tips at the loop's nodes (K, 2)
     tensions: np.ndarray        # the nodes in tension space (K, 2), p = P l^2/B
     det_sign_changes: int       # sign changes of det(d x_t/d p) along the loop
-    converged: bool             # every node solved along the loop
-    cables_clear: bool          # no cable crosses the arm at any node (core/clearance.py)
+    node_converged: np.ndarray  # (K,) the node's equilibrium solved
+    node_clear: np.ndarray      # (K, n) cable i clear of the arm at the node (core/clearance.py)
+
+    @property
+    def converged(self) -> bool:
+        """Every node solved along the loop."""
+        return bool(self.node_converged.all())
+
+    @property
+    def cables_clear(self) -> bool:
+        """No cable crosses the arm at any node."""
+        return bool(self.node_clear.all())
 
     @property
     def feasible(self) -> bool:
         return self.converged and self.cables_clear
+
+
+def infeasibility(area: BoxArea, force_scale_N: float) -> dict:
+    """Which constraint a design's loop violates, in N: the tensions of the nodes
+    whose equilibrium was not solved, and per crossing tendon (numbered from 1)
+    how many nodes, the first and last along the loop, and the smallest
+    max(P_1, P_2) among them (a tension box below it avoids those nodes)."""
+    P = area.tensions * force_scale_N
+    crossings = []
+    for i in range(area.node_clear.shape[1]):
+        at = np.flatnonzero(~area.node_clear[:, i])
+        if len(at):
+            crossings.append({"tendon": i + 1, "nodes": int(len(at)), "of": int(len(P)),
+                              "first_tensions_N": P[at[0]].round(4).tolist(),
+                              "last_tensions_N": P[at[-1]].round(4).tolist(),
+                              "lowest_max_tension_N": float(P[at].max(axis=1).min().round(4))})
+    return {"unsolved_tensions_N": P[~area.node_converged].round(4).tolist(),
+            "crossings": crossings}
 
 
 def _node_derivatives(mf: Manifold, u: np.ndarray, p: np.ndarray, tendons) -> np.ndarray:
@@ -121,25 +137,26 @@ def box_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
     l_mm = arm.length_mm
     mf = Manifold(disc)
     tensions = box_loop(p_max, nodes_per_edge)
-    tips, dtip, dets, ok, clear, previous = [], [], [], True, True, None
+    tips, dtip, dets, ok, clear, previous = [], [], [], [], [], None
     with EquilibriumSolver(disc) as solver:            # the routing points live in disc
         for p in tensions:
             eq = solver.solve(p, start=previous)
-            ok &= bool(eq.converged)
-            clear &= bool(np.all(state_cable_clear(eq)))
+            ok.append(bool(eq.converged))
+            clear.append(state_cable_clear(eq))
             previous = eq
             d = _node_derivatives(mf, eq.u, eq.p, tendons)
             tips.append(eq.tip * l_mm)
             dets.append(np.linalg.det(d[:, :2]))
             dtip.append(d[:, 2:])                      # mm per mm: x_t/l per r/l
     loop = np.array(tips)
-    signed = shoelace_signed(loop)
+    signed = shoelace(loop)
     sigma = 1.0 if signed >= 0 else -1.0
     normals = shoelace_normals(loop)
     grad = sigma * np.einsum("ka,kaj->j", normals, np.array(dtip))
     signs = np.sign(dets)
     changes = int(np.sum(signs != np.roll(signs, 1)))
-    return BoxArea(abs(signed), grad, loop, tensions, changes, ok, clear)
+    return BoxArea(abs(signed), grad, loop, tensions, changes, np.array(ok, bool),
+                   np.array(clear, bool).reshape(len(tensions), -1))
 
 
 # --- independent re-sampling -------------------------------------------------------------------
@@ -168,34 +185,6 @@ def _triangles(tips: np.ndarray, good: np.ndarray) -> np.ndarray:
     return np.concatenate((t1, t2))
 
 
-def union_area(triangles: np.ndarray, h: float) -> float:
-    """Area (mm^2) of the union of triangles, counted on a square lattice of
-    spacing ``h`` mm (a point counts once however many triangles hold it)."""
-    if len(triangles) == 0:
-        return 0.0
-    lo = triangles.reshape(-1, 2).min(axis=0)
-    hi = triangles.reshape(-1, 2).max(axis=0)
-    shape = np.ceil((hi - lo) / h).astype(int) + 1
-    covered = np.zeros(shape, bool)
-    for tri in triangles:
-        i0, j0 = np.floor((tri.min(axis=0) - lo) / h).astype(int)
-        i1, j1 = np.ceil((tri.max(axis=0) - lo) / h).astype(int) + 1
-        gx, gy = np.meshgrid(lo[0] + h * np.arange(i0, i1), lo[1] + h * np.arange(j0, j1),
-                             indexing="ij")
-        covered[i0:i1, j0:j1] |= _inside_triangle(tri, gx, gy)
-    return float(covered.sum()) * h * h
-
-
-def _inside_triangle(tri: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
-    (x0, y0), (x1, y1), (x2, y2) = tri
-    det = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
-    if det == 0.0:
-        return np.zeros(gx.shape, bool)
-    l1 = ((gx - x0) * (y2 - y0) - (x2 - x0) * (gy - y0)) / det
-    l2 = ((x1 - x0) * (gy - y0) - (gx - x0) * (y1 - y0)) / det
-    return (l1 >= 0) & (l2 >= 0) & (l1 + l2 <= 1)
-
-
 def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells: int = 20,
                    lattice_mm: float = 0.25) -> Resampled:
     """Re-sample the workspace of ``arm`` within 0 <= p_i <= ``p_max``: forward
@@ -211,7 +200,7 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
     cells against 58472 mm^2 for the loop's shoelace at 48 nodes per edge."""
     from mpi4py import MPI
 
-    from .workspace import REACHED, run_map
+    from .workspace import Status, run_map
 
     disc = Discretisation.from_arm(arm, elements)
     spacing = p_max / cells
@@ -222,13 +211,13 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
     n = cells + 1
     tips = np.full((n, n, 2), np.nan)
     good = np.zeros((n, n), bool)
-    reached = s["status"] == REACHED
+    reached = s["status"] == Status.REACHED
     with np.errstate(invalid="ignore"):
         stable = reached & (s["lambda_min"] > 0)
     tips[index[:, 0], index[:, 1]] = s["tip"]
     good[index[:, 0], index[:, 1]] = stable
-    fine = union_area(_triangles(tips, good), lattice_mm)
-    coarse = union_area(_triangles(tips[::2, ::2], good[::2, ::2]), lattice_mm)
+    fine = triangles_union_area(_triangles(tips, good), lattice_mm)
+    coarse = triangles_union_area(_triangles(tips[::2, ::2], good[::2, ::2]), lattice_mm)
     edge = np.concatenate([tips[:, 0], tips[-1, 1:], tips[-2::-1, -1], tips[0, -2:0:-1]])
     perimeter = float(np.nansum(np.linalg.norm(np.diff(edge, axis=0), axis=1)))
     seconds = float(np.nansum(s["seconds_control"]) + np.nansum(s["seconds_eigen"]))
@@ -239,6 +228,7 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
 
 
 # --- the optimiser -----------------------------------------------------------------------------
+INFEASIBLE_START = "INFEASIBLE_START"   # AreaDesign.reason: the start violates a constraint
 STALL_GAIN = 1e-3        # relative area gain over 3 iterations below which TAO is stopped
 @dataclass
 class AreaDesign:
@@ -316,11 +306,14 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
         raise DesignError(f"--tension-max must be a positive force, got p = {p_max}")
     t0 = time.perf_counter()
     elements = Discretisation.from_arm(arm, elements).n_elements
-    history, best, first = [], {}, []
+    history, best, first, seen = [], {}, [], {}
 
     def evaluate(candidate):
-        a = box_area(candidate, tendons, p_max, elements=elements,
-                     nodes_per_edge=nodes_per_edge)
+        key = tuple((t.attach_mm, *t.route_mm) for t in candidate.tendons)
+        if key in seen:                          # TAO's first call is the start, evaluated
+            return seen[key]
+        a = seen[key] = box_area(candidate, tendons, p_max, elements=elements,
+                                 nodes_per_edge=nodes_per_edge)
         if not first:
             first.append(a)
         history.append({"attach_mm": [t.attach_mm for t in candidate.tendons],
@@ -336,6 +329,9 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
         return a
 
     designed, reason, iterations = arm, "", 0
+    if not evaluate(arm).feasible:               # nothing to start from: no optimiser, no checks
+        return AreaDesign(arm, arm, list(tendons), p_max, first[0], first[0], None, None,
+                          history, INFEASIBLE_START, 0, time.perf_counter() - t0)
     if attaches:
         designed, _ = search_attachments(arm, attaches, evaluate, elements=elements,
                                          reach_mm=reach_mm)

@@ -16,7 +16,7 @@ included).  The grid is their Cartesian product.  Every design gets:
   the number of targets reached (:func:`~elastica_petsc.studies.design.path_misfit`).
 
 Distribution, checkpoints and ``resume`` are those of the workspace sampler
-(:func:`elastica_petsc.studies.workspace.run`: one design per chunk, handed
+(:func:`elastica_petsc.studies.chunks.run`: one design per chunk, handed
 out through the shared atomic counter; rank 0 writes the file aside and
 renames it).  Each design's result depends on the design alone, so a run
 equals its interrupted-and-resumed twin and does not depend on the ranks.
@@ -32,12 +32,13 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.fem import Discretisation
-from ..core.model import Arm, Tendon
+from ..core.model import Arm
 from .design import DesignError, path_misfit
 from .design_area import box_area
-from .workspace import Grid, Results
+from .chunks import ChunkResults, Grid, Stop, agree, check_out, empty_fields, run
 
-KINDS = ("route.x", "route.y", "attach")
+KINDS = ("route.x", "route.y", "attach", "offset")   # offset: the cable's guides and end
+                                                    # at one offset (docs/model.md §11)
 
 
 @dataclass(frozen=True)
@@ -58,7 +59,7 @@ def parse_axis(text: str, n_tendons: int) -> Axis:
     name, eq, spec = text.partition("=")
     head, _, kind = name.partition(".")
     if not eq or not head.startswith("tendon") or not head[6:].isdigit() or kind not in KINDS:
-        raise DesignError(f"--sweep {text!r}: expected tendonK.route.x|route.y|attach="
+        raise DesignError(f"--sweep {text!r}: expected tendonK.route.x|route.y|attach|offset="
                           "START:STOP:STEP (mm), e.g. tendon2.route.y=20:60:10")
     k = int(head[6:])
     if not 1 <= k <= n_tendons:
@@ -79,13 +80,20 @@ def design_arm(arm: Arm, axes, values) -> Arm:
     """``arm`` with the swept parameters set to ``values`` (mm)."""
     import dataclasses
 
-    tendons = [[t.attach_mm, list(t.route_mm)] for t in arm.tendons]
+    tendons = list(arm.tendons)
     for axis, v in zip(axes, values):
+        t = tendons[axis.tendon]
         if axis.kind == "attach":
-            tendons[axis.tendon][0] = float(v)
+            t = dataclasses.replace(t, attach_mm=float(v))
+        elif axis.kind == "offset":              # every guide and the end point, signed as given
+            t = dataclasses.replace(t, attach_offset_mm=float(v), guides=tuple(
+                dataclasses.replace(g, offset_mm=float(v)) for g in t.guides))
         else:
-            tendons[axis.tendon][1]["xy".index(axis.kind[-1])] = float(v)
-    return dataclasses.replace(arm, tendons=tuple(Tendon(a, tuple(r)) for a, r in tendons))
+            route = list(t.route_mm)
+            route["xy".index(axis.kind[-1])] = float(v)
+            t = dataclasses.replace(t, route_mm=tuple(route))
+        tendons[axis.tendon] = t
+    return dataclasses.replace(arm, tendons=tuple(tendons))
 
 
 def sweep_grid(arm: Arm, elements: int, axes) -> Grid:
@@ -123,11 +131,11 @@ def sweep_fields() -> dict:
     }
 
 
-class SweepResults(Results):
+class SweepResults(ChunkResults):
     """Per-design results with the sweep's schema and file (io/design.py)."""
 
     def __init__(self, grid: Grid):
-        super().__init__(grid, 0, sweep_fields())
+        super().__init__(grid, sweep_fields())
 
     def write(self, path, attrs, limits, timing) -> None:
         from ..io.design import write_sweep
@@ -144,8 +152,6 @@ class SweepSampler:
         self.schema = sweep_fields()
 
     def solve_chunk(self, points: np.ndarray, stop) -> dict | None:
-        from .workspace import empty_fields
-
         out = empty_fields(self.schema, len(points))
         out["path_reached"][:] = -1
         for k, values in enumerate(points):
@@ -205,17 +211,15 @@ def run_sweep(arm: Arm, elements: int, axes, p_max: float, *, targets_mm=None, c
     Collective; returns the :class:`Sweep` on every rank."""
     from mpi4py import MPI
 
-    from .workspace import _check_out, _Stop, agree, run
-
     comm = MPI.COMM_WORLD if comm is None else comm
     lock = path = grid = None
-    with _Stop() as stop:
+    with Stop() as stop:
         try:
             try:
                 grid = sweep_grid(arm, elements, axes)
                 if not (np.isfinite(p_max) and p_max > 0):
                     raise DesignError(f"--tension-max must be positive, got p = {p_max}")
-                path = None if out is None else _check_out(out, resume, overwrite)
+                path = None if out is None else check_out(out, resume, overwrite)
                 if path is not None and comm.rank == 0:
                     from ..io.hdf5 import OutputLock
                     lock = OutputLock(path)
@@ -226,9 +230,9 @@ def run_sweep(arm: Arm, elements: int, axes, p_max: float, *, targets_mm=None, c
             attrs = _attrs(arm, elements, grid, p_max, targets_mm, provenance)
             results = run(grid, SweepSampler(arm, elements, axes, p_max, targets_mm), path,
                           attrs, {}, comm=comm, resume=resume,
+                          new_results=lambda: SweepResults(grid),
                           checkpoint_seconds=checkpoint_seconds, progress=progress,
-                          progress_label=f"design sweep ({comm.size} rank(s))", stop=stop,
-                          new_results=lambda: SweepResults(grid))
+                          progress_label=f"design sweep ({comm.size} rank(s))", stop=stop)
         finally:
             if lock is not None:
                 lock.release()

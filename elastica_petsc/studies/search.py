@@ -77,7 +77,7 @@ def effort_settings(effort: int = 1, levels=None) -> dict:
 def is_paper_arm(disc) -> bool:
     """True if ``disc`` discretises the arm of the paper's Fig. 1 (same routing
     points and attachments in units of l; any mesh)."""
-    from ..core.config import load_config
+    from ..core.model import load_config
 
     paper = load_config()
     return (disc.n_tendons == paper.n_tendons

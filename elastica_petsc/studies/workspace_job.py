@@ -43,7 +43,7 @@ def spawn(arm, elements: int, ranks: int, **kwargs) -> int:
 def main(argv: list[str]) -> int:
     import petsc4py
     petsc4py.init(argv[:1])
-    from ..core.config import arm_from_dict
+    from ..core.model import arm_from_dict
     from ..core.fem import Discretisation
     from .workspace import run_map
 

@@ -12,7 +12,7 @@ classes are kept: reached, tip control ended on P_i = 0 (a local verdict), or
 not converged.
 ``TensionSampler`` (mode ``tensions``): the forward solve on a grid of
 tensions, each warm-started (continued) from the previous one.
-Both fill the same fields (:func:`elastica_petsc.studies.workspace.fields`) and add
+Both fill the same fields (:func:`elastica_petsc.studies.workspace.schema.fields`) and add
 the smallest stiffness eigenvalue (SLEPc) of every equilibrium reached.
 """
 from __future__ import annotations
@@ -21,14 +21,14 @@ import time
 
 import numpy as np
 
-from ..core.clearance import state_cable_clear
-from ..solvers.equilibrium import Equilibrium, EquilibriumSolver
-from ..core.fem import Discretisation
-from ..core.model import Arm
-from ..solvers.stability import StabilityError, StabilitySolver
-from .workspace import (BELOW_FLOOR, BEYOND_REACH, NEEDS_NEGATIVE, NOT_CONVERGED,
-                        OUTSIDE_BOUNDARY, REACHED, UNDECIDED, UNIQUE_BELOW_FLOOR, empty_fields,
-                        fields)
+from ...core.clearance import state_cable_clear
+from ...core.fem import Discretisation
+from ...core.model import Arm
+from ...solvers.equilibrium import Equilibrium, EquilibriumSolver
+from ...solvers.stability import StabilityError, StabilitySolver
+from ..chunks import empty_fields
+from .schema import Status, fields
+from .settings import SamplerSettings
 
 
 class _Sampler:
@@ -80,11 +80,11 @@ class TensionSampler(_Sampler):
             out["iterations"][k] = eq.iterations
             out["reason"][k] = eq.reason.encode()[:48]
             if eq.converged:
-                out["status"][k] = REACHED
+                out["status"][k] = Status.REACHED
                 self._record(out, k, eq)
                 previous = eq
             else:
-                out["status"][k] = NOT_CONVERGED
+                out["status"][k] = Status.NOT_CONVERGED
         return out
 
 
@@ -196,7 +196,7 @@ class TargetSampler(_Sampler):
 
     def __init__(self, arm: Arm, disc: Discretisation, global_search: bool = True,
                  share: str = "none", min_tension: float = 0.0):
-        from ..solvers.control import TipController
+        from ...solvers.control import TipController
 
         super().__init__(arm, disc)
         self.controller = TipController(arm, solver=self.solver,
@@ -206,7 +206,7 @@ class TargetSampler(_Sampler):
         self.share, self.min_tension = share, float(min_tension)
         self.sharer = None
         if share != "none" and disc.n_tendons >= 3:
-            from ..solvers.share import TensionSharer
+            from ...solvers.share import TensionSharer
             self.sharer = TensionSharer(self.controller, share, self.min_tension)
         self._reached = {}                 # sample -> ControlResult that reached it (a chunk)
 
@@ -214,17 +214,17 @@ class TargetSampler(_Sampler):
     def library(self):
         """The seed library of :mod:`~elastica_petsc.solvers.reach` (built on first use)."""
         if self._library is None:
-            from ..solvers.reach import SeedLibrary
+            from ...solvers.reach import SeedLibrary
             self._library = SeedLibrary(self.controller)
         return self._library
 
     def _classify(self, result) -> int:
         if result.converged:
-            return REACHED
+            return Status.REACHED
         # local evidence only (a stationary point of E with a tension on P = 0 and the
         # gradient pushing through it): the class is 'needs a negative tension from
         # here', not a proof about W_0 (solvers/reach.py: reachable stays None)
-        return NEEDS_NEGATIVE if _on_lower_bound(result) else NOT_CONVERGED
+        return Status.NEEDS_NEGATIVE if _on_lower_bound(result) else Status.NOT_CONVERGED
 
     def solve_chunk(self, points: np.ndarray, stop) -> dict | None:
         out = self._empty(len(points))
@@ -233,10 +233,10 @@ class TargetSampler(_Sampler):
         states = {}                        # sample -> equilibrium, reached samples
         runs = {}                          # sample -> [(start, result)] of its local solves
         if self.global_search:
-            from ..solvers.reach import beyond_reach
+            from ...solvers.reach import beyond_reach
             for k, target in enumerate(points):
                 if beyond_reach(target / self.arm.length_mm):
-                    out["status"][k] = BEYOND_REACH
+                    out["status"][k] = Status.BEYOND_REACH
                     out["reason"][k] = b"BEYOND_REACH"
         if not (self._forward(points, out, states, runs, stop)
                 and self._backward(points, out, states, runs, stop)):
@@ -245,8 +245,8 @@ class TargetSampler(_Sampler):
             self._prove_outside(points, out)
             if not self._search(points, out, states, runs, stop):
                 return None
-            out["status"][(out["status"] == NEEDS_NEGATIVE)
-                          | (out["status"] == NOT_CONVERGED)] = UNDECIDED
+            out["status"][(out["status"] == Status.NEEDS_NEGATIVE)
+                          | (out["status"] == Status.NOT_CONVERGED)] = Status.UNDECIDED
         if self.share != "none" and not self._share_chunk(points, out, stop):
             return None
         return out
@@ -257,7 +257,7 @@ class TargetSampler(_Sampler):
         head = np.full(self.disc.n_tendons, self.head_guess)
         reached = boundary = None          # last reached state; state after an outside target
         for k, target in enumerate(points):
-            if out["status"][k] == BEYOND_REACH:
+            if out["status"][k] == Status.BEYOND_REACH:
                 continue
             if stop():
                 return False
@@ -268,7 +268,7 @@ class TargetSampler(_Sampler):
                 result = self.controller.solve_mm(target, start=boundary)
                 runs[k].append((boundary, result))
                 status = self._classify(result)
-                if status == NOT_CONVERGED:
+                if status == Status.NOT_CONVERGED:
                     result = None
             if result is None:
                 result = self.controller.solve_mm(
@@ -276,8 +276,8 @@ class TargetSampler(_Sampler):
                 runs[k].append((reached, result))
                 status = self._classify(result)
             self._store(out, k, result, status, time.perf_counter() - t0)
-            boundary = result.equilibrium if status == NEEDS_NEGATIVE else None
-            if status == REACHED:
+            boundary = result.equilibrium if status == Status.NEEDS_NEGATIVE else None
+            if status == Status.REACHED:
                 reached = states[k] = result.equilibrium
         return True
 
@@ -289,7 +289,7 @@ class TargetSampler(_Sampler):
             if k in states:
                 reached = states[k]
                 continue
-            if out["status"][k] != NOT_CONVERGED or reached is None:
+            if out["status"][k] != Status.NOT_CONVERGED or reached is None:
                 continue
             if stop():
                 return False
@@ -299,32 +299,32 @@ class TargetSampler(_Sampler):
             runs[k].append((reached, result))
             status = self._classify(result)
             seconds = out["seconds_control"][k] + time.perf_counter() - t0
-            if status == NOT_CONVERGED:
+            if status == Status.NOT_CONVERGED:
                 out["seconds_control"][k] = seconds
                 continue
             self._store(out, k, result, status, seconds)
-            if status == REACHED:
+            if status == Status.REACHED:
                 reached = states[k] = result.equilibrium
         return True
 
     def _prove_outside(self, points, out: dict) -> None:
         """Class ``OUTSIDE_BOUNDARY`` the not-reached samples the traced boundary
         of W_0 proves outside (class doc); the boundary is traced on first need."""
-        from .boundary import boundary_proof
+        from ..boundary import boundary_proof
 
         outside = boundary_proof(self.arm, self.disc)     # one trace per process, on first need
         for k, target in enumerate(points):
-            if out["status"][k] in (REACHED, BEYOND_REACH):
+            if out["status"][k] in (Status.REACHED, Status.BEYOND_REACH):
                 continue
             if outside(target / self.arm.length_mm)[0]:
-                out["status"][k] = OUTSIDE_BOUNDARY     # reason: how its local solve ended
+                out["status"][k] = Status.OUTSIDE_BOUNDARY     # reason: how its local solve ended
 
     def _search(self, points, out: dict, states: dict, runs: dict, stop) -> bool:
         """The global search of the class doc over the chunk's not-reached
         samples, in chunk order; False if stopped."""
         tracks = {}                        # seed index -> where its last try ended
         for k in range(len(points)):
-            if out["status"][k] in (REACHED, BEYOND_REACH, OUTSIDE_BOUNDARY):
+            if out["status"][k] in (Status.REACHED, Status.BEYOND_REACH, Status.OUTSIDE_BOUNDARY):
                 continue
             if stop():
                 return False
@@ -337,7 +337,7 @@ class TargetSampler(_Sampler):
                 out["seconds_control"][k] = seconds
                 out["strategy"][k] = b"global search: not reached"
                 continue
-            self._store(out, k, result, REACHED, seconds, label)
+            self._store(out, k, result, Status.REACHED, seconds, label)
             states[k] = result.equilibrium
             if not self._spread(points, out, states, k, stop):
                 return False
@@ -397,8 +397,9 @@ class TargetSampler(_Sampler):
         one reached) until one is not reached; False if stopped."""
         for step in (1, -1):
             j, start = k + step, states[k]
-            while 0 <= j < len(points) and out["status"][j] not in (REACHED, BEYOND_REACH,
-                                                                     OUTSIDE_BOUNDARY):
+            while 0 <= j < len(points) and out["status"][j] not in (Status.REACHED,
+                                                                     Status.BEYOND_REACH,
+                                                                     Status.OUTSIDE_BOUNDARY):
                 if stop():
                     return False
                 t0 = time.perf_counter()
@@ -408,7 +409,7 @@ class TargetSampler(_Sampler):
                 if not result.converged:
                     out["seconds_control"][j] = seconds
                     break
-                self._store(out, j, result, REACHED, seconds, f"neighbour of sample {k} "
+                self._store(out, j, result, Status.REACHED, seconds, f"neighbour of sample {k} "
                             "(global search)")
                 start = states[j] = result.equilibrium
                 j += step
@@ -417,12 +418,12 @@ class TargetSampler(_Sampler):
     def _store(self, out: dict, k: int, result, status: int, seconds: float,
                strategy: str = "local") -> None:
         out["seconds_control"][k] = seconds
-        out["strategy"][k] = strategy.encode()[:48] if status == REACHED else b""
+        out["strategy"][k] = strategy.encode()[:48] if status == Status.REACHED else b""
         out["iterations"][k] = result.iterations
         out["reason"][k] = result.reason.encode()[:48]
         out["tip_error"][k] = result.tip_error_mm
         out["status"][k] = status
-        if status == REACHED:
+        if status == Status.REACHED:
             self._reached[k] = result
             self._record(out, k, result.equilibrium)
         else:
@@ -439,10 +440,10 @@ class TargetSampler(_Sampler):
                 if np.min(out["tensions"][k]) >= self.min_tension - 1e-12:
                     out["shared"][k] = True
                 elif self._unique(points[k]):
-                    out["status"][k] = UNIQUE_BELOW_FLOOR
+                    out["status"][k] = Status.UNIQUE_BELOW_FLOOR
                     out["reason"][k] = b"UNIQUE_BELOW_FLOOR"
                 else:
-                    out["status"][k], out["reason"][k] = BELOW_FLOOR, b"BELOW_FLOOR"
+                    out["status"][k], out["reason"][k] = Status.BELOW_FLOOR, b"BELOW_FLOOR"
             return True
         shared, last = {}, None                     # sample -> shared Evaluation
         for k in sorted(self._reached):
@@ -461,7 +462,7 @@ class TargetSampler(_Sampler):
                     shared[k] = result
         for k in set(self._reached) - set(shared):
             if self.min_tension > 0:
-                out["status"][k] = BELOW_FLOOR
+                out["status"][k] = Status.BELOW_FLOOR
         return True
 
     def _unique(self, target_mm) -> bool:
@@ -469,7 +470,7 @@ class TargetSampler(_Sampler):
         traced boundary of W_0 (:meth:`~elastica_petsc.studies.boundary.BoundaryResult.preimages`
         is 1: docs/model.md §9.1), so that the state reached is its only one (§9.3).
         The boundary is the process's one trace (:func:`~elastica_petsc.studies.boundary.traced_w0`)."""
-        from .boundary import traced_w0
+        from ..boundary import traced_w0
 
         return traced_w0(self.arm, self.disc).preimages(target_mm)[0] == 1
 
@@ -478,7 +479,7 @@ class TargetSampler(_Sampler):
         Evaluation, None: skip, 'own': the sample's reached state) until one
         succeeds; store it and return its Evaluation, else store the sharer's
         stopping reason and return None."""
-        from ..solvers.control import Evaluation
+        from ...solvers.control import Evaluation
 
         t0 = time.perf_counter()
         target, reached, result = target_mm / self.arm.length_mm, self._reached[k], None
@@ -526,3 +527,12 @@ def _same_state(a, b, tol: float = 1e-9) -> bool:
     p = P l^2/B): for a local solve, the same start."""
     return a is b or (np.allclose(a.p, b.p, rtol=tol, atol=tol)
                       and np.allclose(a.tip, b.tip, rtol=0.0, atol=tol))
+
+
+def make_sampler(arm: Arm, disc: Discretisation, settings: SamplerSettings):
+    """The sampler of ``settings`` (:class:`TargetSampler` in mode targets,
+    :class:`TensionSampler` in mode tensions); the caller destroys it."""
+    if settings.mode == "targets":
+        return TargetSampler(arm, disc, global_search=settings.global_search,
+                             share=settings.share, min_tension=settings.min_tension)
+    return TensionSampler(arm, disc)

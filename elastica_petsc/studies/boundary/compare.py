@@ -1,0 +1,78 @@
+"""A traced boundary against a sampled workspace map (Fig. 4): samples on the
+wrong side of it, and the areas compared."""
+from __future__ import annotations
+
+import numpy as np
+
+from ...core.geometry import clip_half_plane, distance_to_edges, inside_polygon, union_area
+from .result import BoundaryResult
+
+
+def compare_restricted(poly_mm: np.ndarray, targets_mm: np.ndarray, masks: dict,
+                       spacing_mm: float) -> dict:
+    """Agreement of the restricted polygon with a sampled map's masks (Eqs. (18)-(22)):
+    samples in W0 ∩ WY ∩ WS ∩ WE ∩ WP outside it by more than one spacing, and
+    reached samples failing a restriction inside it by more than one spacing."""
+    admissible = masks["W0"] & masks["WY"] & masks["WS"] & masks["WE"] & masks["WP"]
+    failing = masks["W0"] & ~admissible
+    inside = inside_polygon(poly_mm, targets_mm)
+    far = distance_to_edges(poly_mm, targets_mm) > spacing_mm
+    return {"admissible": int(admissible.sum()),
+            "admissible_outside": int(np.sum(admissible & ~inside & far)),
+            "reached_inadmissible": int(failing.sum()),
+            "reached_inadmissible_inside": int(np.sum(failing & inside & far))}
+
+
+def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np.ndarray,
+                         spacing_mm: float, inside: np.ndarray | None = None,
+                         distance: np.ndarray | None = None) -> dict:
+    """Agreement of a W_0 polygon with a sampled target map (Fig. 4, y >= 0).
+
+    status: 1 reached, 2 needs a negative tension, 3 not converged
+    (:mod:`elastica_petsc.studies.workspace`).  Counts reached samples outside
+    the polygon by more than one spacing, needing-negative samples inside by
+    more than one spacing, and, for the map of Fig. 4 (the half-disc y >= 0
+    within reach), compares the polygon's area in y >= 0 with
+    the sample count estimate (row y = 0 counts half a cell) and its
+    sampling error, taken as half a cell per unit length of boundary.
+    ``inside``: membership of the targets in W_0 if not the polygon's winding
+    rule (:meth:`BoundaryResult.contains`); ``distance``: their distance (mm)
+    to the boundary if not to the polygon's edges (e.g. folds included).
+    """
+    inside = inside_polygon(poly_mm, targets_mm) if inside is None else inside
+    distance = distance_to_edges(poly_mm, targets_mm) if distance is None else distance
+    far = distance > spacing_mm
+    reached, negative = status == 1, status == 2
+    out = {
+        "reached": int(reached.sum()),
+        "reached_outside": int(np.sum(reached & ~inside & far)),
+        "needs_negative": int(negative.sum()),
+        "needs_negative_inside": int(np.sum(negative & inside & far)),
+        "not_converged_inside": int(np.sum((status == 3) & inside)),
+    }
+    reach = np.max(np.abs(targets_mm))
+    half_disc = (np.min(targets_mm[:, 1]) == 0.0
+                 and np.ptp(targets_mm[:, 0]) >= 2 * (reach - spacing_mm))
+    if not half_disc:                    # e.g. a --box map: no area comparison
+        return out
+    clipped = clip_half_plane(poly_mm)
+    weight = np.where(np.isclose(targets_mm[:, 1], 0.0), 0.5, 1.0)
+    estimate = float(np.sum(weight[reached])) * spacing_mm**2
+    perimeter = float(np.sum(np.linalg.norm(np.diff(np.vstack((clipped, clipped[:1])), axis=0),
+                                            axis=1)))
+    return out | {
+        "area_y_ge_0_mm2": union_area(clipped) if len(clipped) > 2 else 0.0,
+        "sample_area_mm2": estimate,
+        "sampling_error_mm2": 0.5 * spacing_mm * perimeter,
+    }
+
+
+def compare_map(result: BoundaryResult, targets_mm: np.ndarray, status: np.ndarray,
+                spacing_mm: float) -> dict:
+    """:func:`compare_with_samples` for W_0 as assembled (faces and folds):
+    membership by :meth:`BoundaryResult.contains`, distances to the loop's and
+    the fold curves' images."""
+    inside = result.contains(targets_mm) if result.faces else None
+    distance = (result.outside_map.distance(targets_mm) if result.fold_polylines_mm else None)
+    return compare_with_samples(result.polygons_mm["W0"][0], targets_mm, status, spacing_mm,
+                                inside=inside, distance=distance)

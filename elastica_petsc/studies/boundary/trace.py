@@ -1,0 +1,162 @@
+"""The boundary of W_0 (and of the restricted workspace) of a two-tendon arm,
+traced (:func:`trace_boundary`), and the one trace per arm and mesh that a
+process shares (:func:`traced_w0`, :func:`boundary_proof`)."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ...core.errors import InputError
+from ...core.fem import Discretisation
+from ...core.geometry import self_intersections, union_area, union_area_gradient
+from ...core.model import Arm
+from ...solvers.continuation import CurveTracer
+from .faces import classify_faces, curve_polyline, loop_polygon
+from .result import BoundaryResult
+from .walker import (FoldTracer, RegionBoundary, Walker, constraints_for, scan_rays,
+                     tip_fold_crossings)
+
+
+class BoundaryError(InputError):
+    """An arm whose boundary this method cannot trace (e.g. not two tendons)."""
+
+
+def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, tendons,
+                   length_mm: float) -> np.ndarray:
+    """d|A|/d(r_i x, r_i y) for each tendon i in ``tendons`` [mm^2 per mm]."""
+    grads = []
+    for i in tendons:
+        velocity = walker.route_velocities(region, start_rows, i)     # (nodes, 2, 2), l per l
+        poly, dense_velocity = loop_polygon(region, length_mm, node_values=velocity)
+        grads.append(union_area_gradient(poly, dense_velocity))          # mm^2 per mm
+    return np.concatenate(grads)
+
+
+def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: bool = True,
+                   tip_folds: bool = True, route_gradients=(), progress=None) -> BoundaryResult:
+    """The boundary of W_0 (and of the restricted workspace) of a two-tendon arm.
+
+    Returns polygons in mm and areas in mm^2 (module docstring for the
+    definitions).  ``solves`` counts nonlinear solves of the continuation's
+    extended system (each: a few Newton iterations, like one warm-started
+    equilibrium solve).  Raises :class:`BoundaryError` for n != 2 tendons.
+
+    ``route_gradients``: tendon indices (0-based) whose routing points'
+    derivatives of each area are wanted: ``area_gradients[name]`` holds
+    d area / d(r_x, r_y) per tendon, in mm^2 per mm, from the boundary
+    integral of the normal velocity of the loop's nodes (exact for the node
+    polygon; the area itself is that of the Hermite-densified polygon).
+    ``progress(solves, note)``, if given, is called after every continuation
+    step (the number of solves is not known in advance).
+    """
+    disc = Discretisation.from_arm(arm) if disc is None else disc
+    if disc.n_tendons != 2:
+        raise BoundaryError(
+            f"boundary traces curves in a 2-D tension space: it needs exactly 2 tendons, this "
+            f"arm has {disc.n_tendons} (with 3 or more the faces of the tension domain map to "
+            "2-D patches of tip positions; use `workspace` to sample)")
+    t0 = time.perf_counter()
+    regions, polygons, areas, messages, gradients = {}, {}, {}, [], {}
+    fold_crossings, fold_curves, scan, scan_solves = [], [], [], 0
+    with CurveTracer(disc) as tracer:
+        w0 = np.concatenate((disc.straight(), np.zeros(2)))
+        wanted = (("W0", False), ("restricted", True)) if restricted else (("W0", False),)
+        for name, extra in wanted:
+            cons = constraints_for(tracer, arm, extra)
+            walker = Walker(tracer, cons, progress=progress)
+            try:
+                region = walker.walk(name, w0, first=cons[1], previous=cons[0])
+                if name == "W0" and tip_folds:
+                    fold_crossings = tip_fold_crossings(region)
+                    fold_curves = FoldTracer(walker).trace(region, fold_crossings)
+                    before = tracer.solves
+                    scan = scan_rays(walker, w0, fold_curves)
+                    scan_solves = tracer.solves - before
+                if route_gradients and region.closed:
+                    gradients[name] = _area_gradient(walker, region, cons[1::-1],
+                                                     route_gradients, arm.length_mm)
+            finally:
+                walker.destroy()
+            regions[name] = region
+            poly = loop_polygon(region, arm.length_mm)
+            polygons[name] = [poly]
+            areas[name] = union_area(poly)
+            if not region.closed:
+                messages.append(f"{name}: the walk around the region did not close: "
+                                f"{region.message}")
+            crossings = self_intersections(poly)
+            if crossings:
+                faces = (", plus the faces of winding number 0 covered twice (docs/model.md "
+                         "§9.1)") if name == "W0" and tip_folds else ""
+                messages.append(f"{name}: the loop's image crosses itself {crossings} times "
+                                "(the tip map is not one-to-one on the region); the area is "
+                                f"that of the set it winds around{faces}")
+        solves, rejected = tracer.solves, tracer.rejected
+    folds = np.array([x.tip for x in fold_crossings]).reshape(-1, 2) * arm.length_mm
+    result = BoundaryResult(arm, regions, polygons, areas, folds, solves,
+                            time.perf_counter() - t0, messages, gradients, fold_curves,
+                            [curve_polyline(c, arm.length_mm) for c in fold_curves], fold_crossings,
+                            cell_mm=arm.length_mm / 500, scan=scan, scan_solves=scan_solves,
+                            rejected_steps=rejected)
+    messages += [f"W0: tip-map fold not traced: {why} (no OUTSIDE_BOUNDARY verdicts)"
+                 for why in result.untraced_folds]
+    if tip_folds and regions["W0"].closed and not result.untraced_folds:
+        _assemble_w0(result)
+    result.seconds = time.perf_counter() - t0
+    if progress is not None:
+        progress(solves, "traced")
+    return result
+
+
+def _assemble_w0(result: BoundaryResult) -> None:
+    """W_0's area from the faces (docs/model.md §9): the set the loop winds
+    around, plus the faces of winding number 0 covered twice (N > 0);
+    faces whose N is undecided widen ``area_bounds_mm2``."""
+    result.faces = classify_faces(result)
+    extra = sum(f["area_mm2"] for f in result.faces
+                if f["winding"] == 0 and (f["preimages"] or 0) > 0)
+    undecided = sum(f["area_mm2"] for f in result.faces
+                    if f["winding"] == 0 and f["preimages"] is None)
+    bad = [f for f in result.faces if f["preimages"] is not None
+           and (f["preimages"] < abs(f["winding"]) or (f["preimages"] - f["winding"]) % 2)]
+    lower = result.areas_mm2["W0"] + extra
+    result.areas_mm2["W0"] = lower
+    result.area_bounds_mm2 = (lower, lower + undecided)
+    if undecided:
+        result.messages.append(f"W0: {undecided:.0f} mm^2 of faces with winding number 0 are "
+                               "undecided (every ray from them crosses a fold image)")
+    if bad:
+        result.messages.append(f"W0: {len(bad)} faces with a preimage count inconsistent with "
+                               "their winding number (N >= |w|, N = w mod 2): check the loop")
+
+
+_TRACED: dict = {}          # W_0 boundary per arm and mesh, in-process (traced_w0)
+
+
+def traced_w0(arm: Arm, disc: Discretisation) -> BoundaryResult:
+    """The W_0 boundary of a two-tendon arm (no restricted level curves),
+    traced on the first call and kept per arm and mesh for the process: the
+    one trace that tip control's proof and the sampled map share."""
+    key = (arm.length_mm, disc.n_elements, disc.attach_nodes, np.asarray(disc.routes).tobytes(),
+           arm.max_tension, tuple(arm.tendons), arm.gravity_m_s2, arm.tip_mass_kg,
+           arm.mass_per_length_kg_m, arm.bending_stiffness_Nm2)
+    if key not in _TRACED:
+        _TRACED[key] = trace_boundary(arm, disc, restricted=False)
+    return _TRACED[key]
+
+
+def boundary_proof(arm: Arm, disc: Discretisation | None = None):
+    """A callable for :class:`~elastica_petsc.solvers.reach.Reacher`'s ``boundary``:
+    target (units of l) -> (evidence, distance in units of l), from
+    :meth:`BoundaryResult.outside` on :func:`traced_w0` (traced on the first
+    call); arms with other than two tendons give no evidence ('')."""
+    disc = Discretisation.from_arm(arm) if disc is None else disc
+
+    def outside(target: np.ndarray) -> tuple[str, float]:
+        if disc.n_tendons != 2:
+            return "", float("nan")
+        evidence, dist = traced_w0(arm, disc).outside(np.asarray(target, float) * arm.length_mm)
+        return evidence, dist / arm.length_mm
+
+    return outside

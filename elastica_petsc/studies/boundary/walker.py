@@ -1,0 +1,361 @@
+"""The wall follower around the region D of tension space (docs/model.md §9.1):
+the walk once around D (:class:`Walker`), the sign changes of the tip-map
+test on its loop (:func:`tip_fold_crossings`), the fold curves of the tip
+map traced from them (:class:`FoldTracer`) and the scan rays that look for
+folds the loop does not meet (:func:`scan_rays`).  The package docstring
+(:mod:`elastica_petsc.studies.boundary`) describes the method."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...core.geometry import segments_cross
+from ...core.model import Arm
+from ...solvers.continuation import (CableCollapse, Curve, CurveTracer, Fold, FoldSystem,
+                                     StateLevel, TensionBound, TensionRay, TipFold)
+from ...solvers.equilibrium import COLLAPSE_LENGTH
+
+
+@dataclass
+class RegionBoundary:
+    """The closed loop around a region of M and its tip image.
+
+    curves: the pieces, in order; each :class:`Curve` holds the points.
+    closed: the walk came back to the straight arm.
+    """
+
+    name: str
+    curves: list
+    closed: bool
+    message: str = ""
+
+    def nodes(self) -> dict:
+        """Concatenated curve nodes: tip (mm-free, units of l), p, curve index."""
+        tips, ps, index, vel = [], [], [], []
+        for k, curve in enumerate(self.curves):
+            for pt in curve.points:
+                tips.append(pt.tip); ps.append(pt.w[-2:]); index.append(k)
+                vel.append(pt.tip_velocity)
+        return {"tip": np.array(tips), "p": np.array(ps), "curve": np.array(index),
+                "tip_velocity": np.array(vel)}
+
+
+def constraints_for(tracer: CurveTracer, arm: Arm, restricted: bool) -> list:
+    """Bounds of D (and D_r): faces, motor limit, collapse; fold handled apart."""
+    mf = tracer.mf
+    out = [TensionBound(mf, i, 0.0) for i in range(mf.n)]
+    if arm.max_tension is not None:
+        out += [TensionBound(mf, i, arm.max_tension, upper=True) for i in range(mf.n)]
+    out += [CableCollapse(mf, i, COLLAPSE_LENGTH) for i in range(mf.n)]
+    if restricted:
+        out += [StateLevel(mf, "kappa", arm.kappa_limit),
+                StateLevel(mf, "energy", arm.limits.strain_energy_max_SE0)]
+    return out
+
+
+class Walker:
+    """The wall follower around D of the module docstring."""
+
+    def __init__(self, tracer: CurveTracer, constraints: list, *, ds0: float = 0.3,
+                 ds_min: float = 1e-5, max_points: int = 400, progress=None):
+        self.tr, self.progress = tracer, progress        # progress(solves, note) per step
+        self.constraints = constraints
+        self.fold_system = FoldSystem(tracer.mf)
+        self.fold = Fold(self.fold_system)
+        self.ds0, self.ds_min, self.max_points = ds0, ds_min, max_points
+
+    def destroy(self) -> None:
+        self.fold_system.destroy()
+
+    def _orient(self, constraint) -> np.ndarray:
+        """D^-1 times the gradient of side * c: tangents with t . grad > 0 move into
+        the admissible side of ``constraint``."""
+        return lambda w: constraint.side * constraint.gradient(w) / self.tr.mf.metric
+
+    def _start_point(self, w, active, into):
+        t, det_sign, tip_det = self.tr.tangent(w, active, into(w))
+        return self.tr.point(w, t, det_sign, 0, tip_det, self.tr.last_inward)
+
+    def _locate(self, a, b, active, hit) -> np.ndarray | None:
+        """Corner where ``hit`` becomes active between accepted points a and b."""
+        if hit is self.fold:
+            guess_v = self.fold_system.null_vector(b.w)
+            self.fold_system.set_vectors(guess_v)
+        ma, mb = hit.value(a.w), hit.value(b.w)
+        frac = ma / (ma - mb) if ma != mb else 0.5
+        frac = min(max(frac, 0.0), 1.0)
+        guess = a.w + frac * (b.w - a.w)
+        w, ok = self.tr.correct(guess, [active, hit])
+        if not ok:
+            return None
+        if hit is self.fold:
+            self.fold.update(w)
+            # the stable side (a is stable) is the admissible one
+            self.fold.side = 1.0 if self.fold.value(a.w) >= 0 else -1.0
+        return w
+
+    def _events(self, a, b, active):
+        """Constraints that became active between a and b (stability loss: fold)."""
+        hits = [c for c in self.constraints if c is not active and c.margin(b.w) < 0]
+        if b.unstable_modes > 0 and a.unstable_modes == 0 and active is not self.fold:
+            hits.append(self.fold)
+        return hits
+
+    def _collapse_limit(self, pt, active) -> float:
+        """The step length at which the predictor w + ds t brings a cable to half
+        the collapse length eps (linearised; a cable's length is convex along the
+        predictor's line, so the predicted length stays above eps/2).  Past its
+        routing point the cable direction of Eq. (3) flips, and a corrector
+        started there fails whatever the step: the step is cut to reach the
+        event (L_i = eps) instead of being halved after failed correctors."""
+        limit = np.inf
+        for c in self.constraints:
+            if isinstance(c, CableCollapse) and c is not active:
+                rate = float(c.gradient(pt.w) @ pt.t)
+                if rate < 0:
+                    limit = min(limit, 0.5 * (c.value(pt.w) + c.eps) / -rate)
+        return limit
+
+    def follow(self, start, active) -> tuple[Curve, object, np.ndarray | None]:
+        """Follow ``active`` from the point ``start`` until another constraint
+        becomes active: (curve, the new constraint, the corner state w)."""
+        curve = Curve(active.name, [start], active=active)
+        pt, ds = start, self.ds0
+        while len(curve.points) < self.max_points:
+            ds = min(ds, self.tr.step_limit(pt), self._collapse_limit(pt, active))
+            new, its = self.tr.step(pt, active, ds)
+            if self.progress is not None:
+                self.progress(self.tr.solves, f"along {active.name}, point {len(curve.points)}")
+            if new is None:
+                ds *= 0.5
+                if ds < self.ds_min:
+                    curve.end = f"step below {self.ds_min:g} ({self.tr.reason()})"
+                    return curve, None, None
+                continue
+            hits = self._events(pt, new, active)
+            if hits:
+                for hit in hits:
+                    w = self._locate(pt, new, active, hit)
+                    if w is not None:
+                        curve.end, curve.end_constraint, curve.hit = "corner", hit.name, hit
+                        corner = self.tr.point(w, pt.t, pt.det_sign, 0)
+                        curve.points.append(corner)
+                        return curve, hit, w
+                ds *= 0.5
+                if ds < self.ds_min:
+                    curve.end = "could not locate the corner with " + hits[0].name
+                    return curve, None, None
+                continue
+            if new.det_sign != pt.det_sign and new.unstable_modes == pt.unstable_modes:
+                curve.points.append(new)
+                curve.end = "branch point (det of the extended Jacobian changed sign)"
+                return curve, None, None
+            if active is self.fold or isinstance(active, TipFold):
+                active.update(new.w)
+            curve.points.append(new)
+            pt = new
+            ds = min(ds * 2.0 if its <= 3 else ds, self.tr.ds_max)
+        curve.end = f"more than {self.max_points} points"
+        return curve, None, None
+
+    def walk(self, name: str, w0: np.ndarray, first, previous, max_corners: int = 16):
+        """Once around the region from the corner w0 (constraints ``previous`` and
+        ``first`` active), leaving along ``first`` into ``previous``'s admissible side."""
+        curves, active, w, closed, message = [], first, w0, False, ""
+        into = self._orient(previous)
+        for _ in range(max_corners):
+            start = self._start_point(w, active, into)
+            curve, hit, w_next = self.follow(start, active)
+            curves.append(curve)
+            if hit is None:
+                message = f"{curve.constraint}: {curve.end}"
+                break
+            if hit is first and np.linalg.norm(w_next[-2:] - w0[-2:]) < 1e-6:
+                closed = True
+                break
+            into, active, w = self._orient(active), hit, w_next
+        else:
+            message = f"more than {max_corners} corners"
+        return RegionBoundary(name, curves, closed, message)
+
+
+    def route_velocities(self, region: RegionBoundary, start_rows, tendon: int) -> np.ndarray:
+        """d x_t/d r_i (units of l per unit of l) at every node of the loop, in the
+        order of :meth:`RegionBoundary.nodes`, shape (nodes, 2 tip, 2 route).
+
+        Corners (the ends of each curve, and the start, where ``start_rows``
+        are active) move with both of their constraints; a node inside a curve
+        slides orthogonally (metric D) to the curve's tangent.  Only the normal
+        component of the tip motion matters for the area
+        (:func:`~elastica_petsc.core.geometry.union_area_gradient`)."""
+        mf, out = self.tr.mf, []
+        for k, curve in enumerate(region.curves):
+            for j, pt in enumerate(curve.points):
+                if j == 0:
+                    rows = start_rows if k == 0 else [region.curves[k - 1].active, curve.active]
+                elif j == len(curve.points) - 1 and curve.hit is not None:
+                    rows = [curve.active, curve.hit]
+                else:
+                    rows = [curve.active, mf.metric * pt.t]
+                for row in rows:
+                    if row is self.fold:
+                        self.fold.update(pt.w)
+                dw = self.tr.route_velocity(pt.w, rows, tendon)
+                out.append(np.column_stack([mf.tip_velocity(pt.w, dw[:, c]) for c in range(2)]))
+        return np.array(out)
+
+
+@dataclass
+class Crossing:
+    """Where the intrinsic tip-map test changes sign on the loop: between nodes
+    ``a`` and ``b`` of curve ``curve`` (b = -1: across the corner at its end)."""
+
+    curve: int
+    a: int
+    b: int
+    tip: np.ndarray                    # midpoint of the two nodes' tips (units of l)
+    p: np.ndarray                      # midpoint of their tensions
+    w_a: np.ndarray = field(default=None, repr=False)    # the states of the two nodes
+    w_b: np.ndarray = field(default=None, repr=False)
+    constraint: str = ""               # the loop curve's constraint (b = -1: the next one's)
+    traced: bool = False
+    note: str = ""
+
+
+def tip_fold_crossings(region: RegionBoundary) -> list[Crossing]:
+    """Sign changes of the intrinsic tip-map test (:meth:`CurveTracer.tangent`)
+    between consecutive nodes of the loop, corners included (the corner nodes
+    carry no test value: the comparison is between the last node before and
+    the first node after).  Each is where a fold curve of the tip map inside
+    D meets the loop (or, for a pair of changes within one step, two that
+    meet it close together: a step hides an even number)."""
+    nodes = [(k, j, pt) for k, c in enumerate(region.curves) for j, pt in enumerate(c.points)
+             if np.isfinite(pt.tip_det) and pt.tip_det != 0.0]
+    out = []
+    for (k0, j0, a), (k1, j1, b) in zip(nodes, nodes[1:] + nodes[:1]):
+        if np.sign(a.tip_det) == np.sign(b.tip_det):
+            continue
+        same = k0 == k1 and j1 == j0 + 1
+        name = region.curves[k0].constraint
+        out.append(Crossing(k0, j0, j1 if same else -1, 0.5 * (a.tip + b.tip),
+                            0.5 * (a.w[-2:] + b.w[-2:]), a.w, b.w, name))
+    return out
+
+
+class FoldTracer:
+    """Fold curves of the tip map inside D (det S = 0, :class:`TipFold`), each
+    followed by :meth:`Walker.follow` from a loop crossing into D until it
+    leaves D (another constraint becomes active, or stability is lost)."""
+
+    def __init__(self, walker: Walker):
+        self.walker = walker
+        self.tipfold = TipFold(walker.tr.mf)
+
+    def _start(self, region: RegionBoundary, x: Crossing):
+        """Corner of the loop curve and det S = 0 near crossing ``x``, and the
+        direction into D; None where the loop curve is the fold of M (det S
+        is unbounded there) or the corrector fails."""
+        walker, curves = self.walker, region.curves
+        curve = curves[x.curve]
+        if x.b == -1:                                 # across a corner: start at the corner
+            nxt = curves[(x.curve + 1) % len(curves)]
+            corner = curve.points[-1].w
+            self.tipfold.reset(corner)
+            if abs(self.tipfold.value(corner)) > 1e-8 * _scale(self.tipfold, corner):
+                return None, "sign change across a corner away from det S = 0"
+            into = [walker._orient(curve.active), walker._orient(nxt.active)]
+            return corner, (lambda w: into[0](w) + into[1](w))
+        if curve.active is walker.fold:
+            return None, "on the fold of M (the frame of TipFold.reset is singular there)"
+        a, b = curve.points[x.a], curve.points[x.b]
+        self.tipfold.reset(a.w)
+        frac = a.tip_det / (a.tip_det - b.tip_det)
+        w, ok = walker.tr.correct(a.w + frac * (b.w - a.w), [curve.active, self.tipfold])
+        if not ok:
+            return None, f"corrector failed ({walker.tr.reason()})"
+        return w, walker._orient(curve.active)
+
+    def trace(self, region: RegionBoundary, crossings: list[Crossing]) -> list[Curve]:
+        """Trace a fold curve from every crossing not yet reached by an earlier
+        one (a curve ending within 1e-6 l (tip) of a crossing marks it traced)."""
+        curves = []
+        for x in crossings:
+            if x.traced:
+                continue
+            w, into = self._start(region, x)
+            if w is None:
+                x.note = into
+                continue
+            start = self.walker._start_point(w, self.tipfold, into)
+            curve, _, _ = self.walker.follow(start, self.tipfold)
+            curves.append(curve)
+            x.traced = True
+            for y in crossings:
+                if not y.traced and curve.end == "corner" and self._ends_at(curve, y):
+                    y.traced = True
+        return curves
+
+    def _ends_at(self, curve: Curve, x: Crossing) -> bool:
+        """The traced curve ends on the loop curve of crossing ``x``, between its
+        two nodes (inside the ellipse with foci at their states, metric D, whose
+        axis is 1.5 times their distance); for a crossing across a corner, on
+        either curve at the corner."""
+        norm = self.walker.tr.mf.norm
+        end = curve.points[-1].w
+        if x.b == -1:
+            return norm(end - x.w_a) < 0.5 * norm(x.w_b - x.w_a)
+        if curve.end_constraint != x.constraint:
+            return False
+        return norm(end - x.w_a) + norm(end - x.w_b) <= 1.5 * norm(x.w_b - x.w_a)
+
+
+SCAN_ANGLES = (np.radians(20.0), np.radians(45.0), np.radians(70.0))
+
+
+def scan_rays(walker: Walker, w0: np.ndarray, fold_curves: list, angles=SCAN_ANGLES,
+              max_tip_step: float = 0.5) -> list[tuple[str, int, int]]:
+    """A coarse scan of D for folds of the tip map that do not meet the loop:
+    proportional loading rays p = s (cos a, sin a) followed by continuation
+    from the straight arm until they leave D, the intrinsic test evaluated at
+    every node.  A sign change between two nodes must be a traced fold curve
+    crossing the ray there (the fold curve's tension polyline crosses the
+    ray's segment); (ray, changes, unexplained) per ray.  The rays draw no
+    polygon: their steps may move the tip up to ``max_tip_step`` (units of l)."""
+    out = []
+    folds_p = [np.array([pt.w[-2:] for pt in c.points]) for c in fold_curves]
+    tracer = walker.tr
+    cap, tracer.max_tip_step = tracer.max_tip_step, max_tip_step
+    ds_max, tracer.ds_max = tracer.ds_max, 4 * tracer.ds_max
+    try:
+        for angle in angles:
+            ray = TensionRay(tracer.mf, angle)
+            start = walker._start_point(w0, ray, lambda w, r=ray: _p_direction(walker, r.direction))
+            out.append(_scan_one(walker, start, ray, folds_p))
+    finally:
+        tracer.max_tip_step, tracer.ds_max = cap, ds_max
+    return out
+
+
+def _scan_one(walker: Walker, start, ray: TensionRay, folds_p: list) -> tuple[str, int, int]:
+    """One scan ray of :func:`scan_rays`."""
+    curve, _, _ = walker.follow(start, ray)
+    nodes = [pt for pt in curve.points if np.isfinite(pt.tip_det) and pt.tip_det != 0.0]
+    changes = unexplained = 0
+    for a, b in zip(nodes, nodes[1:]):
+        if np.sign(a.tip_det) != np.sign(b.tip_det):
+            changes += 1
+            crossed = any(segments_cross(a.w[-2:], b.w[-2:], f) for f in folds_p)
+            unexplained += not crossed
+    return ray.name, changes, unexplained
+
+
+def _p_direction(walker: Walker, direction: np.ndarray) -> np.ndarray:
+    """D^-1 (0, ..., direction): an orientation vector pointing along +direction in p."""
+    v = np.zeros(walker.tr.mf.m)
+    v[-2:] = direction
+    return v / walker.tr.mf.metric
+
+
+def _scale(constraint, w) -> float:
+    return max(float(np.linalg.norm(constraint.gradient(w))), 1e-300)
