@@ -125,7 +125,7 @@ def run(args) -> int:
     if args.out:
         write_simulation(args.out, args.overwrite, result)
     if args.json:
-        common.print_json(data)
+        common.print_json("simulate", data)
     else:
         print(format_summary(data))
     if result.reason == "INTERRUPTED":
