@@ -224,3 +224,33 @@ def test_cli_bad_schedule_and_duration_and_mass(tmp_path):
         r = _cli("simulate", "--elements", "24", *extra, "--out", str(out))
         assert r.returncode == 2 and r.stderr.count("\n") == 1, (extra, r.stderr)
         assert not out.exists()
+
+
+def test_cable_goes_slack_once_when_paid_out_fast(arm):
+    """Length control: tendon 2 holds the arm bent (p = 5), then pays out 0.05 l in 0.3 tau,
+    faster than the arm can follow: one slack event (TSEvent on the consistent tension),
+    no chattering, tensions >= 0, and afterwards the cable is longer than its span while
+    the tip swings freely."""
+    from elastica_petsc.core.drive import LengthDrive
+    from elastica_petsc.solvers.dynamics import SLACK, TAUT
+
+    disc = Discretisation.from_arm(arm, 30)
+    eq = solve_equilibrium(disc, np.array([0.0, 5.0]))
+    L0 = eq.cable_lengths
+    times = np.array([0.0, 0.5, 0.8, 3.0])
+    L = np.tile(L0 + [0.01, 0.0], (4, 1))
+    L[2:, 1] += 0.05
+    drive = LengthDrive(times, L)
+    sim = DynamicsSolver(disc, Inertia.build(disc), dt0=2e-3, adaptive=False)
+    tr = sim.run(eq.theta, np.zeros(30), np.asarray(eq.p), drive, [SLACK, TAUT], 1.2)
+    assert tr.completed
+    assert [(i, kind) for _, i, kind in tr.events] == [(2, "slack")]
+    t_slack = tr.events[0][0]
+    assert 0.5 < t_slack < 0.52
+    t, p = np.array(tr.time), np.array(tr.p)
+    assert np.all(p >= -1e-6)
+    assert np.all(p[t > t_slack, 1] == 0.0)
+    gap = np.array([drive.lengths(tk)[1] - Lk[1] for tk, Lk in zip(t, tr.lengths)])
+    assert np.all(gap[t > t_slack + 0.05] > 0)                  # slack: longer than its span
+    tip = np.array([th[-1] for th in tr.theta])
+    assert tip[-1] < tip[np.searchsorted(t, t_slack)] - 0.1     # the arm springs back

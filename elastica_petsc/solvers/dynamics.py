@@ -120,7 +120,8 @@ class DynamicsSolver:
 
     def __init__(self, disc: Discretisation, inertia: Inertia, *, rtol: float = 1e-6,
                  atol: float = 1e-8, radius: float = 1.0, dt0: float = 1e-3,
-                 adaptive: bool = True, prefix: str = "sim_", max_steps: int = 10**7):
+                 adaptive: bool = True, contact_tol: float = 1e-6, prefix: str = "sim_",
+                 max_steps: int = 10**7):
         self.adaptive = adaptive
         self.disc, self.inertia = disc, inertia
         self.rtol, self.atol, self.radius, self.dt0 = rtol, atol, radius, dt0
@@ -130,6 +131,9 @@ class DynamicsSolver:
         self.attach = list(disc.attach_nodes)
         self.modes = np.full(self.n, FORCE)
         self.offsets = np.zeros(self.n)     # L_i - Lbar_i when cable i last went slack
+        # a slack cable tightens when its gap falls below -contact_tol (l): the start
+        # of a step's position error, not a cable that re-tightens on round-off
+        self.contact_tol = contact_tol
         self._fired = []
         self.drive = None
 
@@ -240,7 +244,7 @@ class DynamicsSolver:
         out[taut] = p[taut]
         if slack.any():
             gap = self.drive.lengths(t) + self.offsets - self.cable_lengths(theta)
-            out[slack] = gap[slack]
+            out[slack] = gap[slack] + self.contact_tol
         return out
 
     def impulse(self, t, theta, omega) -> np.ndarray:
@@ -332,6 +336,7 @@ class DynamicsSolver:
         (also when interrupted) holds every accepted step.
         """
         self.drive = drive
+        self.offsets = np.zeros(self.n)
         self.modes = np.asarray(modes, int).copy() if isinstance(drive, LengthDrive) \
             else np.full(self.n, FORCE)
         traj = trajectory if trajectory is not None else Trajectory()
@@ -364,7 +369,9 @@ class DynamicsSolver:
     def _switch(self, traj, t, U, V):
         """Change the mode of the cables whose event fired; impact if one
         tightens.  A cable going slack keeps its length drift (index 2, module
-        docstring) as an offset, so that its gap starts at exactly 0."""
+        docstring) as an offset, so that its gap starts at exactly 0.  After an
+        impact a cable whose consistent tension is negative stays slack (the
+        complementarity at the new velocities)."""
         tightened = False
         for i in self._fired:
             if self.modes[i] == TAUT:
@@ -378,7 +385,15 @@ class DynamicsSolver:
                 tightened = True
                 traj.events.append((t, i + 1, "taut"))
         if tightened:
-            V[: self.N] = self.impulse(t, self.theta_of(U), V[: self.N])
+            theta = self.theta_of(U)
+            V[: self.N] = self.impulse(t, theta, V[: self.N])
+            p = self.consistent_tensions(t, theta, V[: self.N], V[self.N:])
+            for i in np.flatnonzero((self.modes == TAUT) & (p < 0)):
+                self.modes[i] = SLACK
+                self.offsets[i] = self.cable_lengths(theta)[i] - self.drive.lengths(t)[i]
+                traj.events.append((t, i + 1, "slack"))
+            taut = self.modes == TAUT
+            V[self.N:][taut] = p[taut]
 
     def _monitor(self, traj, on_step):
         def monitor(ts, step, t, U):
