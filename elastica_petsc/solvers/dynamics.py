@@ -347,8 +347,13 @@ class DynamicsSolver:
         while True:
             ts, objs = self._make_ts(t, t_end, U0, V0, self._monitor(traj, on_step), dt)
             try:
-                ts.solve(objs[0])
-                reason = ts.getConvergedReason()
+                try:
+                    ts.solve(objs[0])
+                    reason = ts.getConvergedReason()
+                except (np.linalg.LinAlgError, PETSc.Error) as err:   # a singular step
+                    traj.completed, traj.reason = False, f"DIVERGED: {str(err).splitlines()[0]}"
+                    traj.steps += ts.getStepNumber()
+                    return traj
                 traj.steps += ts.getStepNumber()
                 traj.rejected += ts.getStepRejections()
                 traj.snes_failures += ts.getSNESFailures()

@@ -74,7 +74,8 @@ class SimulationResult:
         return {"input": self.input, "elements": self.elements, "completed": self.completed,
                 "reason": self.reason, "duration_s": float(self.time_s[-1]),
                 "steps": self.steps, "rejected": self.rejected,
-                "events": [{"time_s": t, "tendon": i, "kind": k} for t, i, k in self.events],
+                "events": [{"time_s": float(t), "tendon": int(i), "kind": k}
+                           for t, i, k in self.events],
                 "wall_s": round(self.wall_s, 3), "real_time_factor": self.real_time_factor,
                 "f1_hz": self.f1_hz, "max_tip_deviation_mm": dev,
                 "energy_drift_J": float(np.max(np.abs(total - total[0]))),
