@@ -254,3 +254,25 @@ def test_cable_goes_slack_once_when_paid_out_fast(arm):
     assert np.all(gap[t > t_slack + 0.05] > 0)                  # slack: longer than its span
     tip = np.array([th[-1] for th in tr.theta])
     assert tip[-1] < tip[np.searchsorted(t, t_slack)] - 0.1     # the arm springs back
+
+
+def test_dynamics_config_section(tmp_path):
+    from elastica_petsc.core.config import arm_to_dict
+    from elastica_petsc.core.errors import InputError
+    from elastica_petsc.core.model import load_config
+
+    base = ("[arm]\nlength_mm = 600\nbending_stiffness_Nm2 = 0.2\nmass_per_length_kg_m = 0.144\n"
+            "[[tendon]]\nattach_mm = 600\nroute_mm = [26.1, 51.1]\n")
+    good = tmp_path / "good.toml"
+    good.write_text(base + "[dynamics]\ndamping_ratio = 0.02\nrotary_inertia = true\n")
+    arm = load_config(good)
+    assert arm.dynamics.damping_ratio == 0.02 and arm.dynamics.rotary_inertia is True
+    assert arm_to_dict(arm)["dynamics"]["kelvin_voigt_fraction"] == 0.5
+    for bad, message in (("damping_ratio = -0.1", "dynamics.damping_ratio"),
+                         ("kelvin_voigt_fraction = 2.0", "dynamics.kelvin_voigt_fraction"),
+                         ("rotary_inertia = 1", "dynamics.rotary_inertia"),
+                         ("zeta = 1", "dynamics.zeta: unknown key")):
+        path = tmp_path / "bad.toml"
+        path.write_text(base + "[dynamics]\n" + bad + "\n")
+        with pytest.raises(InputError, match=message):
+            load_config(path)
