@@ -449,12 +449,13 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
 
 def calibrate(arm: Arm, data, vary, *, bounds=None, input: str | None = None,
               huber_mm: float | None = None, folds: int = 5, candidates=None,
-              elements: int | None = None):
+              method: str = "brgn", elements: int | None = None):
     """Fit the parameters named in ``vary`` (``bending_stiffness``,
     ``tendonK.route``, ``motorK.offset``, ``motor.spool_radius``, ``clamp.angle``,
     ``clamp.position``, ``frame.rotation``, ``frame.offset``) to measured states
     ``data`` (a CSV path or a :class:`CalibrationData`); ``bounds``:
-    {scalar name: (lo, hi)}.  Returns a CalibrationResult: ``.arm`` the fitted
+    {scalar name: (lo, hi)}; ``method``: "brgn" (exact Jacobian) or "pounders"
+    (derivative-free check).  Returns a CalibrationResult: ``.arm`` the fitted
     arm, ``.parameters()`` values with standard deviations, ``.summary()``
     (docs/model.md §14)."""
     from .core.calibration_data import CalibrationData, read_calibration_csv
@@ -468,7 +469,8 @@ def calibrate(arm: Arm, data, vary, *, bounds=None, input: str | None = None,
                                           measured=False)
     model = ParameterModel(arm, vary, bounds)
     return run_calibration(model, data, elements=_mesh(arm, elements).n_elements,
-                           huber_mm=huber_mm, folds=folds, candidates=candidates)
+                           huber_mm=huber_mm, folds=folds, candidates=candidates,
+                           method=method)
 
 
 def read(path: str | Path):
@@ -488,7 +490,7 @@ def simulate(arm: Arm, *, tensions_N=None, history_csv=None, schedule_csv=None,
              settle_s: float = 0.0, dt_s: float | None = None, adaptive: bool = False,
              rtol: float = 1e-6, atol: float = 1e-8, radius: float = 1.0,
              elements: int | None = None):
-    """The arm in motion (PETSc TS, docs/model.md §15) from rest: the straight arm, the
+    """The arm in motion (PETSc TS, docs/model.md §16) from rest: the straight arm, the
     equilibrium at ``initial_tensions_N`` (loaded in ``order``) or the last shape in
     ``from_file``; driven by constant ``tensions_N``, a tension history CSV or a motor
     schedule CSV (cable lengths, slack cables as events).  Returns a

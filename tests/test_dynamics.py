@@ -1,4 +1,4 @@
-"""The arm in motion (issue 22, docs/model.md §15): kernels, the linear check against
+"""The arm in motion (issue 22, docs/model.md §16): kernels, the linear check against
 SLEPc and Euler-Bernoulli, time convergence, energy, and the simulate command's input checks."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""``elastica-petsc simulate``: the arm in motion on PETSc TS (docs/model.md §15).
+"""``elastica-petsc simulate``: the arm in motion on PETSc TS (docs/model.md §16).
 
 Start: the straight arm at rest, the static equilibrium at
 ``--initial-tensions-N`` (loaded in ``--order``), or the last shape in
@@ -60,7 +60,7 @@ def add_parser(sub) -> None:
                         help="default fixed step: K steps per first period (default 200)")
     parser.add_argument("--adaptive", action="store_true",
                         help="adaptive steps (TSAdapt basic, --rtol/--atol) instead of fixed "
-                             "steps (docs/model.md §15.4 says when they pay)")
+                             "steps (docs/model.md §16.4 says when they pay)")
     parser.add_argument("--rtol", type=float, default=1e-6, help="relative tolerance of the "
                         "adaptive steps on the angles (default 1e-6)")
     parser.add_argument("--atol", type=float, default=1e-8, help="absolute tolerance [rad] "

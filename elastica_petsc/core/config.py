@@ -61,7 +61,7 @@ SCHEMA: dict[str, dict[str, tuple[type | tuple, object, str]]] = {
     "dynamics": {
         "damping_ratio": (float, 0.0, "damping ratio zeta_1 of the unloaded first mode"),
         "kelvin_voigt_fraction": (float, 0.5, "share of zeta_1 from Kelvin-Voigt damping, "
-                                              "the rest viscous (docs/model.md §15)"),
+                                              "the rest viscous (docs/model.md §16)"),
         "rotary_inertia": (bool, False, "include the rotary inertia of the cross-section"),
     },
 }

@@ -1,4 +1,4 @@
-"""What the motors do in a simulation (docs/model.md §15.3): tensions or cable lengths in time.
+"""What the motors do in a simulation (docs/model.md §16.3): tensions or cable lengths in time.
 
 Two drives, both in the solvers' units (lengths in l, tensions p = P l^2/B,
 time in tau = sqrt(rho_A l^4 / B)):

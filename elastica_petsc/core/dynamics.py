@@ -1,4 +1,4 @@
-"""Pure-numpy kernels of the arm in motion (docs/model.md §15).
+"""Pure-numpy kernels of the arm in motion (docs/model.md §16).
 
 Non-dimensional: lengths in l, time in tau = sqrt(rho_A l^4 / B), masses in
 rho_A l, forces in B / l^2, energies in B / l.  The unknowns are the nodal
@@ -110,7 +110,7 @@ class Inertia:
               omega1: float = EB_BETA1**2) -> "Inertia":
         """Rayleigh damping with damping ratio ``damping_ratio`` at the circular
         frequency ``omega1`` (units 1/tau): zeta(omega) = a/(2 omega) + b omega/2,
-        a share ``kelvin_voigt_fraction`` of zeta_1 from b (docs/model.md §15)."""
+        a share ``kelvin_voigt_fraction`` of zeta_1 from b (docs/model.md §16)."""
         zeta, f = float(damping_ratio), float(kelvin_voigt_fraction)
         return cls(disc, node_masses(disc, tip_mass), rotary_band(disc, rotary),
                    2.0 * zeta * (1.0 - f) * omega1, 2.0 * zeta * f / omega1)

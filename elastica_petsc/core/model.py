@@ -71,7 +71,7 @@ class Limits:
 
 @dataclass(frozen=True)
 class Dynamics:
-    """Damping and inertia options of the arm in motion (docs/model.md §15)."""
+    """Damping and inertia options of the arm in motion (docs/model.md §16)."""
 
     damping_ratio: float = 0.0           # zeta_1: damping ratio of the unloaded first mode
     kelvin_voigt_fraction: float = 0.5   # share of zeta_1 from Kelvin-Voigt (stiffness) damping

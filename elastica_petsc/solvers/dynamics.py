@@ -1,4 +1,4 @@
-"""The arm in motion on PETSc TS (docs/model.md §15).
+"""The arm in motion on PETSc TS (docs/model.md §16).
 
 The unknowns are U = (theta_1..theta_N, Lambda_1..Lambda_n): the nodal angles
 and the tension impulses, whose rates are the tensions, p = Lambda' (a
@@ -22,7 +22,7 @@ length drifts by O(dt^2) (the rule integrates the rate; not yet reported).
 Time integration: generalized-alpha for second-order systems (TSALPHA2) in
 PETSc's parametrisation by the spectral radius rho_inf at infinite step
 (``radius``; 1, the default: the implicit midpoint member, no numerical
-dissipation; docs/model.md §15.4 on why alpha_f = 1 is not used).  Fixed
+dissipation; docs/model.md §16.4 on why alpha_f = 1 is not used).  Fixed
 equal steps by default, or (``adaptive``) TSAdapt ``basic`` on the alpha
 method's local error estimate of the angles (the tension impulses are
 left out of the norm).  Newton: SNES with KSP ``preonly`` and a PC that

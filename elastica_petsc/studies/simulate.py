@@ -1,4 +1,4 @@
-"""A simulation in user units: start state, motor input, the run (docs/model.md §15).
+"""A simulation in user units: start state, motor input, the run (docs/model.md §16).
 
 Start states: the straight arm at rest, the static equilibrium at given
 tensions (loaded in a given order), or the last shape of a file the tool
@@ -111,7 +111,7 @@ def first_frequency(disc: Discretisation, arm: Arm, theta, p) -> float:
 
 
 def build_inertia(arm: Arm, disc: Discretisation) -> Inertia:
-    """Masses and damping of the arm (docs/model.md §15.2); zeta_1 at the unloaded
+    """Masses and damping of the arm (docs/model.md §16.2); zeta_1 at the unloaded
     first mode of this mesh with the tip mass."""
     tip = arm.tip_mass_kg / (arm.mass_per_length_kg_m * arm.length_mm * 1e-3)
     dyn = arm.dynamics
