@@ -18,23 +18,25 @@ def write_simulation(path, overwrite: bool, result) -> None:
                          "steps": int(result.steps), "rejected": int(result.rejected),
                          "f1_hz": float(result.f1_hz), "wall_s": float(result.wall_s),
                          "summary_json": json.dumps(result.summary())})
-        put(fh, "time_s", result.time_s, "s", "time of each accepted step")
-        put(fh, "tip_mm", result.tip_mm, "mm", "tip position x(l)")
-        put(fh, "x_mm", result.x_mm, "mm", "node positions x_k, k = 0..N")
-        put(fh, "theta", result.theta, "rad", "nodal angles theta_0..theta_N")
-        put(fh, "tensions_N", result.tensions_N, "N", "cable tensions P_i")
+        put(fh, "time_s", result.time_s, "s", "time of each accepted step", ("step",))
+        put(fh, "tip_mm", result.tip_mm, "mm", "tip position x(l)", ("step", "component"))
+        put(fh, "x_mm", result.x_mm, "mm", "node positions x_k, k = 0..N",
+            ("step", "node", "component"))
+        put(fh, "theta", result.theta, "rad", "nodal angles theta_0..theta_N", ("step", "node"))
+        put(fh, "tensions_N", result.tensions_N, "N", "cable tensions P_i", ("step", "tendon"))
         put(fh, "cable_lengths_mm", result.cable_lengths_mm, "mm",
-            "cable lengths |r_i - x(s_i)|")
+            "cable lengths |r_i - x(s_i)|", ("step", "tendon"))
         put(fh, "energy_J", result.energy_J, "J",
-            "kinetic, strain, work done on the arm by the tensions (columns)")
+            "kinetic, strain, work done on the arm by the tensions (columns)",
+            ("step", "energy"), {"energy": ["kinetic", "strain", "work"]})
         ev = result.events
-        put(fh, "event_time_s", np.array([e[0] for e in ev], float), "s", "slack/taut events")
-        put(fh, "event_tendon", np.array([e[1] for e in ev], int), "1", "tendon of each event")
+        put(fh, "event_time_s", np.array([e[0] for e in ev], float), "s", "slack/taut events", ("event",))
+        put(fh, "event_tendon", np.array([e[1] for e in ev], int), "1", "tendon of each event", ("event",))
         put(fh, "event_kind", np.array([e[2].encode() for e in ev], dtype="S8"), "1",
-            "slack or taut")
+            "slack or taut", ("event",))
         if result.planned_tip_mm is not None:
             put(fh, "planned_tip_mm", result.planned_tip_mm, "mm",
-                "quasi-static tip of the schedule at time_s")
+                "quasi-static tip of the schedule at time_s", ("step", "component"))
 
 
 def read_theta(path) -> np.ndarray:
