@@ -19,10 +19,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .core import inputs
 from .core.errors import InputError
 from .core.fem import Discretisation
 from .core.model import Arm
-from .solvers.equilibrium import Equilibrium, EquilibriumSolver, check_order, check_tensions
+from .solvers.equilibrium import Equilibrium, EquilibriumSolver, check_order
 
 
 @dataclass(frozen=True)
@@ -99,18 +100,41 @@ class State:
         return equilibrium_summary(self.arm, self.equilibrium)
 
 
+def _arm(arm) -> Arm:
+    if not isinstance(arm, Arm):
+        raise InputError(f"arm must be an ep.Arm (Arm.paper() or Arm.from_toml(path)), got "
+                         f"{type(arm).__name__}")
+    return arm
+
+
 def _mesh(arm: Arm, elements: int | None) -> Discretisation:
-    if elements is not None and elements < 2:
-        raise InputError(f"elements must be at least 2, got {elements}")
-    return Discretisation.from_arm(arm, elements)
+    return Discretisation.from_arm(_arm(arm), inputs.elements(elements, "elements"))
 
 
-def _tensions(arm: Arm, tensions_N, tensions) -> np.ndarray:
-    """Non-dimensional tensions from exactly one of newtons or p."""
+def _tensions(arm: Arm, tensions_N, tensions, names=("tensions_N", "tensions")) -> np.ndarray:
+    """Non-dimensional tensions from exactly one of newtons or p, checked in the
+    unit given (``names``: the arguments, newtons first)."""
     if (tensions_N is None) == (tensions is None):
-        raise InputError("give exactly one of tensions_N= (newtons) or tensions= (p = P l^2/B)")
-    p = arm.tensions_from_N(tensions_N) if tensions is None else tensions
-    return check_tensions(p, arm.n_tendons)
+        raise InputError(f"give exactly one of {names[0]}= (newtons) or {names[1]}= "
+                         "(p = P l^2/B)")
+    if tensions is None:
+        return arm.tensions_from_N(inputs.tensions(tensions_N, arm.n_tendons, names[0], "N",
+                                                   arm.force_scale_N))
+    return inputs.tensions(tensions, arm.n_tendons, names[1], "P l^2/B")
+
+
+def _guess(arm: Arm, guess_N, guess) -> np.ndarray | None:
+    """Initial tensions from ``guess_N`` (N) or ``guess`` (p), or None."""
+    if guess_N is None and guess is None:
+        return None
+    return _tensions(arm, guess_N, guess, ("guess_N", "guess"))
+
+
+def _floor_N(min_tension_N) -> float:
+    value = inputs.number(min_tension_N, "min_tension_N", "N")
+    if value < 0:
+        raise InputError(f"min_tension_N must be >= 0 N, got {value:g}")
+    return value
 
 
 def _progress(progress, label: str, unit: str, delay: float = 0.0):
@@ -145,11 +169,12 @@ def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None, side: str | N
     """
     from .solvers.equilibrium import solve_equilibrium
 
+    disc = _mesh(arm, elements)
     p = _tensions(arm, tensions_N, tensions)
     order = check_order(order, arm.n_tendons)
     if side not in (None, "left", "right"):
         raise InputError(f"side must be 'left' or 'right', got {side!r}")
-    eq = solve_equilibrium(_mesh(arm, elements), p, order=order, side=side)
+    eq = solve_equilibrium(disc, p, order=order, side=side)
     return State(arm, eq, _loading(order))
 
 
@@ -184,13 +209,16 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
     from .solvers.share import share_rule
     from .studies.boundary import boundary_proof
 
-    target = np.asarray(target_mm, dtype=float).ravel()
-    if target.size != 2 or not np.all(np.isfinite(target)):
-        raise InputError("target_mm must be two finite numbers [x, y] in mm")
-    if guess_N is not None:
-        guess = arm.tensions_from_N(guess_N)
-    p0 = None if guess is None else check_tensions(guess, arm.n_tendons)
-    sharer_asked = share_rule(share, min_tension_N)          # bad input before any solve
+    elements = _mesh(arm, elements).n_elements
+    target = inputs.target_mm(arm, target_mm, "target_mm")
+    p0 = _guess(arm, guess_N, guess)
+    inputs.tip_tolerance_mm(arm, tol_mm, "tol_mm")
+    inputs.choice(cables, "cables", ("prefer", "require", "ignore"))
+    inputs.choice(method, "method", ("blmvm", "gd"))
+    sharer_asked = share_rule(share, _floor_N(min_tension_N))   # bad input before any solve
+    if animate:
+        from .plots.animate import check_animation_path
+        check_animation_path(animate, True, "animate")
     with (_progress(progress, "control", "search steps", delay=1.0) as bar,
           TipController(arm, n_elements=elements, method=method, tip_tol_mm=tol_mm) as ctl):
         reacher = Reacher(ctl, boundary=boundary_proof(arm, ctl.disc), progress=bar)
@@ -219,11 +247,8 @@ def _sharer(arm: Arm, controller, share: str | None, min_tension_N: float):
     return TensionSharer(controller, share, float(arm.tensions_from_N(min_tension_N)))
 
 
-def _points(points_mm) -> np.ndarray:
-    points = np.asarray(points_mm, dtype=float)
-    if points.ndim != 2 or points.shape[1] != 2 or len(points) < 1:
-        raise InputError("points_mm must be an array of shape (K, 2) in mm")
-    return points
+def _points(points_mm, arm: Arm | None = None, name: str = "points_mm") -> np.ndarray:
+    return inputs.points_mm(points_mm, name, arm)
 
 
 def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | None = None,
@@ -240,11 +265,12 @@ def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | Non
     from .solvers.control import TipController
     from .studies import trace as paths
 
-    points = _points(points_mm)
+    elements = _mesh(arm, elements).n_elements
+    points = _points(points_mm, arm)
     if step_mm is not None:
-        points = paths.densify(points, step_mm)
+        points = paths.densify(points, inputs.path_step_mm(points, step_mm, "path", "step_mm"))
     with TipController(arm, n_elements=elements) as ctl:
-        sharer = _sharer(arm, ctl, share, min_tension_N)
+        sharer = _sharer(arm, ctl, share, _floor_N(min_tension_N))
         return paths.trace(ctl, points, sharer=sharer)
 
 
@@ -267,15 +293,18 @@ def schedule(arm: Arm, points_mm, *, step_mm: float = 1.0, speed_mm_s: float | N
     from .studies import trace as paths
     from .studies.schedule import trace_schedule
 
-    if guess_N is not None:
-        guess = arm.tensions_from_N(guess_N)
-    p0 = None if guess is None else check_tensions(guess, arm.n_tendons)
-    points = paths.densify(_points(points_mm), step_mm)
+    elements = _mesh(arm, elements).n_elements
+    p0 = _guess(arm, guess_N, guess)
+    points = _points(points_mm, arm)
+    points = paths.densify(points, inputs.path_step_mm(points, step_mm, "path", "step_mm"))
+    if speed_mm_s is not None:
+        inputs.positive(speed_mm_s, "speed_mm_s", "mm/s", at_least=1e-6)
+    inputs.positive(amplitude_mm, "amplitude_mm", "mm", at_least=1e-6)
     with TipController(arm, n_elements=elements) as ctl:
         return trace_schedule(ctl, points, step_mm=step_mm, speed_mm_s=speed_mm_s,
                               amplitude_mm=amplitude_mm, approach=approach, p0=p0,
                               on_point=on_point,
-                              sharer=_sharer(arm, ctl, share, min_tension_N))
+                              sharer=_sharer(arm, ctl, share, _floor_N(min_tension_N)))
 
 
 def stability(state: State, *, modes: int = 4):
@@ -284,9 +313,17 @@ def stability(state: State, *, modes: int = 4):
     ``Stability`` (``eigenvalues``, ``lambda_min``, ``stable``, ``negative``)."""
     from .solvers.stability import StabilitySolver
 
-    eq = state.equilibrium
+    eq = _state(state).equilibrium
+    inputs.modes(modes, eq.disc.n_elements, "modes")
     with StabilitySolver(eq.disc, nev=modes) as solver:
         return solver.solve(eq.u, eq.p)
+
+
+def _state(state) -> State:
+    if not isinstance(state, State):
+        raise InputError(f"state must be an ep.State (from ep.solve), got "
+                         f"{type(state).__name__}")
+    return state
 
 
 def frequencies(state: State, *, control: str = "load", modes: int = 3):
@@ -297,9 +334,13 @@ def frequencies(state: State, *, control: str = "load", modes: int = 3):
     arm's configuration."""
     from .solvers.stability import StabilitySolver
 
+    _state(state)
+    if control not in ("load", "length"):
+        raise InputError(f"control must be 'load' or 'length', got {control!r}")
     if state.arm.mass_per_length_kg_m is None:
         raise InputError("natural frequencies need [arm] mass_per_length_kg_m in the config")
     eq = state.equilibrium
+    inputs.modes(modes, eq.disc.n_elements, "modes")
     with StabilitySolver(eq.disc) as solver:
         return solver.frequencies(eq.u, eq.p, state.arm, nev=modes, control=control)
 
@@ -317,6 +358,7 @@ def lengths(arm: Arm, lengths_mm, *, all: bool = False, elements: int | None = N
     from .studies.search import follow_lengths, search_lengths
 
     disc = _mesh(arm, elements)
+    lengths_mm = inputs.cable_lengths_mm(arm, lengths_mm, "lengths_mm")
     if not all:
         return follow_lengths(arm, lengths_mm, elements=disc.n_elements)
     with _progress(progress, "lengths search", "search steps") as bar:
@@ -336,6 +378,9 @@ def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None
     with _progress(progress, "equilibria", "search steps") as bar:
         return search_tensions(arm, p, elements=_mesh(arm, elements).n_elements,
                                progress=bar)
+
+
+MIN_SPACING_MM = 1e-100        # finer: the grid count overflows before its limit is checked
 
 
 def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",
@@ -359,11 +404,18 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
     BELOW_FLOOR: reached with P >= 0 but no tensions >= P_min found, not a
     proof; UNIQUE_BELOW_FLOOR: two tendons, the target's only tensions are
     below P_min, proven; docs/model.md §9.3)."""
+    from .io.hdf5 import H5_SUFFIXES, check_output_path
     from .studies.workspace import run_map
 
-    return run_map(arm, _mesh(arm, elements), mode=mode, spacing_mm=spacing_mm, box_mm=box_mm,
+    disc = _mesh(arm, elements)
+    inputs.positive(spacing_mm, "spacing_mm", "mm", at_least=MIN_SPACING_MM)
+    if box_mm is not None:
+        box_mm = tuple(inputs.box_mm(box_mm, "box_mm"))
+    if out is not None:
+        check_output_path(out, overwrite, H5_SUFFIXES, "out")
+    return run_map(arm, disc, mode=mode, spacing_mm=spacing_mm, box_mm=box_mm,
                    comm=comm, out=out, overwrite=overwrite, global_search=global_search,
-                   share=share, min_tension_N=min_tension_N)
+                   share=share, min_tension_N=_floor_N(min_tension_N))
 
 
 def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None,
@@ -397,10 +449,26 @@ def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
     reports each path trace (one per objective evaluation)."""
     from .studies.design import design_for_path, parse_vary
 
+    elements = _mesh(arm, elements).n_elements
     tendons = parse_vary(list(vary), arm.n_tendons)
+    points = _points(points_mm, arm)
+    inputs.design_points(points, "points_mm")
+    inputs.design_options(DESIGN_NAMES, reach_mm=reach_mm, margin=margin)
     with _progress(progress, "design", "path traces") as bar:
-        return design_for_path(arm, tendons, _points(points_mm), elements=elements,
+        return design_for_path(arm, tendons, points, elements=elements,
                                reach_mm=reach_mm, margin=margin, progress=bar)
+
+
+DESIGN_NAMES = {k: k for k in ("iterations", "reach_mm", "clearance_mm", "margin",
+                                "resample_cells")}
+
+
+def _tension_max(arm: Arm, tension_max_N) -> float:
+    """The motor limit of an area design, N -> p (a box of tensions with an area)."""
+    value = inputs.tensions([inputs.number(tension_max_N, "tension_max_N", "N")], 1,
+                            "tension_max_N", "N", arm.force_scale_N)[0]
+    return float(arm.tensions_from_N([inputs.positive(value, "tension_max_N", "N",
+                                                      at_least=1e-3)])[0])
 
 
 def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
@@ -411,17 +479,20 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
     arc lengths on mesh nodes, by a pattern search) maximising the area A
     [mm^2] of the workspace W_0 within 0 <= P_i <= ``tension_max_N`` (tips of stable equilibria connected
     to the straight arm by quasi-static loading; the motor limit of Eq. (22)):
-    A is the shoelace area of the image of the tension box's boundary, dA/dq
-    the boundary integral of the normal component of the tip derivative
-    (TAO BLMVM).  Both arms are then re-sampled on a tension grid; the gain
+    A is the area of its traced boundary (as :func:`boundary` measures it for
+    the arm with that motor limit), dA/dq the boundary integral of the normal
+    component of the tip derivative (TAO BLMVM).  Both arms are then re-sampled on a tension grid; the gain
     is ``confirmed`` only if the re-sampled areas differ by more than their
     errors.  Returns an ``AreaDesign`` (``arm_after``, ``before``/``after``,
     ``resampled_before``/``resampled_after``, ``confirmed``, ``history``)."""
     from .studies.design import parse_design_variables
     from .studies.design_area import design_for_area
 
+    elements = _mesh(arm, elements).n_elements
     tendons, attaches = parse_design_variables(list(vary), arm.n_tendons)
-    p_max = float(arm.tensions_from_N([tension_max_N])[0])
+    p_max = _tension_max(arm, tension_max_N)
+    inputs.design_options(DESIGN_NAMES, reach_mm=reach_mm, iterations=iterations,
+                          resample_cells=resample_cells)
     return design_for_area(arm, tendons, p_max, elements=elements, attaches=attaches,
                            reach_mm=reach_mm, max_iterations=iterations,
                            resample_cells=resample_cells)
@@ -441,7 +512,9 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
 
     disc = _mesh(arm, elements)
     parsed = [parse_axis(text, disc.n_tendons) for text in axes]
-    p_max = float(arm.tensions_from_N([tension_max_N])[0])
+    p_max = _tension_max(arm, tension_max_N)
+    if path_mm is not None:
+        inputs.design_points(_points(path_mm, arm, "path_mm"), "path_mm")
     return run_sweep(arm, disc.n_elements, parsed, p_max,
                      targets_mm=None if path_mm is None else _points(path_mm), comm=comm,
                      out=out, resume=resume, overwrite=overwrite, progress=False)

@@ -11,7 +11,6 @@ about 4201 workspace targets).
 from __future__ import annotations
 
 import datetime
-import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from .core import jsontext
 from .core.model import load_config
 from .core.model import Arm
 
@@ -356,7 +356,8 @@ def write_report(ctx: Context, command: str) -> Path:
         lines.append(f"- {figure}: " + ", ".join(f"`{n}`" for n in names))
     path = ctx.out / "REPORT.md"
     path.write_text("\n".join(lines) + "\n")
-    (ctx.out / "report.json").write_text(json.dumps([r.__dict__ for r in ctx.rows], indent=1))
+    (ctx.out / "report.json").write_text(jsontext.dumps([r.__dict__ for r in ctx.rows],
+                                                        indent=1))
     return path
 
 
@@ -373,9 +374,10 @@ def planned_files() -> list[str]:
 def check_output_folder(out: str | Path, overwrite: bool) -> Path:
     """Before any computation: ``out`` is (or can be made) a writable folder, and
     no file :func:`run` would write exists there unless ``overwrite``.
-    Creates the folder and returns it."""
+    Creates nothing (the caller makes the folder once every check has passed:
+    a refusal leaves no empty folder behind); returns it."""
     from .core.errors import InputError
-    from .io.hdf5 import check_output_path
+    from .io.hdf5 import probe_writable, check_output_path
 
     if not str(out).strip():
         raise InputError("--out: empty folder name")
@@ -387,10 +389,12 @@ def check_output_folder(out: str | Path, overwrite: bool) -> Path:
         more = f" and {len(existing) - 1} more" if len(existing) > 1 else ""
         raise InputError(f"{out} already holds {existing[0]}{more}; pass --overwrite to "
                          "replace them")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise InputError(f"--out {out}: cannot create the folder ({err.strerror})") from None
+    if not out.is_dir():
+        parent = next(p for p in out.absolute().parents if p.exists())
+        if not parent.is_dir():
+            raise InputError(f"--out {out}: {parent} is not a folder")
+        probe_writable(parent, out)
+        return out
     for name in planned_files():
         check_output_path(out / name, overwrite=True)
     return out

@@ -152,17 +152,16 @@ def format_control(s: dict) -> str:
 
 def run(args) -> int:
     from .. import api
-    from ..core.errors import InputError
 
     arm, disc = common.load_arm(args)
-    common.check_outputs(args)
-    if not args.tol_mm > 0:
-        raise InputError(f"--tol-mm must be positive, got {args.tol_mm}")
+    from ..core.inputs import target_mm, tip_tolerance_mm
+    tip_tolerance_mm(arm, args.tol_mm, "--tol-mm")
     guess = common.guess(args, disc)
-    common.check_target_mm(arm, args.target)
+    target_mm(arm, args.target, "--target")
     if args.animate:
         from ..plots.animate import check_animation_path
         check_animation_path(args.animate, args.overwrite)
+    common.check_outputs(args, {"--animate": args.animate} if args.animate else None)
     result = api.control(arm, args.target, guess=guess, method=args.method, tol_mm=args.tol_mm,
                          global_search=not args.local, cables=args.cables, share=args.share,
                          min_tension_N=args.min_tension_N, animate=args.animate,

@@ -20,8 +20,8 @@ def add_parser(sub) -> None:
                     "in W_0 (sum over targets of min_p |x_t - x_d|^2/2, Danskin's gradient). "
                     "--objective area: the area of W_0 within 0 <= P_i <= --tension-max "
                     "(attachments, tendonK.attach, by a pattern search over mesh nodes) "
-                    "(shoelace area of the image of the tension box's boundary, gradient the "
-                    "boundary integral of the normal tip derivative), confirmed by an "
+                    "(on its traced boundary, the area `boundary` reports for that motor limit; "
+                    "gradient the boundary integral of the normal tip derivative), confirmed by an "
                     "independent tension-grid re-sampling of both arms. --sweep: evaluate the "
                     "area (and a path's misfit) over a grid of designs on all ranks of mpiexec, "
                     "into one HDF5 file (resumable). W_0: tips of stable equilibria connected to "
@@ -75,10 +75,11 @@ def run(args) -> int:
     if not args.vary or not args.objective:
         raise InputError("design needs --vary and --objective (area or path:FILE.csv), "
                          "or --sweep")
-    if args.iterations < 1:
-        raise InputError(f"--iterations must be at least 1, got {args.iterations}")
-    if not (args.reach > 0 and args.clearance >= 0):
-        raise InputError("--reach must be positive and --clearance non-negative")
+    from ..core.inputs import design_options
+    design_options({k: "--" + k.removesuffix("_mm").replace("_", "-") for k in
+                    ("iterations", "reach_mm", "clearance_mm", "margin", "resample_cells")},
+                   iterations=args.iterations, reach_mm=args.reach, clearance_mm=args.clearance,
+                   margin=args.margin, resample_cells=args.resample_cells)
     from ..io.hdf5 import PLOT_SUFFIXES, check_output_path
     if args.out:
         check_output_path(args.out, args.overwrite, (".toml",))
@@ -86,6 +87,7 @@ def run(args) -> int:
         if args.objective != "area":
             raise InputError("--plot draws an area design; use it with --objective area")
         check_output_path(args.plot, args.overwrite, PLOT_SUFFIXES, "--plot")
+    common.lock_outputs([args.out, args.plot])
     if args.objective == "area":
         return _run_area(args)
     return _run_path(args)
@@ -93,18 +95,25 @@ def run(args) -> int:
 
 def _path_targets(objective: str):
     from ..core.errors import InputError
+    from ..core.inputs import design_points, design_points_limit
     from ..studies.trace import read_csv
 
     kind, _, source = objective.partition(":")
     if kind != "path" or not source:
         raise InputError(f"--objective {objective!r}: expected area or path:FILE.csv")
-    return read_csv(source)
+    targets = read_csv(source, max_rows=design_points_limit() + 1)   # no need to read more
+    design_points(targets, f"--objective path:{source}")
+    return targets
 
 
 def _tension_max(args, arm) -> float:
-    if args.tension_max is not None:
-        return float(args.tension_max)
-    return float(arm.tensions_from_N([DEFAULT_TENSION_MAX_N])[0])
+    """--tension-max (p; --tension-max-N was converted by load_arm) or the default."""
+    from ..core.inputs import positive, tensions
+
+    if args.tension_max is None:
+        return float(arm.tensions_from_N([DEFAULT_TENSION_MAX_N])[0])
+    p = tensions([args.tension_max], 1, "--tension-max", "P l^2/B")[0]
+    return positive(p, "--tension-max", "P l^2/B", at_least=1e-3 / arm.force_scale_N)
 
 
 # outcome codes of an optimised design (JSON "outcome"); only IMPROVED writes --out
@@ -179,8 +188,6 @@ def _run_area(args) -> int:
     from ..studies.design import parse_design_variables
     from ..studies.design_area import design_for_area
 
-    if args.resample_cells < 2:
-        raise InputError(f"--resample-cells must be at least 2, got {args.resample_cells}")
     arm, disc = common.load_arm(args)
     if disc.n_tendons != 2:
         raise InputError("--objective area needs exactly two tendons")
@@ -314,7 +321,7 @@ def _run_sweep(args) -> int:
 
     comm = MPI.COMM_WORLD
     try:                       # input errors agreed on by all ranks (one line, exit 2)
-        common.check_outputs(args, resume=args.resume)
+        common.check_outputs(args, resume=args.resume, lock=comm.rank == 0)
         arm, disc = common.load_arm(args)
         axes = [parse_axis(text, disc.n_tendons) for text in args.sweep]
         targets = None

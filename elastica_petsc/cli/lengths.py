@@ -25,7 +25,6 @@ HDF5 layout (``--out``), besides the provenance attributes of every file::
 """
 from __future__ import annotations
 
-import math
 import sys
 
 from . import common
@@ -80,34 +79,18 @@ def add_vtk_option(parser) -> None:
 
 
 # --- validation ------------------------------------------------------------------------
-def check_lengths_mm(values, n_tendons: int):
-    import numpy as np
-
-    from ..core.errors import InputError
-
-    L = np.asarray(values, dtype=float).ravel()
-    if L.size != n_tendons:
-        raise InputError(f"--lengths: expected {n_tendons} cable lengths in mm (one per "
-                         f"tendon), got {L.size}")
-    for i, v in enumerate(L, 1):
-        if not (math.isfinite(v) and v > 0):
-            raise InputError(f"--lengths: cable length of tendon {i} must be a positive "
-                             f"number of mm, got {v:g}")
-    return L
-
-
 def check_search_options(args) -> dict:
     """Validated search settings (studies.search.effort_settings) from the options."""
     from ..core.errors import InputError
+    from ..core.inputs import integer, tensions
     from ..studies.search import effort_settings
 
-    if args.effort < 1:
-        raise InputError(f"--effort must be an integer >= 1, got {args.effort}")
-    if args.deflation_rounds is not None and args.deflation_rounds < 0:
-        raise InputError(f"--deflation-rounds must be >= 0, got {args.deflation_rounds}")
-    if args.levels is not None and not all(math.isfinite(v) and v > 0 for v in args.levels):
+    if args.deflation_rounds is not None:
+        integer(args.deflation_rounds, "--deflation-rounds", 0, 1000)
+    if args.levels is not None and not all(v > 0 for v in tensions(
+            args.levels, len(args.levels), "--levels", "P l^2/B")):
         raise InputError("--levels: tension levels must be positive numbers")
-    settings = effort_settings(args.effort, args.levels)
+    settings = effort_settings(args.effort, args.levels, name="--effort")
     if args.deflation_rounds is not None:
         settings["deflation_rounds"] = args.deflation_rounds
     return dict(settings, effort=args.effort)
@@ -250,8 +233,7 @@ def format_states(arm, data: dict) -> str:
 
 # --- HDF5 ------------------------------------------------------------------------------
 def write_states(path, overwrite: bool, arm, data: dict, states, kind: str) -> None:
-    import json
-
+    from ..core import jsontext as json
     from ..io.hdf5 import atomic_h5, provenance, put, write_attrs, write_equilibrium
 
     l_mm = arm.length_mm
@@ -339,8 +321,8 @@ def run(args) -> int:
     from ..io.summary import rounded
 
     arm, disc = common.load_arm(args)
-    L_mm = check_lengths_mm(args.lengths, disc.n_tendons)
-    common.check_cable_lengths(arm, L_mm)
+    from ..core.inputs import cable_lengths_mm
+    L_mm = cable_lengths_mm(arm, args.lengths, "--lengths")
     settings = check_search_options(args)
     common.check_outputs(args)
     data = {"control": "length", "lengths_mm": rounded(L_mm), "elements": disc.n_elements}

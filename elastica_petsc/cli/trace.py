@@ -74,14 +74,14 @@ def add_parser(sub) -> None:
     parser.set_defaults(run=run)
 
 
-def targets(args):
-    from ..studies import trace as paths
+def targets(args, arm):
     from ..core.errors import InputError
+    from ..core.inputs import path_step_mm, points_mm, positive
+    from ..studies import trace as paths
 
-    if not args.amplitude_mm > 0:
-        raise InputError(f"--amplitude-mm must be positive, got {args.amplitude_mm}")
-    if not args.step > 0:
-        raise InputError(f"--step must be positive, got {args.step}")
+    positive(args.amplitude_mm, "--amplitude-mm", "mm", at_least=1e-6)
+    if args.speed_mm_s is not None:
+        positive(args.speed_mm_s, "--speed-mm-s", "mm/s", at_least=1e-6)
     if args.path:
         points = paths.read_csv(args.path)
     elif args.shape == "paper-triangle":
@@ -94,7 +94,8 @@ def targets(args):
         if args.end is None:
             raise InputError("--shape line needs --end X Y (it runs from --center)")
         points = paths.line(args.center, args.end)
-    common.check_path_points(points, args.step)
+    points = points_mm(points, "the path", arm)
+    path_step_mm(points, args.step, "path", "--step")
     return paths.densify(points, args.step)
 
 
@@ -283,26 +284,18 @@ def slowed_runs(labels: list[str]) -> list[list]:
 def check_options(args) -> None:
     """Refuse, before any computing, options and output paths that cannot work."""
     from ..core.errors import InputError
-    from ..io.hdf5 import check_output_path
 
-    common.check_outputs(args)
-    if args.schedule:
-        check_output_path(args.schedule, args.overwrite)
-    if args.step_table:
-        for i in range(1, common.load_config(args.config).n_tendons + 1):
-            check_output_path(f"{args.step_table}_motor{i}.csv", args.overwrite, (".csv",),
-                              "--step-table")
     if args.animate:
         from ..plots.animate import check_animation_path
         check_animation_path(args.animate, args.overwrite)
-    if args.vtk:
-        from ..io.vtk import check_directory
-        check_directory(args.vtk, args.overwrite)
+    extra = {"--animate": args.animate} if args.animate else {}
+    if args.step_table:
+        for i in range(1, common.load_config(args.config).n_tendons + 1):
+            extra[f"--step-table (motor {i})"] = f"{args.step_table}_motor{i}.csv"
+    common.check_outputs(args, extra)
     if args.per_point and not args.json:
         raise InputError("--per-point adds per-point results to the JSON output: use it with "
                          "--json")
-    if args.speed_mm_s is not None and not args.speed_mm_s > 0:
-        raise InputError(f"--speed-mm-s must be positive, got {args.speed_mm_s}")
     if not args.slow_motion > 0:
         raise InputError(f"--slow-motion must be positive, got {args.slow_motion}")
 
@@ -343,7 +336,7 @@ def run(args) -> int:
 
     arm, disc = common.load_arm(args)
     check_options(args)
-    points = targets(args)
+    points = targets(args, arm)
     guess = common.guess(args, disc)
     with Progress(len(points), "trace") as bar:
         planned = api.schedule(arm, points, step_mm=args.step, speed_mm_s=args.speed_mm_s,

@@ -28,6 +28,7 @@ import json
 
 import numpy as np
 
+from ..core import jsontext
 from .hdf5 import atomic_h5, provenance, put, write_attrs
 
 
@@ -39,7 +40,7 @@ def write_boundary(path, result, overwrite: bool = False) -> None:
         write_attrs(fh, provenance(arm, "boundary"))
         fh.attrs["solves"] = result.solves
         fh.attrs["seconds"] = result.seconds
-        fh.attrs["messages_json"] = json.dumps(result.messages)
+        fh.attrs["messages_json"] = jsontext.dumps(result.messages)
         for name, region in result.regions.items():
             group = fh.create_group(name)
             group.attrs["closed"] = bool(region.closed)
@@ -54,8 +55,8 @@ def write_boundary(path, result, overwrite: bool = False) -> None:
             put(sub, "tensions_N", arm.tensions_to_N(nodes["p"]), "N", "tensions P_i")
             put(sub, "curve", nodes["curve"], "1", "index of the curve of each node")
             curves = group.create_group("curves")
-            curves.attrs["names_json"] = json.dumps([c.constraint for c in region.curves])
-            curves.attrs["ends_json"] = json.dumps([c.end for c in region.curves])
+            curves.attrs["names_json"] = jsontext.dumps([c.constraint for c in region.curves])
+            curves.attrs["ends_json"] = jsontext.dumps([c.end for c in region.curves])
         if "W0" in fh:
             _write_folds(fh["W0"], result)
         put(fh, "tip_folds", result.tip_folds_mm, "mm",
@@ -66,8 +67,8 @@ def _write_folds(group, result) -> None:
     """Fold curves of the tip map, face list and area bounds of W_0."""
     lo, hi = result.area_bounds_mm2
     group.attrs["area_lower_mm2"], group.attrs["area_upper_mm2"] = lo, hi
-    group.attrs["faces_json"] = json.dumps(result.faces)
-    group.attrs["untraced_json"] = json.dumps(result.untraced_folds)
+    group.attrs["faces_json"] = jsontext.dumps(result.faces)
+    group.attrs["untraced_json"] = jsontext.dumps(result.untraced_folds)
     folds = group.create_group("folds")
     for k, (curve, line) in enumerate(zip(result.fold_curves, result.fold_polylines_mm)):
         sub = folds.create_group(str(k))

@@ -64,6 +64,7 @@ import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
 
+from ..core import interrupt
 from ..core.fem import Discretisation
 from .equilibrium import SNES_REASONS
 from .inertia import InertiaCounter
@@ -859,6 +860,7 @@ class CurveTracer:
         """One predictor-corrector step of length ds: (point | None, iterations).
         The corrector gets ``step_max_it`` Newton iterations: from the tangent
         predictor a step that needs more is too long (it is halved)."""
+        interrupt.check()                         # a run's stop, inside long work
         w_pred = pt.w + ds * pt.t
         w, ok, its = self._solve(w_pred, [self._row(constraint), self._arclength_row(pt.t, w_pred)],
                                  max_it=self.step_max_it)

@@ -129,6 +129,12 @@ def default_eps(length_mm: float, tip_tol_mm: float = 1e-5) -> float:
     return 0.5 * (tip_tol_mm / length_mm) ** 2
 
 
+
+class StartFailed(RuntimeError):
+    """No equilibrium could be computed at the initial tensions of a solve
+    (e.g. a guess that pulls a cable onto its routing point): a failed start,
+    which the global search answers by trying its next strategy."""
+
 @dataclass(frozen=True)
 class Evaluation:
     """One objective evaluation: equilibrium and sensitivities at tensions p."""
@@ -678,7 +684,7 @@ class TipController:
             if ev is None:
                 ev = st.last_good
             if ev is None:
-                raise RuntimeError(
+                raise StartFailed(
                     "tip control could not compute any equilibrium from the initial tensions "
                     f"{p0}: {st.failure}")
             return self._result(st, ev, tao_reason, iterations)

@@ -16,6 +16,7 @@ from functools import cached_property
 import numpy as np
 from petsc4py import PETSc
 
+from ..core import interrupt
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from .bifurcation import (BIFURCATION_TOL, AmplitudeContinuation, Bifurcation, critical_mode,
@@ -313,6 +314,7 @@ class EquilibriumSolver:
         reason = "CONVERGED_ITERATING"
         n_angles = self.disc.n_elements
         while lam < 1.0:
+            interrupt.check()                     # a run's stop, inside long work
             step = min(dlam, 1.0 - lam)
             if u_prev is not None:
                 predictor = u + (u - u_prev) * (step / dlam_prev)

@@ -21,8 +21,9 @@ when all its samples are stored, so the file on disk is always valid.
 
 Stop protocol (SIGINT/SIGTERM to any rank, to mpiexec or to its process
 group; :func:`run`): the stopped rank exhausts the shared chunk counter
-(one-sided, no rank waits), every rank sees it at its next sample and leaves
-its chunk; rank 0 writes a checkpoint at once (Open MPI's mpiexec kills the
+(one-sided, no rank waits), every rank sees it at its next sample, or inside
+a long one at its next load or continuation step (core/interrupt.py), and
+leaves its chunk; rank 0 writes a checkpoint at once (Open MPI's mpiexec kills the
 ranks about 2 s after forwarding a signal), receives until every rank has
 said it finished, and writes the last one.  No collective is entered unless
 every rank is known to reach it, so no rank is left in MPI_Waitall or in
@@ -58,6 +59,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core import interrupt
 from ..core.errors import InputError
 from ..io.workspace import continue_provenance, read_results
 
@@ -336,7 +338,11 @@ def _work(grid: Grid, sampler, todo: np.ndarray, counter: ChunkCounter, stop, de
         if k >= len(todo):
             return
         chunk = int(todo[k])
-        values = sampler.solve_chunk(grid.points[grid.chunks[chunk]], stop)
+        try:
+            with interrupt.watching(stop):     # a stop inside a long sample, too
+                values = sampler.solve_chunk(grid.points[grid.chunks[chunk]], stop)
+        except interrupt.Stopped:
+            values = None
         if values is None:
             return
         deliver(chunk, values)

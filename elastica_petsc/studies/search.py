@@ -59,15 +59,19 @@ DEFAULT_STEPS = 12
 DEFAULT_DEFLATION_ROUNDS = 2
 
 
-def effort_settings(effort: int = 1, levels=None) -> dict:
+MAX_EFFORT = 16
+
+
+def effort_settings(effort: int = 1, levels=None, name: str = "the search effort") -> dict:
     """Search settings that spend ``effort`` (>= 1) times the default work:
     ``steps`` (deflated continuation points per path segment) and
     ``deflation_rounds`` scale with it, and the tension levels of the starts
     (``levels``, default :data:`DEFAULT_LEVELS`) gain effort - 1 doublings
     of the largest."""
     effort = int(effort)
-    if effort < 1:
-        raise InputError(f"the search effort must be an integer >= 1, got {effort}")
+    if not 1 <= effort <= MAX_EFFORT:
+        raise InputError(f"{name} must be an integer >= 1 and <= {MAX_EFFORT} (each "
+                         f"doubles the top tension level once more), got {effort}")
     levels = sorted(float(v) for v in (DEFAULT_LEVELS if levels is None else levels))
     levels += [levels[-1] * 2.0 ** k for k in range(1, effort)]
     return {"steps": DEFAULT_STEPS * effort, "levels": tuple(levels),

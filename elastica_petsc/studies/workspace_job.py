@@ -16,6 +16,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+from ..core import jsontext
 from ..core.errors import InputError
 
 
@@ -33,7 +34,7 @@ def spawn(arm, elements: int, ranks: int, **kwargs) -> int:
         env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
     with tempfile.TemporaryDirectory() as tmp:
         spec = Path(tmp) / "spec.json"
-        spec.write_text(json.dumps({"arm": arm_to_dict(arm), "elements": elements,
+        spec.write_text(jsontext.dumps({"arm": arm_to_dict(arm), "elements": elements,
                                     "kwargs": kwargs}))
         # our stdout (the job writes nothing else there): on a terminal, rank 0 draws its bar
         return subprocess.run([mpiexec, "-n", str(ranks), sys.executable, "-m", __name__,

@@ -17,8 +17,8 @@ options.
 """
 from __future__ import annotations
 
-import json
 
+from ...core import jsontext
 from ...core.errors import InputError
 from ...io.workspace import read_map_file
 from ..chunks import (CollectiveInputError, Grid, Stop, agree, check_out, checkpoint_interval,
@@ -158,6 +158,7 @@ def map_attrs(arm, disc, grid: Grid, extra: dict | None) -> dict:
 
     attrs = provenance(arm, "workspace")
     attrs.update(mode=grid.mode, elements=disc.n_elements, n_tendons=disc.n_tendons,
-                 config_json=json.dumps(arm_to_dict(arm)), grid_json=json.dumps(grid.meta))
+                 config_json=jsontext.dumps(arm_to_dict(arm)),
+                 grid_json=jsontext.dumps(grid.meta))
     attrs.update(extra or {})
     return attrs
