@@ -7,12 +7,28 @@ values of the solvers (lengths / l, p = P l^2 / B, docs/model.md §3) sit
 beside them (``tensions``, ``equilibrium``).  Solver objects stay available
 for loops (``with TipController(arm) as c: c.solve_mm(...)``).
 
-PETSc is initialised on first use with no options; to pass PETSc options
-from a script call ``petsc4py.init(sys.argv)`` before importing this package
-(the command line does exactly that).
+Every study takes ``petsc_options=`` (a mapping such as
+``{"snes_rtol": 1e-10}`` or ``{"eq_snes_monitor": None}``, names with or
+without their leading dash): they are put in PETSc's options database for
+that call only, so they apply to the solvers it creates whether or not an
+earlier call has solved; names that no solver of the call read raise
+:class:`~elastica_petsc.core.errors.InputError` (a misspelt or misplaced
+option never passes silently).  PETSc itself is initialised on first use
+(``petsc4py.init(sys.argv)`` before the first call also works, as the
+command line does).
+
+The library prints nothing unless asked: the long studies take
+``progress=`` (False by default; True draws the command line's bar on
+stderr, a callable is called as ``progress(done, note)``).  Single-arm
+studies run on ``PETSc.COMM_SELF``; the sampled studies (:func:`workspace`,
+:func:`design_sweep`) take ``comm=`` and run on this process alone unless a
+communicator is given (``comm=MPI.COMM_WORLD``: collective over its ranks).
 """
 from __future__ import annotations
 
+import functools
+import inspect
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -99,6 +115,54 @@ class State:
         return equilibrium_summary(self.arm, self.equilibrium)
 
 
+@contextmanager
+def _petsc_options_in_force(petsc_options):
+    """``petsc_options`` ({name: value}; None values for flags) in PETSc's
+    options database for the ``with`` block only (earlier values restored);
+    InputError for names nothing read during the block."""
+    if not petsc_options:
+        yield
+        return
+    if not hasattr(petsc_options, "items"):
+        raise InputError("petsc_options must be a mapping {name: value}, "
+                         "e.g. {'eq_snes_rtol': 1e-10}")
+    from petsc4py import PETSc
+
+    from .solvers.options import unused_options
+
+    opts = PETSc.Options()
+    names = [str(name).lstrip("-") for name in petsc_options]
+    before = {name: opts.getString(name) for name in names if opts.hasName(name)}
+    for name, value in zip(names, petsc_options.values()):
+        opts.setValue(name, "" if value is None else
+                      str(value).lower() if isinstance(value, bool) else str(value))
+    try:
+        yield
+        unused = unused_options(names)
+    finally:
+        for name in names:
+            opts.delValue(name)
+            if name in before:
+                opts.setValue(name, before[name])
+    if unused:
+        raise InputError(f"PETSc options not used by any solver of this call: "
+                         f"{' '.join(unused)} (check the name and its prefix)")
+
+
+def _takes_petsc_options(study):
+    """Give ``study`` the keyword ``petsc_options=`` (see the module docstring)."""
+    @functools.wraps(study)
+    def with_options(*args, petsc_options=None, **kwargs):
+        with _petsc_options_in_force(petsc_options):
+            return study(*args, **kwargs)
+
+    signature = inspect.signature(study)
+    option = inspect.Parameter("petsc_options", inspect.Parameter.KEYWORD_ONLY, default=None)
+    with_options.__signature__ = signature.replace(
+        parameters=[*signature.parameters.values(), option])
+    return with_options
+
+
 def _mesh(arm: Arm, elements: int | None) -> Discretisation:
     if elements is not None and elements < 2:
         raise InputError(f"elements must be at least 2, got {elements}")
@@ -115,12 +179,12 @@ def _tensions(arm: Arm, tensions_N, tensions) -> np.ndarray:
 
 def _progress(progress, label: str, unit: str, delay: float = 0.0):
     """``progress=`` of the long studies as a context: True draws the command
-    line's bar (lines in logs; core/progress.py; on a terminal only after
+    line's bar (lines in logs; ui/progress.py; on a terminal only after
     ``delay`` seconds), a callable is called as ``progress(done, note)``,
     None/False report nothing."""
     from contextlib import nullcontext
 
-    from .core.progress import Progress
+    from .ui.progress import Progress
 
     if progress is True:
         return Progress(None, label, unit=unit, delay=delay)
@@ -131,6 +195,7 @@ def _loading(order) -> str:
     return "proportional" if order is None else "order " + ",".join(map(str, order))
 
 
+@_takes_petsc_options
 def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None, side: str | None = None,
           elements: int | None = None) -> State:
     """The equilibrium reached by loading the straight arm to the given tensions
@@ -153,6 +218,7 @@ def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None, side: str | N
     return State(arm, eq, _loading(order))
 
 
+@_takes_petsc_options
 def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blmvm",
             tol_mm: float = 1e-5, global_search: bool = True, cables: str = "prefer",
             share: str | None = None, min_tension_N: float = 0.0, animate=None,
@@ -226,6 +292,7 @@ def _points(points_mm) -> np.ndarray:
     return points
 
 
+@_takes_petsc_options
 def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | None = None,
           min_tension_N: float = 0.0, elements: int | None = None):
     """Tip control along a path, each target warm-started from the previous
@@ -248,6 +315,7 @@ def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | Non
         return paths.trace(ctl, points, sharer=sharer)
 
 
+@_takes_petsc_options
 def schedule(arm: Arm, points_mm, *, step_mm: float = 1.0, speed_mm_s: float | None = None,
              amplitude_mm: float = 1.0, approach: bool = True, guess_N=None, guess=None,
              on_point=None, share: str | None = None, min_tension_N: float = 0.0,
@@ -278,6 +346,7 @@ def schedule(arm: Arm, points_mm, *, step_mm: float = 1.0, speed_mm_s: float | N
                               sharer=_sharer(arm, ctl, share, min_tension_N))
 
 
+@_takes_petsc_options
 def stability(state: State, *, modes: int = 4):
     """The smallest eigenvalues of K v = lambda M v at ``state`` (SLEPc,
     Sec. 4.3 (ii)); ``lambda l^2/B`` is pi^2/4 for the unloaded arm.  Returns a
@@ -289,6 +358,7 @@ def stability(state: State, *, modes: int = 4):
         return solver.solve(eq.u, eq.p)
 
 
+@_takes_petsc_options
 def frequencies(state: State, *, control: str = "load", modes: int = 3):
     """The lowest natural frequencies about ``state`` (small vibrations,
     K v = Omega M v with the arm's mass per length), with tensions held
@@ -304,6 +374,7 @@ def frequencies(state: State, *, control: str = "load", modes: int = 3):
         return solver.frequencies(eq.u, eq.p, state.arm, nev=modes, control=control)
 
 
+@_takes_petsc_options
 def lengths(arm: Arm, lengths_mm, *, all: bool = False, elements: int | None = None,
             progress=None):
     """Length control (Sec. 4.6, Eq. (23)): the equilibrium, with its tensions,
@@ -323,6 +394,7 @@ def lengths(arm: Arm, lengths_mm, *, all: bool = False, elements: int | None = N
         return search_lengths(arm, lengths_mm, elements=disc.n_elements, progress=bar)
 
 
+@_takes_petsc_options
 def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None = None,
                progress=None):
     """Equilibria that share the given tensions (N, or non-dimensional
@@ -338,15 +410,17 @@ def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None
                                progress=bar)
 
 
+@_takes_petsc_options
 def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",
               out: str | Path | None = None, overwrite: bool = False, comm=None,
               elements: int | None = None, global_search: bool = True,
-              share: str | None = None, min_tension_N: float = 0.0):
+              share: str | None = None, min_tension_N: float = 0.0, progress: bool = False):
     """Sample the workspace W_0 and its restrictions (Eqs. (18)-(22), Figs. 4-5)
     on a grid of targets (``mode="targets"``: tip control to each) or of
-    tensions (``"tensions"``).  Runs serially, or on every rank of ``comm``
-    (default ``MPI.COMM_WORLD``) when launched with ``mpiexec``; writes HDF5
-    only when ``out`` is given.  Returns a ``WorkspaceMap`` of per-sample
+    tensions (``"tensions"``).  Runs in this process alone (``comm`` None:
+    ``MPI.COMM_SELF``, also on one rank of ``mpiexec``), or collectively on
+    every rank of ``comm`` (e.g. ``MPI.COMM_WORLD``); writes HDF5 only when
+    ``out`` is given.  ``progress=True``: a bar (rank 0; default none).  Returns a ``WorkspaceMap`` of per-sample
     arrays (``status``, masks ``W0``... , ``tip_mm``, ``tensions_N``).
     Targets (mm) that local tip control does not reach go through the global
     search (seeds over every loading order, reached neighbours) and are
@@ -363,9 +437,10 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
 
     return run_map(arm, _mesh(arm, elements), mode=mode, spacing_mm=spacing_mm, box_mm=box_mm,
                    comm=comm, out=out, overwrite=overwrite, global_search=global_search,
-                   share=share, min_tension_N=min_tension_N)
+                   share=share, min_tension_N=min_tension_N, progress=progress)
 
 
+@_takes_petsc_options
 def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None,
              progress=None):
     """The boundary of the workspace W_0 of a two-tendon arm (and of the
@@ -386,6 +461,7 @@ def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None,
         return trace_boundary(arm, _mesh(arm, elements), restricted=restricted, progress=bar)
 
 
+@_takes_petsc_options
 def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
            reach_mm: float = 100.0, margin: float = 1.1, elements: int | None = None,
            progress=None):
@@ -403,6 +479,7 @@ def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
                                reach_mm=reach_mm, margin=margin, progress=bar)
 
 
+@_takes_petsc_options
 def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
                 tension_max_N: float = 10.0, reach_mm: float = 100.0,
                 iterations: int = 15, resample_cells: int | None = 32,
@@ -427,15 +504,17 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
                            resample_cells=resample_cells)
 
 
+@_takes_petsc_options
 def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
                  out: str | Path | None = None, overwrite: bool = False, resume: bool = False,
-                 comm=None, elements: int | None = None):
+                 comm=None, elements: int | None = None, progress: bool = False):
     """Evaluate a grid of designs: ``axes`` are strings
     ``"tendonK.route.x|route.y|attach=START:STOP:STEP"`` (mm; attachments on
     mesh nodes).  Per design: the area [mm^2] of W_0 within 0 <= P_i <=
     ``tension_max_N`` (as :func:`design_area`) and, with ``path_mm``, the
-    path's misfit [mm^2] and targets reached.  On every rank of ``comm``
-    (default ``MPI.COMM_WORLD``), checkpointed to ``out`` (.h5) and
+    path's misfit [mm^2] and targets reached.  In this process alone (``comm``
+    None), or collectively on every rank of ``comm``; ``progress=True``: a
+    bar (default none); checkpointed to ``out`` (.h5) and
     resumable.  Returns a ``Sweep`` (``designs``, ``values``, ``best()``)."""
     from .studies.design_sweep import parse_axis, run_sweep
 
@@ -444,7 +523,7 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
     p_max = float(arm.tensions_from_N([tension_max_N])[0])
     return run_sweep(arm, disc.n_elements, parsed, p_max,
                      targets_mm=None if path_mm is None else _points(path_mm), comm=comm,
-                     out=out, resume=resume, overwrite=overwrite, progress=False)
+                     out=out, resume=resume, overwrite=overwrite, progress=progress)
 
 
 def read(path: str | Path):

@@ -42,7 +42,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from elastica_petsc.core.model import load_config
-    from elastica_petsc.core.progress import Progress
+    from elastica_petsc.ui.progress import Progress
     from elastica_petsc.io.vtk import write_trace
     from elastica_petsc.plots.animate import animate_trace
     from elastica_petsc.solvers.control import TipController

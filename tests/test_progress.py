@@ -1,4 +1,4 @@
-"""Progress (core/progress.py): a live bar on a terminal (also under mpiexec, where
+"""Progress (ui/progress.py): a live bar on a terminal (also under mpiexec, where
 only rank 0's stdout may be one), sparse log lines otherwise, nothing with --quiet."""
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ import time
 import numpy as np
 import pytest
 
-from elastica_petsc.core import progress
-from elastica_petsc.core.progress import Progress
+from elastica_petsc.ui import progress
+from elastica_petsc.ui.progress import Progress
 
 # timing is part of what these tests check: scripts/test.sh runs them alone
 pytestmark = pytest.mark.serial

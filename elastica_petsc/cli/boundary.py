@@ -28,7 +28,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..studies.boundary import compare_map, compare_restricted, trace_boundary
 
     common.check_outputs(args)

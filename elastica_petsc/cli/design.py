@@ -114,7 +114,7 @@ def _write(args, arm, summary: dict, lines) -> None:
 
 
 def _run_path(args) -> int:
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..studies.design import design_for_path, parse_vary
 
     targets = _path_targets(args.objective)
@@ -141,7 +141,7 @@ def _show(args, summary: dict, history, lines) -> None:
 
 def _run_area(args) -> int:
     from ..core.errors import InputError
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..studies.design import parse_design_variables
     from ..studies.design_area import design_for_area
 
@@ -234,13 +234,15 @@ def _run_sweep(args) -> int:
         targets = None
         if args.objective and args.objective != "area":
             targets = _path_targets(args.objective)
+        seconds = common.checkpoint_seconds()
         error = None
     except InputError as err:
         error = str(err)
     agree(comm, error)
     sweep = run_sweep(arm, disc.n_elements, axes, _tension_max(args, arm), targets_mm=targets,
                       comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
-                      provenance={"command_line": " ".join(sys.argv)})
+                      provenance={"command_line": " ".join(sys.argv)},
+                      checkpoint_seconds=seconds, progress=True)
     if comm.rank != 0:
         return 0
     summary = sweep_summary(sweep, arm)

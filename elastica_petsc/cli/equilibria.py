@@ -35,7 +35,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..solvers.equilibrium import check_tensions
     from ..studies.search import search_tensions
     from ..io.summary import rounded

@@ -327,7 +327,7 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
 
 # --- the command -----------------------------------------------------------------------
 def run(args) -> int:
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..studies.search import follow_lengths, search_lengths
     from ..io.summary import rounded
 

@@ -55,12 +55,14 @@ def run(args) -> int:
         if comm.rank == 0:
             check_output_folder(args.out, args.overwrite)
         arm = load_config(args.config)
+        seconds = common.checkpoint_seconds()
     except InputError as err:
         error = str(err)
     agree(comm, error)
     alu = Path(args.aluminium_config) if args.aluminium_config else \
         Path(str(resources.files("elastica_petsc") / "configs" / "aluminium.toml"))
-    ctx = Context(arm=arm, out=out, quick=args.quick, jobs=args.jobs, comm=comm)
+    ctx = Context(arm=arm, out=out, quick=args.quick, jobs=args.jobs, comm=comm,
+                  checkpoint_seconds=seconds)
     log = ((lambda message: None) if args.quiet else
            (lambda message: print(message, file=sys.stderr, flush=True)))
     report = run_all(ctx, "elastica-petsc " + " ".join(sys.argv[1:]), alu, log=log)

@@ -270,7 +270,7 @@ def write_outputs(args, arm, disc, planned) -> None:
 
 def run(args) -> int:
     from .. import api
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
 
     arm, disc = common.load_arm(args)
     check_options(args)

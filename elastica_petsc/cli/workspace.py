@@ -80,6 +80,7 @@ def _run(args, comm) -> int:
     # Input errors are agreed on by all ranks before any collective work (one line, exit 2).
     try:
         arm, disc = _check_inputs(args)
+        seconds = common.checkpoint_seconds()
         error = None
     except InputError as err:
         error = str(err)
@@ -88,7 +89,8 @@ def _run(args, comm) -> int:
         arm, disc, mode=args.mode, spacing_mm=args.spacing, box_mm=args.box,
         tension_spacing=args.tension_spacing, tension_max=args.tension_max, chunk=args.chunk,
         comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
-        global_search=not args.local_only, share=args.share, min_tension_N=args.min_tension_N)
+        global_search=not args.local_only, share=args.share, min_tension_N=args.min_tension_N,
+        checkpoint_seconds=seconds, progress=True)
     if comm.rank != 0:
         return 0
     summary = result.summary()

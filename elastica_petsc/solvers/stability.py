@@ -100,6 +100,7 @@ import scipy.sparse as sp
 from petsc4py import PETSc
 from slepc4py import SLEPc
 
+from ..core.errors import SolverError
 from ..core.fem import Discretisation
 from .inertia import InertiaCounter
 from ..core.model import Arm
@@ -115,7 +116,7 @@ EB_BETA1 = 1.8751040687119611
 EPS_REASONS = {v: k for k, v in vars(SLEPc.EPS.ConvergedReason).items() if not k.startswith("_")}
 
 
-class StabilityError(RuntimeError):
+class StabilityError(SolverError):
     """An eigen solve that did not converge."""
 
 

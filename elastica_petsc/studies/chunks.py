@@ -38,10 +38,11 @@ valid when a process dies mid-write; the measured I/O share is reported in
 the file (``timing`` attributes: ``seconds_wall`` and ``seconds_io`` up to
 the start of the last write, which cannot time itself; ``ranks``).
 
-Checkpoint interval: 2 s by default; the environment variable
-``ELASTICA_PETSC_CHECKPOINT_SECONDS`` overrides it (0: after every chunk,
-as the interruption tests use; larger on a cluster with big grids, where
-each checkpoint rewrites the whole file).
+Checkpoint interval: ``checkpoint_seconds``, 2 s by default (0: after every
+chunk, as the interruption tests use; larger on a cluster with big grids,
+where each checkpoint rewrites the whole file).  The command line reads it
+from the environment variable ``ELASTICA_PETSC_CHECKPOINT_SECONDS``; the
+library reads no environment variable.
 
 Errors in the input (a bad grid, a file to resume made for another grid or
 arm) are agreed on by all ranks before any work starts and raised on every
@@ -50,7 +51,6 @@ line and exit with status 2 without ``MPI_Abort``.
 """
 from __future__ import annotations
 
-import os
 import signal
 import time
 from dataclasses import dataclass, field
@@ -63,7 +63,7 @@ from ..io.workspace import continue_provenance, read_results
 
 
 TAG_RESULT, TAG_FINISHED = 11, 12
-CHECKPOINT_ENV = "ELASTICA_PETSC_CHECKPOINT_SECONDS"
+CHECKPOINT_SECONDS = 2.0  # default interval between checkpoints
 STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the other ranks' last samples
 
 
@@ -80,16 +80,15 @@ def agree(comm, error: str | None) -> None:
         raise CollectiveInputError(first)
 
 
-def checkpoint_interval() -> float:
-    """Seconds between checkpoints: ``$ELASTICA_PETSC_CHECKPOINT_SECONDS`` or 2."""
-    value = os.environ.get(CHECKPOINT_ENV, "2")
+def check_checkpoint_seconds(seconds) -> float:
+    """``seconds`` between checkpoints as a float >= 0, or :class:`InputError`."""
     try:
-        seconds = float(value)
-    except ValueError:
-        seconds = float("nan")
-    if not seconds >= 0:
-        raise InputError(f"{CHECKPOINT_ENV}={value!r}: expected seconds >= 0")
-    return seconds
+        value = float(seconds)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not value >= 0:
+        raise InputError(f"checkpoint interval {seconds!r}: expected seconds >= 0")
+    return value
 
 
 @dataclass(frozen=True)
@@ -386,22 +385,24 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
     :class:`ChunkResults` (its own schema and file layout).  ``attrs``: the
     file's root attributes, which a resumed file must match
     (:func:`~elastica_petsc.io.workspace.read_results`); ``limits``: passed to
-    the results' :meth:`~ChunkResults.write`.
+    the results' :meth:`~ChunkResults.write`.  ``progress``: True (a bar on
+    rank 0, ui/progress.py), None/False (none), or an object with
+    ``update(done)`` and ``close(done)``.
     """
     if stop is None:
         with Stop() as stop:
             return run(grid, sampler, out, attrs, limits, comm=comm, resume=resume,
                        checkpoint_seconds=checkpoint_seconds, progress=progress,
                        progress_label=progress_label, stop=stop, new_results=new_results)
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
 
-    if checkpoint_seconds is None:
-        checkpoint_seconds = checkpoint_interval()
+    checkpoint_seconds = check_checkpoint_seconds(
+        CHECKPOINT_SECONDS if checkpoint_seconds is None else checkpoint_seconds)
     results, todo = _load(out, attrs, resume, comm, new_results)
     counter = stop.counter = ChunkCounter(comm)
     if comm.rank == 0:
         bar = (Progress(grid.size, progress_label, already=results.samples_done)
-               if progress is None else progress if progress else _NoProgress())
+               if progress is True else progress if progress else _NoProgress())
         rank0 = _Collector(comm, counter, results, out, attrs, limits, checkpoint_seconds,
                            bar)
         _work(grid, sampler, todo, counter, stop, rank0.store)

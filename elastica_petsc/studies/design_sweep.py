@@ -196,14 +196,14 @@ def run_sweep(arm: Arm, elements: int, axes, p_max: float, *, targets_mm=None, c
               out=None, resume: bool = False, overwrite: bool = False, progress=None,
               checkpoint_seconds: float | None = None, provenance: dict | None = None) -> Sweep:
     """Evaluate every design of ``axes`` (list of :class:`Axis`) over the ranks of
-    ``comm`` (default COMM_WORLD): the area objective on the tension box
+    ``comm`` (default COMM_SELF: this process alone): the area objective on the tension box
     0 <= p_i <= ``p_max`` (p = P l^2/B) and, with ``targets_mm``, the path
     misfit.  ``out`` (.h5), ``resume``, ``overwrite``, ``progress`` and
     ``checkpoint_seconds`` as in :func:`~elastica_petsc.studies.workspace.run_map`.
     Collective; returns the :class:`Sweep` on every rank."""
     from mpi4py import MPI
 
-    comm = MPI.COMM_WORLD if comm is None else comm
+    comm = MPI.COMM_SELF if comm is None else comm
     lock = path = grid = None
     with Stop() as stop:
         try:
