@@ -35,14 +35,15 @@ from pathlib import Path
 
 import numpy as np
 
+from .core.results import Result
 from .core.errors import InputError
 from .core.fem import Discretisation
 from .core.model import Arm
 from .solvers.equilibrium import Equilibrium, EquilibriumSolver, check_order, check_tensions
 
 
-@dataclass(frozen=True)
-class State:
+@dataclass(frozen=True, repr=False)
+class State(Result):
     """A load-controlled equilibrium (Eq. (9)) of ``arm`` in user units.
 
     ``equilibrium`` is the solver's non-dimensional state; ``loading`` says how
@@ -526,12 +527,27 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
                      out=out, resume=resume, overwrite=overwrite, progress=progress)
 
 
-def read(path: str | Path):
-    """Load a file written by the tool back into its result: a :class:`State`
-    for ``solve``/``control``/``stability`` files (the final state), a
-    ``WorkspaceMap`` for workspace maps, otherwise a dict of its datasets."""
-    from .io.reader import file_kind, read_file
+def save(result, path: str | Path, *, overwrite: bool = False) -> Path:
+    """Write any result of this package to ``path`` (.h5, also ``result.save(path)``):
+    the command line's layout where it has one, with units and provenance, and
+    the whole result, so that :func:`read` returns an equal one."""
+    from .io.records import save_result
 
+    return save_result(path, result, overwrite=overwrite)
+
+
+def read(path: str | Path):
+    """Load a file written by the tool back into its result: the saved type
+    itself for files written by :func:`save` (``result.save(path)``); for files
+    of the command line, a :class:`State` for ``solve``/``control``/``stability``
+    files (the final state), a ``WorkspaceMap`` for workspace maps, otherwise a
+    dict of its datasets."""
+    from .io.reader import file_kind, open_h5, read_file
+    from .io.records import has_result, read_result
+
+    with open_h5(path) as fh:
+        if has_result(fh):
+            return read_result(fh)
     if file_kind(path) == "workspace":
         from .studies.workspace import read_map
         return read_map(path)

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from petsc4py import PETSc
 
+from ..core.results import Result
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm, Tendon
@@ -157,8 +158,8 @@ def path_misfit(arm: Arm, tendons, targets_mm, elements: int | None = None) -> P
     return PathMisfit(f, grad, np.array(reached), np.array(errors), np.array(tensions))
 
 
-@dataclass
-class DesignResult:
+@dataclass(frozen=True, repr=False)
+class DesignResult(Result):
     """History and outcome of a path design (mm, mm^2)."""
 
     arm_before: Arm

@@ -52,6 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from ..core.results import Result
 from ..core.clearance import state_cable_clear
 from ..core.fem import Discretisation
 from ..core.geometry import shoelace, shoelace_normals, triangles_union_area
@@ -200,8 +201,8 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
 
 # --- the optimiser -----------------------------------------------------------------------------
 STALL_GAIN = 1e-3        # relative area gain over 3 iterations below which TAO is stopped
-@dataclass
-class AreaDesign:
+@dataclass(frozen=True, repr=False)
+class AreaDesign(Result):
     """Outcome of ``design --objective area`` (mm, mm^2, N)."""
 
     arm_before: Arm

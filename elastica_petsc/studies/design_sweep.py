@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.results import Result
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm, Tendon
@@ -168,8 +169,8 @@ class SweepSampler:
         pass
 
 
-@dataclass
-class Sweep:
+@dataclass(frozen=True, repr=False)
+class Sweep(Result):
     """A finished (or interrupted) sweep: designs (D, k) in mm and per-design fields."""
 
     names: list

@@ -19,6 +19,7 @@ import itertools
 
 import numpy as np
 
+from ..core.results import Result
 from ..core.deflation import Deflation
 from ..core.errors import InputError
 from ..solvers.equilibrium import (Equilibrium, EquilibriumSolver, check_order, check_tensions,
@@ -107,8 +108,8 @@ def state_numbers(states) -> list[int]:
     return numbers
 
 
-@dataclass(frozen=True)
-class SearchResult:
+@dataclass(frozen=True, repr=False)
+class SearchResult(Result):
     """Distinct equilibria found from a set of starts.  Not a proof that no
     other equilibrium exists: only what these starts and methods reached."""
 

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.results import Result
 from ..solvers.control import ControlResult, Evaluation, TipController
 from ..core.errors import InputError
 
@@ -164,8 +165,8 @@ def read_csv(path) -> np.ndarray:
 
 
 # --- tracing ------------------------------------------------------------------------
-@dataclass(frozen=True)
-class TraceResult:
+@dataclass(frozen=True, repr=False)
+class TraceResult(Result):
     """Tip control along a path.  mm and newtons (converted with the arm's
     l and B / l^2); per point i = 0..k-1, per tendon j."""
 

@@ -203,6 +203,7 @@ class TargetSampler(_Sampler):
                                         stationary_rtol=self.stationary_rtol)
         self.global_search = global_search
         self._library = None
+        self._traces = None            # the W_0 boundary of this arm, traced on first need
         self.share, self.min_tension = share, float(min_tension)
         self.sharer = None
         if share != "none" and disc.n_tendons >= 3:
@@ -312,7 +313,7 @@ class TargetSampler(_Sampler):
         of W_0 proves outside (class doc); the boundary is traced on first need."""
         from ..boundary import boundary_proof
 
-        outside = boundary_proof(self.arm, self.disc)     # one trace per process, on first need
+        outside = boundary_proof(self.arm, self.disc, self._trace_cache())
         for k, target in enumerate(points):
             if out["status"][k] in (Status.REACHED, Status.BEYOND_REACH):
                 continue
@@ -469,10 +470,17 @@ class TargetSampler(_Sampler):
         """Two tendons: whether ``target_mm`` has one preimage in the region D of the
         traced boundary of W_0 (:meth:`~elastica_petsc.studies.boundary.BoundaryResult.preimages`
         is 1: docs/model.md §9.1), so that the state reached is its only one (§9.3).
-        The boundary is the process's one trace (:func:`~elastica_petsc.studies.boundary.traced_w0`)."""
+        The boundary is the sampler's one trace (:func:`~elastica_petsc.studies.boundary.traced_w0`)."""
         from ..boundary import traced_w0
 
-        return traced_w0(self.arm, self.disc).preimages(target_mm)[0] == 1
+        return traced_w0(self.arm, self.disc, self._trace_cache()).preimages(target_mm)[0] == 1
+
+    def _trace_cache(self):
+        """The sampler's own cache of its arm's W_0 boundary (one entry)."""
+        if self._traces is None:
+            from ..boundary import TraceCache
+            self._traces = TraceCache(size=1)
+        return self._traces
 
     def _share_one(self, target_mm, k: int, out: dict, starts: tuple):
         """Track the shared tensions at sample ``k`` from each of ``starts`` (an

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...core.results import Result
 from ...io.workspace import write_results
 from ..chunks import ChunkResults, Grid
 
@@ -138,8 +139,8 @@ def _frozen(array: np.ndarray) -> np.ndarray:
     return array
 
 
-@dataclass(frozen=True)
-class WorkspaceMap:
+@dataclass(frozen=True, repr=False)
+class WorkspaceMap(Result):
     """A sampled workspace (Eq. (18), Fig. 4) and its restrictions (Eqs. (19)-(22), Fig. 5).
 
     W_0 (the workspace) is the set of tips of stable equilibria connected to
