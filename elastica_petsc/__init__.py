@@ -9,7 +9,8 @@ A library first, in millimetres and newtons at its edge::
     ep.control(arm, [535.8, 222.6]).tensions_N                     # Fig. 2
 
 One call per study: :func:`solve`, :func:`control`, :func:`trace`,
-:func:`schedule`, :func:`stability`, :func:`frequencies`, :func:`lengths`, :func:`equilibria`,
+:func:`schedule`, :func:`stability`, :func:`frequencies`, :func:`lengths`,
+:func:`length_equilibria`, :func:`equilibria`,
 :func:`workspace`, :func:`boundary`, :func:`design`, :func:`design_area`,
 :func:`design_sweep`; :func:`save` and :func:`read` write and read any result.
 Every result type is exported (``ep.ControlResult``, ``ep.WorkspaceMap`` ...):
@@ -36,7 +37,8 @@ _EXPORTS = {
     "ElasticaError": ".core.errors", "InputError": ".core.errors",
     "SolverError": ".core.errors",
     "solve": ".api", "control": ".api", "trace": ".api", "schedule": ".api",
-    "stability": ".api", "frequencies": ".api", "lengths": ".api", "equilibria": ".api",
+    "stability": ".api", "frequencies": ".api", "lengths": ".api",
+    "length_equilibria": ".api", "equilibria": ".api",
     "workspace": ".api", "boundary": ".api", "design": ".api",
     "design_area": ".api", "design_sweep": ".api",
     "read": ".api", "save": ".api",

@@ -376,23 +376,31 @@ def frequencies(state: State, *, control: str = "load", modes: int = 3):
 
 
 @_takes_petsc_options
-def lengths(arm: Arm, lengths_mm, *, all: bool = False, elements: int | None = None,
-            progress=None):
+def lengths(arm: Arm, lengths_mm, *, elements: int | None = None):
     """Length control (Sec. 4.6, Eq. (23)): the equilibrium, with its tensions,
-    that prescribed cable lengths (mm) impose (slack cables carry no tension).
-    With ``all=True``, the search for every equilibrium with 0 <= P_i <= P_crit
-    (Eq. (22)) of :func:`~elastica_petsc.studies.search.search_lengths` (curve
-    search and multi-start; a ``SearchResult``: the list found, not a proof
-    that there are no more); ``progress`` (True: a bar, or a callable
+    that prescribed cable lengths (mm) impose (slack cables carry no tension),
+    reached from the straight arm by length continuation; a
+    ``LengthEquilibrium``.  Every equilibrium at these lengths:
+    :func:`length_equilibria`."""
+    from .studies.search import follow_lengths
+
+    return follow_lengths(arm, lengths_mm, elements=_mesh(arm, elements).n_elements)
+
+
+@_takes_petsc_options
+def length_equilibria(arm: Arm, lengths_mm, *, elements: int | None = None, progress=None):
+    """Equilibria with 0 <= P_i <= P_crit (Eq. (22)) that prescribed cable
+    lengths (mm) admit, by the search of
+    :func:`~elastica_petsc.studies.search.search_lengths` (curve search and
+    multi-start; a ``SearchResult``: the list found, not a proof that there
+    are no more); ``progress`` (True: a bar, or a callable
     ``progress(steps, note)``) reports its search steps (curves, continuation
     points and attempts from starts)."""
-    from .studies.search import follow_lengths, search_lengths
+    from .studies.search import search_lengths
 
-    disc = _mesh(arm, elements)
-    if not all:
-        return follow_lengths(arm, lengths_mm, elements=disc.n_elements)
     with _progress(progress, "lengths search", "search steps") as bar:
-        return search_lengths(arm, lengths_mm, elements=disc.n_elements, progress=bar)
+        return search_lengths(arm, lengths_mm, elements=_mesh(arm, elements).n_elements,
+                              progress=bar)
 
 
 @_takes_petsc_options
@@ -402,7 +410,7 @@ def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None
     ``tensions`` p = P l^2/B; load control, Eq. (9), Fig. 8), by the search of
     :func:`~elastica_petsc.studies.search.search_tensions` (loading paths,
     curve search, multi-start); a ``SearchResult``: a list, not a proof that
-    there are no more.  ``progress``: as for :func:`lengths`."""
+    there are no more.  ``progress``: as for :func:`length_equilibria`."""
     from .studies.search import search_tensions
 
     p = _tensions(arm, tensions_N, tensions)

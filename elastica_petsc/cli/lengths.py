@@ -114,72 +114,6 @@ def check_search_options(args) -> dict:
 
 
 # --- plain data ------------------------------------------------------------------------
-def state_summary(arm, state, control: str, found=None) -> dict:
-    """One equilibrium (a LengthEquilibrium) in the user's units.  ``stable`` is
-    the stability under the command's own control (length or load)."""
-    import numpy as np
-
-    from ..io.summary import equilibrium_summary, rounded
-
-    l_mm = arm.length_mm
-    s = equilibrium_summary(arm, state)
-    length_modes = int(getattr(state, "length_unstable_modes", -1))
-    by_length = None if length_modes < 0 else length_modes == 0
-    slack = np.asarray(state.slack_mm, float)
-    slack = np.where(slack > 0.0, slack, 0.0)
-    s.update({
-        "stable_under_load_control": bool(state.stable),
-        "stable_under_length_control": by_length,
-        "unstable_modes_length_control": length_modes,
-        "stable": by_length if control == "length" else bool(state.stable),
-        "stability_control": control,
-        "lengths_requested_mm": rounded(state.lengths_requested * l_mm),
-        "slack_mm": rounded(slack),
-        "taut": [bool(t) for t in state.taut],
-        "jumps_at_lengths_mm": [rounded(np.asarray(L) * l_mm) for L in state.jumps],
-        "instabilities_at_lengths_mm": [rounded(np.asarray(L) * l_mm)
-                                        for L in state.instabilities],
-    })
-    s["number"] = int(found.number) if found is not None and found.number else 1
-    if found is not None:
-        s["found_from"] = {"start": found.start, "method": found.method,
-                           "attempts_reaching_it": int(found.hits)}
-    s["units"].update({"slack_mm": "mm", "lengths_requested_mm": "mm",
-                       "cable_lengths_mm": "mm"})
-    return s
-
-
-def search_summary(result, settings: dict) -> dict:
-    """How a SearchResult was obtained, and its coverage."""
-    what = "cable lengths" if result.control == "length" else "tensions"
-    how = "length continuation" if result.control == "length" else "loading paths"
-    method = (f"deflated continuation in the {what} from the straight arm along every "
-              f"loading order ({settings['steps']} points per segment; Farrell et al. 2016), "
-              f"then a multi-start search: {how} and up to {settings['deflation_rounds']} "
-              "deflated Newton solves (Farrell et al. 2015) from each start (load-controlled "
-              "states at the tension levels " + " ".join(f"{v:g}" for v in settings["levels"])
-              + " in every loading order, and any branch the continuation lost)")
-    if result.control == "load":
-        method = ("loading paths from the straight arm (every order, both sides of each "
-                  "bifurcation), " + method)
-    if settings["effort"] > 1:
-        method += (f"; effort {settings['effort']}: the searches of every lower effort first, "
-                   "then this one (the numbers above are its own)")
-    if result.curves:
-        method = result.curve_method() + "; around it (its curves also followed from the "\
-            "states these add): " + method
-    return {"method": method, "effort": settings,
-            "coverage": {"by_method": {m: {"attempts": a, "new_states": k}
-                                       for m, (a, k) in result.methods().items()},
-                         "last_new_state_at_attempt": result.last_new_attempt,
-                         "curves": dict(result.curves)},
-            "starts": len(result.starts), "attempts": int(result.attempts),
-            "failed": int(result.failures), "refound": int(result.duplicates),
-            "start_labels": list(result.starts),
-            "found_from": [{"state": f.number, "start": f.start, "method": f.method,
-                            "attempts_reaching_it": int(f.hits)}
-                           for f in result.states],
-            "complete": False}
 
 
 def format_states(arm, data: dict) -> str:
@@ -329,6 +263,7 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
 def run(args) -> int:
     from ..ui.progress import Progress
     from ..studies.search import follow_lengths, search_lengths
+    from ..io.summaries import search_summary, state_summary
     from ..io.summary import rounded
 
     arm, disc = common.load_arm(args)

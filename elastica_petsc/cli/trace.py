@@ -92,74 +92,10 @@ def targets(args):
     return paths.densify(points, args.step)
 
 
-def trace_summary(arm, result, schedule) -> dict:
-    import numpy as np
-
-    from ..core.clearance import state_cable_clear
-    from ..io.summary import rounded
-
-    mono = result.monotonic_fraction()
-    return {
-        "points": int(result.n_points),
-        "reached": int(np.sum(result.converged)),
-        "all_reached": bool(result.all_converged),
-        "max_tip_error_mm": float(f"{np.max(result.tip_errors_mm):.6g}"),
-        "iterations_median": float(np.median(result.iterations[1:] if result.n_points > 1
-                                             else result.iterations)),
-        "iterations_max_warm": int(np.max(result.iterations[1:])) if result.n_points > 1 else None,
-        "iterations_first": int(result.iterations[0]),
-        "seconds": round(result.seconds, 4),
-        "seconds_per_point": round(result.seconds / result.n_points, 6),
-        "tension_range_N": [rounded([result.tensions_N[:, i].min(), result.tensions_N[:, i].max()])
-                            for i in range(result.tensions_N.shape[1])],
-        "cable_length_range_mm": [rounded([result.cable_lengths_mm[:, i].min(),
-                                           result.cable_lengths_mm[:, i].max()])
-                                  for i in range(result.cable_lengths_mm.shape[1])],
-        "monotonic_fraction": [None if np.isnan(v) else round(float(v), 4) for v in mono],
-        "work_fraction": round(float(result.work_fraction()), 4),
-        "closes": bool(np.allclose(result.targets_mm[0], result.targets_mm[-1], atol=1e-9)),
-        "closure_cable_length_change_mm": float(f"{np.max(np.abs(result.cable_lengths_mm[-1] - result.cable_lengths_mm[0])):.3g}"),
-        "cable_crossing_points": [int(sum(1 for r in result.results
-                                          if not state_cable_clear(r.equilibrium)[i]))
-                                  for i in range(result.tensions_N.shape[1])],
-        "not_reached_undecided": int(sum(1 for r in result.results
-                                         if not r.converged and r.reachable is None)),
-        "not_reached_proven_unreachable": int(sum(1 for r in result.results
-                                                  if r.reachable is False)),
-        "loading_first_point": (None if not result.results or result.results[0].loading is None
-                                else result.results[0].loading.to_json()),
-        "loading_note": "each point's loading path from the straight arm is in the HDF5 "
-                        "/loading tree (/path/loading_node); `solve --from FILE --point K` "
-                        "replays it",
-        "max_rounding_error_mm": float(f"{np.max(np.abs(schedule.rounding_error_mm)):.3g}"),
-        "mm_per_microstep": float(f"{schedule.mm_per_step:.6g}"),
-        "min_tension_N": rounded(result.tensions_N.min(axis=0)),
-    }
-
-
 def share_summary(args) -> dict:
     """The sharing rule asked for (the library resolves None the same way)."""
     share = args.share or ("min-norm" if args.min_tension_N > 0 else "none")
     return {"share": share, "min_tension_floor_N": args.min_tension_N}
-
-
-def point_entries(result, schedule) -> list[dict]:
-    """One JSON entry per path point (mm, N, p = P l^2/B, s)."""
-    import math
-
-    from ..io.summary import rounded
-
-    times = schedule.time_s[schedule.path_rows()]
-    out = []
-    for k, r in enumerate(result.results):
-        out.append({"point": k, "target_mm": rounded(result.targets_mm[k]),
-                    "tip_mm": rounded(result.tips_mm[k]), "reached": bool(result.converged[k]),
-                    "tip_error_mm": float(f"{result.tip_errors_mm[k]:.6g}"),
-                    "tensions": rounded(result.p[k]), "tensions_N": rounded(result.tensions_N[k]),
-                    "cable_lengths_mm": rounded(result.cable_lengths_mm[k]),
-                    "iterations": int(result.iterations[k]), "reason": r.reason,
-                    "time_s": None if math.isnan(times[k]) else round(float(times[k]), 4)})
-    return out
 
 
 def format_trace(s: dict) -> str:
@@ -202,22 +138,6 @@ def format_trace(s: dict) -> str:
                      f"{s['path_length_mm'] / s['max_tracing_speed_mm_s']:.0f} s for the "
                      f"{s['path_length_mm']:.0f} mm path")
     return "\n".join(lines)
-
-
-def schedule_summary(planned, guessed: bool) -> dict:
-    """The approach and the timing of the schedule (for the summary)."""
-    import math
-
-    sched, before = planned.schedule, planned.approach
-    out = {"approach_start": None if before is None else
-           ("load-controlled state at --guess" if guessed else "straight arm"),
-           "approach_points": 0 if before is None else int(before.n_points),
-           "approach_reached": None if before is None else int(before.converged.sum()),
-           "schedule_rows": int(sched.n_rows),
-           "speed_mm_s": planned.speed["speed_mm_s"],
-           "speed_source": planned.speed["speed_source"],
-           "duration_s": None if math.isnan(sched.duration_s) else round(sched.duration_s, 3)}
-    return out
 
 
 def check_options(args) -> None:
@@ -283,7 +203,9 @@ def run(args) -> int:
                                min_tension_N=args.min_tension_N,
                                on_point=lambda done, total: bar.update(done, total=total))
     result = planned.path
-    summary = trace_summary(arm, result, planned.schedule)
+    from ..io.summaries import point_entries, schedule_summary, trace_summary
+
+    summary = trace_summary(result, planned.schedule)
     summary.update(share_summary(args))
     summary.update({k: v for k, v in planned.speed.items() if k not in ("speed_mm_s",
                                                                            "speed_source")})

@@ -265,6 +265,31 @@ class ChunkCounter:
         self.win.Free()
 
 
+class LocalCounter:
+    """The chunk counter of a run on one process (``comm.size == 1``): a plain
+    integer with :class:`ChunkCounter`'s interface, no MPI window (a window on
+    COMM_SELF of one rank of a larger job makes OpenMPI's finalisation wait
+    for the other ranks forever)."""
+
+    def __init__(self):
+        self.count = 0
+        self.exhausted = False
+
+    def next(self) -> int:
+        k, self.count = self.count, self.count + 1
+        self.exhausted = k >= ChunkCounter.EXHAUSTED
+        return k
+
+    def peek(self) -> int:
+        return self.count
+
+    def exhaust(self) -> None:
+        self.count, self.exhausted = ChunkCounter.EXHAUSTED, True
+
+    def free(self) -> None:
+        pass
+
+
 class _Collector:
     """Rank 0's side: stores chunks (its own and those other ranks send), writes
     checkpoints, and knows how many ranks have finished."""
@@ -399,7 +424,7 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
     checkpoint_seconds = check_checkpoint_seconds(
         CHECKPOINT_SECONDS if checkpoint_seconds is None else checkpoint_seconds)
     results, todo = _load(out, attrs, resume, comm, new_results)
-    counter = stop.counter = ChunkCounter(comm)
+    counter = stop.counter = ChunkCounter(comm) if comm.size > 1 else LocalCounter()
     if comm.rank == 0:
         bar = (Progress(grid.size, progress_label, already=results.samples_done)
                if progress is True else progress if progress else _NoProgress())

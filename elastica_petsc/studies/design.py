@@ -173,6 +173,12 @@ class DesignResult(Result):
     evaluations: int = 0
     seconds: float = 0.0
 
+    def summary(self) -> dict:
+        """What ``design --json`` prints for a path (targets reached before/after)."""
+        from ..io.summaries import path_design_summary
+
+        return path_design_summary(self)
+
 
 def scaled_path(targets_mm, margin: float) -> np.ndarray:
     """The path scaled by ``margin`` about its centroid (margin 1: unchanged)."""

@@ -227,6 +227,12 @@ class AreaDesign(Result):
             return None
         return b.area_mm2 - b.error_mm2 > a.area_mm2 + a.error_mm2
 
+    def summary(self) -> dict:
+        """What ``design --objective area --json`` prints (areas before/after, routes)."""
+        from ..io.summaries import area_summary
+
+        return area_summary(self)
+
 
 def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm: float):
     """Attachment arc lengths on mesh nodes: a pattern search (move one

@@ -192,6 +192,12 @@ class Sweep(Result):
         return None if not ok.any() else int(np.flatnonzero(ok)[np.argmax(
             self.values["area"][ok])])
 
+    def summary(self) -> dict:
+        """What ``design --sweep --json`` prints (counts, the best design)."""
+        from ..io.summaries import sweep_summary
+
+        return sweep_summary(self)
+
 
 def run_sweep(arm: Arm, elements: int, axes, p_max: float, *, targets_mm=None, comm=None,
               out=None, resume: bool = False, overwrite: bool = False, progress=None,

@@ -39,6 +39,12 @@ class TracedSchedule(Result):
     schedule: MotorSchedule
     speed: dict
 
+    def summary(self) -> dict:
+        """What ``trace --json`` prints: the path, its approach and the schedule's timing."""
+        from ..io.summaries import schedule_summary, trace_summary
+
+        return {**trace_summary(self.path, self.schedule), **schedule_summary(self)}
+
 
 APPROACH_TOL_MM = 0.05
 

@@ -168,7 +168,18 @@ class SearchResult(Result):
                 + ("" if not c["outside_the_box"] else
                    f", {c['outside_the_box']} found beyond it not listed"))
 
-    def summary(self) -> str:
+    def summary(self) -> dict:
+        """The search's coverage (what ``lengths --all``/``equilibria --json`` print as
+        ``search``) and the states found (``states``: p, L/l, tip in units of l)."""
+        from ..io.summaries import search_summary
+
+        return dict(search_summary(self), states=[
+            {"number": f.number, "p": f.state.p.tolist(),
+             "cable_lengths": f.state.cable_lengths.tolist(), "tip": f.state.tip.tolist(),
+             "unstable_modes": int(f.state.unstable_modes)} for f in self.states])
+
+    def report(self) -> str:
+        """The search in a few lines of text (a list, not a proof)."""
         what = "cable lengths L/l" if self.control == "length" else "tensions p"
         lines = [f"{len(self.states)} distinct equilibria at {what} = "
                  + ", ".join(f"{v:.6g}" for v in self.target)

@@ -212,6 +212,12 @@ class TraceResult(Result):
             return float("nan")
         return float(np.mean(np.sum(dL * dP, axis=1) < 0))
 
+    def summary(self) -> dict:
+        """What ``trace --json`` prints about the path (without the motor schedule)."""
+        from ..io.summaries import trace_summary
+
+        return trace_summary(self)
+
 
 def monotonic_fraction(lengths, tensions, tol_L: float = 1e-9, tol_P: float = 1e-12):
     """Fraction per column of consecutive steps with dL dP < 0 (see TraceResult)."""

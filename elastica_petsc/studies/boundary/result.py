@@ -120,3 +120,9 @@ class BoundaryResult(Result):
         return (f"OUTSIDE_BOUNDARY: the target lies in a hole of W_0, a bounded face of the "
                 f"plane minus the traced boundary ({curves}) with no preimage, counted along "
                 f"a ray to infinity; {dist:.3g} mm from the boundary (docs/model.md §9.1)"), dist
+
+    def summary(self) -> dict:
+        """What ``boundary --json`` prints (areas, solves, folds, messages)."""
+        from ...io.summaries import boundary_summary
+
+        return boundary_summary(self)
