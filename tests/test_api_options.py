@@ -27,6 +27,7 @@ ep.equilibria(arm, tensions_N=[14.0, 6.0], elements=30)
 """
 
 
+@pytest.mark.slow
 def test_the_library_prints_nothing_unless_asked(tmp_path):
     done = subprocess.run([sys.executable, "-c", QUIET_SCRIPT], cwd=tmp_path,
                           capture_output=True, text=True, timeout=300)
@@ -34,6 +35,7 @@ def test_the_library_prints_nothing_unless_asked(tmp_path):
     assert done.stdout == "" and done.stderr == ""
 
 
+@pytest.mark.slow
 def test_progress_true_reports_on_stderr(tmp_path):
     script = ("import elastica_petsc as ep\n"
               "ep.workspace(ep.Arm.paper(), spacing_mm=200, elements=30, progress=True)\n")

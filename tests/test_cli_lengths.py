@@ -26,6 +26,8 @@ from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.lengths import LengthSolver
 
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 L_MM = 600.0
 P_FIG8 = np.array([25.2, 10.8])
 L_FIG8_MM = np.array([147.1, 472.5])

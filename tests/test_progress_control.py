@@ -19,7 +19,7 @@ from test_progress import assert_timely, run_in_pty
 from elastica_petsc.ui.progress import Progress
 
 # timing is part of what these tests check: scripts/test.sh runs them alone
-pytestmark = pytest.mark.serial
+pytestmark = [pytest.mark.serial, pytest.mark.slow]
 
 # at 30 elements the local solve stalls at (500, 0) mm (on the x axis: every target there
 # is stationary from the straight arm's sensitivities) and the global search reaches it from

@@ -103,6 +103,7 @@ def check_all_reached(arm, count, p_max, seed):
     return results
 
 
+@pytest.mark.slow
 def test_random_admissible_targets_are_reached_paper_arm(arm):
     """The issue's failures were ~7 % STATIONARY from the default start (p = 0);
     with the global search every target made from admissible tensions is reached."""

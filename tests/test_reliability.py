@@ -28,7 +28,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
            OMPI_MCA_rmaps_base_oversubscribe="1")
 
 # timing is part of what these tests check: scripts/test.sh runs them alone
-pytestmark = pytest.mark.serial
+pytestmark = [pytest.mark.serial, pytest.mark.slow]
 
 
 def cli(*args, cwd=None, env=None, timeout=60) -> tuple[subprocess.CompletedProcess, float]:
@@ -267,6 +267,7 @@ def test_trace_on_sigterm_says_interrupted_and_exits_130(tmp_path):
     assert stderr.strip().splitlines()[-1] == "elastica-petsc: interrupted"
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(MPIEXEC is None, reason="mpiexec not found")
 def test_input_error_under_mpiexec_is_one_line(tmp_path):
     """Found by every rank, said once (by rank 0); mpiexec's banner silenced as the

@@ -20,6 +20,8 @@ from elastica_petsc.solvers.lengths import LengthSolver
 from elastica_petsc.studies.preimage import (CurveSearch, FaceChord, LengthLine, SearchTracer,
                                              TensionLine)
 
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 L_FIG8 = np.array([147.1, 472.5]) / 600.0
 # p of the six states at 45 elements (each within 1.1 of its 180-element value)
 P_SIX = np.array([[6.45, 53.83], [9.62, 12.59], [14.58, 122.70], [25.31, 10.82],

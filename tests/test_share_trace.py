@@ -22,6 +22,8 @@ from elastica_petsc.solvers.share import (SHARE_INFEASIBLE, SHARE_STALLED, Tensi
                                           family, kkt_residual, objective)
 from elastica_petsc.studies import trace as paths
 
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "three_tendon.toml"
 ELEMENTS = 30
 CENTER, RADIUS, POINTS = (450.0, 290.0), 40.0, 25      # ~10.5 mm between targets
