@@ -199,7 +199,7 @@ def test_fig8_lengths_finds_states_1_and_2(fig8_lengths, fig8_load, disc, ls):
 
     assert data["control"] == "length" and data["lengths_mm"] == [147.1, 472.5]
     states = data["equilibria"]
-    # issue 12: the reference (scripts/equilibria_reference.py) finds six states with
+    # issue 12: the reference (scripts/studies/equilibria_reference.py) finds six states with
     # 0 <= p_i <= P_crit l^2/B = 203.22, four unstable; the curve search finds all six
     assert len(states) == 6
     assert all(min(s["tensions"]) >= 0 for s in states)

@@ -193,7 +193,7 @@ def test_fig8_length_control_finds_states_1_and_2(eqs, ls, starts):
     constrained strain energy), which is checked as well."""
     L = L_FIG8_MM / L_MM
     res = length_equilibria(ls, L, starts, p_max=load_config().max_tension)
-    # issue 12: the reference (scripts/equilibria_reference.py) finds six states with
+    # issue 12: the reference (scripts/studies/equilibria_reference.py) finds six states with
     # 0 <= p_i <= P_crit l^2/B = 203.22, four of them unstable; the default search finds
     # all six, first by the curve search (studies.preimage)
     assert len(res) == 6, res.summary()

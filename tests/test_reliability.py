@@ -7,7 +7,7 @@ in this process; the interpreter's, MPI's and PETSc's start-up, 0.8 s on an idle
 command, so 2 s of wall time in all); plus the numbered items of the issue that
 need more than one command.  The fault-injection study
 (signals to mpiexec, its process group and each rank, 20+ trials) is
-``scripts/fault_study.py``; here a few of its cases run once each.
+``scripts/studies/fault_study.py``; here a few of its cases run once each.
 """
 from __future__ import annotations
 

@@ -211,7 +211,7 @@ def test_interrupt_and_resume_two_ranks(target, slow_targets_1, tmp_path):
     or to rank 1 alone (it stops the others through the chunk counter), SIGINT to the
     whole process group (Ctrl-C): every rank stops, rank 0 writes a last checkpoint and
     the job ends; --resume completes it to the uninterrupted map (issue 15; the
-    20-trial study is scripts/fault_study.py)."""
+    20-trial study is scripts/studies/fault_study.py)."""
     out = tmp_path / "ws.h5"
     proc = start(*SLOW_TARGETS, "--out", out, ranks=2)
     wait_for_checkpoint(out, proc)
@@ -230,11 +230,11 @@ def test_interrupt_and_resume_two_ranks(target, slow_targets_1, tmp_path):
 
 
 def _fault_study():
-    """scripts/fault_study.py (its helpers find the ranks of an mpiexec)."""
+    """scripts/studies/fault_study.py (its helpers find the ranks of an mpiexec)."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("fault_study",
-                                                  ROOT / "scripts" / "fault_study.py")
+                                                  ROOT / "scripts" / "studies" / "fault_study.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module

@@ -13,7 +13,7 @@
    FuncAnimation + PillowWriter (the figure redrawn twice per frame), same
    40 frames, median of ``--repeat // 2`` interleaved runs.
 
-Usage: python scripts/bench_export.py [--repeat 5] [--step 2] [--elements 180] [--interval 0.05]
+Usage: python scripts/benchmarks/bench_export.py [--repeat 5] [--step 2] [--elements 180] [--interval 0.05]
 """
 from __future__ import annotations
 
