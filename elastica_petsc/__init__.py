@@ -1,12 +1,17 @@
 """elastica_petsc: tendon-actuated elastic arms (Handral & Rangarajan 2019) on PETSc.
 
-A library first, in millimetres and newtons at its edge::
+A library first, in millimetres and newtons at its edge (an example that the
+tests run, tests/test_doctests.py):
 
-    import elastica_petsc as ep
-    arm = ep.Arm.paper()
-    state = ep.solve(arm, tensions_N=[14.0, 6.0], order=(2, 1))   # Fig. 8, state 1
-    state.cable_lengths_mm, state.tip_mm, state.stable
-    ep.control(arm, [535.8, 222.6]).tensions_N                     # Fig. 2
+>>> import elastica_petsc as ep
+>>> arm = ep.Arm.paper()
+>>> state = ep.solve(arm, tensions_N=[14.0, 6.0], order=(2, 1))   # Fig. 8, state 1
+>>> state
+State(arm=Arm(...), equilibrium=Equilibrium(...), loading='order 2,1')
+>>> state.cable_lengths_mm.round(1), state.tip_mm.round(1), state.stable
+(array([147.2, 472.5]), array([489.8, 141.8]), True)
+>>> ep.control(arm, [535.8, 222.6]).tensions_N.round(3)           # Fig. 2
+array([1.206, 4.201])
 
 One call per study: :func:`solve`, :func:`control`, :func:`trace`,
 :func:`schedule`, :func:`stability`, :func:`frequencies`, :func:`lengths`,

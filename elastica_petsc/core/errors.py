@@ -11,6 +11,13 @@
 
 A solve that merely does not converge is not an exception: it is a result
 whose ``converged`` is False and whose ``reason``/``message`` say why.
+
+>>> from elastica_petsc.core.model import Arm
+>>> try:
+...     Arm.from_toml("no_such_arm.toml")
+... except ElasticaError as err:
+...     print(type(err).__name__, isinstance(err, InputError))
+ConfigError True
 """
 
 

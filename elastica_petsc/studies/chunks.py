@@ -443,8 +443,8 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
     else:
         sends = []                                     # results on their way to rank 0
         # non-blocking: a chunk's results exceed the eager limit of shared-memory MPI,
-        # and a blocking send would wait until rank 0 ends its own chunk (measured:
-        # 23% of a worker's time); rank 0 receives until this rank says FINISHED
+        # and a blocking send would wait until rank 0 ends its own chunk (BENCHMARKS.md,
+        # "Timing notes from the docstrings"); rank 0 receives until this rank says FINISHED
         _work(grid, sampler, todo, counter, stop,
               lambda chunk, values: sends.append(
                   comm.isend((chunk, values), dest=0, tag=TAG_RESULT)))

@@ -97,8 +97,8 @@ class TargetSampler(_Sampler):
     * after a target outside W_0 (``NEEDS_NEGATIVE``): from that solve's
       end state, the tip on the boundary P_1 = 0 closest to the target, so
       a run of outside targets slides along the boundary instead of
-      restarting from afar (measured on the paper's half-disc, 4202 targets,
-      180 elements: 66 -> 12 ms per outside target).  If that start does not
+      restarting from afar (timing: BENCHMARKS.md, "Timing notes from the
+      docstrings").  If that start does not
       end reached or outside, the target is solved again from the last
       reached state of the chunk (or the head guess): a boundary state can
       have a cable pulled almost onto its routing point, a poor start for a
@@ -112,17 +112,16 @@ class TargetSampler(_Sampler):
       before a reached one (a chunk that starts outside W_0, where the head
       guess leads the optimiser to a cable collapse) is solved again from
       its reached neighbour, with a failure budget of ``retry_failures``
-      failed equilibria (the retries that fail run into snaps and collapses
-      at 0.1 s per failed equilibrium; with the solve's default budget of 25
-      they cost 50 s on the paper's half-disc).  Measured there (4202
-      targets, 180 elements): 5 more targets reached, 4.2 s of work.
+      failed equilibria (the retries that fail run into snaps and collapses;
+      with the solve's default budget of 25 they cost far more than they
+      reach: BENCHMARKS.md, "Timing notes from the docstrings").
 
     ``stationary_rtol`` (passed to :class:`~elastica_petsc.solvers.control.TipController`)
     is looser than the controller's default 1e-7: a target is classified as
     outside once the projected gradient is 1e-5 of |x_t - x_d| |S|; pinning
-    the closest boundary point to 1e-7 cost ~8 more iterations per outside
-    target and changed no classification (measured on a 30 mm grid, 649
-    targets).  Reached targets are unaffected (they stop on E < eps).
+    the closest boundary point to 1e-7 costs more iterations per outside
+    target and changed no classification (BENCHMARKS.md, "Timing notes from
+    the docstrings").  Reached targets are unaffected (they stop on E < eps).
 
     Global search (``global_search=True``, the default; the theme: a local run
     gives no global verdict).  After both passes, every target of the chunk
