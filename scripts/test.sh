@@ -14,7 +14,8 @@ cd "$here"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 if [[ "${1:-}" == "--fast" ]]; then                # the edit-test loop: no slow, no mpi tests
   shift
-  exec "$venv/bin/python" -m pytest -q -n auto --dist loadfile -m "not slow and not mpi" "$@"
+  "$venv/bin/python" -m pytest -q -n auto --dist loadfile -m "not slow and not mpi and not serial" "$@"
+  exec "$venv/bin/python" -m pytest -q -m "serial and not slow and not mpi" "$@"
 fi
 if (($#)); then                                   # the tests asked for, in one process
   exec "$venv/bin/python" -m pytest -q "$@"
