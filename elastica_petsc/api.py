@@ -109,6 +109,13 @@ class State(Result):
         """max_s l |theta'| (Fig. 5a), non-dimensional."""
         return float(self.equilibrium.kappa_max)
 
+    def to_vtk(self, directory) -> list[Path]:
+        """The state as ParaView files in ``directory`` (created if missing), as
+        ``solve --vtk`` writes them (``solve.vtu``: arm and cables, mm, N)."""
+        from .io.vtk import write_states
+
+        return write_states(directory, self.arm, [self.equilibrium], name="solve")
+
     def summary(self) -> dict:
         """The JSON object that ``elastica-petsc solve --json`` prints."""
         from .io.summary import equilibrium_summary
@@ -546,9 +553,10 @@ def save(result, path: str | Path, *, overwrite: bool = False) -> Path:
 
 def read(path: str | Path):
     """Load a file written by the tool back into its result: the saved type
-    itself for files written by :func:`save` (``result.save(path)``); for files
-    of the command line, a :class:`State` for ``solve``/``control``/``stability``
-    files (the final state), a ``WorkspaceMap`` for workspace maps, otherwise a
+    itself for files written by :func:`save` (``result.save(path)``) and by
+    ``control --out`` (a ``ControlResult``) and ``trace --out`` (a
+    ``TracedSchedule``); a :class:`State` for ``solve``/``stability`` files
+    (the final state), a ``WorkspaceMap`` for workspace maps, otherwise a
     dict of its datasets."""
     from .io.reader import file_kind, open_h5, read_file
     from .io.records import has_result, read_result

@@ -135,3 +135,40 @@ def test_error_hierarchy():
     assert issubclass(DiscretisationError, ep.InputError)
     assert issubclass(StabilityError, ep.SolverError)
     assert issubclass(ContinuationError, ep.SolverError)
+
+
+def test_to_vtk_writes_what_the_cli_writes(results, tmp_path):
+    """``State.to_vtk`` (``solve --vtk``) and ``WorkspaceMap.to_vtk`` (``workspace
+    --vtk``, from the map's file); a map without a file says how to get one."""
+    import xml.etree.ElementTree as ET
+
+    (vtu,) = results["State"].to_vtk(tmp_path / "s")
+    piece = ET.parse(vtu).getroot().find("UnstructuredGrid/Piece")
+    assert int(piece.get("NumberOfPoints")) == ELEMENTS + 1 + 2      # nodes and routing points
+    with pytest.raises(ep.InputError, match="out="):
+        results["WorkspaceMap"].to_vtk(tmp_path / "w")
+    arm = ep.Arm.paper()
+    wmap = ep.workspace(arm, spacing_mm=200, elements=ELEMENTS, out=tmp_path / "w.h5")
+    piece = ET.parse(wmap.to_vtk(tmp_path / "w")).getroot().find("UnstructuredGrid/Piece")
+    assert int(piece.get("NumberOfPoints")) == len(wmap.status)
+
+
+def test_cli_control_and_trace_files_read_back_as_their_results(tmp_path):
+    """``control --out`` and ``trace --out`` files hold the whole result: ep.read
+    returns a ControlResult (target, history kept) and a TracedSchedule."""
+    import subprocess
+    import sys
+
+    cli = [sys.executable, "-m", "elastica_petsc.cli"]
+    subprocess.run(cli + ["control", "--target", "535.8", "222.6", "--elements", "30",
+                          "--out", str(tmp_path / "c.h5")], check=True, capture_output=True)
+    subprocess.run(cli + ["trace", "--shape", "line", "--center", "500", "250", "--end", "480",
+                          "260", "--step", "10",
+                          "--elements", "30", "--out", str(tmp_path / "t.h5")],
+                   check=True, capture_output=True)
+    control = ep.read(tmp_path / "c.h5")
+    assert isinstance(control, ep.ControlResult) and control.converged
+    np.testing.assert_allclose(control.target_mm, [535.8, 222.6], atol=1e-9)
+    assert len(control.history_E) == control.iterations + 1
+    planned = ep.read(tmp_path / "t.h5")
+    assert isinstance(planned, ep.TracedSchedule) and planned.path.all_converged

@@ -140,10 +140,8 @@ def run(args) -> int:
     else:
         print(format_control(summary))
     if args.out:
-        from ..io.hdf5 import atomic_h5, provenance, write_attrs, write_control
-        with atomic_h5(args.out, args.overwrite) as fh:
-            write_attrs(fh, provenance(arm, "control"))
-            write_control(fh, arm, result)
+        from ..io.save import save_control
+        save_control(args.out, arm, result, overwrite=args.overwrite)
     if args.plot:
         from ..plots.control import plot_descent
         plot_descent(arm, result, args.plot)

@@ -167,14 +167,10 @@ def write_outputs(args, arm, disc, planned) -> None:
     if args.schedule:
         schedule.write_csv(args.schedule)
     if args.out:
-        from ..io.hdf5 import atomic_h5, provenance, write_attrs, write_trace
-        with atomic_h5(args.out, args.overwrite) as fh:
-            write_attrs(fh, provenance(arm, "trace"))
-            fh.attrs["elements"] = disc.n_elements
-            fh.attrs["step_mm"] = args.step
-            fh.attrs["source"] = args.path or args.shape
-            write_attrs(fh, share_summary(args))
-            write_trace(fh, arm, result, schedule)
+        from ..io.save import save_trace
+        attrs = dict(elements=disc.n_elements, step_mm=args.step,
+                     source=args.path or args.shape, **share_summary(args))
+        save_trace(args.out, arm, planned, attrs, overwrite=args.overwrite)
     if args.plot:
         from ..plots.control import plot_trace_figures
         plot_trace_figures(arm, result, args.plot)

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 from ..core.model import Arm
 from ..solvers.equilibrium import Equilibrium
-from .hdf5 import atomic_h5, provenance, put, write_attrs, write_equilibrium, write_loading
+from .hdf5 import (atomic_h5, provenance, put, write_attrs, write_control, write_equilibrium,
+                   write_loading, write_trace)
+from .records import RESULT_GROUP, encode
 
 
 def save_state(path, arm: Arm, eq: Equilibrium, *, overwrite: bool = False,
@@ -37,3 +39,25 @@ def save_stability(path, arm: Arm, eq: Equilibrium, result, freqs: dict | None, 
         put(g, "asymmetry", result.asymmetry, "1", "||K - K^T|| / ||K|| (probe estimate)")
         for control, f in (freqs or {}).items():
             put(g, f"frequencies_{control}_hz", f.hz, "Hz", f"natural frequencies, control={control}")
+
+
+def save_control(path, arm: Arm, result, *, overwrite: bool = False) -> None:
+    """A tip-control result (``control --out``): the layout of :func:`.hdf5.write_control`
+    and the whole :class:`~elastica_petsc.solvers.control.ControlResult` under
+    ``/result`` (``elastica_petsc.read`` returns it)."""
+    with atomic_h5(path, overwrite) as fh:
+        write_attrs(fh, provenance(arm, "control"))
+        write_control(fh, arm, result)
+        encode(fh, RESULT_GROUP, result)
+
+
+def save_trace(path, arm: Arm, planned, attrs: dict, *, overwrite: bool = False) -> None:
+    """A traced path with its motor schedule (``trace --out``): root ``attrs``
+    (elements, step, source, sharing), the layout of :func:`.hdf5.write_trace`
+    and the whole :class:`~elastica_petsc.studies.schedule.TracedSchedule`
+    under ``/result`` (``elastica_petsc.read`` returns it)."""
+    with atomic_h5(path, overwrite) as fh:
+        write_attrs(fh, provenance(arm, "trace"))
+        write_attrs(fh, attrs)
+        write_trace(fh, arm, planned.path, planned.schedule)
+        encode(fh, RESULT_GROUP, planned)

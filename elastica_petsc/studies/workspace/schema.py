@@ -183,6 +183,16 @@ class WorkspaceMap(Result):
                    dict(results.grid.meta), ranks, None if file is None else Path(file),
                    results.stranded, sampler, share[0], float(share[1]))
 
+    def to_vtk(self, directory) -> Path:
+        """The map as a ParaView file ``directory/workspace.vtu``, as ``workspace
+        --vtk`` writes it; from the map's HDF5 file (run it with ``out=``)."""
+        from ...core.errors import InputError
+        from ...io.vtk import write_workspace_vtk
+
+        if self.file is None:
+            raise InputError("to_vtk needs the map's HDF5 file: run the workspace with out=")
+        return write_workspace_vtk(directory, self.file)
+
     @property
     def complete(self) -> bool:
         return bool(self.chunk_done.all())
