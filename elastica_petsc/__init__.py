@@ -17,12 +17,12 @@ One call per study: :func:`solve`, :func:`control`, :func:`trace`,
 :func:`schedule`, :func:`stability`, :func:`frequencies`, :func:`lengths`,
 :func:`length_equilibria`, :func:`equilibria`,
 :func:`workspace`, :func:`boundary`, :func:`design`, :func:`design_area`,
-:func:`design_sweep`; :func:`save` and :func:`read` write and read any result.
-Every result type is exported (``ep.ControlResult``, ``ep.WorkspaceMap`` ...):
-frozen, printed in one line, with ``summary() -> dict`` and ``save(path)``.
-Errors derive from :class:`ElasticaError` (:class:`InputError` for bad input,
-:class:`SolverError` for a method that could not run; "not converged" is a
-result, not an exception).  The solver classes
+:func:`design_sweep`, :func:`calibrate`; :func:`save` and :func:`read` write and
+read any result.  Every result type is exported (``ep.ControlResult``,
+``ep.WorkspaceMap`` ...): frozen, printed in one line, with ``summary() -> dict``
+and ``save(path)``.  Errors derive from :class:`ElasticaError`
+(:class:`InputError` for bad input, :class:`SolverError` for a method that could
+not run; "not converged" is a result, not an exception).  The solver classes
 (:class:`EquilibriumSolver`, :class:`TipController`, :class:`LengthSolver`,
 :class:`StabilitySolver`) can be kept for loops; they work in the
 non-dimensional units of docs/model.md §3.
@@ -46,7 +46,7 @@ _EXPORTS = {
     "length_equilibria": ".api", "equilibria": ".api",
     "workspace": ".api", "boundary": ".api", "design": ".api",
     "design_area": ".api", "design_sweep": ".api",
-    "read": ".api", "save": ".api",
+    "read": ".api", "save": ".api", "calibrate": ".api",
     # result types: frozen, short repr, summary() -> dict, save(path); ep.read(path) -> same type
     "State": ".api", "Equilibrium": ".solvers.equilibrium",
     "ControlResult": ".solvers.control", "Stability": ".solvers.stability",

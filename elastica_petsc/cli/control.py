@@ -136,7 +136,7 @@ def run(args) -> int:
 
     summary = control_summary(arm, result)
     if args.json:
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print(format_control(summary))
     if args.out:

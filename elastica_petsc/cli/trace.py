@@ -44,9 +44,15 @@ def add_parser(sub) -> None:
     parser.add_argument("--speed-mm-s", type=float, metavar="V",
                         help="tip speed of the schedule's time column in mm/s (default: the "
                              "suggested safe tracing speed, see --amplitude-mm)")
+    parser.add_argument("--step-table", metavar="STEM",
+                        help="write one step/direction timing table per motor, "
+                             "STEM_motorI.csv (time_s, direction, position_steps)")
     parser.add_argument("--animate", metavar="GIF|MP4",
                         help="write an animation of the arm, its cables and the tip trail along "
                              "the path (.gif with Pillow; .mp4 needs ffmpeg)")
+    parser.add_argument("--slow-motion", type=float, default=1.0, metavar="K",
+                        help="--animate: play the schedule K times slower than real time "
+                             "(default 1: real time, frames timed to the schedule)")
     parser.add_argument("--vtk", metavar="DIR",
                         help="write ParaView files into this folder: trace.pvd (the arm and "
                              "cables at every point of the approach and the path, timed as the "
@@ -132,6 +138,24 @@ def format_trace(s: dict) -> str:
     if s["duration_s"] is not None:
         lines.append(f"schedule: {s['schedule_rows']} rows, {s['duration_s']:.1f} s at "
                      f"{s['speed_mm_s']:.3g} mm/s ({s['speed_source']})")
+    if s["peak_speed_steps_s"] is not None:
+        peaks = ", ".join(f"motor {i}: {v:.4g} microsteps/s, {a:.4g} microsteps/s^2"
+                          for i, (v, a) in enumerate(zip(s["peak_speed_steps_s"],
+                                                         s["peak_accel_steps_s2"]), 1))
+        if s["motor_limits"] is None:
+            lines.append(f"motor peaks {peaks}; no [motor] max_speed_steps_s / "
+                         "max_accel_steps_s2 in the config, so nothing checks that the motors "
+                         "can play them (`elastica-petsc schedule CSV` checks and re-times)")
+        else:
+            runs = ", ".join(f"{a}" + (f"-{b}" if b > a else "") + f" ({code})"
+                             for a, b, code in s["slowed_rows"][:8])
+            more = len(s["slowed_rows"]) - 8
+            lines.append(f"motor peaks {peaks}, within the [motor] limits; rows where a motor "
+                         f"slowed the tip: {s['rows_slowed_by_motor']}"
+                         + (f": {runs}" + (f" and {more} more runs" if more > 0 else "")
+                            if runs else "")
+                         + f"; no schedule under the limits is shorter than "
+                           f"{s['time_bound_s']:.1f} s")
     if s.get("max_tracing_speed_mm_s") is not None:
         lines.append(f"lowest natural frequency along the path {s['f1_min_hz']:.3g} Hz (tensions "
                      f"held): suggested max tracing speed {s['max_tracing_speed_mm_s']:.3g} mm/s, "
@@ -148,6 +172,10 @@ def check_options(args) -> None:
     common.check_outputs(args)
     if args.schedule:
         check_output_path(args.schedule, args.overwrite)
+    if args.step_table:
+        for i in range(1, common.load_config(args.config).n_tendons + 1):
+            check_output_path(f"{args.step_table}_motor{i}.csv", args.overwrite, (".csv",),
+                              "--step-table")
     if args.animate:
         from ..plots.animate import check_animation_path
         check_animation_path(args.animate, args.overwrite)
@@ -159,6 +187,8 @@ def check_options(args) -> None:
                          "--json")
     if args.speed_mm_s is not None and not args.speed_mm_s > 0:
         raise InputError(f"--speed-mm-s must be positive, got {args.speed_mm_s}")
+    if not args.slow_motion > 0:
+        raise InputError(f"--slow-motion must be positive, got {args.slow_motion}")
 
 
 def write_outputs(args, arm, disc, planned) -> None:
@@ -166,6 +196,8 @@ def write_outputs(args, arm, disc, planned) -> None:
     result, schedule = planned.path, planned.schedule
     if args.schedule:
         schedule.write_csv(args.schedule)
+    if args.step_table:
+        schedule.write_step_tables(args.step_table)
     if args.out:
         from ..io.save import save_trace
         attrs = dict(elements=disc.n_elements, step_mm=args.step,
@@ -181,7 +213,8 @@ def write_outputs(args, arm, disc, planned) -> None:
                   approach=planned.approach, approach_times_s=schedule.time_s[:rows[0]])
     if args.animate:
         from ..plots.animate import animate_trace
-        animate_trace(arm, result, args.animate, approach=planned.approach)
+        animate_trace(arm, result, args.animate, approach=planned.approach,
+                      times_s=schedule.time_s, slow_motion=args.slow_motion)
 
 
 def run(args) -> int:
@@ -209,10 +242,14 @@ def run(args) -> int:
     if args.json:
         if args.per_point:
             summary["per_point"] = point_entries(result, planned.schedule)
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print(format_trace(summary))
     write_outputs(args, arm, disc, planned)
+    if args.speed_mm_s is not None and summary["rows_slowed_by_motor"]:
+        print(f"elastica-petsc: warning: the motors cannot follow --speed-mm-s "
+              f"{args.speed_mm_s:g} on {summary['rows_slowed_by_motor']} rows: the tip is slower "
+              "there (the limited_by column of --schedule)", file=sys.stderr)
     before = planned.approach
     if before is not None and not before.all_converged:
         print(f"elastica-petsc: warning: {before.n_points - int(before.converged.sum())} of "

@@ -89,7 +89,7 @@ def path_design_summary(result, elements: int | None = None) -> dict:
 def area_summary(r, elements: int | None = None) -> dict:
     """The JSON summary of an area design (mm, mm^2, N)."""
     def sampled(s):
-        if s is None:
+        if s is None:                            # not re-sampled (an infeasible start)
             return None
         return {"area_mm2": s.area_mm2, "error_mm2": s.error_mm2, "samples": s.samples,
                 "reached": s.reached, "stable": s.stable, "cables_clear": s.cables_clear}
@@ -116,7 +116,8 @@ def sweep_summary(sweep) -> dict:
     """A design sweep (:class:`~elastica_petsc.studies.design_sweep.Sweep`): counts and the best design."""
     v = sweep.values
     best = sweep.best()
-    return {"designs": int(len(sweep.designs)), "done": int(sweep.done.sum()),
+    return {"objective": "sweep", "designs": int(len(sweep.designs)),
+            "done": int(sweep.done.sum()),
             "complete": sweep.complete, "ranks": sweep.ranks, "axes": sweep.names,
             "file": sweep.file,
             "errors": int(np.sum(v["error"][sweep.done] != b"")),
@@ -188,7 +189,8 @@ def point_entries(result, schedule) -> list[dict]:
 
 
 def schedule_summary(planned, guessed: bool | None = None) -> dict:
-    """The approach and the timing of the schedule (for the summary)."""
+    """The approach and the timing of the schedule (for the summary); ``guessed``:
+    whether the approach started at a guess (None: not known)."""
     sched, before = planned.schedule, planned.approach
     out = {"approach_start": None if before is None or guessed is None else
            ("load-controlled state at --guess" if guessed else "straight arm"),
@@ -198,7 +200,41 @@ def schedule_summary(planned, guessed: bool | None = None) -> dict:
            "speed_mm_s": planned.speed["speed_mm_s"],
            "speed_source": planned.speed["speed_source"],
            "duration_s": None if math.isnan(sched.duration_s) else round(sched.duration_s, 3)}
+    out.update(motor_summary(sched))
     return out
+
+
+def motor_summary(sched) -> dict:
+    """Peak motor rates of the timed schedule, the limits and where they slowed the tip."""
+    from collections import Counter
+
+    from ..core.motion import rates_and_accelerations
+
+    if math.isnan(sched.duration_s) or sched.n_rows < 2:
+        return {"motor_limits": None, "peak_speed_steps_s": None, "peak_accel_steps_s2": None,
+                "rows_slowed_by_motor": 0, "slowed_by": {}, "slowed_rows": [],
+                "time_bound_s": None}
+    r, a = rates_and_accelerations(sched.positions_steps, sched.durations_s[1:])
+    labels = [str(x) for x in sched.limited_by]
+    slowed = [x for x in labels if x.startswith(("speed_", "accel_"))]
+    return {"motor_limits": None if sched.limits is None else sched.limits.to_json(),
+            "peak_speed_steps_s": rounded(abs(r).max(axis=0)),
+            "peak_accel_steps_s2": rounded(abs(a).max(axis=0)),
+            "rows_slowed_by_motor": len(slowed), "slowed_by": dict(sorted(Counter(slowed).items())),
+            "slowed_rows": slowed_runs(labels), "time_bound_s": round(sched.speed_bound_s, 6)}
+
+
+def slowed_runs(labels: list[str]) -> list[list]:
+    """[first row, last row, limit code] of each run of rows a motor limit slowed."""
+    runs = []
+    for k, label in enumerate(labels):
+        if not label.startswith(("speed_", "accel_")):
+            continue
+        if runs and runs[-1][1] == k - 1 and runs[-1][2] == label:
+            runs[-1][1] = k
+        else:
+            runs.append([k, k, label])
+    return runs
 
 
 def state_summary(arm, state, control: str, found=None) -> dict:

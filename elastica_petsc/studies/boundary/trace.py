@@ -153,7 +153,9 @@ class TraceCache:
 
     def get(self, arm: Arm, disc: Discretisation) -> BoundaryResult:
         key = (arm.length_mm, disc.n_elements, disc.attach_nodes,
-               np.asarray(disc.routes).tobytes(), arm.max_tension)
+               np.asarray(disc.routes).tobytes(), arm.max_tension, tuple(arm.tendons),
+               arm.gravity_m_s2, arm.tip_mass_kg, arm.mass_per_length_kg_m,
+               arm.bending_stiffness_Nm2)
         if key in self._traces:
             self._traces.move_to_end(key)
         else:
