@@ -12,7 +12,8 @@ Encoding of ``/result`` (every node carries an attribute ``kind``):
   a field declared ``repr=False`` that holds a live solver object, such as
   the constraint a boundary curve followed, is stored as None with attribute
   ``dropped`` naming its type: it is a working reference, not data);
-* ``array``: a dataset (strings: fixed-length bytes, attribute ``strings``);
+* ``array``: a dataset (strings: fixed-length UTF-8 bytes, attribute
+  ``strings``: True, or "object" for an object array of str);
 * ``none``, ``bool``, ``int``, ``float``, ``str``, ``path``: a scalar dataset;
 * ``list``, ``tuple``: a group of children ``0``, ``1``, ...;
 * ``dict``: a group of children ``0``, ``1``, ... and attribute ``keys_json``
@@ -115,12 +116,22 @@ def _encode_leaf(group, name: str, value) -> None:
 
 def _encode_array(group, name: str, value: np.ndarray):
     if value.dtype.kind == "U":
-        node = group.create_dataset(name, data=np.char.encode(value, "utf-8"))
+        node = group.create_dataset(name, data=_utf8(value))
         node.attrs["strings"] = True
         return node
     if value.dtype.kind == "O":
-        raise TypeError(f"{name}: cannot store an array of Python objects in a result file")
+        if not all(isinstance(item, str) for item in value.flat):
+            raise TypeError(f"{name}: cannot store an array of Python objects in a result file")
+        node = group.create_dataset(name, data=_utf8(value))
+        node.attrs["strings"] = "object"                      # an object array of str
+        return node
     return group.create_dataset(name, data=value)
+
+
+def _utf8(strings: np.ndarray) -> np.ndarray:
+    """An array of str as fixed-length UTF-8 bytes (``S1`` when empty)."""
+    encoded = [str(item).encode("utf-8") for item in strings.flat]
+    return np.array(encoded or [b""], dtype=bytes)[: len(encoded)].reshape(strings.shape)
 
 
 # --- reading -------------------------------------------------------------------------
@@ -158,8 +169,11 @@ def _decode_leaf(node, kind: str):
         return Path(text) if kind == "path" else text
     if kind == "enum":
         return _import(node.attrs["type"])(int(value))
-    if node.attrs.get("strings", False):
-        return np.char.decode(value, "utf-8")
+    strings = node.attrs.get("strings", False)
+    if strings:
+        text = np.array([item.decode("utf-8") for item in value.flat] or [""],
+                        dtype=str)[: value.size].reshape(value.shape)
+        return text.astype(object) if strings == "object" else text
     return value
 
 
