@@ -95,3 +95,16 @@ def test_workspace_on_one_rank_of_two_runs_locally(tmp_path):
     assert done.returncode == 0, done.stderr
     words = done.stdout.split()
     assert words[:2] == ["map", "1"] and int(words[2]) > 0
+
+
+def test_environment_variables_are_read_by_the_command_line_only():
+    """Settings from the environment (checkpoint interval, progress delay) are the
+    command line's; the library reads none.  Allowed: the progress UI asking the
+    MPI launcher which rank it is, and workspace_job passing its environment on."""
+    from pathlib import Path
+
+    package = Path(ep.__file__).resolve().parent
+    allowed = {"ui/progress.py", "studies/workspace_job.py"}
+    readers = {str(p.relative_to(package)) for p in package.rglob("*.py")
+               if "os.environ" in p.read_text() or "getenv" in p.read_text()}
+    assert {r for r in readers if not r.startswith("cli/")} <= allowed
