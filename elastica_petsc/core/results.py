@@ -4,8 +4,9 @@
 A result type is a frozen dataclass declared with ``repr=False`` that derives
 from :class:`Result`.  Its ``repr`` names the type and its scalar fields and
 gives arrays by shape only, so ``print(result)`` never dumps arrays;
-``summary()`` is a JSON-ready dict (by default the scalar fields; types with a
-richer summary, the one ``--json`` prints, override it); ``save(path)``
+``summary()`` is a JSON-ready dict (by default the scalar fields and small
+arrays; types with a richer summary, the one ``--json`` prints, override it);
+``save(path)``
 writes the HDF5 file that :func:`elastica_petsc.read` reads back into an
 equal result (through the package's public :func:`elastica_petsc.save`, so
 this numpy-only layer never imports the HDF5 layer).
@@ -20,11 +21,13 @@ import numpy as np
 
 SCALARS = (bool, int, float, str, np.bool_, np.integer, np.floating)
 REPR_FIELDS = 8          # scalar fields shown by repr before "..."
+SUMMARY_VALUES = 16      # numeric arrays up to this size appear in the default summary
 
 
 def scalar_fields(result) -> dict:
-    """The constructor fields of a dataclass that are numbers, strings or None,
-    as JSON values (enums by name, numpy scalars as Python numbers)."""
+    """The constructor fields of a dataclass that are numbers, strings, None or
+    small numeric arrays (at most :data:`SUMMARY_VALUES` values, as lists), as
+    JSON values (enums by name, numpy scalars as Python numbers)."""
     out = {}
     for field in dataclasses.fields(result):
         if field.name.startswith("_"):
@@ -36,6 +39,9 @@ def scalar_fields(result) -> dict:
             out[field.name] = value.item() if isinstance(value, np.generic) else value
         elif isinstance(value, Path):
             out[field.name] = str(value)
+        elif (isinstance(value, np.ndarray) and value.size <= SUMMARY_VALUES
+              and value.dtype.kind in "biuf"):
+            out[field.name] = value.tolist()
     return out
 
 
@@ -65,7 +71,7 @@ class Result:
         return short_repr(self)
 
     def summary(self) -> dict:
-        """The result's scalar fields (numbers, strings, None) as a JSON-ready dict."""
+        """The result's scalar fields and small arrays as a JSON-ready dict."""
         return scalar_fields(self)
 
     def save(self, path, *, overwrite: bool = False) -> Path:
