@@ -172,3 +172,17 @@ def test_cli_control_and_trace_files_read_back_as_their_results(tmp_path):
     assert len(control.history_E) == control.iterations + 1
     planned = ep.read(tmp_path / "t.h5")
     assert isinstance(planned, ep.TracedSchedule) and planned.path.all_converged
+
+
+def test_cli_boundary_file_reads_back_as_the_result(tmp_path):
+    import subprocess
+    import sys
+
+    subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "boundary", "--no-restricted",
+                    "--elements", "30", "--out", str(tmp_path / "b.h5")], check=True,
+                   capture_output=True)
+    back = ep.read(tmp_path / "b.h5")
+    direct = ep.boundary(ep.Arm.paper(), restricted=False, elements=ELEMENTS)
+    assert isinstance(back, ep.BoundaryResult)
+    np.testing.assert_array_equal(back.polygons_mm["W0"][0], direct.polygons_mm["W0"][0])
+    assert back.areas_mm2 == direct.areas_mm2

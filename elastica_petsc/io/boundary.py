@@ -32,9 +32,13 @@ from .hdf5 import atomic_h5, provenance, put, write_attrs
 
 
 def write_boundary(path, result, overwrite: bool = False) -> None:
-    """Write a :class:`~elastica_petsc.studies.boundary.BoundaryResult`."""
+    """Write a :class:`~elastica_petsc.studies.boundary.BoundaryResult`: the layout
+    above and the whole result under ``/result`` (``elastica_petsc.read`` returns it)."""
+    from .records import RESULT_GROUP, encode
+
     with atomic_h5(path, overwrite) as fh:
         write_boundary_layout(fh, result)
+        encode(fh, RESULT_GROUP, result)
 
 
 def write_boundary_layout(fh, result) -> None:
