@@ -17,7 +17,7 @@ One call per study: :func:`solve`, :func:`control`, :func:`trace`,
 :func:`schedule`, :func:`stability`, :func:`frequencies`, :func:`lengths`,
 :func:`length_equilibria`, :func:`equilibria`,
 :func:`workspace`, :func:`boundary`, :func:`design`, :func:`design_area`,
-:func:`design_sweep`, :func:`calibrate`; :func:`save` and :func:`read` write and
+:func:`design_sweep`, :func:`calibrate`, :func:`simulate`; :func:`save` and :func:`read` write and
 read any result.  Every result type is exported (``ep.ControlResult``,
 ``ep.WorkspaceMap`` ...): frozen, printed in one line, with ``summary() -> dict``
 and ``save(path)``.  Errors derive from :class:`ElasticaError`
@@ -46,7 +46,7 @@ _EXPORTS = {
     "length_equilibria": ".api", "equilibria": ".api",
     "workspace": ".api", "boundary": ".api", "design": ".api",
     "design_area": ".api", "design_sweep": ".api",
-    "read": ".api", "save": ".api", "calibrate": ".api",
+    "read": ".api", "save": ".api", "calibrate": ".api", "simulate": ".api",
     # result types: frozen, short repr, summary() -> dict, save(path); ep.read(path) -> same type
     "State": ".api", "Equilibrium": ".solvers.equilibrium",
     "ControlResult": ".solvers.control", "Stability": ".solvers.stability",
