@@ -546,7 +546,7 @@ def save(result, path: str | Path, *, overwrite: bool = False) -> Path:
     """Write any result of this package to ``path`` (.h5, also ``result.save(path)``):
     the command line's layout where it has one, with units and provenance, and
     the whole result, so that :func:`read` returns an equal one."""
-    from .io.records import save_result
+    from .io.save import save_result
 
     return save_result(path, result, overwrite=overwrite)
 

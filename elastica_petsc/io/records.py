@@ -1,9 +1,9 @@
 """Any result object as an HDF5 group, and back: the ``result`` group of a saved file.
 
-:func:`save_result` writes a result the way the command line writes it (the
-layout of :mod:`.hdf5`, :mod:`.boundary`, where the command has one: see
-:data:`LAYOUTS`) and, beside it, the whole result under ``/result`` so that
-:func:`read_result` returns the same type with the same fields.
+:func:`~elastica_petsc.io.save.save_result` writes a result the way the
+command line writes it (where the command has a layout) and, beside it, the
+whole result under ``/result`` (:func:`encode`), so that :func:`read_result`
+returns the same type with the same fields.
 
 Encoding of ``/result`` (every node carries an attribute ``kind``):
 
@@ -188,60 +188,6 @@ def _import(qualified: str):
 
 
 # --- files ---------------------------------------------------------------------------
-def _state_layout(fh, state) -> None:
-    """``solve --out``'s layout (:func:`~elastica_petsc.io.save.save_state`)."""
-    from .hdf5 import write_equilibrium
-
-    fh.attrs["loading_order"] = state.loading
-    write_equilibrium(fh, state.arm, state.equilibrium)
-
-
-def _boundary_layout(fh, result) -> None:
-    from .boundary import write_boundary_layout
-
-    write_boundary_layout(fh, result)
-
-
-# the command line's layout per result type (by class name: io sits below the api layer)
-LAYOUTS = {"State": ("equilibrium", _state_layout),
-           "BoundaryResult": ("boundary", _boundary_layout)}
-
-
-def result_arm(result):
-    """The arm a result was computed for, or None if it does not hold one."""
-    for name in ("arm", "arm_after"):
-        arm = getattr(result, name, None)
-        if arm is not None:
-            return arm
-    return None
-
-
-def save_result(path, result, *, overwrite: bool = False) -> Path:
-    """Write ``result`` to ``path`` (.h5): provenance, the command line's
-    layout where it has one (:data:`LAYOUTS`), and ``/result`` (the whole
-    result, read back by :func:`read_result`).  Written aside and renamed."""
-    from .. import __version__
-    from .hdf5 import atomic_h5, provenance, write_attrs
-
-    if not dataclasses.is_dataclass(result) or isinstance(result, type):
-        raise InputError(f"cannot save a {type(result).__name__}: not a result")
-    name = type(result).__name__
-    kind, layout = LAYOUTS.get(name, (name, None))
-    arm = result_arm(result)
-    with atomic_h5(path, overwrite) as fh:
-        if arm is not None:
-            write_attrs(fh, provenance(arm, kind))
-        else:
-            write_attrs(fh, {"kind": kind, "elastica_petsc_version": __version__})
-        if layout is not None:
-            layout(fh, result)
-        fh.attrs["kind"] = kind
-        encode(fh, RESULT_GROUP, result)
-        fh[RESULT_GROUP].attrs["description"] = (
-            "the whole result object (elastica_petsc.io.records), read by elastica_petsc.read")
-    return Path(path)
-
-
 def has_result(fh) -> bool:
     """Whether an open file holds a ``/result`` group (:func:`save_result`)."""
     return RESULT_GROUP in fh
