@@ -150,7 +150,7 @@ def _main(argv: list[str] | None) -> int:
     from ..solvers import runtime
     # PETSc errors become one line here (main), not PETSc's error stack on stderr
     runtime.init(parser.prog, petsc_options)
-    from ..core import progress
+    from ..ui import progress
     # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     signal.signal(signal.SIGTERM, _interrupt)   # again: PETSc's initialisation may take it

@@ -65,6 +65,7 @@ import scipy.sparse as sp
 from petsc4py import PETSc
 
 from ..core import interrupt
+from ..core.errors import SolverError
 from ..core.fem import Discretisation
 from .equilibrium import SNES_REASONS
 from .inertia import InertiaCounter
@@ -90,7 +91,7 @@ def use_pivoting_lu(ksp: PETSc.KSP) -> PETSc.KSP:
     raise ContinuationError("no pivoting sparse LU (UMFPACK, SuperLU or MUMPS) in this PETSc")
 
 
-class ContinuationError(RuntimeError):
+class ContinuationError(SolverError):
     """The curve could not be followed (step too small, singular system)."""
 
 

@@ -84,6 +84,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from petsc4py import PETSc
 
+from ..core.results import Result
 from .options import set_from_options
 from .equilibrium import COLLAPSE_LENGTH, Equilibrium, EquilibriumSolver, check_tensions
 from ..core.errors import InputError
@@ -145,8 +146,8 @@ class Evaluation:
     loading: Loading | None = None      # how the equilibrium was reached (None: unknown)
 
 
-@dataclass(frozen=True)
-class ControlResult:
+@dataclass(frozen=True, repr=False)
+class ControlResult(Result):
     """Outcome of one tip-control solve.  Non-dimensional: lengths in units of
     l (``length_mm``), tensions p = P l^2 / B (``force_scale_N`` = B / l^2)."""
 

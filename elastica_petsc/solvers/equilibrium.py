@@ -17,6 +17,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..core import interrupt
+from ..core.results import Result
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from .bifurcation import (BIFURCATION_TOL, AmplitudeContinuation, Bifurcation, critical_mode,
@@ -44,8 +45,8 @@ BRANCH_ENDS = {
 SIDES = ("left", "right")
 
 
-@dataclass(frozen=True)
-class Equilibrium:
+@dataclass(frozen=True, repr=False)
+class Equilibrium(Result):
     """A solved state of the arm, non-dimensional (lengths / l, p = P l^2 / B)."""
 
     disc: Discretisation

@@ -39,6 +39,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.results import Result
+from ..core.clearance import state_cable_clear
 from ..core.fem import Discretisation
 from ..core.geometry import triangles_union_area
 from ..core.model import Arm
@@ -135,8 +137,8 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
 # --- the optimiser -----------------------------------------------------------------------------
 INFEASIBLE_START = "INFEASIBLE_START"   # AreaDesign.reason: the start violates a constraint
 STALL_GAIN = 1e-3        # relative area gain over 3 iterations below which TAO is stopped
-@dataclass
-class AreaDesign:
+@dataclass(frozen=True, repr=False)
+class AreaDesign(Result):
     """Outcome of ``design --objective area`` (mm, mm^2, N)."""
 
     arm_before: Arm
@@ -160,6 +162,12 @@ class AreaDesign:
         if a is None or b is None:
             return None
         return b.area_mm2 - b.error_mm2 > a.area_mm2 + a.error_mm2
+
+    def summary(self) -> dict:
+        """What ``design --objective area --json`` prints (areas before/after, routes)."""
+        from ..io.summaries import area_summary
+
+        return area_summary(self)
 
 
 def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm: float):
