@@ -23,6 +23,7 @@ import os
 import signal
 import sys
 
+from ..core import inputs
 from ..core.errors import InputError
 
 COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "design", "lengths",
@@ -157,6 +158,7 @@ def _main(argv: list[str] | None) -> int:
     progress.configure(quiet=getattr(args, "quiet", False), delay=_progress_delay())
     as_json = getattr(args, "json", False)
     try:
+        inputs.configure_limits(os.environ)     # ELASTICA_PETSC_MAX_*: the size limits
         status = args.run(args)
     except InputError as err:
         progress.close_all()
