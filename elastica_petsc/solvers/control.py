@@ -68,7 +68,7 @@ __all__ = ["CABLE_COLLAPSE", "CABLE_FRACTION", "COLLAPSE_STOP", "LINE_SEARCH_FAI
            "MAX_EVALUATIONS", "MAX_ITERATIONS", "METHODS", "STALLED", "STATIONARY",
            "TARGET_REACHED", "ControlResult", "Evaluation", "TipController", "default_eps"]
 
-METHODS = ("blmvm", "gd")
+METHODS = ("blmvm", "gd", "brgn")
 
 # More-Thuente curvature parameter with the Gauss-Newton metric: 0.1 instead of
 # TAO's 0.9, so a step that overshoots a minimum along the line is refined
@@ -76,6 +76,11 @@ METHODS = ("blmvm", "gd")
 # and the unit step was accepted; 47 iterations to the closest boundary point
 # became 4).
 LINE_SEARCH_GTOL = "0.1"
+# TAO BRGN (method "brgn"): a proximal weight (E ~ 1e-16 at the target, so
+# PETSc's 1e-4 dominates the Gauss-Newton matrix: 277 iterations on Fig. 2)
+# and an Armijo line search in its BNLS subsolver (14 evaluations on Fig. 2
+# instead of More-Thuente's 17); BENCHMARKS.md compares it with blmvm.
+BRGN_DEFAULTS = {"tao_brgn_regularizer_weight": 1e-12, "tao_brgn_subsolver_tao_ls_type": "armijo"}
 
 
 @dataclass(frozen=True)
@@ -192,6 +197,8 @@ class TipController:
         if lmvm_history is None:
             lmvm_history = 0 if self.gauss_newton else None
         defaults = {"tao_ls_gtol": LINE_SEARCH_GTOL} if self.gauss_newton else {}
+        if method == "brgn":
+            defaults = dict(BRGN_DEFAULTS)
         if lmvm_history is not None:
             defaults["tao_blmvm_mat_lmvm_hist_size"] = str(int(lmvm_history))
         self.options = SolverOptions(options_prefix, petsc_options, defaults)
@@ -220,6 +227,8 @@ class TipController:
         self.tao = self.H0 = None
         if method == "blmvm":
             self._create_tao()
+        elif method == "brgn":
+            self._create_brgn()
 
     def _create_tao(self) -> None:
         self.x = PETSc.Vec().createSeq(self.n, comm=self.comm)
@@ -249,6 +258,54 @@ class TipController:
             ksp.getPC().setType(PETSc.PC.Type.CHOLESKY)
         self.options.apply(tao)
         self.tao = tao
+
+    def _create_brgn(self) -> None:
+        """TAO BRGN on the residual r(p) = x_t(p) - x_d (Eq. (11)) and its
+        Jacobian S^T (Eq. (13)), bounded; our stopping test and monitor on its
+        Newton subsolver (BNLS), which runs the iterations."""
+        self.x = PETSc.Vec().createSeq(self.n, comm=self.comm)
+        self.lb, self.ub = self.x.duplicate(), self.x.duplicate()
+        self.R = PETSc.Vec().createSeq(2, comm=self.comm)
+        self.Jr = PETSc.Mat().createDense((2, self.n), comm=self.comm)
+        self.Jr.setUp()
+        self._true_bounds()
+        tao = PETSc.TAO().create(self.comm)
+        self.options.label(tao, self.x, self.lb, self.ub, self.R, self.Jr)
+        tao.setType(PETSc.TAO.Type.BRGN)
+        # PETSc 3.18 names the subsolver when BRGN is created, before any prefix
+        tao.getBRGNSubsolver().setOptionsPrefix(self.options.prefix + "tao_brgn_subsolver_")
+        tao.setSolution(self.x)
+        tao.setResidual(self._residual, self.R)
+        tao.setJacobianResidual(self._jacobian_residual, self.Jr, self.Jr)
+        tao.setVariableBounds(self.lb, self.ub)
+        self.options.apply(tao)
+        sub = tao.getBRGNSubsolver()
+        sub.setConvergenceTest(self._convergence_test)
+        sub.setMonitor(self._monitor)
+        sub.setMaximumIterations(self.max_it)
+        sub.setMaximumFunctionEvaluations(self.max_evaluations)
+        self.tao = tao
+
+    def _residual(self, tao, X, F) -> None:
+        problem = tao.getAppCtx()
+        p = np.maximum(X.getArray(readonly=True).copy(), 0.0)
+        E, g = problem.penalised(p)
+        ev = self._cache.get(p.tobytes())
+        F.setArray(ev.equilibrium.tip - problem.target if ev is not None
+                   else [np.sqrt(2.0 * E), 0.0])              # penalty: |r|^2 / 2 = E_fail
+        problem.penalty_gradient = None if ev is not None else g
+
+    def _jacobian_residual(self, tao, X, J, P) -> None:
+        problem = tao.getAppCtx()
+        p = np.maximum(X.getArray(readonly=True).copy(), 0.0)
+        ev = self._cache.get(p.tobytes())
+        if ev is not None:
+            jac = ev.sensitivity.tip.T                          # d x_t / d p, (2, n)
+        else:                                                   # J^T r = the secant gradient
+            g = problem.penalty_gradient if problem.penalty_gradient is not None else np.zeros(self.n)
+            jac = np.vstack((g, np.zeros(self.n))) / max(np.sqrt(2.0 * (10.0 * (problem.E_max + 1.0))), 1e-300)
+        J.setValues(range(2), range(self.n), np.ascontiguousarray(jac).ravel())
+        J.assemble()
 
     # --- evaluations ----------------------------------------------------------
     def _remember(self, ev: Evaluation) -> None:
@@ -365,6 +422,8 @@ class TipController:
         problem.history.append((np.maximum(p, 0.0), ev.equilibrium.tip.copy(), E))
         if self.gauss_newton and E >= self.eps:        # next direction from a fresh GN H0
             self._gauss_newton_H0(problem, ev)
+        elif self.method == "brgn" and E >= self.eps:
+            problem.gauss_newton(ev)                   # only for CABLE_COLLAPSE
 
     def _convergence_test(self, tao) -> None:
         problem = tao.getAppCtx()
@@ -384,11 +443,14 @@ class TipController:
         self.options.refresh(self.tao)
         self.x.setArray(p0)
         self._true_bounds()
-        self.tao.setAppCtx(problem)
+        taos = [self.tao] + ([self.tao.getBRGNSubsolver()] if self.method == "brgn" else [])
+        for tao in taos:
+            tao.setAppCtx(problem)
         try:
             self.tao.solve(self.x)
         finally:
-            self.tao.setAppCtx(None)
+            for tao in taos:
+                tao.setAppCtx(None)
             self._true_bounds()
         p = np.maximum(self.x.getArray(readonly=True).copy(), 0.0)
         ev = self._cache.get(p.tobytes()) or self._evaluate(p, problem)
@@ -530,7 +592,8 @@ class TipController:
     def destroy(self) -> None:
         self._cache.clear()
         if self.tao is not None:
-            for obj in (self.tao, self.x, self.lb, self.ub, self.H0):
+            for obj in (self.tao, self.x, self.lb, self.ub, self.H0, getattr(self, "R", None),
+                        getattr(self, "Jr", None)):
                 if obj is not None:
                     obj.destroy()
             self.tao = None
