@@ -92,13 +92,6 @@ def pushed_options(prefix: str, options: Mapping | None):
             opts.delValue(name)
 
 
-def set_from_options(obj, prefix: str, defaults: Mapping | None = None) -> None:
-    """``obj.setFromOptions()`` with ``defaults`` ({"snes_rtol": 1e-8, ...}, keys
-    without the prefix, nested dicts flattened) in force for that call only."""
-    with pushed_options(prefix, flatten_options(defaults)):
-        obj.setFromOptions()
-
-
 def options_under(prefix: str) -> dict:
     """The entries of PETSc's database whose names start with ``prefix``."""
     return {k: v for k, v in PETSc.Options().getAll().items() if k.startswith(prefix)}
