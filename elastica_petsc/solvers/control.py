@@ -46,7 +46,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections import OrderedDict
-from dataclasses import dataclass
 
 import numpy as np
 from petsc4py import PETSc
@@ -59,10 +58,10 @@ from .descent import gradient_descent
 from .equilibrium import COLLAPSE_LENGTH, Equilibrium, EquilibriumSolver, check_tensions
 from .options import SolverOptions, check_comm
 from .reasons import converged_reason
-from .sensitivity import Sensitivity, SensitivityError, SensitivitySolver
+from .sensitivity import SensitivityError, SensitivitySolver
 from .tip_problem import (CABLE_COLLAPSE, CABLE_FRACTION, COLLAPSE_STOP, LINE_SEARCH_FAILURE,
                           MAX_EVALUATIONS, MAX_ITERATIONS, STALLED, STATIONARY, TARGET_REACHED,
-                          Evaluation, StopRule, TipProblem, default_eps)
+                          ControlResult, Evaluation, StopRule, TipProblem, default_eps)
 
 __all__ = ["CABLE_COLLAPSE", "CABLE_FRACTION", "COLLAPSE_STOP", "LINE_SEARCH_FAILURE",
            "MAX_EVALUATIONS", "MAX_ITERATIONS", "METHODS", "STALLED", "STATIONARY",
@@ -81,68 +80,6 @@ LINE_SEARCH_GTOL = "0.1"
 # and an Armijo line search in its BNLS subsolver (14 evaluations on Fig. 2
 # instead of More-Thuente's 17); BENCHMARKS.md compares it with blmvm.
 BRGN_DEFAULTS = {"tao_brgn_regularizer_weight": 1e-12, "tao_brgn_subsolver_tao_ls_type": "armijo"}
-
-
-@dataclass(frozen=True)
-class ControlResult:
-    """Outcome of one tip-control solve.  Non-dimensional: lengths in units of
-    l (``length_mm``), tensions p = P l^2 / B (``force_scale_N`` = B / l^2)."""
-
-    converged: bool                 # E < eps: the tip is on the target
-    reachable: bool | None          # True: reached; False: proven outside W_0 (see
-    #                                 ``evidence``, set by :mod:`.reach` only); None:
-    #                                 not reached and not proven unreachable
-    reason: str                     # TARGET_REACHED, STATIONARY, STALLED, MAX_ITERATIONS, ...
-    tao_reason: str                 # TAO's converged reason, checked
-    message: str
-    method: str
-    iterations: int                 # TAO iterations
-    evaluations: int                # objective evaluations (equilibrium solves incl. cached)
-    failed_evaluations: int         # evaluations whose equilibrium failed (penalised)
-    target: np.ndarray              # x_d
-    p: np.ndarray                   # tensions reached
-    tip: np.ndarray                 # x_t(p)
-    tip_error: float                # |x_t - x_d|
-    E: float
-    eps: float
-    equilibrium: Equilibrium
-    sensitivity: Sensitivity
-    cable_lengths: np.ndarray       # L_i = |r_i - x_i|
-    history_p: np.ndarray           # (k+1, n) tensions at iterations 0..k
-    history_tip: np.ndarray         # (k+1, 2)
-    history_E: np.ndarray           # (k+1,)
-    on_bound: tuple[tuple[int, str], ...] = ()   # (tendon number 1.., "lower"/"upper")
-    length_mm: float = 1.0
-    force_scale_N: float = 1.0
-    loading: Loading | None = None  # loading path from the straight arm (None: unknown)
-    evidence: str = ""              # why reachable is False (or what the search tried)
-    strategy: str = "local"         # what reached the target: local, homotopy, seed, ...
-    local_reason: str = ""          # with SEARCH_EXHAUSTED: how the closest local solve ended
-
-    @property
-    def gradient(self) -> np.ndarray:
-        """dE/dp at the solution (Eq. (12))."""
-        return self.sensitivity.tip @ (self.tip - self.target)
-
-    @property
-    def tip_mm(self) -> np.ndarray:
-        return self.tip * self.length_mm
-
-    @property
-    def target_mm(self) -> np.ndarray:
-        return self.target * self.length_mm
-
-    @property
-    def tip_error_mm(self) -> float:
-        return self.tip_error * self.length_mm
-
-    @property
-    def tensions_N(self) -> np.ndarray:
-        return self.p * self.force_scale_N
-
-    @property
-    def cable_lengths_mm(self) -> np.ndarray:
-        return self.cable_lengths * self.length_mm
 
 
 class TipController:
@@ -179,7 +116,9 @@ class TipController:
         here has ``eq_``.
     petsc_options : PETSc options for the TAO without the prefix, e.g.
         ``{"tao_ls_type": "armijo"}`` or ``{"tao": {"ls_type": "armijo"}}``;
-        command-line options win (:mod:`.options`).
+        command-line options win (:mod:`.options`); options given later (in
+        the database under the prefix, or by ``self.options.update``) are
+        applied at the next solve.  Refused (InputError) with ``gd``.
     """
 
     def __init__(self, arm: Arm, *, solver: EquilibriumSolver | None = None,
@@ -193,6 +132,9 @@ class TipController:
                  petsc_options=None):
         if method not in METHODS:
             raise InputError(f"unknown tip-control method {method!r} (choose from {METHODS})")
+        if method == "gd" and petsc_options:
+            raise InputError("the gd method (Algorithm 1) is our own loop and runs no TAO: "
+                             "petsc_options do not apply to it (use blmvm or brgn)")
         self.gauss_newton = gauss_newton and method == "blmvm"
         if lmvm_history is None:
             lmvm_history = 0 if self.gauss_newton else None

@@ -1,5 +1,6 @@
 """The tip-control problem of one solve (Eqs. (10)-(12)): objective, stopping
-test and Gauss-Newton metric, whatever optimiser runs it.
+test and Gauss-Newton metric, whatever optimiser runs it, and its result
+(:class:`ControlResult`).
 
     minimise E(p) = |x_d - x_t(p)|^2 / 2          over 0 <= p <= p_max   (Eqs. (10)-(11))
     dE/dp_i = (x_t - x_d) . d x_t / d p_i                                (Eq. (12))
@@ -80,6 +81,68 @@ class Evaluation:
     equilibrium: Equilibrium
     sensitivity: Sensitivity
     loading: Loading | None = None      # how the equilibrium was reached (None: unknown)
+
+
+@dataclass(frozen=True)
+class ControlResult:
+    """Outcome of one tip-control solve.  Non-dimensional: lengths in units of
+    l (``length_mm``), tensions p = P l^2 / B (``force_scale_N`` = B / l^2)."""
+
+    converged: bool                 # E < eps: the tip is on the target
+    reachable: bool | None          # True: reached; False: proven outside W_0 (see
+    #                                 ``evidence``, set by :mod:`.reach` only); None:
+    #                                 not reached and not proven unreachable
+    reason: str                     # TARGET_REACHED, STATIONARY, STALLED, MAX_ITERATIONS, ...
+    tao_reason: str                 # TAO's converged reason, checked
+    message: str
+    method: str
+    iterations: int                 # TAO iterations
+    evaluations: int                # objective evaluations (equilibrium solves incl. cached)
+    failed_evaluations: int         # evaluations whose equilibrium failed (penalised)
+    target: np.ndarray              # x_d
+    p: np.ndarray                   # tensions reached
+    tip: np.ndarray                 # x_t(p)
+    tip_error: float                # |x_t - x_d|
+    E: float
+    eps: float
+    equilibrium: Equilibrium
+    sensitivity: Sensitivity
+    cable_lengths: np.ndarray       # L_i = |r_i - x_i|
+    history_p: np.ndarray           # (k+1, n) tensions at iterations 0..k
+    history_tip: np.ndarray         # (k+1, 2)
+    history_E: np.ndarray           # (k+1,)
+    on_bound: tuple[tuple[int, str], ...] = ()   # (tendon number 1.., "lower"/"upper")
+    length_mm: float = 1.0
+    force_scale_N: float = 1.0
+    loading: Loading | None = None  # loading path from the straight arm (None: unknown)
+    evidence: str = ""              # why reachable is False (or what the search tried)
+    strategy: str = "local"         # what reached the target: local, homotopy, seed, ...
+    local_reason: str = ""          # with SEARCH_EXHAUSTED: how the closest local solve ended
+
+    @property
+    def gradient(self) -> np.ndarray:
+        """dE/dp at the solution (Eq. (12))."""
+        return self.sensitivity.tip @ (self.tip - self.target)
+
+    @property
+    def tip_mm(self) -> np.ndarray:
+        return self.tip * self.length_mm
+
+    @property
+    def target_mm(self) -> np.ndarray:
+        return self.target * self.length_mm
+
+    @property
+    def tip_error_mm(self) -> float:
+        return self.tip_error * self.length_mm
+
+    @property
+    def tensions_N(self) -> np.ndarray:
+        return self.p * self.force_scale_N
+
+    @property
+    def cable_lengths_mm(self) -> np.ndarray:
+        return self.cable_lengths * self.length_mm
 
 
 @dataclass(frozen=True)
