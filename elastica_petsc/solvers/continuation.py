@@ -692,7 +692,8 @@ class CurveTracer:
         self.ksp.setOptionsPrefix(self.options.name("tangent_"))
         use_pivoting_lu(self.ksp)
         self.options.apply(self.ksp)
-        self.inertia = InertiaCounter(disc)
+        self.inertia = InertiaCounter(disc, comm=comm,
+                                      options_prefix=self.options.name("inertia_"))
         self.solves = 0
         self.rejected = 0            # steps whose corrector failed or was rejected (halved)
         self._rows = None            # the two scalar equations: callables (value, gradient)

@@ -231,7 +231,8 @@ class EquilibriumSolver:
         use_bordered_lu(snes.getKSP())
         self.options.apply(snes)
         self.snes = snes
-        self.inertia = InertiaCounter(disc)
+        self.inertia = InertiaCounter(disc, comm=comm,
+                                      options_prefix=self.options.name("inertia_"))
 
     # --- PETSc callbacks ------------------------------------------------------
     def _form_function(self, snes, X, F) -> None:

@@ -377,13 +377,13 @@ class LengthInertia(BorderedInertia):
     """Negative eigenvalues of K restricted to null(C^T) of the taut cables
     (module docstring), by the LDL^T inertia of the bordered H_c, O(N)."""
 
-    def __init__(self, disc: Discretisation, taut_tol: float = TAUT_TOL):
+    def __init__(self, disc: Discretisation, taut_tol: float = TAUT_TOL, **contract):
         self.disc, self.taut_tol = disc, taut_tol
         supports = np.concatenate((disc.attach_nodes, disc.attach_nodes))   # W cols, C cols
         pattern = disc.bordered_pattern(supports, upper=True)
         self._src = pattern[2]
         super().__init__(pattern, disc.n_elements + 2 * disc.n_tendons,
-                         self.values(disc.straight(), np.zeros(disc.n_tendons))[0])
+                         self.values(disc.straight(), np.zeros(disc.n_tendons))[0], **contract)
 
     def values(self, u, p) -> tuple[np.ndarray, int]:
         """Upper-triangle entries of H_c and the number m of taut cables."""
@@ -479,14 +479,15 @@ class LengthSolver:
         plain = {k: v for k, v in flat.items() if not k.startswith("defl_")}
         self.system = AugmentedSystem(disc, "length", options_prefix, petsc_options=plain,
                                       comm=comm)
-        self.prefix = self.system.options.prefix
+        self.prefix, self.comm = self.system.options.prefix, self.system.comm
         # deflated solves explore: the l2 (secant) line search leaves the basin
         # of the start far more often than backtracking (measured on Fig. 8)
         self.deflated_system = AugmentedSystem(disc, "length", self.prefix + "defl_",
                                                petsc_options={**DEFLATION_OPTIONS, **deflated},
                                                comm=comm)
-        self.inertia = LengthInertia(disc)
-        self.load_inertia = InertiaCounter(disc)
+        self.inertia = LengthInertia(disc, comm=comm, options_prefix=self.prefix + "inertia_")
+        self.load_inertia = InertiaCounter(disc, comm=comm,
+                                           options_prefix=self.prefix + "load_inertia_")
 
     @classmethod
     def from_arm(cls, arm, n_elements: int | None = None, **kw) -> "LengthSolver":

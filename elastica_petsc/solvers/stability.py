@@ -367,7 +367,8 @@ class StabilitySolver:
             self.B_raw = _diag_mat(np.concatenate((np.ones(N), np.zeros(self.n_border))))
             self.eps_raw = self._make_eps(self.A, self.B_raw, 1, tol, prefix + "raw_")
             self._user_target_raw = self._target_given("raw_")
-        self.inertia = InertiaCounter(disc)
+        self.inertia = InertiaCounter(disc, comm=self.comm,
+                                      options_prefix=self.options.name("inertia_"))
 
     def _target_given(self, part: str) -> bool:
         """Whether the user set ``-<prefix><part>eps_target`` (command line or code)."""
