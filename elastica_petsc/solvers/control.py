@@ -235,7 +235,8 @@ class TipController:
         ev = self._cache.get(p.tobytes())
         F.setArray(ev.equilibrium.tip - problem.target if ev is not None
                    else [np.sqrt(2.0 * E), 0.0])              # penalty: |r|^2 / 2 = E_fail
-        problem.penalty_gradient = None if ev is not None else g
+        # after a failure, the Jacobian row whose J^T r is the penalty's secant gradient
+        problem.penalty_row = None if ev is not None else g / np.sqrt(2.0 * E)
 
     def _jacobian_residual(self, tao, X, J, P) -> None:
         problem = tao.getAppCtx()
@@ -243,9 +244,9 @@ class TipController:
         ev = self._cache.get(p.tobytes())
         if ev is not None:
             jac = ev.sensitivity.tip.T                          # d x_t / d p, (2, n)
-        else:                                                   # J^T r = the secant gradient
-            g = problem.penalty_gradient if problem.penalty_gradient is not None else np.zeros(self.n)
-            jac = np.vstack((g, np.zeros(self.n))) / max(np.sqrt(2.0 * (10.0 * (problem.E_max + 1.0))), 1e-300)
+        else:                                                   # a failure (_residual)
+            row = problem.penalty_row
+            jac = np.vstack((np.zeros(self.n) if row is None else row, np.zeros(self.n)))
         J.setValues(range(2), range(self.n), np.ascontiguousarray(jac).ravel())
         J.assemble()
 

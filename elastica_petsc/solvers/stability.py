@@ -312,14 +312,9 @@ class StabilitySolver:
     operator : ``"jacobian"`` (default; the SNES bordered Jacobian
         [[T, B], [C, I]], non-symmetric storage) or ``"symmetric"``
         (H = [[T, W], [W^T, -I]] stored in full as AIJ).
-    comm : one process (default ``PETSc.COMM_SELF``).
-    options_prefix : PETSc options prefix, e.g. ``-stab_eps_view``,
-        ``-stab_eps_target``, ``-stab_st_pc_factor_mat_ordering_type``.
-        The raw-K solve uses ``<prefix>raw_``, the frequency solve
-        ``<prefix>freq_``.  Options set on the command line win: each EPS
-        calls ``setFromOptions()`` last.
-    petsc_options : options without the prefix (e.g. ``{"eps": {"tol":
-        1e-10}}``, ``{"raw": {"eps_view": None}}``), :mod:`.options`.
+    comm, options_prefix, petsc_options : the contract of :mod:`.options`
+        (one process; ``-stab_eps_view``, ``-stab_eps_target``; the raw-K
+        solve ``<prefix>raw_``, the frequency solve ``<prefix>freq_``).
     """
 
     def __init__(self, disc: Discretisation, *, nev: int = 4, mass: str = "lumped",
@@ -361,12 +356,10 @@ class StabilitySolver:
         self._v0.setArray(np.random.default_rng(2019).standard_normal(size))
         self.eps = self._make_eps(self.A, self.B, min(int(nev), N), tol, prefix)
         self.nev = self.eps.getDimensions()[0]
-        self._user_target = self._target_given("")
         self.eps_raw = None
         if mass != "paper":
             self.B_raw = _diag_mat(np.concatenate((np.ones(N), np.zeros(self.n_border))))
             self.eps_raw = self._make_eps(self.A, self.B_raw, 1, tol, prefix + "raw_")
-            self._user_target_raw = self._target_given("raw_")
         self.inertia = InertiaCounter(disc, comm=self.comm,
                                       options_prefix=self.options.name("inertia_"))
 
@@ -433,10 +426,11 @@ class StabilitySolver:
                                probes)
 
     # --- stability ------------------------------------------------------------------------
-    def _run(self, eps, B, u, p, nev: int, negatives: int, user_target: bool,
+    def _run(self, eps, B, u, p, nev: int, negatives: int, part: str,
              weights) -> tuple[float, int]:
-        """Set the target (module docstring), solve, check convergence."""
-        if not user_target:
+        """Set the target (module docstring) unless the user set it for this
+        ``part`` of the prefix ("" or "raw_"), solve, check convergence."""
+        if not self._target_given(part):
             # -1 in units of lambda l^2/B, whatever the weights' scale
             target = -self.disc.h / float(np.max(weights))
             if negatives > 0:
@@ -463,21 +457,19 @@ class StabilitySolver:
         ``mass="paper"``).
         """
         disc = self.disc
-        if self.options.refresh(*[e for e in (self.eps, self.eps_raw) if e is not None]):
-            self._user_target = self._target_given("")
-            self._user_target_raw = self._target_given("raw_")
+        self.options.refresh(*filter(None, (self.eps, self.eps_raw)))
         u = np.asarray(u, float)
         p = np.asarray(p, float)
         negatives = self.inertia.negative_eigenvalues(u, p)
         self._assemble(u, p)
         nev = min(max(self.nev, negatives + 1), disc.n_elements)
-        target, reason = self._run(self.eps, self.B, u, p, nev, negatives, self._user_target,
+        target, reason = self._run(self.eps, self.B, u, p, nev, negatives, "",
                                    self.m)
         values, imag, modes = _real_eigenpairs(self.eps, self.A, disc.n_elements, nev)
         if self.mass == "paper":
             raw_min = disc.h * float(values[0])
         elif raw:
-            self._run(self.eps_raw, self.B_raw, u, p, 1, negatives, self._user_target_raw,
+            self._run(self.eps_raw, self.B_raw, u, p, 1, negatives, "raw_",
                       np.ones(disc.n_elements))
             raw_values, _, _ = _real_eigenpairs(self.eps_raw, self.A, disc.n_elements, 1)
             raw_min = float(raw_values[0])

@@ -183,7 +183,7 @@ class TipProblem:
     failure: str = ""
     failed_at: set = field(default_factory=set)   # tensions whose equilibrium failed
     collapsing: int | None = None                  # cable (0-based) the GN step would collapse
-    penalty_gradient: np.ndarray | None = None     # BRGN: the secant gradient of a failure
+    penalty_row: np.ndarray | None = None          # BRGN: residual Jacobian row of a failure
 
     # --- the objective -----------------------------------------------------------
     def residual_E(self, ev: Evaluation) -> tuple[np.ndarray, float]:
