@@ -1,14 +1,32 @@
 # elastica_petsc: reproduce Handral & Rangarajan (2019) in a container.
 #   docker build -t elastica-petsc .
-#   docker run --rm -v "$PWD/results:/results" elastica-petsc
-# The image is set up by the same script as a Debian 12 machine (scripts/setup.sh,
-# system packages listed once in scripts/system-packages.txt).
-FROM debian:12
-SHELL ["/bin/bash", "-o", "pipefail", "-c"]
+#   mkdir -p results
+#   docker run --rm --user "$(id -u):$(id -g)" -v "$PWD/results:/results" elastica-petsc
+# The image is set up by the same script as a Debian 12 machine (scripts/setup.sh
+# --runtime: the run-time packages of scripts/system-packages.txt, no compilers).
+#
+# Base: debian:12.11 (bookworm), pinned by the digest of its multi-arch index
+# (tag debian:12.11; to move to a newer point release, change both together).
+FROM debian:12.11@sha256:b6507e340c43553136f5078284c8c68d86ec8262b1724dde73c325e8d3dcdeba
 WORKDIR /opt/elastica_petsc
-COPY . .
-RUN bash scripts/setup.sh
-ENV OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-VOLUME ["/results"]
-ENTRYPOINT ["/opt/elastica_petsc/.venv/bin/elastica-petsc"]
-CMD ["reproduce", "--out", "/results", "--overwrite"]
+# 1. Debian packages: this layer is rebuilt only when the package list or the set-up
+#    script changes, not when the project's sources or README do.
+COPY scripts/setup.sh scripts/system-packages.txt scripts/system-packages-dev.txt scripts/
+RUN bash scripts/setup.sh --runtime --system-only
+# 2. The project: the only layer rebuilt after an edit to it.
+COPY pyproject.toml README.md LICENSE ./
+COPY configs/ configs/
+COPY elastica_petsc/ elastica_petsc/
+COPY scripts/container-entry.sh scripts/
+RUN bash scripts/setup.sh --runtime \
+    && .venv/bin/python -m compileall -q elastica_petsc \
+    && useradd --uid 1000 --user-group --no-create-home --shell /usr/sbin/nologin elastica
+# Any user (docker run --user "$(id -u):$(id -g)") can write matplotlib's cache and a home.
+ENV MPLCONFIGDIR=/tmp/matplotlib HOME=/tmp OMPI_MCA_rmaps_base_oversubscribe=1
+USER 1000:1000
+WORKDIR /results
+# elastica-petsc, after refusing a /results that is not a mounted, writable folder
+ENTRYPOINT ["/opt/elastica_petsc/scripts/container-entry.sh"]
+# The quick reproduction into the mounted folder; it refuses to replace an earlier run's
+# files (add --overwrite to the command line to allow it).
+CMD ["reproduce", "--quick", "--out", "/results"]

@@ -431,7 +431,7 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
                  out: str | Path | None = None, overwrite: bool = False, resume: bool = False,
                  comm=None, elements: int | None = None):
     """Evaluate a grid of designs: ``axes`` are strings
-    ``"tendonK.route.x|route.y|attach=START:STOP:STEP"`` (mm; attachments on
+    ``"tendonK.route.x|route.y|attach|offset=START:STOP:STEP"`` (mm; attachments on
     mesh nodes).  Per design: the area [mm^2] of W_0 within 0 <= P_i <=
     ``tension_max_N`` (as :func:`design_area`) and, with ``path_mm``, the
     path's misfit [mm^2] and targets reached.  On every rank of ``comm``
@@ -445,6 +445,30 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
     return run_sweep(arm, disc.n_elements, parsed, p_max,
                      targets_mm=None if path_mm is None else _points(path_mm), comm=comm,
                      out=out, resume=resume, overwrite=overwrite, progress=False)
+
+
+def calibrate(arm: Arm, data, vary, *, bounds=None, input: str | None = None,
+              huber_mm: float | None = None, folds: int = 5, candidates=None,
+              elements: int | None = None):
+    """Fit the parameters named in ``vary`` (``bending_stiffness``,
+    ``tendonK.route``, ``motorK.offset``, ``motor.spool_radius``, ``clamp.angle``,
+    ``clamp.position``, ``frame.rotation``, ``frame.offset``) to measured states
+    ``data`` (a CSV path or a :class:`CalibrationData`); ``bounds``:
+    {scalar name: (lo, hi)}.  Returns a CalibrationResult: ``.arm`` the fitted
+    arm, ``.parameters()`` values with standard deviations, ``.summary()``
+    (docs/model.md §14)."""
+    from .core.calibration_data import CalibrationData, read_calibration_csv
+    from .core.calibration_params import ParameterModel
+    from .studies.calibrate_report import calibrate as run_calibration
+
+    if not isinstance(data, CalibrationData):
+        data = read_calibration_csv(data, arm.n_tendons, input, arm.length_mm)
+    if candidates is not None and not isinstance(candidates, CalibrationData):
+        candidates = read_calibration_csv(candidates, arm.n_tendons, input, arm.length_mm,
+                                          measured=False)
+    model = ParameterModel(arm, vary, bounds)
+    return run_calibration(model, data, elements=_mesh(arm, elements).n_elements,
+                           huber_mm=huber_mm, folds=folds, candidates=candidates)
 
 
 def read(path: str | Path):

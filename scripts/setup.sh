@@ -2,22 +2,44 @@
 # Set up elastica_petsc on Debian 12: system packages, a virtual environment
 # from the system Python (which holds Debian's MPI builds of petsc4py, slepc4py,
 # mpi4py and h5py) and the package itself.  Idempotent: a second run only
-# checks.  Usage: bash scripts/setup.sh   (prints the venv path at the end)
+# checks.  Usage: bash scripts/setup.sh [--runtime] [--system-only]
+#   --runtime      only the run-time packages (scripts/system-packages.txt), as the container
+#   --system-only  stop after the Debian packages (the container's first, cached layer)
+# Prints the venv path at the end.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 venv="${ELASTICA_VENV:-$here/.venv}"
-mapfile -t packages < <(grep -v '^\s*#' "$here/scripts/system-packages.txt" | grep -v '^\s*$')
+runtime=0; system_only=0
+for arg in "$@"; do
+  case "$arg" in
+    --runtime) runtime=1 ;;
+    --system-only) system_only=1 ;;
+    *) echo "setup: unknown option $arg" >&2; exit 2 ;;
+  esac
+done
+lists=("$here/scripts/system-packages.txt")
+((runtime)) || lists+=("$here/scripts/system-packages-dev.txt")
+mapfile -t packages < <(cat "${lists[@]}" | grep -v '^\s*#' | grep -v '^\s*$')
 
-missing=()
+missing=(); sudo_cmd=""; [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
 for pkg in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
 done
 if ((${#missing[@]})); then
   echo "setup: installing Debian packages: ${missing[*]}" >&2
-  sudo_cmd=""; [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
   $sudo_cmd apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  ((runtime)) && $sudo_cmd rm -rf /var/lib/apt/lists/*
 fi
+# Without petsc-dev/slepc-dev nothing registers /usr/lib/petsc and /usr/lib/slepc, the
+# folders petsc4py.pth and slepc4py.pth add to sys.path: register them as those packages do.
+for lib in petsc slepc; do
+  if [ ! -e "/usr/lib/$lib" ]; then
+    target="$(ls -d /usr/lib/${lib}dir/${lib}3.*/*-real | sort -V | tail -n 1)"
+    $sudo_cmd update-alternatives --quiet --install "/usr/lib/$lib" "$lib" "$target" 10
+  fi
+done
+((system_only)) && exit 0
 
 if [ ! -x "$venv/bin/python" ]; then
   echo "setup: creating virtual environment $venv (system site packages)" >&2

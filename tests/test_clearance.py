@@ -102,3 +102,24 @@ def test_tip_control_cable_policies():
         prefer.equilibrium.disc.routes))
     assert not require.converged and require.reason == CABLE_CROSSES_ARM
     assert require.reachable is None and require.tip_error_mm < 1e-5
+
+
+def test_path_clear_tests_every_segment_of_a_guided_cable():
+    """A cable through guides (docs/model.md §11): each of its segments is tested;
+    a point on the centreline skips its own two elements, an offset point none."""
+    from elastica_petsc.core.clearance import path_clear
+    nodes = np.array([[0, 0], [1, 0], [2, 0], [3, 0]], float)
+    above = (np.array([[0, 0.2], [1, 0.2], [3, 0.2]]), [-1, 1, 3], [1.0, 0.2, 0.2])
+    dips = (np.array([[0, 0.2], [1.5, -0.2], [3, 0.2]]), [-1, 1, 3], [1.0, 0.2, 0.2])
+    on_line = (np.array([[0, 0.2], [2, 0.0]]), [-1, 2], [1.0, 0.0])
+    np.testing.assert_array_equal(path_clear(nodes, [above, dips, on_line]), [True, False, True])
+
+
+def test_guided_robot_cables_clear_the_arm():
+    from elastica_petsc.core.clearance import state_cable_clear
+    from conftest import REPO
+    disc = Discretisation.from_arm(load_config(REPO / "configs" / "guided3.toml"))
+    with EquilibriumSolver(disc) as solver:
+        eq = solver.solve([3.0, 1.0])
+    assert eq.converged and np.all(state_cable_clear(eq))
+    assert len(eq.cable_points[0]) == 5                     # route, 3 guides, end

@@ -100,7 +100,8 @@ def test_trace_paper_triangle_schedule_and_hdf5(tmp_path):
     assert [r["phase"] for r in rows].count("path") == data["points"]
     assert data["speed_mm_s"] == data["max_tracing_speed_mm_s"]
     assert float(rows[-1]["time_s"]) == pytest.approx(data["duration_s"], abs=1e-3)
-    expected = ["row", "phase", "point", "time_s", "reached", "target_x_mm", "target_y_mm",
+    expected = ["row", "phase", "point", "time_s", "duration_s", "limited_by", "reached",
+                "target_x_mm", "target_y_mm",
                 "tip_x_mm", "tip_y_mm"]
     for i in (1, 2):
         expected += [f"tension_{i}_N", f"tension_{i}_p", f"length_{i}_mm", f"revolutions_{i}",

@@ -36,7 +36,7 @@ def numbers(line: str) -> list[float]:
 
 def test_every_example_is_tested():
     tested = {"equilibrium_stability.py", "trace_schedule.py", "workspace_mpi.py",
-              "design_task.py"}
+              "design_task.py", "calibrate_arm.py"}
     assert {p.name for p in EXAMPLES.glob("*.py")} <= tested
 
 
@@ -62,3 +62,11 @@ def test_workspace_mpi(tmp_path):
               cwd=tmp_path)
     assert out.startswith("2 rank(s):")
     assert list(tmp_path.iterdir()) == []                    # no file written
+
+
+def test_calibrate_arm(tmp_path):
+    out = run(sys.executable, str(EXAMPLES / "calibrate_arm.py"), cwd=tmp_path)
+    assert "SYNTHETIC" in (tmp_path / "calibration_data.csv").read_text()
+    rows = [numbers(l) for l in out.splitlines() if l.startswith(("bending", "tendon", "motor"))]
+    assert len(rows) == 7 and all(r[-1] < 3.0 for r in rows)     # |error| / sigma
+    assert "undetermined: none" in out

@@ -149,7 +149,8 @@ def test_schedule_csv(traced, tmp_path):
     sched = write_schedule_csv(out, tr, arm)
     with open(out, newline="") as fh:
         rows = list(csv.DictReader(fh))
-    expected = ["row", "phase", "point", "time_s", "reached", "target_x_mm", "target_y_mm",
+    expected = ["row", "phase", "point", "time_s", "duration_s", "limited_by", "reached",
+                "target_x_mm", "target_y_mm",
                 "tip_x_mm", "tip_y_mm"]
     for i in (1, 2):
         expected += [f"tension_{i}_N", f"tension_{i}_p", f"length_{i}_mm", f"revolutions_{i}",

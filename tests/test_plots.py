@@ -31,7 +31,7 @@ def test_trace_gif(traced, tmp_path):
     out = animate_trace(arm, result, tmp_path / "t.gif", max_frames=4)
     with Image.open(out) as im:
         assert im.format == "GIF" and im.n_frames == 4
-        assert im.size == (512, 416)                    # 6.4 x 5.2 in at 80 dpi
+        assert im.size == (1024, 832)                   # 6.4 x 5.2 in at 160 dpi
         first = np.asarray(im.convert("RGB"))
         im.seek(3)
         last = np.asarray(im.convert("RGB"))
@@ -46,6 +46,30 @@ def test_trace_gif(traced, tmp_path):
     assert both[0].caption.startswith("approach 1/6") and both[6].caption.startswith("point 1/6")
 
 
+def test_trace_gif_timed_to_the_schedule(traced, tmp_path):
+    """Frames at constant playback intervals show the row the motors are at then;
+    the GIF's frame durations add up to the schedule's duration (real time) or
+    K times it (--slow-motion K)."""
+    arm, result = traced
+    times = np.array([0.0, 0.5, 1.0, 3.0, 3.5, 4.0])         # a slow move in the middle
+    frames = trace_frames(arm, result, max_frames=100, times_s=times, fps=2.0)
+    assert len(frames) == 9 and frames[0].caption.startswith("t = 0.0 s  point 1/6")
+    shown = [f.caption.split("point ")[1].split("/")[0] for f in frames]
+    assert shown == ["1", "2", "3", "3", "3", "3", "4", "5", "6"]   # held during the slow move
+    for slow in (1.0, 3.0):
+        out = animate_trace(arm, result, tmp_path / f"t{slow:g}.gif", times_s=times, fps=2.0,
+                            slow_motion=slow)
+        with Image.open(out) as im:
+            total_ms = 0
+            for k in range(im.n_frames):
+                im.seek(k)
+                total_ms += im.info["duration"]
+            count = im.n_frames
+        # 4 s of schedule, K times slower, one frame per 0.5 s and the end held 0.5 s
+        assert count == 4.0 * slow / 0.5 + 1
+        assert abs(total_ms - 1000 * (4.0 * slow + 0.5)) <= count
+
+
 def test_control_gif_from_the_command_line(tmp_path):
     """`control --animate`: one frame per optimiser iterate (Fig. 2 as a movie)."""
     out = tmp_path / "c.gif"
@@ -58,7 +82,7 @@ def test_control_gif_from_the_command_line(tmp_path):
     with h5py.File(tmp_path / "c.h5", "r") as fh:
         iterates = len(fh["control/history_E"])
     with Image.open(out) as im:
-        assert im.n_frames == iterates and im.size == (512, 416)
+        assert im.n_frames == iterates and im.size == (1024, 832)
 
 
 def test_animation_path_errors(tmp_path):

@@ -42,22 +42,70 @@ def test_reproduce_quick_writes_every_promised_file(tmp_path):
     assert again.returncode == 2 and "--overwrite" in again.stderr
 
 
-def test_dockerfile_runs_the_setup_script_and_nothing_else():
+def dockerfile_instructions() -> list[list[str]]:
+    """(instruction, arguments) of the Dockerfile, continuation lines joined."""
+    text = (ROOT / "Dockerfile").read_text().replace("\\\n", " ")
+    return [line.split(None, 1) for line in text.splitlines()
+            if line.strip() and not line.lstrip().startswith("#")]
+
+
+def test_dockerfile_layers_user_and_pinned_base():
     """No Docker engine here: CI runs the very script the Dockerfile runs
     (scripts/setup.sh via .ci/run -> scripts/test.sh), and this test pins the
-    Dockerfile to it so the two cannot drift."""
+    Dockerfile to it so the two cannot drift.  The system packages are a layer of
+    their own, before the project is copied (an edit does not re-run apt); only the
+    run-time list is installed; the base is pinned by digest with its tag in a
+    comment; the image runs as a non-root user with a writable matplotlib folder;
+    the default command is the quick reproduction, which refuses to overwrite."""
     text = (ROOT / "Dockerfile").read_text()
-    instructions = [line.split(None, 1) for line in text.splitlines()
-                    if line.strip() and not line.lstrip().startswith("#")]
-    runs = [rest for word, rest in instructions if word == "RUN"]
-    assert runs == ["bash scripts/setup.sh"]
-    assert instructions[0] == ["FROM", "debian:12"]
-    for forbidden in ("apt-get", "pip ", "apt "):
+    steps = dockerfile_instructions()
+    words = [word for word, _ in steps]
+    runs = [rest for word, rest in steps if word == "RUN"]
+    assert runs[0] == "bash scripts/setup.sh --runtime --system-only"
+    assert runs[1].startswith("bash scripts/setup.sh --runtime ")
+    for forbidden in ("apt-get", "pip ", "apt ", "VOLUME", "SHELL"):
         assert forbidden not in text, forbidden
+    # the base: a digest, and the same tag named in a comment
+    base = steps[0][1]
+    match = re.fullmatch(r"debian:(12\.\d+)@sha256:[0-9a-f]{64}", base)
+    assert words[0] == "FROM" and match, base
+    assert f"debian:{match.group(1)}" in text.split("FROM", 1)[0]
+    # layer order: only the set-up script and package lists before the packages' RUN
+    first_run = words.index("RUN")
+    early_copies = [rest.split()[:-1] for word, rest in steps[:first_run] if word == "COPY"]
+    assert early_copies and all(src.startswith("scripts/") for c in early_copies for src in c)
+    assert all(not src.startswith(("elastica_petsc", ".", "configs"))
+               for c in early_copies for src in c)
+    assert any(word == "COPY" and rest.startswith("elastica_petsc/")
+               for word, rest in steps[first_run:])
+    # a non-root user after the last RUN; a matplotlib folder any user can write
+    user = [rest for word, rest in steps if word == "USER"]
+    assert len(user) == 1 and user[0].split(":")[0] not in ("0", "root")
+    assert words.index("USER") > len(words) - 1 - words[::-1].index("RUN")
+    assert "MPLCONFIGDIR=/tmp/" in text
+    cmd = [rest for word, rest in steps if word == "CMD"][0]
+    assert '"reproduce", "--quick"' in cmd and "--overwrite" not in cmd
+    # the packages installed are the run-time list; the dev list holds the compilers
+    runtime = (ROOT / "scripts" / "system-packages.txt").read_text()
+    assert "petsc-dev" not in runtime and "pytest" not in runtime
+    assert "petsc-dev" in (ROOT / "scripts" / "system-packages-dev.txt").read_text()
     assert "bash scripts/setup.sh" in (ROOT / "scripts" / "test.sh").read_text().replace(
         '"$here/scripts/setup.sh"', "scripts/setup.sh")
     assert "scripts/test.sh" in (ROOT / ".ci" / "run").read_text()
-    assert '"reproduce"' in text
+
+
+def test_container_entry_refuses_an_unmounted_results_folder(tmp_path):
+    """Without -v the results would vanish with the container: the entry point
+    says so and stops (exit 2) before running anything."""
+    entry = ROOT / "scripts" / "container-entry.sh"
+    env = dict(os.environ, RESULTS_DIR=str(tmp_path), ELASTICA_PETSC="/bin/echo")
+    run = subprocess.run([str(entry), "reproduce", "--quick", "--out", str(tmp_path)],
+                         env=env, capture_output=True, text=True)
+    assert run.returncode == 2 and "not a mounted folder" in run.stderr
+    assert 'mkdir -p results' in run.stderr and '--user "$(id -u):$(id -g)"' in run.stderr
+    other = subprocess.run([str(entry), "solve", "--tensions", "1", "1"], env=env,
+                           capture_output=True, text=True)
+    assert other.returncode == 0 and other.stdout.strip() == "solve --tensions 1 1"
 
 
 @pytest.mark.skipif(shutil.which("hadolint") is None and not (

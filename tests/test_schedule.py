@@ -43,14 +43,15 @@ def read_documented_csv(path):
     with open(path, newline="") as fh:
         rows = list(csv.DictReader(fh))
     n = sum(1 for c in rows[0] if c.startswith("length_") and c.endswith("_mm"))
-    expected = ["row", "phase", "point", "time_s", "reached", "target_x_mm", "target_y_mm",
+    expected = ["row", "phase", "point", "time_s", "duration_s", "limited_by", "reached",
+                "target_x_mm", "target_y_mm",
                 "tip_x_mm", "tip_y_mm"]
     for i in range(1, n + 1):
         expected += [f"tension_{i}_N", f"tension_{i}_p", f"length_{i}_mm", f"revolutions_{i}",
                      f"steps_{i}", f"step_increment_{i}", f"rounding_error_{i}_mm"]
     assert list(rows[0]) == expected
     col = {c: np.array([float(r[c]) for r in rows]) for c in expected
-           if c not in ("phase", "reached")}
+           if c not in ("phase", "reached", "limited_by")}
     col["phase"] = [r["phase"] for r in rows]
     assert {r["reached"] for r in rows} <= {"true", "false"}
     col["reached"] = np.array([r["reached"] == "true" for r in rows])

@@ -8,7 +8,8 @@ start with a single dash (``-eq_snes_monitor``, ``-ctl_tao_monitor``,
 once, before any solver module is imported.
 
 Exit status: 0 success; 1 a solve that did not converge; 2 bad input or an
-output that cannot be written (one line on stderr, no traceback); 3 a target
+output that cannot be written (one line on stderr, no traceback; with
+``--json`` also an error object on stdout, docs/json.md); 3 a target
 outside the workspace; 130 interrupted (SIGINT or SIGTERM).  Under mpiexec an
 input error found by every rank is printed once, by rank 0; Open MPI's own
 banner about a non-zero exit status is mpiexec's to print (``mpiexec --quiet``
@@ -25,7 +26,7 @@ import sys
 from ..core.errors import InputError
 
 COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "design", "lengths",
-            "equilibria", "replay", "reproduce")
+            "equilibria", "replay", "schedule", "reproduce", "calibrate")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed
@@ -38,10 +39,30 @@ written), 3 target proven unreachable (control: |target| > l), 4 target not
 reached and not proven unreachable, 130 interrupted."""
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse that also prints a JSON error object for a usage error when the
+    command line asks for ``--json`` (its subcommand parsers are of this class too)."""
+
+    def error(self, message):
+        if "--json" in _ARGV:
+            _json_error("USAGE_ERROR", f"{self.prog}: {message}")
+        super().error(message)
+
+
+_ARGV: list[str] = []
+
+
+def _json_error(code: str, message: str) -> None:
+    """The object ``--json`` prints on stdout with exit status 2 (docs/json.md)."""
+    from .common import print_json
+    print_json("error", {"status": 2, "error": code, "message": message})
+    sys.stdout.flush()
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="elastica-petsc",
         description="Equilibria, tip control, stability and workspaces of tendon-actuated "
                     "elastic arms (Handral & Rangarajan 2019) with PETSc, TAO and SLEPc.",
@@ -100,6 +121,7 @@ def warn_unused(petsc_options: list[str]) -> None:
 
 def _main(argv: list[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    _ARGV[:] = argv
     parser = build_parser()
     args, rest = parser.parse_known_args(argv)
     petsc_options = split_petsc_options(parser, rest)
@@ -111,18 +133,23 @@ def _main(argv: list[str] | None) -> int:
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     signal.signal(signal.SIGTERM, _interrupt)   # again: PETSc's initialisation may take it
     progress.configure(quiet=getattr(args, "quiet", False), delay=_progress_delay())
+    as_json = getattr(args, "json", False)
     try:
         status = args.run(args)
     except InputError as err:
         progress.close_all()
         if _first_to_say(err):
             print(f"elastica-petsc: error: {err}", file=sys.stderr)
+            if as_json:
+                _json_error("INPUT_ERROR", str(err))
         return 2
     except OSError as err:                      # an output that could not be written
         progress.close_all()
         where = f" {err.filename}" if err.filename else ""
-        print(f"elastica-petsc: error: cannot write{where}: {err.strerror or err}",
-              file=sys.stderr)
+        message = f"cannot write{where}: {err.strerror or err}"
+        print(f"elastica-petsc: error: {message}", file=sys.stderr)
+        if as_json:
+            _json_error("OUTPUT_ERROR", message)
         return 2
     except KeyboardInterrupt:
         progress.close_all()
@@ -133,7 +160,10 @@ def _main(argv: list[str] | None) -> int:
         if what is None:
             raise
         progress.close_all()
-        return _petsc_error(what, petsc_options)
+        status = _petsc_error(what, petsc_options)
+        if as_json and status == 2:
+            _json_error("PETSC_OPTION_ERROR", f"PETSc: {what}")
+        return status
     warn_unused(petsc_options)
     return status
 

@@ -57,7 +57,7 @@ def run(args) -> int:
         summary["tip_folds_mm"] = result.tip_folds_mm.tolist()
         summary["fold_curves_mm"] = [line.tolist() for line in result.fold_polylines_mm]
         summary["faces"] = result.faces
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print(_format(summary))
     return 0 if all(r.closed for r in result.regions.values()) else 1

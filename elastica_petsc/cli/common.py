@@ -13,8 +13,19 @@ from ..core.model import Arm
 def add_arm_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--config", metavar="TOML",
                         help="arm configuration (default: the paper's arm, configs/paper.toml)")
-    parser.add_argument("--elements", type=int, metavar="N",
-                        help="number of finite elements (overrides the config)")
+    parser.add_argument("--elements", type=elements_count, metavar="N|auto",
+                        help="number of finite elements (overrides the config); auto: the "
+                             "count nearest the config's that puts every attachment on a node")
+
+
+def elements_count(text: str):
+    """``--elements``: an integer or ``auto``."""
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer or auto, got {text!r}") from None
 
 
 def add_output_options(parser: argparse.ArgumentParser, plot: bool = True) -> None:
@@ -79,6 +90,9 @@ def load_arm(args) -> tuple[Arm, "Discretisation"]:
 
     arm = load_config(args.config)
     newton_forms(args, arm)
+    if args.elements == "auto":
+        from ..core.fem import nearest_element_count
+        args.elements = nearest_element_count(arm)
     if args.elements is not None and args.elements < 2:
         raise InputError(f"--elements must be at least 2, got {args.elements}")
     return arm, Discretisation.from_arm(arm, args.elements)
@@ -176,6 +190,12 @@ def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None
         check_directory(args.vtk, args.overwrite)
 
 
-def print_json(data: dict) -> None:
-    json.dump(data, sys.stdout, indent=2)
+JSON_SCHEMA_VERSION = 1     # elastica_petsc/schema/output.schema.json, docs/json.md
+
+
+def print_json(kind: str, data: dict) -> None:
+    """One JSON object on stdout: ``kind`` (the command, or ``error``),
+    ``schema_version``, then ``data`` (docs/json.md)."""
+    json.dump({"kind": kind, "schema_version": JSON_SCHEMA_VERSION, **data}, sys.stdout,
+              indent=2)
     sys.stdout.write("\n")

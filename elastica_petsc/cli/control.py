@@ -169,7 +169,7 @@ def run(args) -> int:
                          elements=disc.n_elements, progress=True)
     summary = control_summary(arm, result)
     if args.json:
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print(format_control(summary))
     if args.out:

@@ -33,8 +33,9 @@ def add_parser(sub) -> None:
                         help="area, or path:FILE.csv (targets x_mm,y_mm) to be made reachable")
     parser.add_argument("--sweep", nargs="+", metavar="AXIS=START:STOP:STEP",
                         help="grid of designs instead of an optimisation; AXIS is "
-                             "tendonK.route.x, tendonK.route.y or tendonK.attach (mm; "
-                             "attachments on mesh nodes)")
+                             "tendonK.route.x, tendonK.route.y, tendonK.attach (mm; "
+                             "attachments on mesh nodes) or tendonK.offset (mm: the offset "
+                             "of the cable's guides and end point)")
     common.add_tension_option(parser, "--tension-max",
                               help=f"motor limit of the area objective (default "
                                    f"{DEFAULT_TENSION_MAX_N:g} N)")
@@ -106,11 +107,35 @@ def _tension_max(args, arm) -> float:
     return float(arm.tensions_from_N([DEFAULT_TENSION_MAX_N])[0])
 
 
+# outcome codes of an optimised design (JSON "outcome"); only IMPROVED writes --out
+IMPROVED = "IMPROVED"                  # the design changed and its objective improved (confirmed)
+NOT_CONFIRMED = "NOT_CONFIRMED"        # area: the optimiser's gain is within the re-sampling error
+NO_IMPROVEMENT = "NO_IMPROVEMENT"      # path: the task is not better reached than before
+UNCHANGED = "UNCHANGED"                # no design step was taken
+INFEASIBLE_START = "INFEASIBLE_START"  # the starting design violates a constraint
+
+
 def _write(args, arm, summary: dict, lines) -> None:
-    if args.out:
-        from ..io.design import write_config
-        write_config(args.out, arm, lines(summary), args.overwrite)
-        summary["file"] = args.out
+    """--out only for an improved design; otherwise say why nothing was written."""
+    summary["file"] = None
+    if not args.out:
+        return
+    if summary["outcome"] != IMPROVED:
+        summary["file_note"] = (f"{args.out} not written: the design did not improve "
+                                f"({summary['outcome']})")
+        return
+    from ..io.design import write_config
+    write_config(args.out, arm, lines(summary), args.overwrite)
+    summary["file"] = args.out
+
+
+def _step_line(s: dict) -> str:
+    """Iterations and TAO's reason, or that the optimiser took no step."""
+    counts = f"{s['iterations']} iterations, {s['evaluations']} evaluations, {s['seconds']:.1f} s"
+    if s["iterations"] == 0:
+        return f"  {counts}: the optimiser took no step (TAO stopped at the start: " \
+               f"{s['tao_reason']}), so there is no optimised design to report"
+    return f"  {counts}; TAO: {s['tao_reason']}"
 
 
 def _run_path(args) -> int:
@@ -131,10 +156,19 @@ def _run_path(args) -> int:
     return 0 if result.misfit_after.reached.all() else 1
 
 
+def path_outcome(result) -> str:
+    before, after = result.misfit_before, result.misfit_after
+    if result.arm_after == result.arm_before:
+        return UNCHANGED
+    better = (after.reached.sum(), -after.errors_mm.max()) > (before.reached.sum(),
+                                                              -before.errors_mm.max())
+    return IMPROVED if better else NO_IMPROVEMENT
+
+
 def _show(args, summary: dict, history, lines) -> None:
     if args.json:
         summary["history"] = history
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print("\n".join(lines(summary)))
 
@@ -164,12 +198,50 @@ def _run_area(args) -> int:
         plot_area_design(result, args.plot)
         summary["plot"] = args.plot
     _show(args, summary, result.history, area_lines)
-    return 0 if result.confirmed else 1
+    return 0 if summary["outcome"] == IMPROVED else 1
+
+
+def area_outcome(r) -> str:
+    if not r.before.feasible:
+        return INFEASIBLE_START
+    if r.arm_after == r.arm_before:
+        return UNCHANGED
+    return IMPROVED if r.confirmed else NOT_CONFIRMED
+
+
+def infeasible_start_lines(start: dict, tension_max_N: float) -> list[str]:
+    """What fails at the starting design of an area objective and what to change
+    (``start``: :func:`~elastica_petsc.studies.design_area.infeasibility`)."""
+    lines = [f"  the starting design is infeasible on the edge of the tension box 0 <= P_i <= "
+             f"{tension_max_N:.3g} N, so the optimiser cannot start from it:"]
+    for c in start["crossings"]:
+        first, last = c["first_tensions_N"], c["last_tensions_N"]
+        where = f"P = ({first[0]:.3g}, {first[1]:.3g}) N"
+        if c["nodes"] > 1:
+            where = f"from {where} to ({last[0]:.3g}, {last[1]:.3g}) N along the edge"
+        lines.append(f"  - tendon {c['tendon']}'s cable crosses the arm at {c['nodes']} of the "
+                     f"{c['of']} nodes, {where} (core/clearance.py)")
+    if start["unsolved_tensions_N"]:
+        P = start["unsolved_tensions_N"][0]
+        lines.append(f"  - {len(start['unsolved_tensions_N'])} equilibria along the edge were "
+                     f"not solved, the first at P = ({P[0]:.3g}, {P[1]:.3g}) N")
+    fixes = [f"move r_{c['tendon']} farther from the arm" for c in start["crossings"]]
+    lowest = min((c["lowest_max_tension_N"] for c in start["crossings"]), default=None)
+    if lowest is not None:
+        fixes.append(f"lower --tension-max-N below {lowest:.3g} N (where the first crossing is)")
+    lines.append("  to change: " + ("; or ".join(fixes) if fixes else
+                                    "a smaller --tension-max or other routing points")
+                 + ", and run design again")
+    return lines
 
 
 def area_summary(r, elements: int) -> dict:
     """The JSON summary of an area design (mm, mm^2, N)."""
+    from ..studies.design_area import infeasibility
+
     def sampled(s):
+        if s is None:                            # not re-sampled (an infeasible start)
+            return None
         return {"area_mm2": s.area_mm2, "error_mm2": s.error_mm2, "samples": s.samples,
                 "reached": s.reached, "stable": s.stable, "cables_clear": s.cables_clear}
     force = r.arm_before.force_scale_N
@@ -187,25 +259,32 @@ def area_summary(r, elements: int) -> dict:
         "attach_before_mm": [t.attach_mm for t in r.arm_before.tendons],
         "attach_after_mm": [t.attach_mm for t in r.arm_after.tendons],
         "iterations": r.iterations, "evaluations": len(r.history), "seconds": r.seconds,
-        "tao_reason": r.reason,
+        "tao_reason": r.reason, "outcome": area_outcome(r),
+        "start": r.history[0] | infeasibility(r.before, force),
     }
 
 
 def area_lines(s: dict) -> list[str]:
     a, b = s["resampled_before"], s["resampled_after"]
+    head = (f"design (area of W_0 within 0 <= P_i <= {s['tension_max_N']:.3g} N, p = "
+            f"{s['tension_max']:.3g}; {s['elements']} elements): ")
+    if s["outcome"] == INFEASIBLE_START:
+        return [head + f"start {s['area_before_mm2']:.0f} mm^2, not optimised",
+                *infeasible_start_lines(s["start"], s["tension_max_N"]), *_file_lines(s)]
+    if s["outcome"] == UNCHANGED:
+        return [head + f"{s['area_before_mm2']:.0f} mm^2, unchanged", _step_line(s),
+                *_file_lines(s)]
     gain = 100.0 * (s["area_after_mm2"] / s["area_before_mm2"] - 1.0)
     verdict = ("confirmed by re-sampling" if s["confirmed"] else
                "NOT confirmed by re-sampling (the optimiser's gain is not claimed)")
-    lines = [f"design (area of W_0 within 0 <= P_i <= {s['tension_max_N']:.3g} N, p = "
-             f"{s['tension_max']:.3g}; {s['elements']} elements): {s['area_before_mm2']:.0f} -> "
-             f"{s['area_after_mm2']:.0f} mm^2 ({gain:+.1f} %)",
+    lines = [head + f"{s['area_before_mm2']:.0f} -> {s['area_after_mm2']:.0f} mm^2 "
+             f"({gain:+.1f} %)",
              f"  {verdict}: area {a['area_mm2']:.0f} ± {a['error_mm2']:.0f} mm^2 before, "
              f"{b['area_mm2']:.0f} ± {b['error_mm2']:.0f} after (forward solves on a "
              f"{int(round(np.sqrt(a['samples'])))}^2 tension grid; stable "
              f"{a['stable']}/{a['samples']} and {b['stable']}/{b['samples']}, cables clear "
              f"{a['cables_clear']} and {b['cables_clear']})",
-             f"  {s['iterations']} iterations, {s['evaluations']} evaluations, "
-             f"{s['seconds']:.1f} s; TAO: {s['tao_reason']}"]
+             _step_line(s)]
     for k, (x, y) in enumerate(zip(s["routes_before_mm"], s["routes_after_mm"]), start=1):
         lines.append(f"  r_{k}: ({x[0]:.2f}, {x[1]:.2f}) -> ({y[0]:.2f}, {y[1]:.2f}) mm")
     for k, (x, y) in enumerate(zip(s["attach_before_mm"], s["attach_after_mm"]), start=1):
@@ -215,8 +294,15 @@ def area_lines(s: dict) -> list[str]:
         lines.append(f"  note: det(d x_t/d p) changes sign {s['fold_sign_changes_before']} -> "
                      f"{s['fold_sign_changes_after']} times along the loop: a fold of the tip "
                      "map reaches the box's edge, so the loop's area is not exactly the image's; "
-                     "the re-sampled area is")
-    return lines
+                     "the re-sampled area (the union of the images of the tension grid's "
+                     "cells) is the one to trust")
+    return lines + _file_lines(s)
+
+
+def _file_lines(s: dict) -> list[str]:
+    if s.get("file"):
+        return [f"  wrote {s['file']}"]
+    return [f"  {s['file_note']}"] if s.get("file_note") else []
 
 
 def _run_sweep(args) -> int:
@@ -245,7 +331,7 @@ def _run_sweep(args) -> int:
         return 0
     summary = sweep_summary(sweep, arm)
     if args.json:
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print("\n".join(sweep_lines(summary)))
     return 0 if sweep.complete else 130
@@ -254,7 +340,8 @@ def _run_sweep(args) -> int:
 def sweep_summary(sweep, arm) -> dict:
     v = sweep.values
     best = sweep.best()
-    return {"designs": int(len(sweep.designs)), "done": int(sweep.done.sum()),
+    return {"objective": "sweep", "designs": int(len(sweep.designs)),
+            "done": int(sweep.done.sum()),
             "complete": sweep.complete, "ranks": sweep.ranks, "axes": sweep.names,
             "file": sweep.file,
             "errors": int(np.sum(v["error"][sweep.done] != b"")),
@@ -294,7 +381,7 @@ def _summary(result, elements: int, count: int) -> dict:
         "routes_before_mm": [list(t.route_mm) for t in result.arm_before.tendons],
         "routes_after_mm": [list(t.route_mm) for t in result.arm_after.tendons],
         "iterations": result.iterations, "evaluations": result.evaluations,
-        "seconds": result.seconds, "tao_reason": result.reason,
+        "seconds": result.seconds, "tao_reason": result.reason, "outcome": path_outcome(result),
     }
 
 
@@ -302,8 +389,7 @@ def _lines(s: dict) -> list[str]:
     lines = [f"design (path of {s['targets']} targets, {s['elements']} elements): reached "
              f"{s['reached_before']} -> {s['reached_after']} "
              f"(largest miss {s['max_error_before_mm']:.2f} -> {s['max_error_after_mm']:.2g} mm)",
-             f"  {s['iterations']} iterations, {s['evaluations']} path traces, "
-             f"{s['seconds']:.1f} s; TAO: {s['tao_reason']}",
+             _step_line(s),
              f"  path scaled by the margin: {s['margin_path_reached']} of {s['targets']} "
              f"reached (misfit {s['margin_path_misfit_mm2']:.3g} mm^2); smallest tension "
              f"on the path: {s['smallest_tension_after_N']:.3f} N"]

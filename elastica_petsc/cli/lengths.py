@@ -233,6 +233,10 @@ def format_states(arm, data: dict) -> str:
                          + (f"{s['lengths_requested_mm'][i]:>11.3f} {s['slack_mm'][i]:>11.3f} "
                             if by_length else "")
                          + f"{'yes' if s['taut'][i] else 'no':>5}")
+        for i, clear in enumerate(s["cable_clear"], start=1):
+            if not clear:
+                lines.append(f"  note: cable {i} crosses the arm (a straight cable through the "
+                             "arm: this state needs a guide or is not physical; core/clearance.py)")
         if s["kappa_max"] > s["kappa_limit"]:
             lines.append(f"  note: l*kappa_max = {s['kappa_max']:.4g} exceeds the strain limit "
                          f"{s['kappa_limit']:.4g} (Eq. (19))")
@@ -308,7 +312,7 @@ def plot(arm, data: dict, states, path, title: str) -> None:
 def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
     """Print, write, plot; exit 1 if no state converged."""
     if args.json:
-        common.print_json(data)
+        common.print_json(args.command, data)
     else:
         print(format_states(arm, data))
     if args.out:

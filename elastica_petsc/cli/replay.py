@@ -77,7 +77,7 @@ def run(args) -> int:
     data = replay_summary(args.trace, trace, result, tip_tol_mm=args.tip_tol_mm,
                           shape_tol=args.shape_tol)
     if args.json:
-        common.print_json(data)
+        common.print_json(args.command, data)
     else:
         print(format_replay(data, result.summary()))
     if args.out:

@@ -108,7 +108,7 @@ def run(args) -> int:
     summary["loading"] = None if loading is None else loading.to_json()
     summary.update(extra)
     if args.json:
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print(format_equilibrium(arm, summary))
         if extra:

@@ -56,7 +56,7 @@ def run(args) -> int:
     eq = state.equilibrium
     summary = stability_summary(arm, eq, result, freqs, args.amplitude_mm)
     if args.json:
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print(format_stability(arm, summary))
     if args.out:

@@ -44,9 +44,15 @@ def add_parser(sub) -> None:
     parser.add_argument("--speed-mm-s", type=float, metavar="V",
                         help="tip speed of the schedule's time column in mm/s (default: the "
                              "suggested safe tracing speed, see --amplitude-mm)")
+    parser.add_argument("--step-table", metavar="STEM",
+                        help="write one step/direction timing table per motor, "
+                             "STEM_motorI.csv (time_s, direction, position_steps)")
     parser.add_argument("--animate", metavar="GIF|MP4",
                         help="write an animation of the arm, its cables and the tip trail along "
                              "the path (.gif with Pillow; .mp4 needs ffmpeg)")
+    parser.add_argument("--slow-motion", type=float, default=1.0, metavar="K",
+                        help="--animate: play the schedule K times slower than real time "
+                             "(default 1: real time, frames timed to the schedule)")
     parser.add_argument("--vtk", metavar="DIR",
                         help="write ParaView files into this folder: trace.pvd (the arm and "
                              "cables at every point of the approach and the path, timed as the "
@@ -196,6 +202,24 @@ def format_trace(s: dict) -> str:
     if s["duration_s"] is not None:
         lines.append(f"schedule: {s['schedule_rows']} rows, {s['duration_s']:.1f} s at "
                      f"{s['speed_mm_s']:.3g} mm/s ({s['speed_source']})")
+    if s["peak_speed_steps_s"] is not None:
+        peaks = ", ".join(f"motor {i}: {v:.4g} microsteps/s, {a:.4g} microsteps/s^2"
+                          for i, (v, a) in enumerate(zip(s["peak_speed_steps_s"],
+                                                         s["peak_accel_steps_s2"]), 1))
+        if s["motor_limits"] is None:
+            lines.append(f"motor peaks {peaks}; no [motor] max_speed_steps_s / "
+                         "max_accel_steps_s2 in the config, so nothing checks that the motors "
+                         "can play them (`elastica-petsc schedule CSV` checks and re-times)")
+        else:
+            runs = ", ".join(f"{a}" + (f"-{b}" if b > a else "") + f" ({code})"
+                             for a, b, code in s["slowed_rows"][:8])
+            more = len(s["slowed_rows"]) - 8
+            lines.append(f"motor peaks {peaks}, within the [motor] limits; rows where a motor "
+                         f"slowed the tip: {s['rows_slowed_by_motor']}"
+                         + (f": {runs}" + (f" and {more} more runs" if more > 0 else "")
+                            if runs else "")
+                         + f"; no schedule under the limits is shorter than "
+                           f"{s['time_bound_s']:.1f} s")
     if s.get("max_tracing_speed_mm_s") is not None:
         lines.append(f"lowest natural frequency along the path {s['f1_min_hz']:.3g} Hz (tensions "
                      f"held): suggested max tracing speed {s['max_tracing_speed_mm_s']:.3g} mm/s, "
@@ -217,7 +241,43 @@ def schedule_summary(planned, guessed: bool) -> dict:
            "speed_mm_s": planned.speed["speed_mm_s"],
            "speed_source": planned.speed["speed_source"],
            "duration_s": None if math.isnan(sched.duration_s) else round(sched.duration_s, 3)}
+    out.update(motor_summary(sched))
     return out
+
+
+def motor_summary(sched) -> dict:
+    """Peak motor rates of the timed schedule, the limits and where they slowed the tip."""
+    import math
+    from collections import Counter
+
+    from ..core.motion import rates_and_accelerations
+    from ..io.summary import rounded
+
+    if math.isnan(sched.duration_s) or sched.n_rows < 2:
+        return {"motor_limits": None, "peak_speed_steps_s": None, "peak_accel_steps_s2": None,
+                "rows_slowed_by_motor": 0, "slowed_by": {}, "slowed_rows": [],
+                "time_bound_s": None}
+    r, a = rates_and_accelerations(sched.positions_steps, sched.durations_s[1:])
+    labels = [str(x) for x in sched.limited_by]
+    slowed = [x for x in labels if x.startswith(("speed_", "accel_"))]
+    return {"motor_limits": None if sched.limits is None else sched.limits.to_json(),
+            "peak_speed_steps_s": rounded(abs(r).max(axis=0)),
+            "peak_accel_steps_s2": rounded(abs(a).max(axis=0)),
+            "rows_slowed_by_motor": len(slowed), "slowed_by": dict(sorted(Counter(slowed).items())),
+            "slowed_rows": slowed_runs(labels), "time_bound_s": round(sched.speed_bound_s, 6)}
+
+
+def slowed_runs(labels: list[str]) -> list[list]:
+    """[first row, last row, limit code] of each run of rows a motor limit slowed."""
+    runs = []
+    for k, label in enumerate(labels):
+        if not label.startswith(("speed_", "accel_")):
+            continue
+        if runs and runs[-1][1] == k - 1 and runs[-1][2] == label:
+            runs[-1][1] = k
+        else:
+            runs.append([k, k, label])
+    return runs
 
 
 def check_options(args) -> None:
@@ -228,6 +288,10 @@ def check_options(args) -> None:
     common.check_outputs(args)
     if args.schedule:
         check_output_path(args.schedule, args.overwrite)
+    if args.step_table:
+        for i in range(1, common.load_config(args.config).n_tendons + 1):
+            check_output_path(f"{args.step_table}_motor{i}.csv", args.overwrite, (".csv",),
+                              "--step-table")
     if args.animate:
         from ..plots.animate import check_animation_path
         check_animation_path(args.animate, args.overwrite)
@@ -239,6 +303,8 @@ def check_options(args) -> None:
                          "--json")
     if args.speed_mm_s is not None and not args.speed_mm_s > 0:
         raise InputError(f"--speed-mm-s must be positive, got {args.speed_mm_s}")
+    if not args.slow_motion > 0:
+        raise InputError(f"--slow-motion must be positive, got {args.slow_motion}")
 
 
 def write_outputs(args, arm, disc, planned) -> None:
@@ -246,6 +312,8 @@ def write_outputs(args, arm, disc, planned) -> None:
     result, schedule = planned.path, planned.schedule
     if args.schedule:
         schedule.write_csv(args.schedule)
+    if args.step_table:
+        schedule.write_step_tables(args.step_table)
     if args.out:
         from ..io.hdf5 import atomic_h5, provenance, write_attrs, write_trace
         with atomic_h5(args.out, args.overwrite) as fh:
@@ -265,7 +333,8 @@ def write_outputs(args, arm, disc, planned) -> None:
                   approach=planned.approach, approach_times_s=schedule.time_s[:rows[0]])
     if args.animate:
         from ..plots.animate import animate_trace
-        animate_trace(arm, result, args.animate, approach=planned.approach)
+        animate_trace(arm, result, args.animate, approach=planned.approach,
+                      times_s=schedule.time_s, slow_motion=args.slow_motion)
 
 
 def run(args) -> int:
@@ -291,10 +360,14 @@ def run(args) -> int:
     if args.json:
         if args.per_point:
             summary["per_point"] = point_entries(result, planned.schedule)
-        common.print_json(summary)
+        common.print_json(args.command, summary)
     else:
         print(format_trace(summary))
     write_outputs(args, arm, disc, planned)
+    if args.speed_mm_s is not None and summary["rows_slowed_by_motor"]:
+        print(f"elastica-petsc: warning: the motors cannot follow --speed-mm-s "
+              f"{args.speed_mm_s:g} on {summary['rows_slowed_by_motor']} rows: the tip is slower "
+              "there (the limited_by column of --schedule)", file=sys.stderr)
     before = planned.approach
     if before is not None and not before.all_converged:
         print(f"elastica-petsc: warning: {before.n_points - int(before.converged.sum())} of "

@@ -93,7 +93,8 @@ def _run(args, comm) -> int:
         return 0
     summary = result.summary()
     if args.json:
-        common.print_json(summary)
+        from ..studies.map_area import map_json
+        common.print_json(args.command, summary | map_json(result, args.box))
     else:
         print(format_summary(summary))
     if not summary["complete"]:

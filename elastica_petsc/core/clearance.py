@@ -78,7 +78,38 @@ def crossing_elements(nodes: np.ndarray, attach_node: int, route: np.ndarray) ->
     return np.flatnonzero(hits)
 
 
+def path_clear(nodes: np.ndarray, paths) -> np.ndarray:
+    """(n,) bool: no straight segment of cable i's path crosses the arm
+    (cables through guides, docs/model.md §11).
+
+    paths : per cable, (points (k+1, 2) from the routing point to the end,
+    node of each point or -1 for the routing point, offset of each point).
+    A point on the centreline (offset 0) starts on the elements that end at
+    its node: those are not tested for the segments that touch it."""
+    nodes = np.asarray(nodes, float)
+    a, b = nodes[:-1], nodes[1:]
+    out = np.ones(len(paths), dtype=bool)
+    for i, (points, point_nodes, offsets) in enumerate(paths):
+        for j in range(1, len(points)):
+            keep = np.ones(len(a), dtype=bool)
+            for k, off in ((point_nodes[j - 1], offsets[j - 1]), (point_nodes[j], offsets[j])):
+                if k >= 0 and off == 0.0:
+                    keep[max(k - 1, 0):k + 1] = False
+            if np.any(segment_hits(points[j - 1], points[j], a[keep], b[keep])):
+                out[i] = False
+                break
+    return out
+
+
 def state_cable_clear(eq) -> np.ndarray:
     """:func:`cable_clear` of a solved state (an ``Equilibrium``: its nodes,
-    attachment nodes and routing points, units of l)."""
-    return cable_clear(eq.x, eq.disc.attach_nodes, eq.disc.routes)
+    attachment nodes and routing points, units of l); every segment of a
+    cable through guides (:func:`path_clear`)."""
+    disc = eq.disc
+    if not disc.has_paths:
+        return cable_clear(eq.x, disc.attach_nodes, disc.routes)
+    starts = disc.path_starts
+    paths = [(points, [-1] + list(disc.point_nodes[starts[i]:starts[i + 1]]),
+              [1.0] + list(disc.point_offsets[starts[i]:starts[i + 1]]))
+             for i, points in enumerate(eq.cable_points)]
+    return path_clear(eq.x, paths)

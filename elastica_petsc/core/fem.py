@@ -64,6 +64,24 @@ class Terms(NamedTuple):
     force: np.ndarray        # sum of the tendon forces acting on each element (N, 2)
 
 
+MAX_AUTO_ELEMENTS = 100_000
+
+
+def nearest_element_count(arm: Arm, near: int | None = None) -> int:
+    """The element count nearest ``near`` (default the config's ``elements``; the
+    larger one on a tie) that puts every attachment on a node: s_i / l * N an
+    integer (to 1e-9 N, as :meth:`Discretisation.from_arm` checks)."""
+    near = max(2, arm.elements if near is None else near)
+    s = np.asarray(arm.attachments(), float)
+    for gap in range(MAX_AUTO_ELEMENTS):
+        for n in (near + gap, near - gap):
+            if 2 <= n <= MAX_AUTO_ELEMENTS and np.all(np.abs(s * n - np.rint(s * n)) <= 1e-9 * n):
+                return n
+    raise DiscretisationError(
+        f"no element count up to {MAX_AUTO_ELEMENTS} puts every attachment on a node (s_i / l "
+        f"= {', '.join(f'{v:.6g}' for v in s)}); round the attachments or give --elements N")
+
+
 @dataclass(frozen=True)
 class Discretisation:
     """Mesh and tendon data of one arm, non-dimensional."""
@@ -72,9 +90,23 @@ class Discretisation:
     attach_nodes: tuple[int, ...]   # m_i: node index of tendon i's attachment
     routes: np.ndarray              # (n, 2) routing points r_i / l
 
+    # cables through guides, offsets or weight (core/guided.py, docs/model.md §11)
+    has_paths = False
+    _path_kernels = []            # the subclass with has_paths, registered on definition
+
+    def __init_subclass__(cls, **kw):
+        super().__init_subclass__(**kw)
+        if cls.has_paths:
+            Discretisation._path_kernels[:] = [cls]
+
     @classmethod
     def from_arm(cls, arm: Arm, n_elements: int | None = None) -> "Discretisation":
-        """Put ``arm`` on a uniform mesh; attachments must fall on nodes."""
+        """Put ``arm`` on a uniform mesh; attachments must fall on nodes.  An arm
+        with guides, offsets or weight gets the kernel of docs/model.md §11
+        (:class:`~.guided.GuidedDiscretisation`, registered when the package
+        ``core`` is imported); the paper's cables keep this kernel."""
+        if cls is Discretisation and arm.has_paths:
+            return cls._path_kernels[0].from_arm(arm, n_elements)
         n = arm.elements if n_elements is None else n_elements
         if n < 2:
             raise DiscretisationError(f"need at least 2 elements, got {n}")
@@ -86,7 +118,8 @@ class Discretisation:
                 raise DiscretisationError(
                     f"tendon {i}: attachment s = {s * arm.length_mm:g} mm is not on a node of "
                     f"the {n}-element mesh (spacing {h_mm:g} mm); choose an element count that "
-                    f"makes s_i / l * N an integer (nearest node: {k * h_mm:g} mm)")
+                    f"makes s_i / l * N an integer (nearest node: {k * h_mm:g} mm), or "
+                    "--elements auto")
             nodes.append(k)
         return cls(n, tuple(nodes), arm.routes())
 
@@ -103,6 +136,11 @@ class Discretisation:
     def size(self) -> int:
         """Unknowns of the bordered system: N angles + 2 per tendon."""
         return self.n_elements + 2 * self.n_tendons
+
+    @property
+    def stability_border(self) -> int:
+        """Border columns of the stability matrix H: one per tendon."""
+        return self.n_tendons
 
     @cached_property
     def support(self) -> np.ndarray:
@@ -127,6 +165,14 @@ class Discretisation:
     def consistent_state(self, theta: np.ndarray) -> np.ndarray:
         """Bordered state with y_i = X_i(theta) exactly."""
         return self.join(theta, self.node_positions(theta)[list(self.attach_nodes)])
+
+    def attachment_points(self, theta: np.ndarray) -> np.ndarray:
+        """Where each cable ends, (n, 2)."""
+        return self.node_positions(theta)[list(self.attach_nodes)]
+
+    def cable_lengths_of(self, theta: np.ndarray) -> np.ndarray:
+        """L_i = |r_i - x_i| of the state ``theta`` (Eq. (3))."""
+        return np.linalg.norm(self.routes - self.attachment_points(theta), axis=1)
 
     # --- geometry (Eqs. (1)-(2)) -------------------------------------------------
     @staticmethod
@@ -190,6 +236,27 @@ class Discretisation:
         lengths = np.linalg.norm(chord, axis=1)
         return lengths, chord / lengths[:, None]
 
+    def shortest_segments(self, y: np.ndarray) -> np.ndarray:
+        """The shortest straight segment of each cable (here: the whole cable)."""
+        return self.cables(y)[0]
+
+    @property
+    def length_supports(self) -> np.ndarray:
+        """Rows of grad_theta L_i that can be nonzero: 0..length_supports[i]-1."""
+        return np.asarray(self.attach_nodes)
+
+    def length_columns(self, i: int) -> np.ndarray:
+        """Columns of y (0-based in the border) that cable i's length depends on."""
+        return 2 * i + np.arange(2)
+
+    def length_gradients(self, y: np.ndarray) -> np.ndarray:
+        """dL_i/dy, shape (n, 2n): -d_i in tendon i's two columns."""
+        d = self.cables(y)[1]
+        out = np.zeros((self.n_tendons, 2 * self.n_tendons))
+        for i in range(self.n_tendons):
+            out[i, 2 * i: 2 * i + 2] = -d[i]
+        return out
+
     def terms(self, u: np.ndarray, p) -> Terms:
         """The shared quantities of (u, p) (:class:`Terms`)."""
         theta, y = self.split(u)
@@ -215,10 +282,10 @@ class Discretisation:
         x_attach = self.h * np.column_stack((support @ c, support @ s))   # Eq. (2) at s_i
         return np.concatenate((f_theta, (y - x_attach).ravel()))
 
-    def bordered_pattern(self, supports, upper: bool = False):
+    def bordered_pattern(self, supports, upper: bool = False, starts=None):
         """CSR structure of a tridiagonal N x N block bordered by one column and
         one row per entry of ``supports`` (column b is nonzero in rows
-        0..supports[b]-1), with a diagonal corner block.
+        starts[b]..supports[b]-1, ``starts`` default 0), with a diagonal corner block.
 
         Returns (indptr, indices, src): ``src`` maps each stored entry to the flat
         source array concatenating band (N, 3), border columns (N, nb), border
@@ -232,10 +299,12 @@ class Discretisation:
             ok = (k + off >= 0) & (k + off < N)
             rows.append(k[ok]); cols.append(k[ok] + off); src.append(3 * k[ok] + off + 1)
         col_base, row_base, corner_base = 3 * N, 3 * N + nb * N, 3 * N + 2 * nb * N
-        for b, m in enumerate(supports):
-            r = np.arange(m)
-            rows.append(r); cols.append(np.full(m, N + b)); src.append(col_base + r * nb + b)
-            rows.append(np.full(m, N + b)); cols.append(r); src.append(row_base + b * N + r)
+        starts = np.zeros(nb, int) if starts is None else starts
+        for b, (lo, m) in enumerate(zip(starts, supports)):
+            r = np.arange(lo, m)
+            rows.append(r); cols.append(np.full(len(r), N + b))
+            src.append(col_base + r * nb + b)
+            rows.append(np.full(len(r), N + b)); cols.append(r); src.append(row_base + b * N + r)
             rows.append(np.array([N + b])); cols.append(np.array([N + b]))
             src.append(np.array([corner_base + b]))
         rows, cols, src = (np.concatenate(a) for a in (rows, cols, src))
@@ -251,11 +320,21 @@ class Discretisation:
         """CSR structure of the bordered Jacobian (2 border columns per tendon)."""
         return self.bordered_pattern(np.repeat(self.attach_nodes, 2))
 
+    @property
+    def stability_pattern_supports(self) -> np.ndarray:
+        """Rows reached by each border column of H (W's columns): up to this one."""
+        return np.asarray(self.attach_nodes)
+
+    @property
+    def stability_pattern_starts(self) -> np.ndarray:
+        """The first row reached by each border column of H."""
+        return np.zeros(self.n_tendons, int)
+
     @cached_property
     def stability_pattern(self):
         """Upper-triangle CSR structure of the symmetric stability matrix H
         (one border column per tendon)."""
-        return self.bordered_pattern(np.asarray(self.attach_nodes), upper=True)
+        return self.bordered_pattern(self.stability_pattern_supports, upper=True)
 
     def band(self, theta, d, p, terms: Terms | None = None) -> np.ndarray:
         """Tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper);

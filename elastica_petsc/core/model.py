@@ -21,12 +21,31 @@ class ModelError(InputError):
 
 
 @dataclass(frozen=True)
+class Guide:
+    """A guide (spacer disk, eyelet) on the arm that a cable passes through:
+    at arc length ``s_mm``, ``offset_mm`` along the normal to the left of the
+    arm's tangent (docs/model.md §11)."""
+
+    s_mm: float
+    offset_mm: float = 0.0
+
+
+@dataclass(frozen=True)
 class Tendon:
-    """One cable: attached to the centreline at arc length ``attach_mm`` and
-    routed in a straight line to the fixed point ``route_mm`` (Eqs. (3)-(4))."""
+    """One cable: from the fixed point ``route_mm`` (the motor end) through the
+    ``guides`` in order, straight between consecutive points, to its end at arc
+    length ``attach_mm``, ``attach_offset_mm`` along the left normal (Eqs. (3)-(4);
+    without guides and offset, the paper's cable; docs/model.md §11)."""
 
     attach_mm: float
     route_mm: tuple[float, float]
+    attach_offset_mm: float = 0.0
+    guides: tuple[Guide, ...] = ()
+
+    @property
+    def routed_straight(self) -> bool:
+        """The paper's cable: straight from the routing point to the centreline."""
+        return not self.guides and self.attach_offset_mm == 0.0
 
 
 @dataclass(frozen=True)
@@ -37,6 +56,9 @@ class Motor:
     steps_per_rev: int = 200
     microsteps: int = 16
     max_tension_N: float | None = None  # P_crit of Eq. (22); None: no upper bound
+    # stepper limits in microsteps/s and /s^2: one number, or one per tendon (core/motion.py)
+    max_speed_steps_s: float | tuple[float, ...] | None = None
+    max_accel_steps_s2: float | tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -58,6 +80,10 @@ class Arm:
     thickness_mm: float = 3.0
     width_mm: float = 40.0
     mass_per_length_kg_m: float | None = None
+    youngs_modulus_Pa: float | None = None   # the material, when B came from it
+    density_kg_m3: float | None = None       # the material, when the mass came from it
+    gravity_m_s2: tuple[float, float] | None = None   # in the clamp's frame, arm along +x
+    tip_mass_kg: float = 0.0
     motor: Motor = field(default_factory=Motor)
     limits: Limits = field(default_factory=Limits)
 
@@ -89,6 +115,28 @@ class Arm:
     @property
     def n_tendons(self) -> int:
         return len(self.tendons)
+
+    @property
+    def has_paths(self) -> bool:
+        """Guides, offsets or weight: the kernel of docs/model.md §11 is needed."""
+        return (not all(t.routed_straight for t in self.tendons)
+                or np.any(self.gravity_load() != 0.0) or np.any(self.tip_weight() != 0.0))
+
+    def gravity_load(self) -> np.ndarray:
+        """q = rho_A g l^3 / B, the non-dimensional weight per length (docs/model.md §11)."""
+        if self.gravity_m_s2 is None or self.mass_per_length_kg_m is None:
+            return np.zeros(2)
+        length_m = self.length_mm * 1e-3
+        return (self.mass_per_length_kg_m * np.asarray(self.gravity_m_s2, float)
+                * length_m**3 / self.bending_stiffness_Nm2)
+
+    def tip_weight(self) -> np.ndarray:
+        """m_tip g l^2 / B, the non-dimensional weight of the tip mass."""
+        if self.gravity_m_s2 is None or not self.tip_mass_kg:
+            return np.zeros(2)
+        length_m = self.length_mm * 1e-3
+        return (self.tip_mass_kg * np.asarray(self.gravity_m_s2, float)
+                * length_m**2 / self.bending_stiffness_Nm2)
 
     def attachments(self) -> np.ndarray:
         """Attachment arc lengths s_i / l."""
@@ -139,12 +187,14 @@ def validate(arm: Arm) -> None:
     positive("arm.bending_stiffness_Nm2", arm.bending_stiffness_Nm2)
     positive("arm.thickness_mm", arm.thickness_mm)
     positive("arm.width_mm", arm.width_mm)
-    if arm.mass_per_length_kg_m is not None:
-        positive("arm.mass_per_length_kg_m", arm.mass_per_length_kg_m)
+    for key in ("mass_per_length_kg_m", "youngs_modulus_Pa", "density_kg_m3"):
+        if getattr(arm, key) is not None:
+            positive(f"arm.{key}", getattr(arm, key))
     if not isinstance(arm.elements, int) or isinstance(arm.elements, bool) or arm.elements < 2:
         raise ModelError(f"arm.elements must be an integer >= 2, got {arm.elements!r}")
     if len(arm.tendons) < 1:
         raise ModelError("tendon: at least one [[tendon]] is needed")
+    _validate_weight(arm)
     for i, tendon in enumerate(arm.tendons, start=1):
         key = f"tendon[{i}]"
         positive(f"{key}.attach_mm", tendon.attach_mm)
@@ -152,17 +202,20 @@ def validate(arm: Arm) -> None:
             raise ModelError(
                 f"{key}.attach_mm = {tendon.attach_mm} lies beyond the arm's length "
                 f"{arm.length_mm} mm (need 0 < s_i <= l)")
+        _validate_path(arm, tendon, key)
         if len(tendon.route_mm) != 2 or not all(
                 isinstance(c, (int, float)) and math.isfinite(c) for c in tendon.route_mm):
             raise ModelError(f"{key}.route_mm must be two numbers [x, y] in mm")
         if math.hypot(*tendon.route_mm) > MAX_ROUTE_DISTANCE * arm.length_mm:
             raise ModelError(f"{key}.route_mm lies more than {MAX_ROUTE_DISTANCE:g} arm lengths "
                              "from the clamp (a dead load is modelled well long before that)")
-        gap = math.hypot(tendon.route_mm[0] - tendon.attach_mm, tendon.route_mm[1])
+        first = tendon.guides[0] if tendon.guides else Guide(tendon.attach_mm,
+                                                             tendon.attach_offset_mm)
+        gap = math.hypot(tendon.route_mm[0] - first.s_mm, tendon.route_mm[1] - first.offset_mm)
         if gap < 1e-9 * arm.length_mm:
             raise ModelError(
-                f"{key}.route_mm coincides with its attachment point on the straight arm "
-                "(a cable of zero length)")
+                f"{key}.route_mm coincides with the cable's first point on the straight arm "
+                "(a segment of zero length)")
     motor = arm.motor
     positive("motor.spool_radius_mm", motor.spool_radius_mm)
     for name in ("steps_per_rev", "microsteps"):
@@ -171,14 +224,66 @@ def validate(arm: Arm) -> None:
             raise ModelError(f"motor.{name} must be a positive integer, got {value!r}")
     if motor.max_tension_N is not None:
         positive("motor.max_tension_N", motor.max_tension_N)
+    from .motion import MotorLimits
+    try:
+        MotorLimits.of(motor, len(arm.tendons))
+    except InputError as err:
+        raise ModelError(str(err)) from None
     positive("limits.failure_strain", arm.limits.failure_strain)
     positive("limits.strain_energy_max_SE0", arm.limits.strain_energy_max_SE0)
+
+
+def _finite(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _validate_weight(arm: Arm) -> None:
+    """Gravity needs a mass; a tip mass is >= 0 (docs/model.md §11)."""
+    if not (_finite(arm.tip_mass_kg) and arm.tip_mass_kg >= 0):
+        raise ModelError(f"arm.tip_mass_kg must be a number >= 0, got {arm.tip_mass_kg!r}")
+    if arm.gravity_m_s2 is None:
+        return
+    g = arm.gravity_m_s2
+    if len(g) != 2 or not all(_finite(c) for c in g):
+        raise ModelError(f"arm.gravity_m_s2 must be two numbers [gx, gy] in m/s^2, got {g!r}")
+    if arm.mass_per_length_kg_m is None and not arm.tip_mass_kg and any(g):
+        raise ModelError("arm.gravity_m_s2 is given but neither arm.mass_per_length_kg_m nor "
+                         "arm.tip_mass_kg: gravity needs a mass")
+
+
+def _validate_path(arm: Arm, tendon: Tendon, key: str) -> None:
+    """Guides on the arm, offsets within the arm's width, no two points of the
+    path at one place (a segment of zero length has no direction)."""
+    points = [(g.s_mm, g.offset_mm, f"{key}.guides[{j}]")
+              for j, g in enumerate(tendon.guides, start=1)]
+    points.append((tendon.attach_mm, tendon.attach_offset_mm, f"{key}.attach"))
+    for s_mm, offset_mm, where in points:
+        if not (_finite(s_mm) and _finite(offset_mm)):
+            raise ModelError(f"{where}: arc length and offset must be numbers in mm")
+        if not 0.0 < s_mm <= arm.length_mm * (1 + 1e-12):
+            raise ModelError(f"{where}: s = {s_mm:g} mm lies outside the arm "
+                             f"(need 0 < s <= l = {arm.length_mm:g} mm)")
+        if abs(offset_mm) > 0.5 * arm.width_mm:
+            raise ModelError(f"{where}: offset {offset_mm:g} mm is larger than half the arm's "
+                             f"width (arm.width_mm = {arm.width_mm:g} mm)")
+    for j, (s0, d0, w0) in enumerate(points):
+        for s1, d1, w1 in points[j + 1:]:
+            _distinct(arm, (s0, d0, w0), (s1, d1, w1))
+
+
+def _distinct(arm: Arm, a, b) -> None:
+    (s0, d0, w0), (s1, d1, w1) = a, b
+    if abs(s0 - s1) <= 1e-9 * arm.length_mm and abs(d0 - d1) <= 1e-9 * arm.length_mm:
+        raise ModelError(f"{w0} and {w1} are at one point (s = {s0:g} mm, offset "
+                         f"{d0:g} mm): two points of one cable must differ")
 
 
 def arm_from_dict(data: dict) -> Arm:
     """Build an Arm from parsed TOML (mm, N m^2, N; layout of core/config.py)."""
     values = config_values(data)
-    return Arm(tendons=tuple(Tendon(**t) for t in values["tendons"]),
+    tendons = tuple(Tendon(**{**t, "guides": tuple(Guide(**g) for g in t["guides"])})
+                    for t in values["tendons"])
+    return Arm(tendons=tendons,
                motor=Motor(**values["motor"]), limits=Limits(**values["limits"]),
                **values["arm"])
 

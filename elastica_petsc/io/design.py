@@ -13,6 +13,8 @@ def _value(v) -> str:
         return "true" if v else "false"
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_value(x) for x in v) + "]"
+    if isinstance(v, dict):                                 # a guide: an inline table
+        return "{" + ", ".join(f"{k} = {_value(x)}" for k, x in v.items()) + "}"
     if isinstance(v, float):
         return repr(v)
     return str(v)
@@ -29,7 +31,7 @@ def config_toml(arm, header_lines=()) -> str:
                   if data[section].get(k) is not None]
     for tendon in data["tendon"]:
         lines += ["", "[[tendon]]"]
-        lines += [f"{k} = {_value(tendon[k])}" for k in SCHEMA["tendon"]]
+        lines += [f"{k} = {_value(tendon[k])}" for k in SCHEMA["tendon"] if k in tendon]
     return "\n".join(lines) + "\n"
 
 

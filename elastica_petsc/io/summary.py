@@ -86,9 +86,10 @@ def format_equilibrium(arm: Arm, summary: dict) -> str:
 
 def crossing_lines(cable_clear) -> list[str]:
     """Warnings for cables whose straight segment crosses the arm."""
-    return [f"WARNING: tendon {i}'s cable crosses the arm (the straight segment from its "
-            "attachment to its routing point passes through the arm: not a physical state "
-            "for a real cable)" for i, clear in enumerate(cable_clear, start=1) if not clear]
+    return [f"WARNING: tendon {i}'s cable crosses the arm (a straight segment of the cable, "
+            "between its routing point, guides and attachment, passes through the arm: not a "
+            "physical state for a real cable)"
+            for i, clear in enumerate(cable_clear, start=1) if not clear]
 
 
 def stability_summary(arm: Arm, eq: Equilibrium, result, freqs: dict | None,

@@ -8,7 +8,8 @@ beside them; booleans as UInt8 0/1 (VTK has no boolean type).
   (point data ``s_mm``, ``theta_rad``; cell data ``curvature`` l*theta',
   ``part`` = 0) and each cable as one line cell from its attachment node to
   its routing point (``part`` = i, ``tension_N``, ``tension_p``,
-  ``cable_length_mm``).  Eqs. (2)-(4).
+  ``cable_length_mm``).  Eqs. (2)-(4).  A cable through guides is one line
+  cell per segment, routing point -> guides -> end (docs/model.md §11).
 * :func:`write_states` — equilibria into a folder (``solve``, ``control``,
   ``lengths``, ``equilibria`` ``--vtk``): one such file each, and a
   ``.pvd`` listing several by their number.
@@ -125,6 +126,8 @@ def _write_text(path: Path, text: str) -> None:
 # --- states and paths -----------------------------------------------------------------------
 def state_grid(arm, eq):
     """(points, cells, point data, cell data) of one equilibrium (see the module doc)."""
+    if eq.disc.has_paths:
+        return _guided_state_grid(arm, eq)
     l_mm, N, n = arm.length_mm, eq.disc.n_elements, arm.n_tendons
     routes = arm.routes() * l_mm
     points = np.vstack((eq.x * l_mm, routes))
@@ -140,6 +143,31 @@ def state_grid(arm, eq):
                  "tension_p": np.concatenate((np.full(N, np.nan), eq.p)),
                  "cable_length_mm": np.concatenate((np.full(N, np.nan), eq.cable_lengths * l_mm))}
     return points, [(VTK_LINE, np.vstack((arm_cells, cable_cells)))], point_data, cell_data
+
+
+def _guided_state_grid(arm, eq):
+    """:func:`state_grid` with every cable a polyline from its routing point through
+    its guides to its end (docs/model.md §11): one line cell per segment, whose
+    tension and cable length (the whole path) are the cable's."""
+    l_mm, N = arm.length_mm, eq.disc.n_elements
+    lines = eq.cable_points
+    points = np.vstack([eq.x * l_mm] + [c * l_mm for c in lines])
+    first = N + 1 + np.cumsum([0] + [len(c) for c in lines[:-1]])
+    segs = [np.column_stack((f + np.arange(len(c) - 1), f + np.arange(1, len(c))))
+            for f, c in zip(first, lines)]
+    tendon = np.concatenate([np.full(len(s), i) for i, s in enumerate(segs)])
+    n_cable_points, n_segs = len(points) - N - 1, len(tendon)
+    nan_p, nan_s = np.full(n_cable_points, np.nan), np.full(N, np.nan)
+    P = arm.tensions_to_N(eq.p)
+    point_data = {"s_mm": np.concatenate((np.linspace(0.0, l_mm, N + 1), nan_p)),
+                  "theta_rad": np.concatenate((eq.theta, nan_p))}
+    cell_data = {"part": np.concatenate((np.zeros(N, np.int64), tendon + 1)),
+                 "curvature": np.concatenate((eq.curvature, np.full(n_segs, np.nan))),
+                 "tension_N": np.concatenate((nan_s, P[tendon])),
+                 "tension_p": np.concatenate((nan_s, np.asarray(eq.p)[tendon])),
+                 "cable_length_mm": np.concatenate((nan_s, eq.cable_lengths[tendon] * l_mm))}
+    arm_cells = np.column_stack((np.arange(N), np.arange(1, N + 1)))
+    return points, [(VTK_LINE, np.vstack([arm_cells] + segs))], point_data, cell_data
 
 
 def write_state(path, arm, eq) -> Path:

@@ -12,7 +12,7 @@ computing).  Geometry in mm, tensions in N beside p = P l^2/B.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +22,7 @@ from ..core.model import Arm
 from .common import TENDON_COLOURS, draw_setting, figure
 
 FORMATS = (".gif", ".mp4")
-DPI = 80                     # 6.4 x 5.2 in -> 512 x 416 pixels
+DPI = 160                    # 6.4 x 5.2 in -> 1024 x 832 pixels; 8 pt text is 18 px high
 
 
 @dataclass(frozen=True)
@@ -33,6 +33,8 @@ class Frame:
     attachments_mm: np.ndarray    # (n, 2)
     tip_mm: np.ndarray            # (2,)
     caption: str
+    duration_s: float = 0.0       # how long it is shown (0: the animation's fps)
+    cables_mm: tuple = ()         # each cable's polyline, routing point to end (guides between)
 
 
 def check_animation_path(path, overwrite: bool = False) -> Path:
@@ -54,7 +56,8 @@ def check_animation_path(path, overwrite: bool = False) -> Path:
 
 def _frame(arm: Arm, eq, caption: str) -> Frame:
     l_mm = arm.length_mm
-    return Frame(eq.x * l_mm, eq.attachments * l_mm, eq.tip * l_mm, caption)
+    return Frame(eq.x * l_mm, eq.attachments * l_mm, eq.tip * l_mm, caption,
+                 cables_mm=tuple(c * l_mm for c in eq.cable_points))
 
 
 def _tensions(arm: Arm, p) -> str:
@@ -66,19 +69,39 @@ def _pick(count: int, max_frames: int) -> np.ndarray:
     return np.unique(np.linspace(0, count - 1, min(count, max_frames)).round().astype(int))
 
 
-def trace_frames(arm: Arm, trace, max_frames: int = 150, approach=None) -> list[Frame]:
+def trace_frames(arm: Arm, trace, max_frames: int = 150, approach=None, times_s=None,
+                 slow_motion: float = 1.0, fps: float = 10.0) -> list[Frame]:
     """Frames of a traced path (``trace.results`` needed: trace with
-    keep_results), preceded by those of its ``approach`` (another trace) if given."""
+    keep_results), preceded by those of its ``approach`` (another trace) if given.
+    With ``times_s`` (the schedule's time of every row, approach rows first) the
+    frames are timed to the schedule, ``slow_motion`` times slower than real time:
+    one every 1/``fps`` s of playback (longer if more than ``max_frames`` would be
+    needed), showing the row the motors have reached then, until it is replaced (the
+    last, the end of the schedule, for one interval more)."""
     parts = [(name, t) for name, t in (("approach", approach), ("point", trace)) if t is not None]
     if any(not t.results for _, t in parts):
         raise InputError("animating a trace needs its per-point states (keep_results=True)")
     rows = [(name, k, t) for name, t in parts for k in range(t.n_points)]
+    timed = times_s is not None and len(times_s) == len(rows) and np.all(np.isfinite(times_s))
+    if timed:
+        if not slow_motion > 0:
+            raise InputError(f"--slow-motion must be positive, got {slow_motion}")
+        play_s = float(times_s[-1]) * slow_motion
+        show_s = max(1.0 / fps, play_s / max(max_frames - 1, 1))    # each frame's display
+        count = int(np.ceil(play_s / show_s - 1e-9)) + 1
+        at_s = np.minimum(np.arange(count) * show_s, play_s) / slow_motion   # schedule time
+        picks = np.clip(np.searchsorted(times_s, at_s * (1 + 1e-12), side="right") - 1, 0,
+                        len(rows) - 1)
+    else:
+        picks, at_s, show_s = _pick(len(rows), max_frames), None, 0.0
     frames = []
-    for j in _pick(len(rows), max_frames):
-        name, k, t = rows[j]
-        frames.append(_frame(arm, t.results[k].equilibrium,
-                             f"{name} {k + 1}/{t.n_points}: {_tensions(arm, t.p[k])}"
-                             + ("" if t.converged[k] else "  (NOT reached)")))
+    for j, row in enumerate(picks):
+        name, k, t = rows[row]
+        clock = "" if at_s is None else f"t = {at_s[j]:.1f} s  "
+        frame = _frame(arm, t.results[k].equilibrium,
+                       f"{clock}{name} {k + 1}/{t.n_points}: {_tensions(arm, t.p[k])}"
+                       + ("" if t.converged[k] else "  (NOT reached)"))
+        frames.append(replace(frame, duration_s=show_s))
     return frames
 
 
@@ -116,7 +139,7 @@ def animate(arm: Arm, frames: list[Frame], path, *, targets_mm=None, title: str 
     tip, = ax.plot([], [], "o", color="k", ms=5, zorder=5)
     cables = [ax.plot([], [], "-", lw=1.0, color=TENDON_COLOURS[i % len(TENDON_COLOURS)],
                       zorder=2)[0] for i in range(arm.n_tendons)]
-    caption = ax.text(0.02, 0.02, "", transform=ax.transAxes, fontsize=8)
+    caption = fig.text(0.5, 0.04, "", ha="center", fontsize=9)    # under the axes, off the arm
     pts = np.vstack([f.x_mm for f in frames] + [routes, [[0.0, 0.0], [arm.length_mm, 0.0]]])
     pad = 0.05 * np.ptp(pts, axis=0).max()
     ax.set_xlim(pts[:, 0].min() - pad, pts[:, 0].max() + pad)
@@ -134,24 +157,26 @@ def animate(arm: Arm, frames: list[Frame], path, *, targets_mm=None, title: str 
         arm_line.set_data(f.x_mm[:, 0], f.x_mm[:, 1])
         tip.set_data([f.tip_mm[0]], [f.tip_mm[1]])
         trail.set_data(tips[:k + 1, 0], tips[:k + 1, 1])
-        for c, a, r in zip(cables, f.attachments_mm, routes):
-            c.set_data([a[0], r[0]], [a[1], r[1]])
+        for c, line in zip(cables, f.cables_mm):
+            c.set_data(line[:, 0], line[:, 1])
         caption.set_text(f.caption)
         return [arm_line, tip, trail, caption, *cables]
 
     import matplotlib.pyplot as plt
     try:
+        shown_ms = [int(round(1000.0 * (f.duration_s or 1.0 / fps))) for f in frames]
         if path.suffix.lower() == ".gif":
-            _write_gif(fig, draw, len(frames), path, fps)
-        else:
+            _write_gif(fig, draw, shown_ms, path)
+        else:                          # constant frame rate: the frames' mean duration
+            rate = 1000.0 / float(np.mean(shown_ms))
             movie = animation.FuncAnimation(fig, draw, frames=len(frames), blit=False)
-            movie.save(path, writer=animation.FFMpegWriter(fps=fps), dpi=DPI)
+            movie.save(path, writer=animation.FFMpegWriter(fps=rate), dpi=DPI)
     finally:
         plt.close(fig)
     return path
 
 
-def _write_gif(fig, draw, count: int, path: Path, fps: float) -> None:
+def _write_gif(fig, draw, shown_ms: list[int], path: Path) -> None:
     """Blitted frames into an animated GIF with Pillow: the static picture
     (axes, routing points, targets) is drawn once, each frame redraws only
     the moving artists (5x faster than redrawing the figure twice per frame
@@ -166,28 +191,35 @@ def _write_gif(fig, draw, count: int, path: Path, fps: float) -> None:
     canvas.draw()
     background = canvas.copy_from_bbox(fig.bbox)
     images = []
-    for k in range(count):
+    for k in range(len(shown_ms)):
         canvas.restore_region(background)
         for artist in draw(k):
-            artist.axes.draw_artist(artist)
+            fig.draw_artist(artist)
         rgb = np.asarray(canvas.buffer_rgba())[..., :3]
         images.append(Image.fromarray(rgb.copy()))      # Pillow picks a palette per frame
     images[0].save(path, save_all=True, append_images=images[1:], loop=0,
-                   duration=int(round(1000.0 / fps)), optimize=False)
+                   duration=shown_ms, optimize=False)
 
 
 def animate_trace(arm: Arm, trace, path, *, approach=None, max_frames: int = 150,
-                  fps: float = 10.0) -> Path:
+                  fps: float = 10.0, times_s=None, slow_motion: float = 1.0) -> Path:
     """The arm along a traced path (GIF/MP4 by suffix), at most ``max_frames``
     frames, after the ``approach`` from the straight arm when given (the
-    motors' whole schedule, :func:`elastica_petsc.studies.schedule.trace_schedule`)."""
+    motors' whole schedule, :func:`elastica_petsc.studies.schedule.trace_schedule`);
+    timed to the schedule's ``times_s`` when given (:func:`trace_frames`)."""
     targets = trace.targets_mm if approach is None else np.vstack((approach.targets_mm,
                                                                    trace.targets_mm))
     reached = int(np.sum(trace.converged))
-    return animate(arm, trace_frames(arm, trace, max_frames, approach), path, targets_mm=targets,
+    frames = trace_frames(arm, trace, max_frames, approach, times_s, slow_motion, fps)
+    if times_s is not None and frames[0].duration_s:
+        speed = "real time" if slow_motion == 1 else f"{slow_motion:g}x slower than real time"
+    else:
+        speed = ""
+    return animate(arm, frames, path, targets_mm=targets,
                    title=f"Traced path: {trace.n_points} points ({reached} reached)"
                          + ("" if approach is None else
-                            f", after a {approach.n_points}-point approach"), fps=fps)
+                            f", after a {approach.n_points}-point approach")
+                         + (f"; {speed}" if speed else ""), fps=fps)
 
 
 def animate_control(controller, result, path, *, fps: float = 2.0) -> Path:

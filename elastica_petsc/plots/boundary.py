@@ -23,8 +23,9 @@ def plot_boundary(data: dict, path, *, arm_length_mm: float, routes_mm: np.ndarr
         ax.plot(arm_length_mm * np.cos(a), arm_length_mm * np.sin(a), "k--", lw=0.8,
                 label=f"rigid link of length l = {arm_length_mm:g} mm")
         ax.plot(routes_mm[:, 0], routes_mm[:, 1], "k^", ms=6, ls="none", label="routing points")
+    if "W0" in data["regions"]:
+        shade_w0(ax, data["regions"]["W0"], arm_length_mm / 300)     # holes (around r_1) white
     if "W0" in data["regions"] and samples is None:
-        shade_w0(ax, data["regions"]["W0"], arm_length_mm / 300)
         ax.set_xlim(-1.08 * arm_length_mm, 1.08 * arm_length_mm)     # the reach, whole
         ax.set_ylim(-1.08 * arm_length_mm, 1.08 * arm_length_mm)
     for name, region in data["regions"].items():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..studies.buckling import Fig7Result, PAPER, segment_profile
-from .common import draw_arm, draw_setting, figure, finish_geometry, save
+from .common import draw_arm, draw_setting, figure, finish_geometry, legend_below, save
 
 
 def plot_fig7(arm, result: Fig7Result, png) -> None:
@@ -59,7 +59,7 @@ def _geometry_panel(ax, arm, r: Fig7Result, states, straight_label: str) -> None
     finish_geometry(ax, "Critical state and the two post-buckling states "
                         f"(dL2 = {r.post_dL2_mm:.2f} mm on the aligned path)")
     ax.title.set_fontsize(10)
-    ax.legend(loc="lower left", fontsize=7.5, framealpha=0.9)
+    legend_below(ax, ncol=1, fontsize=7.5)
     # zoom: a square window (equal aspect) around the middle of the straight column
     mid = 0.5 * (x_s[m1] + x_s[-1])
     half = max(4.0 * float(np.max(np.abs(r.post_deviation_mm), initial=0.0)), 5.0)

@@ -26,15 +26,15 @@ def save(fig, path: str | Path) -> None:
 
 def draw_arm(ax, arm: Arm, eq: Equilibrium, label: str | None = None, colour: str = "k",
              tendons: bool = True) -> None:
-    """The deformed centreline, its tendons as straight segments to their routing points."""
+    """The deformed centreline, its tendons as straight segments to their routing points
+    (through their guides)."""
     l_mm = arm.length_mm
     x = eq.x * l_mm
     ax.plot(x[:, 0], x[:, 1], "-", color=colour, lw=2.2, label=label, zorder=3)
     ax.plot(*x[-1], "o", color=colour, ms=5, zorder=4)
     if tendons:
-        routes = arm.routes() * l_mm
-        for i, (a, r) in enumerate(zip(eq.attachments * l_mm, routes)):
-            ax.plot([a[0], r[0]], [a[1], r[1]], "-", lw=1.0,
+        for i, line in enumerate(eq.cable_points):
+            ax.plot(line[:, 0] * l_mm, line[:, 1] * l_mm, "-", lw=1.0,
                     color=TENDON_COLOURS[i % len(TENDON_COLOURS)], zorder=2)
 
 
@@ -49,12 +49,19 @@ def draw_setting(ax, arm: Arm) -> None:
 
 
 def finish_geometry(ax, title: str) -> None:
+    """Equal aspect, labels in mm, and the legend below the axes, off the drawing."""
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.grid(True, lw=0.3, alpha=0.6)
     ax.set_title(title)
-    ax.legend(loc="best", fontsize=8)
+    legend_below(ax)
+
+
+def legend_below(ax, ncol: int = 2, fontsize: float = 8) -> None:
+    """The legend under the axes (beneath the x label), where it hides no data."""
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), borderaxespad=4.6, ncol=ncol,
+              fontsize=fontsize, frameon=False)    # 4.6 font sizes below: under the x label
 
 
 def plot_equilibria(arm: Arm, states: list[tuple[Equilibrium, str]], path: str | Path,

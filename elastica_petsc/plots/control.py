@@ -107,9 +107,9 @@ def plot_tensions_lengths(arm: Arm, trace, path) -> None:
 
 def plot_sensitivities(arm: Arm, trace, path) -> None:
     """Fig. 6b: tip sensitivity vectors d x_t / d P_i (Eq. (13)) along the
-    path, each tendon's arrows scaled on their own (the legend gives the
-    scale: tendon 2 moves the tip about ten times more per newton), and a
-    polar plot of their magnitudes [mm/N] and directions."""
+    path, every tendon's arrows on one scale (so their lengths show how much
+    more one tendon moves the tip per newton), and a polar plot of their
+    magnitudes [mm/N] and directions."""
     import matplotlib.pyplot as plt
 
     sens = np.array([r.sensitivity.tip for r in trace.results]) * arm.length_mm  # mm per p
@@ -120,14 +120,16 @@ def plot_sensitivities(arm: Arm, trace, path) -> None:
     ax.plot(*trace.targets_mm.T, "-", color="0.6", lw=1)
     xy = trace.tips_mm[::every]
     ends = [trace.targets_mm]
+    arrow_mm = 40.0                       # the longest arrow of all tendons
+    norms = np.linalg.norm(sens_N, axis=2)
+    biggest = float(np.max(norms))
     for i in range(sens.shape[1]):
-        biggest = float(np.max(np.linalg.norm(sens_N[:, i], axis=1)))
-        arrow_mm = 25.0
         v = sens_N[::every, i] * (arrow_mm / biggest if biggest > 0 else 0.0)
         ax.quiver(xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], angles="xy", scale_units="xy", scale=1,
                   color=TENDON_COLOURS[i % len(TENDON_COLOURS)], width=0.005, zorder=3,
-                  label=f"d x_t / d P{i + 1}: {arrow_mm:g} mm arrow = {biggest:.3g} mm/N")
+                  label=f"d x_t / d P{i + 1} (largest {np.max(norms[:, i]):.3g} mm/N)")
         ends.append(xy + v)
+    ax.plot([], [], " ", label=f"one scale: {arrow_mm:g} mm of arrow = {biggest:.3g} mm/N")
     ends = np.vstack(ends)
     ax.set_xlim(ends[:, 0].min() - 5, ends[:, 0].max() + 5)
     ax.set_ylim(ends[:, 1].min() - 5, ends[:, 1].max() + 5)
@@ -155,16 +157,21 @@ def plot_curvature(arm: Arm, trace, path) -> None:
     disc = trace.results[0].equilibrium.disc
     s_mid = (np.arange(disc.n_elements) + 0.5) / disc.n_elements * arm.length_mm
     nodes = [0] + sorted(set(disc.attach_nodes))
-    picks = _snapshots(trace.n_points, 5)
-    for j, k in enumerate(picks):
+    # a closed path ends where it started: a state drawn already is named in its
+    # first curve's label ("point 0 = point 328"), not drawn over it
+    shown: list[tuple[list[int], object]] = []
+    for k in _snapshots(trace.n_points, 5):
         eq = trace.results[k].equilibrium
-        # earlier curves wider and underneath: a closed path ends where it started,
-        # and its last curve must not hide the first
-        same = [int(q) for q in picks[:j]
-                if np.max(np.abs(trace.results[q].equilibrium.theta - eq.theta)) < 1e-6]
-        line, = ax.plot(s_mid, eq.curvature, lw=1.4 + 2.0 * (len(picks) - 1 - j) / len(picks),
-                        zorder=2 + j, label=f"point {k}" + (f" (same state as point {same[0]})"
-                                                            if same else ""))
+        same = [names for names, first in shown
+                if np.max(np.abs(first.theta - eq.theta)) < 1e-6]
+        if same:
+            same[0].append(int(k))
+        else:
+            shown.append(([int(k)], eq))
+    for j, (names, eq) in enumerate(shown):
+        line, = ax.plot(s_mid, eq.curvature, lw=1.6, zorder=2 + j,
+                        label=" = ".join(f"point {k}" for k in names)
+                        + (" (the path is closed)" if len(names) > 1 else ""))
         piecewise = np.empty(disc.n_elements)
         for a, b in zip(nodes[:-1], nodes[1:]):
             piecewise[a:b] = (eq.theta[b] - eq.theta[a]) / ((b - a) / disc.n_elements)

@@ -35,9 +35,10 @@ def plot_area_design(result, path) -> None:
     ax.legend(fontsize=7, loc="lower left")
     ok = [h["area_mm2"] if h["feasible"] else np.nan for h in result.history]
     hx.plot(np.arange(1, len(ok) + 1), ok, "o", ms=3, color="tab:blue", label="feasible")
-    bad = [k + 1 for k, h in enumerate(result.history) if not h["feasible"]]
-    hx.plot(bad, [result.before.area_mm2] * len(bad), "x", color="tab:red",
-            label="rejected (loop not solved or a cable across the arm)")
+    bad = [(k + 1, h["area_mm2"]) for k, h in enumerate(result.history) if not h["feasible"]]
+    if bad:                              # at the loop area each rejected design had
+        hx.plot(*np.array(bad).T, "x", color="tab:red",
+                label="rejected: loop not solved or a cable across the arm")
     hx.set_xlabel("evaluation")
     hx.set_ylabel("loop area [mm^2]")
     hx.legend(fontsize=7)

@@ -14,14 +14,24 @@ STATE_COLOURS = ("k", "tab:red", "tab:cyan", "tab:olive", "tab:pink", "tab:gray"
 
 
 def draw_state(ax, arm: Arm, eq, label: str, colour: str, number: int | None = None) -> None:
-    """Centreline, tip, attachments; taut cables solid, slack cables dotted."""
+    """Centreline, tip, attachments; taut cables solid, slack cables dotted; a
+    cable that crosses the arm (core/clearance.py) on a red band, said in the label."""
+    from ..core.clearance import state_cable_clear
+
     l_mm = arm.length_mm
     x = eq.x * l_mm
+    clear = state_cable_clear(eq)
+    crossing = [i + 1 for i, ok in enumerate(clear) if not ok]
+    if crossing:
+        label += "; cable " + ", ".join(map(str, crossing)) + " crosses the arm (red band)"
     ax.plot(x[:, 0], x[:, 1], "-", color=colour, lw=2.2, label=label, zorder=3)
     ax.plot(*x[-1], "o", color=colour, ms=5, zorder=4)
     taut = np.asarray(getattr(eq, "taut", np.asarray(eq.p) > 0))
-    for i, (a, r) in enumerate(zip(eq.attachments * l_mm, arm.routes() * l_mm)):
-        ax.plot([a[0], r[0]], [a[1], r[1]], "-" if taut[i] else ":", lw=1.0,
+    for i, (a, line) in enumerate(zip(eq.attachments * l_mm, eq.cable_points)):
+        if not clear[i]:
+            ax.plot(line[:, 0] * l_mm, line[:, 1] * l_mm, "-", lw=6, color="tab:red",
+                    alpha=0.3, zorder=1.5, solid_capstyle="butt")
+        ax.plot(line[:, 0] * l_mm, line[:, 1] * l_mm, "-" if taut[i] else ":", lw=1.0,
                 color=TENDON_COLOURS[i % len(TENDON_COLOURS)], zorder=2)
         ax.plot(*a, "o", color=colour, ms=3, mfc="white", zorder=4)
     if number is not None:

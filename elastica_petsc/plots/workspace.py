@@ -48,6 +48,7 @@ def read_overlays(files) -> list[tuple[str, np.ndarray]]:
     return paths
 
 
+MARKER_SIZE = 3.0            # points, every class of sample in Fig. 4
 PATH_COLOURS = ("k", "tab:purple", "tab:cyan", "tab:brown", "tab:blue")   # not orange: undecided samples
 
 
@@ -84,9 +85,9 @@ def _classes(data: dict) -> list[tuple[np.ndarray, str, str, str]]:
              "reached with P >= 0, its only tensions below the floor (proven)"),
             (status == Status.UNDECIDED, "tab:orange", "o",
              "not reached after the global search (undecided)"),
-            (status == Status.OUTSIDE_BOUNDARY, "tab:purple", ".",
+            (status == Status.OUTSIDE_BOUNDARY, "tab:purple", "o",
              "outside the traced W_0 boundary (proven)"),
-            (status == Status.BEYOND_REACH, "k", ".", "beyond reach |x| > l (proven)"),
+            (status == Status.BEYOND_REACH, "k", "o", "beyond reach |x| > l (proven)"),
             (status == Status.NEEDS_NEGATIVE, "tab:red", "o", "ended on P_i = 0 (local verdict)"),
             (status == Status.NOT_CONVERGED, "0.6", "x", "not converged")]
 
@@ -103,11 +104,14 @@ def plot_samples(data: dict, ax, paths=None) -> None:
             count = f"{int(sel.sum())}"
             if colour == "0.6":
                 count += f": {reason_counts(data['reason'][sel])}"
-            ax.plot(pts[:, 0], pts[:, 1], marker, color=colour, ms=2.5, ls="none",
+            # one marker size for every class: only colour and shape tell them apart
+            ax.plot(pts[:, 0], pts[:, 1], marker, color=colour, ms=MARKER_SIZE, ls="none",
                     label=f"{label} ({count})")
     routes = data["routes_mm"]
     ax.plot(routes[:, 0], routes[:, 1], "k^", ms=6, ls="none",
             label="routing points r_" + ", r_".join(str(i) for i in range(1, len(routes) + 1)))
+    for i, r in enumerate(routes, start=1):
+        ax.annotate(f"r_{i}", r, xytext=(5, -3), textcoords="offset points", fontsize=9)
     _rigid_link(ax, data["length_mm"])
     _paths_overlay(ax, paths)
     ax.plot(0, 0, "ks", ms=6)
@@ -174,11 +178,15 @@ def plot_restrictions(data: dict, path, paths=None) -> None:
     for ax, (name, title, label, limit) in zip(axes, panels):
         _contour(fig, ax, xy, data[name][reached], title, label, limit=limit, paths=paths,
                  spacing=data.get("spacing"))
+    # tensions in N, with the non-dimensional p of the same colour in the title
+    p_max = data["limits"].get("max_tension")
     for i in range(n):
-        _contour(fig, axes[len(panels) + i], xy, data["tensions"][reached, i],
-                 f"(d) tension of tendon {i + 1}, P l^2/B", "P l^2/B",
-                 limit=data["limits"].get("max_tension"), paths=paths,
-                 spacing=data.get("spacing"))
+        P_N, p = data["tensions_N"][reached, i], data["tensions"][reached, i]
+        per_N = float(np.nanmedian(p[P_N > 0] / P_N[P_N > 0])) if np.any(P_N > 0) else np.nan
+        _contour(fig, axes[len(panels) + i], xy, P_N,
+                 f"(d) tension of tendon {i + 1} [N] (p = P l^2/B = {per_N:.3g} P/N)", "P [N]",
+                 limit=None if p_max is None or not np.isfinite(per_N) else p_max / per_N,
+                 paths=paths, spacing=data.get("spacing"))
     for ax in axes[count:]:
         ax.axis("off")
     fig.suptitle("Restrictions on the workspace (Fig. 5); red lines: limits of Eqs. (19)-(22)")

@@ -256,8 +256,10 @@ class Manifold:
         angle rows (the border columns of tendon i of the Jacobian) and 0 on the
         attachment rows (y - X(theta) does not involve r_i)."""
         N = self.disc.n_elements
-        cols = N + 2 * i + np.arange(2)
+        if self.disc.has_paths:          # the first chord's equation (docs/model.md §11.7)
+            return self.disc.route_derivative(*self.split(w), i)
         out = np.zeros((self.size, 2))
+        cols = N + 2 * i + np.arange(2)
         out[:N] = -self.jacobian(w)[:N][:, cols].toarray()
         return out
 
@@ -371,7 +373,9 @@ class TensionRay(Constraint):
 
 class CableCollapse(Constraint):
     """L_i = eps: the attachment point of tendon i within eps (units of l) of its
-    routing point; beyond it the cable direction of Eq. (3) is undefined."""
+    routing point; beyond it the cable direction of Eq. (3) is undefined.  For a
+    cable through guides (docs/model.md §11): its shortest segment, between
+    point a and its predecessor (the routing point for the first)."""
 
     def __init__(self, manifold: Manifold, i: int, eps: float):
         self.mf, self.i, self.eps = manifold, i, float(eps)
@@ -380,19 +384,36 @@ class CableCollapse(Constraint):
     def _offset(self) -> int:
         return self.mf.disc.n_elements + 2 * self.i
 
+    def _segment(self, w):
+        """(length, unit vector, index) of the cable's shortest chord z_a."""
+        disc = self.mf.disc
+        lengths, e = disc.segments(disc.split(self.mf.split(w)[0])[1])
+        first, last = disc.path_starts[self.i], disc.path_starts[self.i + 1]
+        a = first + int(np.argmin(lengths[first:last]))
+        return lengths[a], e[a], a
+
     def value(self, w):
+        if self.mf.disc.has_paths:
+            return float(self._segment(w)[0] - self.eps)
         y = w[self._offset():self._offset() + 2]
         return float(np.linalg.norm(self.mf.disc.routes[self.i] - y) - self.eps)
 
     def gradient(self, w):
+        g = np.zeros(self.mf.m)
+        if self.mf.disc.has_paths:                     # d|z_a|/dz_a = e_a
+            _, e, a = self._segment(w)
+            N = self.mf.disc.n_elements
+            g[N + 2 * a:N + 2 * a + 2] = e
+            return g
         y = w[self._offset():self._offset() + 2]
         chord = self.mf.disc.routes[self.i] - y
-        g = np.zeros(self.mf.m)
         g[self._offset():self._offset() + 2] = -chord / np.linalg.norm(chord)
         return g
 
     def route_gradient(self, w, i):
         if i != self.i:
+            return np.zeros(2)
+        if self.mf.disc.has_paths:          # |z_a| does not involve r_i (F does)
             return np.zeros(2)
         y = w[self._offset():self._offset() + 2]
         chord = self.mf.disc.routes[self.i] - y

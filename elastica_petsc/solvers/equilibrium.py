@@ -81,17 +81,36 @@ class Equilibrium:
 
     @property
     def attachments(self) -> np.ndarray:
+        """Where each cable ends (its offset included, docs/model.md §11)."""
+        if self.disc.has_paths:
+            return self.disc.attachment_points(self.theta)
         return self.x[list(self.disc.attach_nodes)]
 
     @cached_property
     def cable_lengths(self) -> np.ndarray:
-        """L_i = |r_i - x_i| in units of l."""
+        """L_i = |r_i - x_i| in units of l (through the guides: the whole path)."""
+        if self.disc.has_paths:
+            return self.disc.cable_lengths_of(self.theta)
         return np.linalg.norm(self.disc.routes - self.attachments, axis=1)
 
     @property
     def directions(self) -> np.ndarray:
-        """Unit cable directions d_i (Eq. (3))."""
+        """Unit cable directions d_i (Eq. (3)); through guides, those of each
+        cable's last segment, from its end point toward the previous point."""
+        if self.disc.has_paths:
+            return self.disc.cables(self.disc.split(self.disc.consistent_state(self.theta))[1])[1]
         return (self.disc.routes - self.attachments) / self.cable_lengths[:, None]
+
+    @cached_property
+    def cable_points(self) -> list[np.ndarray]:
+        """Each cable's polyline from its routing point to its end, units of l."""
+        disc = self.disc
+        if not disc.has_paths:
+            return [np.vstack((r, a)) for r, a in zip(disc.routes, self.attachments)]
+        points = disc.point_positions(self.theta)
+        starts = disc.path_starts
+        return [np.vstack((disc.routes[i], points[starts[i]:starts[i + 1]]))
+                for i in range(disc.n_tendons)]
 
     @property
     def strain_energy(self) -> float:
@@ -362,7 +381,8 @@ class EquilibriumSolver:
                     else:
                         u_prev, dlam_prev = u, step
                     u, lam, steps, path.modes = u_new, lam + step, steps + 1, modes
-                    if np.min(self.disc.cables(self.disc.split(u)[1])[0]) < COLLAPSE_LENGTH:
+                    if np.min(self.disc.shortest_segments(self.disc.split(u)[1])) < \
+                            COLLAPSE_LENGTH:
                         # a cable collapsed onto its routing point: no load beyond
                         return u, pa + lam * (pb - pa), iterations, steps, CABLE_COLLAPSE, False
                     if its <= 4:
@@ -429,13 +449,15 @@ class EquilibriumSolver:
         return low, "the lower potential energy"
 
     def _failure_message(self, path: _Path, u, p_reached, p_target, reason: str) -> str:
-        lengths = np.linalg.norm(self.disc.routes - self.disc.split(u)[1], axis=1)
+        lengths = self.disc.shortest_segments(self.disc.split(u)[1])
         shortest = int(np.argmin(lengths))
         where = "tensions p = (" + ", ".join(f"{v:.4g}" for v in p_reached) + ")"
         if lengths[shortest] < COLLAPSE_LENGTH:
-            return (f"tendon {shortest + 1} pulled its attachment point onto its routing point "
-                    f"(cable length {lengths[shortest]:.2e} l) at {where}: the cable direction "
-                    "is undefined beyond this load")
+            what = ("pulled two points of its path together (segment length" if
+                    self.disc.has_paths else
+                    "pulled its attachment point onto its routing point (cable length")
+            return (f"tendon {shortest + 1} {what} {lengths[shortest]:.2e} l) at {where}: the "
+                    "cable direction is undefined beyond this load")
         if reason == BIFURCATION:
             side = f"on the {path.side} side" if path.side else "on either side"
             return (f"the stable branch ends at {where} at a bifurcation (the critical mode is "

@@ -62,10 +62,10 @@ class InertiaCounter(BorderedInertia):
 
     def __init__(self, disc: Discretisation, **contract):
         self.disc = disc
-        super().__init__(disc.stability_pattern, disc.n_elements + disc.n_tendons,
-                         disc.stability_values(disc.straight(), np.zeros(disc.n_tendons)),
-                         **contract)
+        u0 = disc.consistent_state(np.zeros(disc.n_elements + 1))
+        super().__init__(disc.stability_pattern, disc.n_elements + disc.stability_border,
+                         disc.stability_values(u0, np.zeros(disc.n_tendons)), **contract)
 
     def negative_eigenvalues(self, u: np.ndarray, p) -> int:
         """Number of negative eigenvalues of the tangent K at state ``u``."""
-        return self.count(self.disc.stability_values(u, p), self.disc.n_tendons)
+        return self.count(self.disc.stability_values(u, p), self.disc.stability_border)

@@ -258,10 +258,11 @@ class AugmentedSystem:
         indptr, indices, _ = disc.pattern
         rows = [np.repeat(np.arange(nu), np.diff(indptr)), ]
         cols = [np.asarray(indices)]
-        for i, m in enumerate(disc.attach_nodes):           # dF_theta/dp_i (rows < m_i)
+        for i, m in enumerate(disc.length_supports):        # dF_theta/dp_i (rows < m_i)
             rows.append(np.arange(m)); cols.append(np.full(m, ip + i))
-        for i in range(n):                                  # dg_i/dy_i
-            rows.append(np.full(2, ip + i)); cols.append(N + 2 * i + np.arange(2))
+        for i in range(n):                                  # dg_i/dy (its cable's points)
+            c = disc.length_columns(i)
+            rows.append(np.full(len(c), ip + i)); cols.append(N + c)
         rows.append(ip + np.arange(n)); cols.append(ip + np.arange(n))   # p diagonal
         rows.append(np.arange(imu)); cols.append(np.full(imu, imu))      # d/dmu = F, g
         rows.append(np.full(N, imu)); cols.append(np.arange(N))          # -grad M
@@ -296,12 +297,15 @@ class AugmentedSystem:
         _, gradM = self.deflation.factor_and_gradient(u[: disc.n_elements])
         dFdp = disc.load_derivative(u)
         blocks = [mu * disc.jacobian_values(u, p)]
-        blocks += [mu * dFdp[i, :m] for i, m in enumerate(disc.attach_nodes)]
+        blocks += [mu * dFdp[i, :m] for i, m in enumerate(disc.length_supports)]
+        columns = [disc.length_columns(i) for i in range(self.n)]
         if self.mode == "length":
-            d = disc.cables(disc.split(u)[1])[1]
-            blocks += [mu * d.ravel(), np.zeros(self.n), F, g]
+            dLdy = disc.length_gradients(disc.split(u)[1])           # dg/dy = -dL/dy
+            blocks += [-mu * dLdy[i, c] for i, c in enumerate(columns)]
+            blocks += [np.zeros(self.n), F, g]
         else:
-            blocks += [np.zeros(2 * self.n), np.ones(self.n), F, np.zeros(self.n)]
+            blocks += [np.zeros(sum(len(c) for c in columns)), np.ones(self.n), F,
+                       np.zeros(self.n)]
         blocks += [-gradM, [1.0]]
         return np.concatenate(blocks)[self._order]
 
@@ -379,10 +383,12 @@ class LengthInertia(BorderedInertia):
 
     def __init__(self, disc: Discretisation, taut_tol: float = TAUT_TOL, **contract):
         self.disc, self.taut_tol = disc, taut_tol
-        supports = np.concatenate((disc.attach_nodes, disc.attach_nodes))   # W cols, C cols
-        pattern = disc.bordered_pattern(supports, upper=True)
+        w_supports = disc.stability_pattern_supports
+        supports = np.concatenate((w_supports, disc.length_supports))        # W cols, C cols
+        starts = np.concatenate((disc.stability_pattern_starts, np.zeros(disc.n_tendons, int)))
+        pattern = disc.bordered_pattern(supports, upper=True, starts=starts)
         self._src = pattern[2]
-        super().__init__(pattern, disc.n_elements + 2 * disc.n_tendons,
+        super().__init__(pattern, disc.n_elements + len(supports),
                          self.values(disc.straight(), np.zeros(disc.n_tendons))[0], **contract)
 
     def values(self, u, p) -> tuple[np.ndarray, int]:
@@ -394,7 +400,7 @@ class LengthInertia(BorderedInertia):
         taut = p > self.taut_tol
         C = disc.load_derivative(u)[:, : disc.n_elements] * taut[:, None]  # grad L_i (n, N)
         border = np.vstack((w, C))                                          # (2n, N)
-        corner = np.concatenate((-np.ones(disc.n_tendons), np.where(taut, 0.0, 1.0)))
+        corner = np.concatenate((-np.ones(disc.stability_border), np.where(taut, 0.0, 1.0)))
         source = np.concatenate((disc.band(theta, disc.cables(y)[1], p).ravel(),
                                  border.T.ravel(), border.ravel(), corner))
         return source[self._src], int(np.count_nonzero(taut))
@@ -403,7 +409,7 @@ class LengthInertia(BorderedInertia):
         """Negative (or zero) eigenvalues of K on null(C_taut^T); 0: stable
         under length control."""
         vals, m = self.values(u, p)
-        return self.count(vals, self.disc.n_tendons + m)
+        return self.count(vals, self.disc.stability_border + m)
 
 
 def constrained_mode(system: AugmentedSystem, z, iterations: int = 30,

@@ -143,7 +143,7 @@ class SensitivitySolver:
             raise SensitivityError("non-finite sensitivities: the tangent is singular")
         alpha = np.zeros((n, N + 1))
         alpha[:, 1:] = du[:, :N]
-        border = du[:, N:].reshape(n, n, 2)
+        border = du[:, N:].reshape(n, -1, 2)
         theta = eq.theta
         phi = disc.element_angles(theta)
         normals = np.column_stack((-np.sin(phi), np.cos(phi)))          # n_e, (N, 2)
@@ -151,12 +151,39 @@ class SensitivitySolver:
         steps = self._h * dphi[:, :, None] * normals[None]              # (n, N, 2)
         cumulative = np.cumsum(steps, axis=1)                           # d x_{k+1} / dp_i
         tip = cumulative[:, -1]                                         # Eq. (13)
-        nodes = np.asarray(disc.attach_nodes)
-        attach = cumulative[:, nodes - 1]                               # (n, n, 2)
-        d = eq.directions                                               # (n, 2)
-        dL = -np.einsum("ijc,jc->ij", attach, d)
+        if disc.has_paths:       # dL_j/dp_i = grad_theta L_j . alpha_i (docs/model.md §11)
+            ends = np.asarray(disc.path_starts[1:]) - 1
+            m = np.asarray(disc.point_nodes)[ends]
+            turn = disc.point_offsets[ends] * alpha[:, m]                 # delta dtheta_m
+            attach = cumulative[:, m - 1] - turn[..., None] * np.column_stack(
+                (np.cos(theta[m]), np.sin(theta[m])))[None]              # end points (n, n, 2)
+            dL = du[:, :N] @ dFdp[:, :N].T
+        else:
+            attach = cumulative[:, np.asarray(disc.attach_nodes) - 1]   # (n, n, 2)
+            d = eq.directions                                           # (n, 2)
+            dL = -np.einsum("ijc,jc->ij", attach, d)
         return Sensitivity(p=p.copy(), alpha=alpha, tip=tip, attachments=attach,
                            attachments_border=border, cable_lengths=dL)
+
+    def parameter_derivative(self, eq: Equilibrium, dFdq: np.ndarray):
+        """du/dq and d x_t/dq at fixed tensions for a design parameter q whose
+        dF/dq (size,) is given (a routing point's coordinate, a guide's offset:
+        docs/model.md §11.7): J du/dq = -dF/dq, then Eq. (13)."""
+        disc = self.disc
+        self.J.setValuesCSR(*self._csr, disc.jacobian_values(eq.u, np.asarray(eq.p, float)))
+        self.J.assemble()
+        self.ksp.setOperators(self.J)
+        self.rhs.setArray(-np.asarray(dFdq, float))
+        self.ksp.solve(self.rhs, self.sol)
+        if self.ksp.getConvergedReason() < 0:
+            raise SensitivityError(f"design sensitivity solve failed, KSP reason "
+                                   f"{self.ksp.getConvergedReason()}")
+        du = self.sol.getArray(readonly=True).copy()
+        dtheta = np.concatenate(([0.0], du[: disc.n_elements]))
+        phi = disc.element_angles(eq.theta)
+        dphi = disc.element_angles(dtheta)
+        dtip = self._h * np.array([np.sum(-np.sin(phi) * dphi), np.sum(np.cos(phi) * dphi)])
+        return du, dtip
 
     def destroy(self) -> None:
         for obj in (self.ksp, self.J, self.rhs, self.sol):

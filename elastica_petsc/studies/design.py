@@ -36,9 +36,10 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+
 from ..core.errors import InputError
 from ..core.fem import Discretisation
-from ..core.model import Arm, Tendon
+from ..core.model import Arm
 from ..solvers.continuation import CurveTracer, TensionBound
 from ..solvers.control import TipController
 from ..solvers.minimise import minimise_bounded
@@ -84,7 +85,7 @@ def parse_vary(names, n_tendons: int) -> list[int]:
 def with_attachment(arm: Arm, tendon: int, s_mm: float) -> Arm:
     """The arm with tendon ``tendon``'s attachment at arc length ``s_mm``."""
     new = list(arm.tendons)
-    new[tendon] = Tendon(float(s_mm), new[tendon].route_mm)
+    new[tendon] = dataclasses.replace(new[tendon], attach_mm=float(s_mm))   # guides kept
     return dataclasses.replace(arm, tendons=tuple(new))
 
 
@@ -92,7 +93,7 @@ def with_routes(arm: Arm, tendons, q_mm) -> Arm:
     """The arm with the routing points of ``tendons`` set to q (mm, 2 per tendon)."""
     new = list(arm.tendons)
     for j, i in enumerate(tendons):
-        new[i] = Tendon(new[i].attach_mm, (float(q_mm[2 * j]), float(q_mm[2 * j + 1])))
+        new[i] = dataclasses.replace(new[i], route_mm=(float(q_mm[2 * j]), float(q_mm[2 * j + 1])))
     return dataclasses.replace(arm, tendons=tuple(new))
 
 

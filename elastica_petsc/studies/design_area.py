@@ -79,12 +79,40 @@ class BoxArea:
     loop_mm: np.ndarray         # tips at the loop's nodes (K, 2)
     tensions: np.ndarray        # the nodes in tension space (K, 2), p = P l^2/B
     det_sign_changes: int       # sign changes of det(d x_t/d p) along the loop
-    converged: bool             # every node solved along the loop
-    cables_clear: bool          # no cable crosses the arm at any node (core/clearance.py)
+    node_converged: np.ndarray  # (K,) the node's equilibrium solved
+    node_clear: np.ndarray      # (K, n) cable i clear of the arm at the node (core/clearance.py)
+
+    @property
+    def converged(self) -> bool:
+        """Every node solved along the loop."""
+        return bool(self.node_converged.all())
+
+    @property
+    def cables_clear(self) -> bool:
+        """No cable crosses the arm at any node."""
+        return bool(self.node_clear.all())
 
     @property
     def feasible(self) -> bool:
         return self.converged and self.cables_clear
+
+
+def infeasibility(area: BoxArea, force_scale_N: float) -> dict:
+    """Which constraint a design's loop violates, in N: the tensions of the nodes
+    whose equilibrium was not solved, and per crossing tendon (numbered from 1)
+    how many nodes, the first and last along the loop, and the smallest
+    max(P_1, P_2) among them (a tension box below it avoids those nodes)."""
+    P = area.tensions * force_scale_N
+    crossings = []
+    for i in range(area.node_clear.shape[1]):
+        at = np.flatnonzero(~area.node_clear[:, i])
+        if len(at):
+            crossings.append({"tendon": i + 1, "nodes": int(len(at)), "of": int(len(P)),
+                              "first_tensions_N": P[at[0]].round(4).tolist(),
+                              "last_tensions_N": P[at[-1]].round(4).tolist(),
+                              "lowest_max_tension_N": float(P[at].max(axis=1).min().round(4))})
+    return {"unsolved_tensions_N": P[~area.node_converged].round(4).tolist(),
+            "crossings": crossings}
 
 
 def _node_derivatives(mf: Manifold, u: np.ndarray, p: np.ndarray, tendons) -> np.ndarray:
@@ -109,12 +137,12 @@ def box_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
     l_mm = arm.length_mm
     mf = Manifold(disc)
     tensions = box_loop(p_max, nodes_per_edge)
-    tips, dtip, dets, ok, clear, previous = [], [], [], True, True, None
+    tips, dtip, dets, ok, clear, previous = [], [], [], [], [], None
     with EquilibriumSolver(disc) as solver:            # the routing points live in disc
         for p in tensions:
             eq = solver.solve(p, start=previous)
-            ok &= bool(eq.converged)
-            clear &= bool(np.all(state_cable_clear(eq)))
+            ok.append(bool(eq.converged))
+            clear.append(state_cable_clear(eq))
             previous = eq
             d = _node_derivatives(mf, eq.u, eq.p, tendons)
             tips.append(eq.tip * l_mm)
@@ -127,7 +155,8 @@ def box_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
     grad = sigma * np.einsum("ka,kaj->j", normals, np.array(dtip))
     signs = np.sign(dets)
     changes = int(np.sum(signs != np.roll(signs, 1)))
-    return BoxArea(abs(signed), grad, loop, tensions, changes, ok, clear)
+    return BoxArea(abs(signed), grad, loop, tensions, changes, np.array(ok, bool),
+                   np.array(clear, bool).reshape(len(tensions), -1))
 
 
 # --- independent re-sampling -------------------------------------------------------------------
@@ -199,6 +228,7 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
 
 
 # --- the optimiser -----------------------------------------------------------------------------
+INFEASIBLE_START = "INFEASIBLE_START"   # AreaDesign.reason: the start violates a constraint
 STALL_GAIN = 1e-3        # relative area gain over 3 iterations below which TAO is stopped
 @dataclass
 class AreaDesign:
@@ -276,11 +306,14 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
         raise DesignError(f"--tension-max must be a positive force, got p = {p_max}")
     t0 = time.perf_counter()
     elements = Discretisation.from_arm(arm, elements).n_elements
-    history, best, first = [], {}, []
+    history, best, first, seen = [], {}, [], {}
 
     def evaluate(candidate):
-        a = box_area(candidate, tendons, p_max, elements=elements,
-                     nodes_per_edge=nodes_per_edge)
+        key = tuple((t.attach_mm, *t.route_mm) for t in candidate.tendons)
+        if key in seen:                          # TAO's first call is the start, evaluated
+            return seen[key]
+        a = seen[key] = box_area(candidate, tendons, p_max, elements=elements,
+                                 nodes_per_edge=nodes_per_edge)
         if not first:
             first.append(a)
         history.append({"attach_mm": [t.attach_mm for t in candidate.tendons],
@@ -296,6 +329,9 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
         return a
 
     designed, reason, iterations = arm, "", 0
+    if not evaluate(arm).feasible:               # nothing to start from: no optimiser, no checks
+        return AreaDesign(arm, arm, list(tendons), p_max, first[0], first[0], None, None,
+                          history, INFEASIBLE_START, 0, time.perf_counter() - t0)
     if attaches:
         designed, _ = search_attachments(arm, attaches, evaluate, elements=elements,
                                          reach_mm=reach_mm)

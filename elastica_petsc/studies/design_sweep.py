@@ -32,12 +32,13 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.fem import Discretisation
-from ..core.model import Arm, Tendon
+from ..core.model import Arm
 from .design import DesignError, path_misfit
 from .design_area import box_area
 from .chunks import ChunkResults, Grid, Stop, agree, check_out, empty_fields, run
 
-KINDS = ("route.x", "route.y", "attach")
+KINDS = ("route.x", "route.y", "attach", "offset")   # offset: the cable's guides and end
+                                                    # at one offset (docs/model.md §11)
 
 
 @dataclass(frozen=True)
@@ -58,7 +59,7 @@ def parse_axis(text: str, n_tendons: int) -> Axis:
     name, eq, spec = text.partition("=")
     head, _, kind = name.partition(".")
     if not eq or not head.startswith("tendon") or not head[6:].isdigit() or kind not in KINDS:
-        raise DesignError(f"--sweep {text!r}: expected tendonK.route.x|route.y|attach="
+        raise DesignError(f"--sweep {text!r}: expected tendonK.route.x|route.y|attach|offset="
                           "START:STOP:STEP (mm), e.g. tendon2.route.y=20:60:10")
     k = int(head[6:])
     if not 1 <= k <= n_tendons:
@@ -79,13 +80,20 @@ def design_arm(arm: Arm, axes, values) -> Arm:
     """``arm`` with the swept parameters set to ``values`` (mm)."""
     import dataclasses
 
-    tendons = [[t.attach_mm, list(t.route_mm)] for t in arm.tendons]
+    tendons = list(arm.tendons)
     for axis, v in zip(axes, values):
+        t = tendons[axis.tendon]
         if axis.kind == "attach":
-            tendons[axis.tendon][0] = float(v)
+            t = dataclasses.replace(t, attach_mm=float(v))
+        elif axis.kind == "offset":              # every guide and the end point, signed as given
+            t = dataclasses.replace(t, attach_offset_mm=float(v), guides=tuple(
+                dataclasses.replace(g, offset_mm=float(v)) for g in t.guides))
         else:
-            tendons[axis.tendon][1]["xy".index(axis.kind[-1])] = float(v)
-    return dataclasses.replace(arm, tendons=tuple(Tendon(a, tuple(r)) for a, r in tendons))
+            route = list(t.route_mm)
+            route["xy".index(axis.kind[-1])] = float(v)
+            t = dataclasses.replace(t, route_mm=tuple(route))
+        tendons[axis.tendon] = t
+    return dataclasses.replace(arm, tendons=tuple(tendons))
 
 
 def sweep_grid(arm: Arm, elements: int, axes) -> Grid:

@@ -95,12 +95,12 @@ class LengthLine(Constraint):
         return float(self.vector @ (self._chords(w)[0] - self.target))
 
     def gradient(self, w):
-        """d|r_i - y_i|/dy_i = -d_i (Eq. (3)), weighted by the line's vector."""
+        """d|r_i - y_i|/dy_i = -d_i (Eq. (3); through guides, docs/model.md §11),
+        weighted by the line's vector."""
         disc = self.mf.disc
-        _, d = self._chords(w)
+        y = disc.split(self.mf.split(w)[0])[1]
         g = np.zeros(self.mf.m)
-        for i in range(disc.n_tendons):
-            g[disc.n_elements + 2 * i: disc.n_elements + 2 * i + 2] = -self.vector[i] * d[i]
+        g[disc.n_elements:disc.size] = self.vector @ disc.length_gradients(y)
         return g
 
 
@@ -134,9 +134,9 @@ class FaceChord(Constraint):
 
     def gradient(self, w):
         disc = self.mf.disc
-        _, d = disc.cables(disc.split(self.mf.split(w)[0])[1])
+        y = disc.split(self.mf.split(w)[0])[1]
         g = np.zeros(self.mf.m)
-        g[disc.n_elements + 2 * self.j: disc.n_elements + 2 * self.j + 2] = -d[self.j]
+        g[disc.n_elements:disc.size] = disc.length_gradients(y)[self.j]
         return g
 
 

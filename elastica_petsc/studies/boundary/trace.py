@@ -139,7 +139,8 @@ def traced_w0(arm: Arm, disc: Discretisation) -> BoundaryResult:
     traced on the first call and kept per arm and mesh for the process: the
     one trace that tip control's proof and the sampled map share."""
     key = (arm.length_mm, disc.n_elements, disc.attach_nodes, np.asarray(disc.routes).tobytes(),
-           arm.max_tension)
+           arm.max_tension, tuple(arm.tendons), arm.gravity_m_s2, arm.tip_mass_kg,
+           arm.mass_per_length_kg_m, arm.bending_stiffness_Nm2)
     if key not in _TRACED:
         _TRACED[key] = trace_boundary(arm, disc, restricted=False)
     return _TRACED[key]
