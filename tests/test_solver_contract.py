@@ -17,7 +17,8 @@ from elastica_petsc.solvers.continuation import CurveTracer
 from elastica_petsc.solvers.control import TipController
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.solvers.lengths import LengthSolver
-from elastica_petsc.solvers.minimise import minimise_bounded
+from elastica_petsc.solvers.calibration import RowSolver
+from elastica_petsc.solvers.minimise import BoundedMinimiser, minimise_bounded
 from elastica_petsc.solvers.options import check_prefix, flatten_options
 from elastica_petsc.solvers.reasons import converged_reason
 from elastica_petsc.solvers.sensitivity import SensitivitySolver
@@ -46,7 +47,9 @@ def test_every_solver_checks_its_prefix(paper_arm, disc):
               lambda: StabilitySolver(disc, options_prefix="stab"),
               lambda: LengthSolver(disc, options_prefix="len-"),
               lambda: CurveTracer(disc, options_prefix=""),
-              lambda: TipController(paper_arm, n_elements=30, options_prefix="ctl")]
+              lambda: TipController(paper_arm, n_elements=30, options_prefix="ctl"),
+              lambda: RowSolver(paper_arm, 30, options_prefix="calib"),
+              lambda: BoundedMinimiser(2, max_iterations=1, options_prefix="design")]
     for make in makers:
         with pytest.raises(InputError, match="options prefix"):
             make()

@@ -113,6 +113,11 @@ class SolverOptions:
         """The prefix of a part, e.g. ``name("raw_")`` -> ``stab_raw_``."""
         return self.prefix + suffix
 
+    def part(self, suffix: str) -> dict:
+        """The code options of a part with its own prefix ``<prefix><suffix>``,
+        keys relative to it: ``{"eq_snes_rtol": 1}`` -> ``part("eq_")`` = ``{"snes_rtol": 1}``."""
+        return {k[len(suffix):]: v for k, v in self.options.items() if k.startswith(suffix)}
+
     def label(self, *objs) -> None:
         """Give PETSc objects (solvers, Mats, Vecs) the prefix."""
         for obj in objs:
