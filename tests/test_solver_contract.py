@@ -176,3 +176,14 @@ def test_sharer_takes_the_contract(paper_arm):
     with TipController(paper_arm, n_elements=30) as ctl:
         with pytest.raises(InputError, match="options prefix"):
             TensionSharer(ctl, options_prefix="share")
+
+
+def test_length_solver_gives_each_part_its_options(disc):
+    """Keys under ``defl`` go to the deflated solves (<prefix>defl_), over their
+    own default (the l2 line search); the rest to the plain solves."""
+    with LengthSolver(disc, petsc_options={"snes": {"max_it": 7},
+                                           "defl": {"snes_max_it": 9}}) as solver:
+        assert solver.system.snes.getTolerances()[3] == 7
+        assert solver.deflated_system.snes.getTolerances()[3] == 9
+        assert solver.deflated_system.options.options == {"snes_linesearch_type": "l2",
+                                                          "snes_max_it": 9}

@@ -91,7 +91,7 @@ from ..core.fem import Discretisation
 from .bifurcation import inverse_iteration
 from .inertia import BorderedInertia, InertiaCounter
 from .linalg import use_bordered_lu
-from .options import SolverOptions, check_comm, flatten_options
+from .options import SolverOptions, check_comm
 from .reasons import SNES_REASONS, reason_name
 
 # A tension below this (non-dimensional, p = P l^2/B) counts as zero: the
@@ -480,9 +480,9 @@ class LengthSolver:
         self.length_mm = length_mm
         self.jump_tol = jump_tol
         self.max_step = max_step
-        flat = flatten_options(petsc_options)
-        deflated = {k[len("defl_"):]: v for k, v in flat.items() if k.startswith("defl_")}
-        plain = {k: v for k, v in flat.items() if not k.startswith("defl_")}
+        given = SolverOptions(options_prefix, petsc_options)
+        deflated = given.part("defl_")
+        plain = {k: v for k, v in given.options.items() if not k.startswith("defl_")}
         self.system = AugmentedSystem(disc, "length", options_prefix, petsc_options=plain,
                                       comm=comm)
         self.prefix, self.comm = self.system.options.prefix, self.system.comm
