@@ -449,12 +449,13 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
 
 def calibrate(arm: Arm, data, vary, *, bounds=None, input: str | None = None,
               huber_mm: float | None = None, folds: int = 5, candidates=None,
-              elements: int | None = None):
+              method: str = "brgn", elements: int | None = None):
     """Fit the parameters named in ``vary`` (``bending_stiffness``,
     ``tendonK.route``, ``motorK.offset``, ``motor.spool_radius``, ``clamp.angle``,
     ``clamp.position``, ``frame.rotation``, ``frame.offset``) to measured states
     ``data`` (a CSV path or a :class:`CalibrationData`); ``bounds``:
-    {scalar name: (lo, hi)}.  Returns a CalibrationResult: ``.arm`` the fitted
+    {scalar name: (lo, hi)}; ``method``: "brgn" (exact Jacobian) or "pounders"
+    (derivative-free check).  Returns a CalibrationResult: ``.arm`` the fitted
     arm, ``.parameters()`` values with standard deviations, ``.summary()``
     (docs/model.md §14)."""
     from .core.calibration_data import CalibrationData, read_calibration_csv
@@ -468,7 +469,8 @@ def calibrate(arm: Arm, data, vary, *, bounds=None, input: str | None = None,
                                           measured=False)
     model = ParameterModel(arm, vary, bounds)
     return run_calibration(model, data, elements=_mesh(arm, elements).n_elements,
-                           huber_mm=huber_mm, folds=folds, candidates=candidates)
+                           huber_mm=huber_mm, folds=folds, candidates=candidates,
+                           method=method)
 
 
 def read(path: str | Path):

@@ -9,8 +9,9 @@
    shared); reported: the median over rounds of each round's median, and the ratio
    of the medians.  Target: guided / paper <= 1.5.
 2. Time per Newton iteration of the guided robot against N (a multiple of 12, so
-   that the guides every 25 mm fall on nodes): one Newton solve from a perturbed
-   state, divided by its iterations.  O(N): the ratio grows like N.
+   that the guides every 25 mm fall on nodes), beside the paper's arm at the same N:
+   one Newton solve from a perturbed state, divided by its iterations.  O(N): the
+   ratio to the first size grows like N.
 Prints markdown tables for BENCHMARKS.md.
 """
 from __future__ import annotations
@@ -62,29 +63,36 @@ def warm_solves(repeats: int, rounds: int) -> None:
         solver.destroy()
 
 
+def per_iteration(name: str, n: int, repeats: int) -> tuple[float, int]:
+    """Median time of one Newton solve from a perturbed equilibrium, and its iterations."""
+    path, p = ARMS[name]
+    disc = Discretisation.from_arm(load_config(path), n)
+    with EquilibriumSolver(disc) as solver:
+        eq = solver.solve(p)
+        assert eq.converged, name
+        start = eq.u.copy()
+        start[: disc.n_elements] *= 0.98
+        its = []
+
+        def newton():
+            _, k, _ = solver.newton(start, p)
+            its.append(k)
+        return median_time(newton, repeats), its[-1]
+
+
 def scaling(sizes, repeats: int) -> None:
-    arm = load_config(CONFIGS / "guided.toml")
-    p = ARMS["guided.toml (5 guides per tendon)"][1]
+    """Per Newton iteration against N, the guided robot beside the paper's arm (same N)."""
     rows = []
     for n in sizes:
-        disc = Discretisation.from_arm(arm, n)
-        with EquilibriumSolver(disc) as solver:
-            eq = solver.solve(p)
-            assert eq.converged
-            start = eq.u.copy()
-            start[: disc.n_elements] *= 0.98
-            its = []
-
-            def newton():
-                _, k, _ = solver.newton(start, p)
-                its.append(k)
-            t = median_time(newton, repeats)
-        rows.append((n, t, its[-1], t / its[-1]))
-    print("| N | Newton solve | iterations | time / iteration | ratio to first | N ratio |")
-    print("|---|---|---|---|---|---|")
-    for n, t, k, per in rows:
-        print(f"| {n} | {t * 1e3:.2f} ms | {k} | {per * 1e3:.3f} ms | {per / rows[0][3]:.2f} "
-              f"| {n / rows[0][0]:.1f} |")
+        tg, kg = per_iteration("guided.toml (5 guides per tendon)", n, repeats)
+        tp, kp = per_iteration("paper (no guides)", n, repeats)
+        rows.append((n, tg / kg, kg, tp / kp, kp))
+    print("| N | guided: time / iteration | iterations | paper: time / iteration | iterations "
+          "| guided / paper | guided ratio to first | N ratio |")
+    print("|---|---|---|---|---|---|---|---|")
+    for n, g, kg, pp, kp in rows:
+        print(f"| {n} | {g * 1e3:.3f} ms | {kg} | {pp * 1e3:.3f} ms | {kp} | {g / pp:.2f} "
+              f"| {g / rows[0][1]:.2f} | {n / rows[0][0]:.1f} |")
 
 
 def main() -> None:
@@ -92,7 +100,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--sizes", type=int, nargs="+",
-                        default=[1200, 2400, 6000, 12000, 24000, 60000])
+                        default=[1200, 2400, 6000, 12000, 24000, 48000])
     args = parser.parse_args()
     warm_solves(args.repeats, args.rounds)
     print()

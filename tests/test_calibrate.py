@@ -250,3 +250,18 @@ def test_next_measurements_prefer_rows_that_load_tendon_2():
     chosen = next_measurements(problem, result, report, candidates, count=2)
     assert chosen[0]["inputs"] == [4.0, 3.0]
     assert chosen[0]["log_det_gain"] > 10 * max(chosen[1]["log_det_gain"], 1e-3)
+
+
+def test_pounders_derivative_free_finds_the_same_optimum():
+    """TAO POUNDERS (residuals only) and BRGN (exact Jacobian) agree on noisy data."""
+    rng = np.random.default_rng(1)
+    P = np.column_stack((rng.uniform(1, 9, 12), rng.uniform(0.5, 5, 12)))
+    vary = ["bending_stiffness", "tendon1.route"]
+    model = ParameterModel(ARM, vary)
+    data = synthesize(ARM, vary, model.start() + [0.02, 2.0, -1.0],
+                      command_rows(ARM, P, "tension"), noise_mm=0.3)
+    brgn = fit(CalibrationProblem(model, data))
+    pounders = fit(CalibrationProblem(model, data), method="pounders")
+    assert pounders.reason.startswith("CONVERGED"), pounders.reason
+    np.testing.assert_allclose(pounders.theta, brgn.theta, rtol=1e-6)
+    assert pounders.evaluations > brgn.evaluations

@@ -125,9 +125,10 @@ def test_hdf5_round_trip_units_and_provenance(tmp_path):
         assert json.loads(fh.attrs["config_json"])["arm"]["length_mm"] == 600.0
         for key in ("petsc_version", "elastica_petsc_version", "command_line", "created_utc"):
             assert fh.attrs[key]
+        # UDUNITS/CF units; a non-dimensional quantity has "1", its scale in long_name
         expected_units = {"mesh/s": "mm", "state/theta": "rad", "state/x": "mm",
-                          "state/tip": "mm", "state/strain_energy": "B/(2l)",
-                          "tendons/cable_lengths": "mm", "tendons/tensions": "P l^2/B",
+                          "state/tip": "mm", "state/strain_energy": "1",
+                          "tendons/cable_lengths": "mm", "tendons/tensions": "1",
                           "tendons/tensions_N": "N", "tendons/attachments": "mm"}
         for name, units in expected_units.items():
             assert fh[name].attrs["units"] == units
@@ -168,7 +169,8 @@ def test_stability_command_json_and_hdf5(tmp_path):
     with h5py.File(out, "r") as fh:
         assert fh.attrs["kind"] == "stability"
         assert fh["stability/modes"].shape[1] == 181
-        assert fh["stability/eigenvalues"].attrs["units"] == "B/l^2"
+        assert fh["stability/eigenvalues"].attrs["units"] == "1"
+        assert "B/l^2" in fh["stability/eigenvalues"].attrs["long_name"]
 
 
 def test_stability_bad_modes():

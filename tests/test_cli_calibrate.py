@@ -151,3 +151,14 @@ def test_a_schedule_csv_reads_with_input_steps(tmp_path):
     np.testing.assert_allclose(data.tips_mm, [[590, -50], [580, -80], [570, -100]])
     with pytest.raises(DataError, match="inputs of several kinds"):
         read_calibration_csv(path, 2)
+
+
+@pytest.mark.parametrize("config", ["guided.toml", "paper_vertical.toml"])
+def test_guided_or_heavy_arms_are_refused(config, data_csv, tmp_path):
+    """The derivatives assume straight cables and no weight: such arms are refused."""
+    path, _ = data_csv
+    run = cli("--config", ROOT / "configs" / config, "--data", path, "--vary", "tendon1.route",
+              "--out", tmp_path / "fit.toml", cwd=tmp_path)
+    assert run.returncode == 2, run.stderr
+    assert "not supported yet" in run.stderr and len(run.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "fit.toml").exists()

@@ -13,7 +13,6 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 from scipy.special import jv

@@ -53,3 +53,31 @@ def test_boundary_of_guided_robot_and_vertical_paper_arm(robot):
     rest = api.solve(vertical, [0.0, 0.0], elements=60)
     assert rest.equilibrium.tip[1] < -0.1                           # it sags
     assert rest.equilibrium.stable
+
+
+def test_tension_sharing_with_three_guided_cables(robot):
+    """A third cable through guides on the right to the tip: the tensions that reach a
+    target form a family; min-norm sharing picks one of smaller norm.  (Cable 3, slack
+    at the unshared state, cuts through the curled arm between its sparse guides:
+    cables="ignore" keeps the search local.)"""
+    import dataclasses
+    from elastica_petsc.core.model import Guide, Tendon
+    third = Tendon(300.0, (0.0, -8.0), attach_offset_mm=-8.0,
+                   guides=tuple(Guide(s, -8.0) for s in (75.0, 150.0, 225.0)))
+    arm = dataclasses.replace(robot, tendons=robot.tendons + (third,))
+    plain = api.control(arm, [240.0, 100.0], elements=40, guess=[20.0, 10.0, 5.0],
+                        global_search=False, cables="ignore")
+    shared = api.control(arm, [240.0, 100.0], elements=40, guess=[20.0, 10.0, 5.0],
+                         global_search=False, cables="ignore", share="min-norm")
+    assert plain.converged and shared.converged
+    assert np.linalg.norm(shared.tip_mm - [240.0, 100.0]) < 1e-5
+    assert np.linalg.norm(shared.tensions_N) <= np.linalg.norm(plain.tensions_N) + 1e-9
+
+
+def test_vtk_draws_each_cable_through_its_guides(robot, tmp_path):
+    from elastica_petsc.io.vtk import write_state
+    state = api.solve(robot, [20.0, 10.0], elements=40)
+    path = write_state(tmp_path / "s.vtu", robot, state.equilibrium)
+    text = path.read_text()
+    # 41 nodes + (route + 3 guides + end) per cable; 40 elements + 4 segments per cable
+    assert 'NumberOfPoints="51"' in text and 'NumberOfCells="48"' in text

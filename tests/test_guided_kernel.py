@@ -238,3 +238,64 @@ def test_cable_length_sensitivities_through_guides():
             dX = (disc.attachment_points(th[0]) - disc.attachment_points(th[1])) / (2 * eps)
             assert np.allclose(s.cable_lengths[i], dL, atol=1e-7)
             assert np.allclose(s.attachments[i], dX, atol=1e-7)
+
+
+def test_every_stored_entry_is_written(disc):
+    """The values are written slot by slot into the CSR patterns: every stored entry
+    of the Jacobian and of H has exactly one source."""
+    for slots, pattern in ((disc._jacobian_slots, disc.pattern),
+                           (disc._stability_slots, disc.stability_pattern)):
+        band_slots, _, cols, rows, corner = slots
+        written = np.concatenate([a[a >= 0] for a in (band_slots, cols.ravel(), rows.ravel(),
+                                                      corner)])
+        assert np.array_equal(np.sort(written), np.arange(len(pattern[1])))
+
+
+def test_length_control_inertia_through_guides():
+    """Negative eigenvalues of K on null(C^T) (taut cables; docs/model.md §4.7, §11.3)
+    from the bordered LDL^T against the dense projection."""
+    from scipy.linalg import null_space
+    from elastica_petsc.solvers.lengths import LengthInertia
+    disc = Discretisation.from_arm(guided_arm(gravity=(-9.81, 0.0)))
+    counter = LengthInertia(disc)
+    N = disc.n_elements
+    rng = np.random.default_rng(12)
+    counts = []
+    try:
+        for p in ([0.0, 0.0], [60.0, 0.0], [60.0, 50.0], [200.0, 150.0]):
+            p = np.array(p)
+            u = disc.consistent_state(np.concatenate(([0.0], 0.05 * rng.standard_normal(N))))
+            K = reduced_tangent(disc, u, p)
+            C = disc.load_derivative(u)[p > 1e-8, :N].T
+            Z = null_space(C.T) if C.shape[1] else np.eye(N)
+            expected = int(np.sum(np.linalg.eigvalsh(Z.T @ (0.5 * (K + K.T)) @ Z) < 0))
+            counts.append(expected)
+            assert counter.negative_eigenvalues(u, p) == expected
+        assert max(counts) > 0
+    finally:
+        counter.destroy()
+
+
+def test_tip_sensitivity_to_routing_points_taylor():
+    """d x_t/d r_i of a cable through guides (J du = -dF/dr_i, the first chord's rows)
+    against equilibria re-solved with the routing point moved: remainder O(eps^2)."""
+    import dataclasses
+    from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+    from elastica_petsc.solvers.sensitivity import SensitivitySolver
+    disc = Discretisation.from_arm(guided_arm(elements=24))
+    rng = np.random.default_rng(13)
+    with EquilibriumSolver(disc) as solver, SensitivitySolver(disc) as sens:
+        eq = solver.solve(P)
+        for i in range(disc.n_tendons):
+            v = rng.standard_normal(2)
+            _, dtip = sens.parameter_derivative(eq, disc.route_derivative(eq.u, P, i) @ v)
+            rem = []
+            for eps in (4e-3, 2e-3, 1e-3):
+                routes = disc.routes.copy()
+                routes[i] += eps * v
+                moved = dataclasses.replace(disc, routes=routes)
+                with EquilibriumSolver(moved) as other:
+                    u, _, _ = other.newton(eq.u, P)
+                rem.append(np.linalg.norm(moved.node_positions(moved.split(u)[0])[-1]
+                                          - eq.tip - eps * dtip))
+            assert np.all(np.log2(np.array(rem[:-1]) / rem[1:]) > 1.9), (i, rem)

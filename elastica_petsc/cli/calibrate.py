@@ -40,6 +40,9 @@ def add_parser(sub) -> None:
                         help="read only this input group (e.g. of a schedule CSV)")
     parser.add_argument("--huber", type=float, metavar="MM",
                         help="robust fit: Huber loss with this threshold [mm]")
+    parser.add_argument("--method", choices=("brgn", "pounders"), default="brgn",
+                        help="TAO BRGN with the exact Jacobian (default) or POUNDERS "
+                             "(derivative-free, a check; slower)")
     parser.add_argument("--folds", type=int, default=5, metavar="K",
                         help="k-fold cross-validation (0: none; default 5)")
     parser.add_argument("--candidates", metavar="CSV",
@@ -98,7 +101,7 @@ def run(args) -> int:
         try:
             result = calibrate(model, data, elements=disc.n_elements, huber_mm=args.huber,
                                folds=args.folds, candidates=candidates, next_count=args.next,
-                               progress=bar, comm=comm)
+                               progress=bar, comm=comm, method=args.method)
         except RowError as err:
             bar.close()
             if root:
@@ -120,9 +123,7 @@ def finish(args, result, root: bool = True) -> int:
 
     summary = result.summary()
     summary["ranks"] = result.problem.ranks
-    converged = summary["solver"]["tao_reason"].startswith("CONVERGED") or \
-        summary["solver"]["remaining_step_sigma"] < 1e-2
-    summary["converged"] = converged
+    converged = summary["converged"] = summary["solver"]["converged"]
     if not root:
         return 0 if converged else 1
     if args.out:
@@ -164,9 +165,14 @@ def print_summary(s: dict) -> None:
         print("Down-weighted by the Huber loss: lines "
               + ", ".join(map(str, s["down_weighted_lines"])))
     sv = s["solver"]
-    print(f"TAO BRGN: {sv['tao_reason']} after {sv['iterations']} iterations "
+    print(f"TAO {sv['method'].upper()}: {sv['tao_reason']} after {sv['iterations']} iterations "
           f"({sv['evaluations']} evaluations, {sv['seconds']:.3g} s); remaining step "
           f"{sv['remaining_step_sigma']:.2g} sigma")
+    if not sv["converged"]:
+        print(f"Not converged: the Gauss-Newton step still to go is {sv['remaining_step_sigma']:.2g} "
+              "standard deviations" + (f"; {sv['failed_trial_points']} trial points had a row "
+                                       "without an equilibrium (a row near a fold or snap limits "
+                                       "the steps)" if sv["failed_trial_points"] else ""))
     for k, nxt in enumerate(s.get("next_measurements") or (), start=1):
         print(f"  next measurement {k}: candidate line {nxt['line']} ({nxt['kind']} "
               f"{nxt['inputs']}), log det gain {nxt['log_det_gain']:.3g}")

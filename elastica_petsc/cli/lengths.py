@@ -270,19 +270,22 @@ def write_states(path, overwrite: bool, arm, data: dict, states, kind: str) -> N
                          "state_numbers": [int(s["number"]) for s in data["equilibria"]]})
         target = fh.create_group("target")
         if data["control"] == "length":
-            put(target, "lengths_mm", data["lengths_mm"], "mm", "prescribed cable lengths L_i")
+            put(target, "lengths_mm", data["lengths_mm"], "mm", "prescribed cable lengths L_i",
+                ("tendon",))
         else:
-            put(target, "tensions", data["tensions"], "P l^2/B", "prescribed tensions p_i")
-            put(target, "tensions_N", data["tensions_N"], "N", "prescribed tensions P_i")
+            put(target, "tensions", data["tensions"], "P l^2/B", "prescribed tensions p_i",
+                ("tendon",))
+            put(target, "tensions_N", data["tensions_N"], "N", "prescribed tensions P_i",
+                ("tendon",))
         group = fh.create_group("equilibria")
         for state, summary in zip(states, data["equilibria"]):
             g = group.create_group(f"state_{summary['number']}")
             write_equilibrium(g, arm, state)
             put(g["tendons"], "lengths_requested", state.lengths_requested * l_mm, "mm",
-                "prescribed cable lengths L_i (load control: the state's own chords)")
+                "prescribed cable lengths L_i (load control: the state's own chords)", ("tendon",))
             put(g["tendons"], "slack", summary["slack_mm"], "mm",
-                "L_i - |r_i - x_i| (> 0: slack cable, tension 0)")
-            put(g["tendons"], "taut", summary["taut"], "1", "cable carries tension")
+                "L_i - |r_i - x_i| (> 0: slack cable, tension 0)", ("tendon",))
+            put(g["tendons"], "taut", summary["taut"], "1", "cable carries tension", ("tendon",))
             solver = g["solver"]
             write_attrs(solver, {
                 "length_unstable_modes": int(summary["unstable_modes_length_control"]),

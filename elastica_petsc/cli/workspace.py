@@ -22,7 +22,12 @@ def add_parser(sub) -> None:
     parser.add_argument("--spacing", type=float, default=20.0, metavar="MM",
                         help="target grid spacing in mm (mode targets; default 20)")
     parser.add_argument("--box", type=float, nargs=4, metavar=("XMIN", "XMAX", "YMIN", "YMAX"),
-                        help="target box in mm (default: the half-disc y >= 0 within reach l)")
+                        help="target box in mm (default: --region)")
+    parser.add_argument("--region", choices=("half-disc", "disc"),
+                        help="without --box: the half-disc y >= 0 within reach l (the paper's "
+                             "Fig. 4; the default for the paper's arm) or the whole disc of "
+                             "reach (the default with --config: a user's arm need not be "
+                             "symmetric, and half of its W_0 may lie below y = 0)")
     common.add_tension_option(parser, "--tension-spacing", default=2.0,
                               help="tension grid spacing in mode tensions")
     common.add_tension_option(parser, "--tension-max", default=40.0,
@@ -88,15 +93,19 @@ def _run(args, comm) -> int:
         arm, disc, mode=args.mode, spacing_mm=args.spacing, box_mm=args.box,
         tension_spacing=args.tension_spacing, tension_max=args.tension_max, chunk=args.chunk,
         comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
-        global_search=not args.local_only, share=args.share, min_tension_N=args.min_tension_N)
+        global_search=not args.local_only, share=args.share, min_tension_N=args.min_tension_N,
+        region=default_region(args))
     if comm.rank != 0:
         return 0
-    summary = result.summary()
+    from ..studies.map_area import map_json
+    described = map_json(result, args.box)     # status codes, region, lattice, area
+    summary = result.summary()                 # status counts in words, for the text
     if args.json:
-        from ..studies.map_area import map_json
-        common.print_json(args.command, summary | map_json(result, args.box))
+        common.print_json(args.command, summary | described)
     else:
-        print(format_summary(summary))
+        print(format_summary(summary | {k: v for k, v in described.items()
+                                        if k != "status_counts"}))
+    summary = summary | described
     if not summary["complete"]:
         message = (f"interrupted: {summary['samples_done']} of {summary['samples_total']} "
                    f"samples saved in {args.out}; continue with --resume")
@@ -111,6 +120,14 @@ def _run(args, comm) -> int:
         from ..io.vtk import write_workspace_vtk
         write_workspace_vtk(args.vtk, args.out)
     return 0
+
+
+def default_region(args) -> str:
+    """--region, or the paper's half-disc for the paper's arm and the whole disc of
+    reach for an arm of the user's own (--config)."""
+    if args.region is not None:
+        return args.region
+    return "half-disc" if args.config is None else "disc"
 
 
 def _exit_without_finalize(status: int, message: str) -> None:
@@ -151,6 +168,11 @@ def _derived_plots(args) -> dict:
 
 def format_summary(s: dict) -> str:
     lines = [f"workspace samples: {s['samples_done']}/{s['samples_total']} done -> {s['file']}"]
+    if s.get("region"):
+        lines.append(f"  region: {s['region']}")
+    if s.get("area_mm2") is not None:
+        lines.append(f"  area of W_0 in the region: {s['area_mm2']:.0f} ± "
+                     f"{s['area_error_mm2']:.0f} mm^2 (lattice cells of the reached samples)")
     if s.get("share", "none") != "none":
         lines.append(f"  tensions shared {s['share']}, every P >= {s['min_tension_floor_N']:g} N "
                      "(W_0(P_min), docs/model.md §9.3)")

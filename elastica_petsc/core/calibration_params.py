@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
-from .model import Arm, Motor, Tendon
+from .model import Arm, Motor
 
 
 class ParameterError(InputError):
@@ -131,6 +131,14 @@ class ParameterModel:
         if len(set(vary)) != len(vary):
             raise ParameterError(f"--vary: {next(v for v in vary if vary.count(v) > 1)!r} "
                                  "given twice")
+        unsupported = [what for what, present in (
+            ("cable guides", any(t.guides for t in arm.tendons)),
+            ("offset cable ends", any(t.attach_offset_mm for t in arm.tendons)),
+            ("the arm's weight", arm.gravity_m_s2 is not None or arm.tip_mass_kg)) if present]
+        if unsupported:
+            raise ParameterError("calibrate: arms with " + " or ".join(unsupported) + " are not "
+                                 "supported yet (the exact derivatives assume straight cables "
+                                 "from the routing points to the centreline and no weight)")
         self.arm0, self.groups = arm, vary
         params = [p for g in vary for p in _group_parameters(g, arm)]
         names = {p.name for p in params}
@@ -214,7 +222,7 @@ class ParameterModel:
         """The arm in its own frame (clamp at the origin along +x) at theta."""
         v = self.values(theta)
         rho = self.arm_routes(theta)[0]
-        tendons = tuple(Tendon(t.attach_mm, (float(r[0]), float(r[1])))
+        tendons = tuple(dataclasses.replace(t, route_mm=(float(r[0]), float(r[1])))
                         for t, r in zip(self.arm0.tendons, rho))
         motor = dataclasses.replace(self.arm0.motor, spool_radius_mm=v["spool_radius"])
         return dataclasses.replace(self.arm0, bending_stiffness_Nm2=v["bending_stiffness"],

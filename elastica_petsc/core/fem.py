@@ -334,7 +334,8 @@ class Discretisation:
     def stability_pattern(self):
         """Upper-triangle CSR structure of the symmetric stability matrix H
         (one border column per tendon)."""
-        return self.bordered_pattern(self.stability_pattern_supports, upper=True)
+        return self.bordered_pattern(self.stability_pattern_supports, upper=True,
+                                     starts=self.stability_pattern_starts)
 
     def band(self, theta, d, p, terms: Terms | None = None) -> np.ndarray:
         """Tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper);

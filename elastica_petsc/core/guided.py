@@ -50,6 +50,7 @@ class PathTerms(NamedTuple):
     force: np.ndarray        # sum of the forces acting beyond each element (N, 2)
     moment: np.ndarray       # delta_a f_a . t(theta_m): the offsets' moments (residual's sign)
     moment_slope: np.ndarray  # its derivative in theta_m: delta_a f_a . n(theta_m)
+    node_cs: tuple           # cos, sin of theta at the points' nodes
 
 
 def on_node(s: float, n: int, what: str, length_mm: float) -> int:
@@ -195,11 +196,16 @@ class GuidedDiscretisation(Discretisation):
         return (1.0 - mid)[:, None] * self.gravity[None] + self.tip_weight[None]
 
     # --- geometry -------------------------------------------------------------------------
-    def point_positions(self, theta: np.ndarray) -> np.ndarray:
-        """X_a = x_{m_a} + delta_a n(theta_{m_a}), shape (P, 2)."""
-        m = np.asarray(self.point_nodes)
-        normal = np.column_stack((-np.sin(theta[m]), np.cos(theta[m])))
-        return self.node_positions(theta)[m] + self.point_offsets[:, None] * normal
+    def point_positions(self, theta: np.ndarray, cs=None, node_cs=None) -> np.ndarray:
+        """X_a = x_{m_a} + delta_a n(theta_{m_a}), shape (P, 2); ``cs``, ``node_cs``:
+        cos, sin of the element angles and of theta at the points' nodes if known."""
+        m = self._deposit + 1
+        c, s = self.trig(theta) if cs is None else cs
+        cm, sm = (np.cos(theta[m]), np.sin(theta[m])) if node_cs is None else node_cs
+        out = np.empty((self.n_points, 2))
+        out[:, 0] = self.h * np.cumsum(c)[m - 1] - self.point_offsets * sm
+        out[:, 1] = self.h * np.cumsum(s)[m - 1] + self.point_offsets * cm
+        return out
 
     def attachment_points(self, theta: np.ndarray) -> np.ndarray:
         return self.point_positions(theta)[np.asarray(self.path_starts[1:]) - 1]
@@ -271,6 +277,7 @@ class GuidedDiscretisation(Discretisation):
 
     def _terms(self, u: np.ndarray, p) -> PathTerms:
         theta, y = self.split(u)
+        y = y.copy()                       # kept with the terms: not a view of u
         seg_len, e = self.segments(y)
         p = np.asarray(p, float)
         pull = p[self.point_tendon][:, None] * e
@@ -289,7 +296,7 @@ class GuidedDiscretisation(Discretisation):
                              self.n_elements)
         slope = np.bincount(self._deposit, self.point_offsets * (f[:, 1] * cm - f[:, 0] * sm),
                             self.n_elements)
-        return PathTerms(theta, y, seg_len, e, f, c, s, p, force, moment, slope)
+        return PathTerms(theta, y, seg_len, e, f, c, s, p, force, moment, slope, (cm, sm))
 
     def residual(self, u: np.ndarray, p, tip_moment: float = 0.0,
                  terms: PathTerms | None = None) -> np.ndarray:
@@ -301,7 +308,8 @@ class GuidedDiscretisation(Discretisation):
         f_theta[:-1] -= q[1:]
         f_theta[-1] -= tip_moment
         f_theta += t.moment
-        return np.concatenate((f_theta, (t.y - self.chords(self.point_positions(t.theta))).ravel()))
+        points = self.point_positions(t.theta, (t.c, t.s), t.node_cs)
+        return np.concatenate((f_theta, (t.y - self.chords(points)).ravel()))
 
     def band(self, theta, d, p, terms: PathTerms | None = None) -> np.ndarray:
         """Tridiagonal part T of the tangent (``d`` unused: the forces come from
@@ -318,13 +326,28 @@ class GuidedDiscretisation(Discretisation):
         e_perp = np.column_stack((-t.e[chord, 1], t.e[chord, 0]))
         return dg[:, 0] * e_perp[:, 0] + dg[:, 1] * e_perp[:, 1], e_perp
 
-    def _border_source(self, per_entry: np.ndarray, width: int) -> np.ndarray:
-        """(N, width * P) border columns from per-entry values (M, width)."""
+    def _slots(self, pattern, width: int):
+        """Where the values go in a bordered ``pattern`` (of :meth:`bordered_pattern`,
+        ``width`` border columns per chord): (band slots and their entries of the
+        (N, 3) band, column slots (M, width), row slots (M, width), corner slots)."""
+        N, nb = self.n_elements, width * self.n_points
+        src = pattern[2]
+        where = np.full(3 * N + 2 * nb * N + nb, -1)
+        where[src] = np.arange(len(src))
+        band = np.flatnonzero(where[:3 * N] >= 0)
         chord, rows = self.entries[:2]
-        out = np.zeros((self.n_elements, width * self.n_points))
-        for j in range(width):
-            out[rows, width * chord + j] = per_entry[:, j]
-        return out
+        border = width * chord[:, None] + np.arange(width)[None, :]
+        cols = where[3 * N + rows[:, None] * nb + border]
+        rows_ = where[3 * N + nb * N + border * N + rows[:, None]]
+        return where[band], band, cols, rows_, where[3 * N + 2 * nb * N + np.arange(nb)]
+
+    @cached_property
+    def _jacobian_slots(self):
+        return self._slots(self.pattern, 2)
+
+    @cached_property
+    def _stability_slots(self):
+        return self._slots(self.stability_pattern, 1)
 
     def jacobian_values(self, u: np.ndarray, p, terms: PathTerms | None = None,
                         g=None) -> np.ndarray:
@@ -336,29 +359,39 @@ class GuidedDiscretisation(Discretisation):
         lever, e_perp = self._levers(t, dg)
         chord = self.entries[0]
         lever *= -t.p[self.point_tendon][chord] / t.seg_len[chord]
-        border = self._border_source(lever[:, None] * e_perp, 2)
-        source = np.concatenate((self.band(t.theta, None, t.p, t).ravel(), border.ravel(),
-                                 border.T.ravel(), np.ones(2 * self.n_points)))
-        source[3 * self.n_elements + border.size:-2 * self.n_points] = \
-            self._border_source(dg, 2).T.ravel()
-        return source[self.pattern[2]]
+        band_slots, band, cols, rows, corner = self._jacobian_slots
+        values = np.zeros(len(self.pattern[1]))
+        values[band_slots] = self.band(t.theta, None, t.p, t).ravel()[band]
+        values[cols] = lever[:, None] * e_perp
+        values[rows] = dg
+        values[corner] = 1.0
+        return values
 
     def stiffness_border(self, theta: np.ndarray, y: np.ndarray, p) -> np.ndarray:
         """W (P, N), one row per segment: sqrt(p/L_a) D_a^T e_a^perp, K = T + W^T W."""
         t = self.terms(self.join(theta, y), p)
-        lever, _ = self._levers(t, self.segment_gradients(theta))
-        chord = self.entries[0]
+        chord, rows = self.entries[:2]
+        dense = np.zeros((self.n_points, self.n_elements))
+        dense[chord, rows] = self._stiffness_entries(t)
+        return dense
+
+    def _stiffness_entries(self, t: PathTerms) -> np.ndarray:
+        """W at the stored entries (M,): sqrt(p/L_a) D_a . e_a^perp."""
+        w = self._levers(t, self.segment_gradients(t.theta, (t.c, t.s)))[0]
         weights = np.sqrt(np.maximum(t.p[self.point_tendon], 0.0) / t.seg_len)
-        return self._border_source((weights[chord] * lever)[:, None], 1).T
+        return w * weights[self.entries[0]]
 
     def stability_values(self, u: np.ndarray, p) -> np.ndarray:
-        p = np.asarray(p, float)
-        theta, y = self.split(u)
+        """Upper-triangle entries of H = [[T, W], [W^T, -I]] (:attr:`stability_pattern`)."""
         t = self.terms(u, p)
-        w = self.stiffness_border(theta, y, p)
-        source = np.concatenate((self.band(theta, None, p, t).ravel(), w.T.ravel(), w.ravel(),
-                                 -np.ones(self.n_points)))
-        return source[self.stability_pattern[2]]
+        w = self._stiffness_entries(t)
+        band_slots, band, cols, rows, corner = self._stability_slots
+        values = np.zeros(len(self.stability_pattern[1]))
+        values[band_slots] = self.band(t.theta, None, t.p, t).ravel()[band]
+        upper = cols[:, 0] >= 0                 # the upper triangle holds the columns only
+        values[cols[upper, 0]] = w[upper]
+        values[corner] = -1.0
+        return values
 
     def load_derivative(self, u: np.ndarray, g=None, d=None) -> np.ndarray:
         """dF/dp_i = grad_theta L_i = -sum_a D_a^T e_a over tendon i's segments;
@@ -421,7 +454,12 @@ class GuidedDiscretisation(Discretisation):
     # --- the unloaded state under weight ---------------------------------------------------
     def straight(self) -> np.ndarray:
         """The state at p = 0: straight without weight, else the arm sagging under its
-        weight, reached by continuation in the weight from the straight arm."""
+        weight, reached by continuation in the weight from the straight arm (computed
+        once per discretisation)."""
+        return self._rest_state.copy()
+
+    @cached_property
+    def _rest_state(self) -> np.ndarray:
         return self.consistent_state(self.rest_angles())
 
     def rest_angles(self, steps: int | None = None) -> np.ndarray:

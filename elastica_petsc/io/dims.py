@@ -16,6 +16,30 @@ import numpy as np
 # coordinates every writer shares: tendon numbers and vector components
 COMPONENTS = ("x", "y")
 
+# the project's unit notation -> (UDUNITS/CF units, what the number means, for long_name)
+CF_UNITS = {
+    "P l^2/B": ("1", "non-dimensional tension p = P l^2/B"),
+    "B/(2l)": ("1", "in units of SE_0 = B/(2l)"),
+    "B/l^2": ("1", "in units of B/l^2"),
+    "B/l": ("1", "in units of B/l"),
+    "mm per (P l^2/B)": ("mm", "mm per unit of p = P l^2/B"),
+    "microsteps": ("1", "motor microsteps"),
+    "rev": ("1", "spool revolutions"),
+}
+DIMENSION_TEXT = {"tendon": "tendon number", "component": "vector component (x, y)",
+                  "node": "mesh node index (arc length s = node l / N)",
+                  "element": "finite element index", "point": "path point index",
+                  "row": "schedule row", "sample": "workspace sample index",
+                  "iteration": "optimiser iteration", "x": "target x", "y": "target y"}
+
+
+def cf_attrs(units: str, description: str) -> dict:
+    """``units`` as a UDUNITS/CF string and ``long_name`` with the description
+    and, for a non-dimensional quantity, what it is measured in."""
+    cf, meaning = CF_UNITS.get(units, (units, None))
+    return {"units": cf, "long_name": description if meaning is None
+            else f"{description} [{meaning}]"}
+
 
 def dimension(group, name: str, length: int, values=None, units: str | None = None,
               long_name: str | None = None):
@@ -37,10 +61,8 @@ def dimension(group, name: str, length: int, values=None, units: str | None = No
         values = np.array([str(v) for v in values], dtype=h5py.string_dtype("utf-8"))
     scale = group.create_dataset(name, data=values)
     scale.make_scale(name)
-    if units is not None:
-        scale.attrs["units"] = units
-    if long_name is not None:
-        scale.attrs["long_name"] = long_name
+    text = long_name or DIMENSION_TEXT.get(name, f"index along {name}")
+    scale.attrs.update({"units": units or "1", "long_name": text, "description": text})
     return scale
 
 
@@ -60,3 +82,34 @@ def label(dset, dims, coords: dict | None = None) -> None:
         values, units, long_name = spec if isinstance(spec, tuple) else (spec, None, None)
         scale = dimension(dset.parent, name, dset.shape[axis], values, units, long_name)
         dset.dims[axis].attach_scale(scale)
+
+
+def fields(group) -> dict:
+    """{name: values} of a group's datasets, its dimension scales left out."""
+    import h5py
+
+    return {name: d[()] for name, d in group.items()
+            if isinstance(d, h5py.Dataset) and not h5py.h5ds.is_scale(d.id)}
+
+
+def xarray_dataset(variables: dict, coords: dict | None = None, attrs: dict | None = None):
+    """An ``xarray.Dataset`` (xarray is optional: InputError without it) from
+    {name: (dims, values, units, description)} in the project's units, with the
+    same dimension names, CF units and long names as the HDF5 files."""
+    from ..core.errors import InputError
+
+    try:
+        import xarray as xr
+    except ImportError:
+        raise InputError("to_xarray needs xarray (Debian: python3-xarray)") from None
+    data = {name: (dims, np.asarray(values), {**cf_attrs(units, text), "description": text})
+            for name, (dims, values, units, text) in variables.items()}
+    lengths = {d: np.shape(v[1])[k] for v in variables.values() for k, d in enumerate(v[0])}
+    coords = dict(coords or {})
+    if "tendon" in lengths and "tendon" not in coords:
+        coords["tendon"] = ("tendon", np.arange(1, lengths["tendon"] + 1),
+                            {"long_name": DIMENSION_TEXT["tendon"], "units": "1"})
+    if "component" in lengths and "component" not in coords:
+        coords["component"] = ("component", list(COMPONENTS[:lengths["component"]]),
+                               {"long_name": DIMENSION_TEXT["component"]})
+    return xr.Dataset(data, coords=coords, attrs=attrs or {})

@@ -233,11 +233,21 @@ def write_attrs(obj, attrs: dict) -> None:
         obj.attrs[key] = value
 
 
-def put(group, name: str, data, units: str, description: str):
-    """A dataset with its units and description."""
-    dset = group.create_dataset(name, data=np.asarray(data))
-    dset.attrs["units"] = units
+def put(group, name: str, data, units: str, description: str, dims=None, coords=None):
+    """A dataset with its units (UDUNITS/CF: ``1`` for a non-dimensional one, its
+    meaning in ``long_name``), description and, with ``dims``, one named
+    dimension per axis (io/dims.py; ``coords`` their values)."""
+    from .dims import cf_attrs, label
+
+    data = np.asarray(data)
+    if data.dtype.kind == "U":                  # text: variable-length UTF-8 strings
+        import h5py
+        data = data.astype(object).astype(h5py.string_dtype("utf-8"))
+    dset = group.create_dataset(name, data=data)
+    dset.attrs.update(cf_attrs(units, description))
     dset.attrs["description"] = description
+    if dims is not None:
+        label(dset, dims, coords)
     return dset
 
 
@@ -245,25 +255,31 @@ def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
     """One solved state under ``group`` (layout in the module docstring)."""
     l_mm = arm.length_mm
     mesh = group.create_group("mesh")
-    put(mesh, "s", np.linspace(0.0, l_mm, eq.disc.n_elements + 1), "mm", "arc length of nodes")
+    put(mesh, "s", np.linspace(0.0, l_mm, eq.disc.n_elements + 1), "mm", "arc length of nodes",
+        ("node",))
     state = group.create_group("state")
-    put(state, "theta", eq.theta, "rad", "tangent angle at the nodes (P1)")
-    put(state, "x", eq.x * l_mm, "mm", "centreline position at the nodes (Eq. (2))")
-    put(state, "curvature", eq.curvature, "1", "l * dtheta/ds per element")
-    put(state, "tip", eq.tip * l_mm, "mm", "tip position x(l)")
+    put(state, "theta", eq.theta, "rad", "tangent angle at the nodes (P1)", ("node",))
+    put(state, "x", eq.x * l_mm, "mm", "centreline position at the nodes (Eq. (2))",
+        ("node", "component"))
+    put(state, "curvature", eq.curvature, "1", "l * dtheta/ds per element", ("element",))
+    put(state, "tip", eq.tip * l_mm, "mm", "tip position x(l)", ("component",))
     put(state, "strain_energy", eq.strain_energy, "B/(2l)", "strain energy (Eq. (21)) / SE_0")
     put(state, "strain_energy_J", eq.strain_energy * arm.energy_scale_J, "J", "strain energy")
     put(state, "kappa_max", eq.kappa_max, "1", "max over s of l*|theta'| (Fig. 5a)")
     tendons = group.create_group("tendons")
-    put(tendons, "attach_s", [t.attach_mm for t in arm.tendons], "mm", "attachment arc length s_i")
-    put(tendons, "routes", arm.routes() * l_mm, "mm", "routing points r_i")
-    put(tendons, "attachments", eq.attachments * l_mm, "mm", "attachment points x_i")
-    put(tendons, "directions", eq.directions, "1", "unit cable directions d_i (Eq. (3))")
-    put(tendons, "cable_lengths", eq.cable_lengths * l_mm, "mm", "cable lengths |r_i - x_i|")
-    put(tendons, "tensions", eq.p, "P l^2/B", "non-dimensional tensions p_i")
-    put(tendons, "tensions_N", arm.tensions_to_N(eq.p), "N", "tensions P_i")
+    put(tendons, "attach_s", [t.attach_mm for t in arm.tendons], "mm", "attachment arc length s_i",
+        ("tendon",))
+    put(tendons, "routes", arm.routes() * l_mm, "mm", "routing points r_i", ("tendon", "component"))
+    put(tendons, "attachments", eq.attachments * l_mm, "mm", "attachment points x_i",
+        ("tendon", "component"))
+    put(tendons, "directions", eq.directions, "1", "unit cable directions d_i (Eq. (3))",
+        ("tendon", "component"))
+    put(tendons, "cable_lengths", eq.cable_lengths * l_mm, "mm", "cable lengths |r_i - x_i|",
+        ("tendon",))
+    put(tendons, "tensions", eq.p, "P l^2/B", "non-dimensional tensions p_i", ("tendon",))
+    put(tendons, "tensions_N", arm.tensions_to_N(eq.p), "N", "tensions P_i", ("tendon",))
     put(tendons, "cable_clear", state_cable_clear(eq), "1",
-        "the straight cable [x_i, r_i] does not cross the arm (HDF5 boolean)")
+        "the straight cable [x_i, r_i] does not cross the arm (HDF5 boolean)", ("tendon",))
     solver = group.create_group("solver")
     write_attrs(solver, {"converged": bool(eq.converged), "reason": eq.reason,
                          "message": eq.message, "iterations": int(eq.iterations),
@@ -271,7 +287,8 @@ def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
                          "unstable_modes": int(eq.unstable_modes)})
     if eq.bifurcations:
         put(solver, "bifurcation_tensions", np.array([b.p_critical for b in eq.bifurcations]),
-            "P l^2/B", "critical tensions of the symmetric bifurcations crossed, in order")
+            "P l^2/B", "critical tensions of the symmetric bifurcations crossed, in order",
+            ("bifurcation",))
         write_attrs(solver, {"bifurcation_sides": [b.side for b in eq.bifurcations],
                              "bifurcation_rules": [b.rule for b in eq.bifurcations]})
 
@@ -281,14 +298,16 @@ def write_control(group, arm: Arm, result) -> None:
     l_mm = arm.length_mm
     write_equilibrium(group, arm, result.equilibrium)
     ctl = group.create_group("control")
-    put(ctl, "target", result.target * l_mm, "mm", "desired tip position x_d")
+    put(ctl, "target", result.target * l_mm, "mm", "desired tip position x_d", ("component",))
     put(ctl, "tip_error", result.tip_error * l_mm, "mm", "|x_t - x_d|")
     put(ctl, "tip_sensitivity", result.sensitivity.tip * l_mm, "mm per (P l^2/B)",
-        "d x_t / d p_i (Eq. (13)), one row per tendon")
-    put(ctl, "history_tensions", result.history_p, "P l^2/B", "tensions at iterations 0..k")
-    put(ctl, "history_tip", result.history_tip * l_mm, "mm", "tip at iterations 0..k")
+        "d x_t / d p_i (Eq. (13)), one row per tendon", ("tendon", "component"))
+    put(ctl, "history_tensions", result.history_p, "P l^2/B", "tensions at iterations 0..k",
+        ("iteration", "tendon"))
+    put(ctl, "history_tip", result.history_tip * l_mm, "mm", "tip at iterations 0..k",
+        ("iteration", "component"))
     put(ctl, "history_E", result.history_E * l_mm ** 2, "mm^2",
-        "objective E = |x_d - x_t|^2 / 2 at iterations 0..k (Eq. (10))")
+        "objective E = |x_d - x_t|^2 / 2 at iterations 0..k (Eq. (10))", ("iteration",))
     write_attrs(ctl, {"converged": bool(result.converged),
                       "reachable": str(result.reachable), "reason": result.reason,
                       "tao_reason": result.tao_reason, "method": result.method,
@@ -314,48 +333,57 @@ def write_trace(group, arm: Arm, trace, schedule) -> None:
     l_mm = arm.length_mm
     results = trace.results
     path = group.create_group("path")
-    put(path, "target", trace.targets_mm, "mm", "target tip positions, in tracing order")
-    put(path, "tip", trace.tips_mm, "mm", "tip positions reached")
-    put(path, "tip_error", trace.tip_errors_mm, "mm", "|tip - target|")
-    put(path, "tensions", trace.p, "P l^2/B", "non-dimensional tensions")
-    put(path, "tensions_N", trace.tensions_N, "N", "tensions")
-    put(path, "cable_lengths", trace.cable_lengths_mm, "mm", "cable lengths |r_i - x_i|")
+    P2, PT = ("point", "component"), ("point", "tendon")
+    put(path, "target", trace.targets_mm, "mm", "target tip positions, in tracing order", P2)
+    put(path, "tip", trace.tips_mm, "mm", "tip positions reached", P2)
+    put(path, "tip_error", trace.tip_errors_mm, "mm", "|tip - target|", ("point",))
+    put(path, "tensions", trace.p, "P l^2/B", "non-dimensional tensions", PT)
+    put(path, "tensions_N", trace.tensions_N, "N", "tensions", PT)
+    put(path, "cable_lengths", trace.cable_lengths_mm, "mm", "cable lengths |r_i - x_i|", PT)
     put(path, "theta", np.array([r.equilibrium.theta for r in results]), "rad",
-        "nodal tangent angles of each equilibrium")
+        "nodal tangent angles of each equilibrium", ("point", "node"))
     put(path, "curvature", np.array([r.equilibrium.curvature for r in results]), "1",
-        "l * theta' per element, each point")
+        "l * theta' per element, each point", ("point", "element"))
     put(path, "tip_sensitivity", np.array([r.sensitivity.tip for r in results]) * l_mm,
-        "mm per (P l^2/B)", "d x_t / d p_i (Eq. (13)): [point, tendon, component]")
-    put(path, "iterations", trace.iterations, "1", "optimiser iterations per point")
-    put(path, "converged", trace.converged, "1", "tip within tolerance of the target")
+        "mm per (P l^2/B)", "d x_t / d p_i (Eq. (13)): [point, tendon, component]",
+        ("point", "tendon", "component"))
+    put(path, "iterations", trace.iterations, "1", "optimiser iterations per point", ("point",))
+    put(path, "converged", trace.converged, "1", "tip within tolerance of the target", ("point",))
     put(path, "cable_clear", np.array([state_cable_clear(r.equilibrium) for r in results],
                                       dtype=bool).reshape(len(results), -1), "1",
-        "per point and tendon: the straight cable does not cross the arm (HDF5 boolean)")
+        "per point and tendon: the straight cable does not cross the arm (HDF5 boolean)", PT)
     ends = write_loading_tree(group, [r.loading for r in results])
     put(path, "loading_node", ends, "1",
-        "per point: last vertex of its loading path in /loading (-1: p = 0, -2: unknown)")
+        "per point: last vertex of its loading path in /loading (-1: p = 0, -2: unknown)",
+        ("point",))
     write_schedule(group.create_group("schedule"), schedule)
 
 
 def write_schedule(sched, schedule) -> None:
     """The timed motor schedule (:mod:`elastica_petsc.core.schedule`), the
     same rows and columns as its CSV: R rows (approach, then path), n tendons."""
-    put(sched, "phase", schedule.phase.astype("S"), "1", "approach or path")
-    put(sched, "point", schedule.point, "1", "index within the phase (path: index of path/)")
-    put(sched, "time", schedule.time_s, "s", "time of the row at the tip speed (NaN: no speed)")
-    put(sched, "reached", schedule.reached.astype(bool), "1", "tip within tolerance of the target")
-    put(sched, "target", schedule.targets_mm, "mm", "target tip position")
-    put(sched, "tip", schedule.tips_mm, "mm", "tip position of the planned state")
-    put(sched, "tensions", schedule.p, "P l^2/B", "non-dimensional tensions p_i")
-    put(sched, "tensions_N", schedule.tensions_N, "N", "tensions P_i")
-    put(sched, "cable_lengths", schedule.lengths_mm, "mm", "cable lengths L_i")
-    put(sched, "revolutions", schedule.revolutions, "rev", "spool revolutions from row 0")
+    R, RT, RC = ("row",), ("row", "tendon"), ("row", "component")
+    put(sched, "phase", schedule.phase.astype(str), "1", "approach or path", R)
+    put(sched, "point", schedule.point, "1", "index within the phase (path: index of path/)", R)
+    put(sched, "time", schedule.time_s, "s",
+        "time of the row: the tip speed, re-timed under the motor limits (NaN: untimed)", R)
+    put(sched, "duration", schedule.durations_s, "s", "duration of the move into the row", R)
+    put(sched, "limited_by", schedule.limited_by.astype(str), "1",
+        "what sets that duration: tip_speed, speed_I, accel_I (motor I), none; start at row 0", R)
+    put(sched, "reached", schedule.reached.astype(bool), "1", "tip within tolerance of the target",
+        R)
+    put(sched, "target", schedule.targets_mm, "mm", "target tip position", RC)
+    put(sched, "tip", schedule.tips_mm, "mm", "tip position of the planned state", RC)
+    put(sched, "tensions", schedule.p, "P l^2/B", "non-dimensional tensions p_i", RT)
+    put(sched, "tensions_N", schedule.tensions_N, "N", "tensions P_i", RT)
+    put(sched, "cable_lengths", schedule.lengths_mm, "mm", "cable lengths L_i", RT)
+    put(sched, "revolutions", schedule.revolutions, "rev", "spool revolutions from row 0", RT)
     put(sched, "steps", schedule.steps, "microsteps",
-        "motor microsteps from row 0 (> 0: cable paid out, < 0: reeled in)")
+        "motor microsteps from row 0 (> 0: cable paid out, < 0: reeled in)", RT)
     put(sched, "step_increments", schedule.step_increments, "microsteps",
-        "microsteps from the previous row")
+        "microsteps from the previous row", RT)
     put(sched, "rounding_error", schedule.rounding_error_mm, "mm",
-        "imposed minus requested cable length change (integer steps)")
+        "imposed minus requested cable length change (integer steps)", RT)
     write_attrs(sched, {"spool_radius_mm": schedule.spool_radius_mm,
                         "steps_per_revolution": schedule.steps_per_revolution,
                         "speed_mm_s": schedule.speed_mm_s})

@@ -315,11 +315,13 @@ def write_workspace(path, h5path) -> Path:
     tensions p, two tendons shown in the plane) and lattice quads."""
     import h5py
 
+    from .dims import fields
+
     with h5py.File(h5path, "r") as fh:
         points = fh["grid/points"][()]
         index = fh["grid/index"][()] if "grid/index" in fh else None
-        samples = {k: fh["samples"][k][()] for k in fh["samples"]}
-        masks = {k: fh["masks"][k][()] for k in fh.get("masks", {})}
+        samples = fields(fh["samples"])
+        masks = fields(fh["masks"]) if "masks" in fh else {}
     S = len(points)
     xy = points[:, :2] if points.shape[1] >= 2 else np.column_stack((points[:, 0], np.zeros(S)))
     cells = [(VTK_VERTEX, np.arange(S)[:, None])]

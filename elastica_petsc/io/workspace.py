@@ -72,6 +72,48 @@ def lattice_index(grid) -> tuple[np.ndarray, list[np.ndarray]]:
     return index, axes
 
 
+POINT_FIELDS = ("target", "tip")        # per sample a point [x, y]; other vectors: per tendon
+
+
+def sample_dims(name: str, shape) -> tuple[str, ...]:
+    """Named dimensions of a per-sample field beyond ``sample``: (), (component,)
+    for a point in the plane, (tendon,) for one value per tendon."""
+    if shape == ():
+        return ()
+    return ("component",) if name in POINT_FIELDS else ("tendon",)
+
+
+MAP_FIELDS = ("status", "tip_error", "tensions", "tensions_N", "cable_lengths", "kappa_max",
+              "lambda_min", "strain_energy")
+
+
+def write_map_grids(group, results, index, axes, limits: dict, descriptions: dict) -> None:
+    """The map of targets as (y, x) grids with coordinate arrays x and y [mm]
+    (``map/``): the masks, the status code and the fields of MAP_FIELDS, NaN
+    (status -1, masks false) at lattice points outside the sampled region."""
+    from .hdf5 import put
+
+    coords = {"x": (axes[0], "mm", "target x"), "y": (axes[1], "mm", "target y")}
+    shape = (len(axes[1]), len(axes[0]))
+    rows, cols = index[:, 1], index[:, 0]
+
+    def grid(values, fill):
+        values = np.asarray(values)
+        out = np.full(shape + values.shape[1:], fill, dtype=values.dtype)
+        out[rows, cols] = values
+        return out
+
+    for name, mask in results.masks(limits).items():
+        put(group, name, grid(mask, False), "1", descriptions[name], ("y", "x"), coords)
+    for name in MAP_FIELDS:
+        shape_k, _, units, description = results.schema[name]
+        values = results.data[name]
+        fill = -1 if values.dtype.kind in "iu" else np.nan
+        put(group, name, grid(values, fill), units,
+            description + " (on the lattice; outside the region: " + str(fill) + ")",
+            ("y", "x") + sample_dims(name, shape_k), coords)
+
+
 def write_results(path: Path, results, attrs: dict, limits: dict, timing: dict) -> None:
     """Write the whole file of a workspace map's ``results``
     (:class:`~elastica_petsc.studies.workspace.schema.Results`) aside and rename
@@ -83,27 +125,34 @@ def write_results(path: Path, results, attrs: dict, limits: dict, timing: dict) 
         fh.attrs["complete"] = bool(results.chunk_done.all())
         fh.attrs["samples_done"] = results.samples_done
         fh.attrs["samples_total"] = results.grid.size
+        targets = results.grid.mode == "targets"
+        coordinate = "component" if targets else "tendon"      # of a sample point
         grid = fh.create_group("grid")
-        put(grid, "points", results.grid.points, "mm" if results.grid.mode == "targets"
-            else "P l^2/B", "sample points: targets (mm) or tensions (P l^2/B)")
+        put(grid, "points", results.grid.points, "mm" if targets else "P l^2/B",
+            "sample points: targets (mm) or tensions (P l^2/B)", ("sample", coordinate))
         bounds = np.cumsum([0] + [len(c) for c in results.grid.chunks])
         put(grid, "chunk_order", np.concatenate(results.grid.chunks), "1",
-            "sample indices in chunk order; chunk c is chunk_order[chunk_bounds[c]:chunk_bounds[c+1]]")
-        put(grid, "chunk_bounds", bounds, "1", "offsets of the chunks in chunk_order")
-        put(grid, "chunk_done", results.chunk_done, "1", "chunk finished and stored")
+            "sample indices in chunk order; chunk c is chunk_order[chunk_bounds[c]:chunk_bounds[c+1]]",
+            ("sample",))
+        put(grid, "chunk_bounds", bounds, "1", "offsets of the chunks in chunk_order",
+            ("chunk_bound",))
+        put(grid, "chunk_done", results.chunk_done, "1", "chunk finished and stored", ("chunk",))
         index, axes = lattice_index(results.grid)
         put(grid, "index", index, "1", "lattice indices of each sample along each coordinate of "
-            "points: a 2-D map is A[index[:, 1], index[:, 0]] = samples/FIELD")
+            "points: a 2-D map is A[index[:, 1], index[:, 0]] = samples/FIELD",
+            ("sample", coordinate))
         for d, axis in enumerate(axes):
-            put(grid, f"axis_{d}", axis, "mm" if results.grid.mode == "targets" else "P l^2/B",
-                f"lattice coordinates along coordinate {d} of points (index[:, {d}])")
+            put(grid, f"axis_{d}", axis, "mm" if targets else "P l^2/B",
+                f"lattice coordinates along coordinate {d} of points (index[:, {d}])",
+                (f"lattice_{d}",))
         samples = fh.create_group("samples")
         done = np.zeros(results.grid.size, bool)
         for c in np.flatnonzero(results.chunk_done):
             done[results.grid.chunks[c]] = True
-        put(samples, "done", done, "1", "sample finished and stored")
-        for name, (_, _, units, description) in results.schema.items():
-            put(samples, name, results.data[name], units, description)
+        put(samples, "done", done, "1", "sample finished and stored", ("sample",))
+        for name, (shape, _, units, description) in results.schema.items():
+            put(samples, name, results.data[name], units, description,
+                ("sample",) + sample_dims(name, shape))
         masks = fh.create_group("masks")
         descriptions = {"W0": "reached with non-negative tensions (Eq. (18))",
                         "WY": "W0 and l*kappa_max below the strain limit (Eq. (19))",
@@ -113,8 +162,10 @@ def write_results(path: Path, results, attrs: dict, limits: dict, timing: dict) 
                         "WC": "W0 and every cable clear of the arm (no cable segment crosses "
                               "the arm, core/clearance.py)"}
         for name, mask in results.masks(limits).items():
-            put(masks, name, mask, "1", descriptions[name])
+            put(masks, name, mask, "1", descriptions[name], ("sample",))
         write_attrs(masks, {k: v for k, v in limits.items() if v is not None})
+        if targets:
+            write_map_grids(fh.create_group("map"), results, index, axes, limits, descriptions)
         write_attrs(fh.create_group("timing"), timing)
 
 

@@ -16,8 +16,10 @@ from ..studies.workspace import Status, reason_counts
 def read_workspace(path) -> dict:
     import h5py
 
+    from ..io.dims import fields
+
     with h5py.File(path, "r") as fh:
-        data = {name: fh["samples"][name][()] for name in fh["samples"]}
+        data = fields(fh["samples"])
         config = json.loads(fh.attrs["config_json"])
         data["length_mm"] = float(config["arm"]["length_mm"])
         data["routes_mm"] = np.array([t["route_mm"] for t in config["tendon"]], float)
@@ -25,7 +27,8 @@ def read_workspace(path) -> dict:
         data["share"], data["min_tension_N"] = share_of(fh.attrs)
         grid = json.loads(fh.attrs.get("grid_json", "{}"))
         data["spacing"] = grid.get("spacing") if data["mode"] == "targets" else None
-        data["masks"] = {name: fh["masks"][name][()] for name in fh["masks"]}
+        data["region"] = grid.get("region")
+        data["masks"] = fields(fh["masks"])
         data["limits"] = dict(fh["masks"].attrs)
     return data
 
@@ -58,8 +61,8 @@ def _paths_overlay(ax, paths) -> None:
                 label=label, zorder=6)
 
 
-def _rigid_link(ax, length_mm: float) -> None:
-    a = np.linspace(0, np.pi, 200)
+def _rigid_link(ax, length_mm: float, whole: bool = False) -> None:
+    a = np.linspace(0, 2 * np.pi if whole else np.pi, 400)
     ax.plot(length_mm * np.cos(a), length_mm * np.sin(a), "k--", lw=1.0,
             label=f"rigid link of length l = {length_mm:g} mm")
 
@@ -112,13 +115,15 @@ def plot_samples(data: dict, ax, paths=None) -> None:
             label="routing points r_" + ", r_".join(str(i) for i in range(1, len(routes) + 1)))
     for i, r in enumerate(routes, start=1):
         ax.annotate(f"r_{i}", r, xytext=(5, -3), textcoords="offset points", fontsize=9)
-    _rigid_link(ax, data["length_mm"])
+    _rigid_link(ax, data["length_mm"], whole=bool(np.any(where[:, 1] < 0)))
     _paths_overlay(ax, paths)
     ax.plot(0, 0, "ks", ms=6)
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
-    ax.set_title("Sampled workspace (Fig. 4)")
+    region = data.get("region")
+    ax.set_title("Sampled workspace (Fig. 4)" + (f"\nregion: {region}" if region else ""),
+                 fontsize=11)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))   # off the samples
 
 

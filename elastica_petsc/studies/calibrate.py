@@ -11,7 +11,7 @@ loading order) and the measurement map m of
 row derivatives of :mod:`elastica_petsc.solvers.calibration` (implicit
 function theorem on the bordered tangent) chained with d rho/d theta and
 d drive/d theta.  TAO BRGN (bounded regularised Gauss-Newton, prefix
-``calib_``) minimises |W^(1/2) r|^2 / 2 in scaled variables
+``calib_``; TAO POUNDERS, derivative-free, as a check) minimises |W^(1/2) r|^2 / 2 in scaled variables
 X = (theta - theta_0) / scale within the bounds; its proximal regulariser
 lambda |X - X_k|^2 / 2 vanishes at convergence and keeps directions the data
 cannot determine where they are.  Robust loss (``huber_mm`` = delta): the
@@ -37,7 +37,7 @@ from ..core.calibration_params import ParameterModel
 from ..core.errors import InputError
 from ..solvers.calibration import RowError, RowSolver, RowState
 from ..solvers.lengths import SAME_SHAPE_TOL
-from ..solvers.reasons import converged_reason
+from ..solvers.reasons import TAO_REASONS, reason_name
 
 # Convergence: no scaled parameter moved by more in one Gauss-Newton iteration.
 STEP_TOL = 1e-7
@@ -45,6 +45,12 @@ STEP_TOL = 1e-7
 F_RTOL = 1e-10
 # Residual [mm] reported for a trial point at which some row has no equilibrium.
 FAILED_RESIDUAL_MM = 1e6
+# POUNDERS (derivative-free): stop on this gradient of its model (scaled units) ...
+POUNDERS_GATOL = 1e-9
+POUNDERS_GRTOL = 1e-10           # ... or on |g| / f (residuals that do not vanish)
+# ... or after max_iterations x this x parameters iterations.
+POUNDERS_ITERATIONS_PER_PARAMETER = 4
+METHODS = ("brgn", "pounders")
 
 
 class CalibrationError(InputError):
@@ -91,6 +97,7 @@ class CalibrationProblem:
         self.matched = [order is None for order in data.loading]
         self.row_of = np.repeat(np.nonzero(self.observed)[0], 2)
         self.evaluations = 0
+        self.failed_trials = 0              # trial points with a row out of reach
         self.comm = comm                    # mpi4py communicator: rows dealt to its ranks
         self.rank, self.ranks = (0, 1) if comm is None else (comm.rank, comm.size)
 
@@ -196,36 +203,43 @@ class CalibrationProblem:
 
 
 # --- the least-squares solve ------------------------------------------------------------------
-def brgn(problem: CalibrationProblem, theta0, weights, *, max_iterations: int = 50,
-         step_tol: float = STEP_TOL, prefix: str = "calib_") -> tuple[np.ndarray, str, int]:
-    """TAO BRGN on X = (theta - theta0) / scale within the bounds; ``weights``
-    (M,) multiply the squared residuals.  Converged (CONVERGED_USER) when an
-    iteration of BRGN's subsolver moves no scaled parameter by more than
+def least_squares(problem: CalibrationProblem, theta0, weights, *, method: str = "brgn",
+                  max_iterations: int = 50, step_tol: float = STEP_TOL,
+                  prefix: str = "calib_") -> tuple[np.ndarray, str, int]:
+    """TAO on X = (theta - theta0) / scale within the bounds; ``weights`` (M,)
+    multiply the squared residuals.  ``method`` "brgn": bounded regularised
+    Gauss-Newton with the exact Jacobian, converged (CONVERGED_USER) when an
+    iteration of its subsolver moves no scaled parameter by more than
     ``step_tol`` or lowers the objective by less than F_RTOL of itself (the
     gradient cannot fall below the round-off of the equilibria, residuals
-    ~1e-8 mm).
+    ~1e-8 mm).  "pounders": derivative-free (residuals only, a check of the
+    Jacobian's optimum), converged on its model gradient (POUNDERS_GATOL).
     A trial point whose rows cannot be solved gets residuals of
-    FAILED_RESIDUAL_MM, so the line search steps back.
+    FAILED_RESIDUAL_MM, so the step is refused.
     Returns (theta, TAO's reason, iterations)."""
+    if method not in METHODS:
+        raise CalibrationError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     model = problem.model
     scale = model.scales()
     lo, hi = model.bounds()
     sqrt_w = np.sqrt(weights)
+    M, P_ = len(weights), model.size
     cache: dict = {}
 
     def at(X):
         key = X.getArray(readonly=True).tobytes()
         if cache.get("key") != key:
-            theta = theta0 + scale * X.getArray(readonly=True)
-            ev = problem.evaluate(theta)
-            cache.update(key=key, r=sqrt_w * ev.residual,
-                         J=sqrt_w[:, None] * ev.jacobian * scale[None, :])
+            ev = problem.evaluate(theta0 + scale * X.getArray(readonly=True),
+                                  jacobian=method == "brgn")
+            cache.update(key=key, r=sqrt_w * ev.residual, J=None if ev.jacobian is None
+                         else sqrt_w[:, None] * ev.jacobian * scale[None, :])
         return cache
 
     def residual(tao, X, R):
         try:
             R.setArray(at(X)["r"])
         except (RowError, CalibrationError):   # a trial step too far: make it look bad
+            problem.failed_trials += 1
             R.setArray(np.full(M, FAILED_RESIDUAL_MM))
 
     def jacobian(tao, X, J, P):
@@ -236,9 +250,18 @@ def brgn(problem: CalibrationProblem, theta0, weights, *, max_iterations: int = 
         J.setValues(range(M), range(P_), values)
         J.assemble()
 
-    M, P_ = len(weights), model.size
+    previous = {}
+
+    def monitor(t) -> None:
+        X = t.getSolution().getArray(readonly=True)
+        f, step = t.getObjectiveValue(), t.getSolutionStatus()[4]
+        if "X" in previous and step > 0 and (np.max(np.abs(X - previous["X"])) <= step_tol
+                                             or previous["f"] - f <= F_RTOL * previous["f"]):
+            t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
+        previous.update(X=X.copy(), f=f)
+
     x = PETSc.Vec().createSeq(P_, comm=PETSc.COMM_SELF)
-    x.setArray(0.0)
+    x.set(0.0)
     R = PETSc.Vec().createSeq(M, comm=PETSc.COMM_SELF)
     Jm = PETSc.Mat().createDense((M, P_), comm=PETSc.COMM_SELF)
     Jm.setUp()
@@ -247,33 +270,27 @@ def brgn(problem: CalibrationProblem, theta0, weights, *, max_iterations: int = 
     xu.setArray((hi - theta0) / scale)
     tao = PETSc.TAO().create(PETSc.COMM_SELF)
     tao.setOptionsPrefix(prefix)
-    tao.setType("brgn")
-    # PETSc 3.18 names the subsolver when BRGN is created, before any prefix
-    tao.getBRGNSubsolver().setOptionsPrefix(prefix + "tao_brgn_subsolver_")
+    tao.setType(method)
     tao.setResidual(residual, R)
-    tao.setJacobianResidual(jacobian, Jm, Jm)
+    if method == "brgn":
+        tao.setJacobianResidual(jacobian, Jm, Jm)
     tao.setVariableBounds(xl, xu)
-    tao.setTolerances(gatol=1e-12, grtol=1e-14, gttol=0.0)
-    tao.setMaximumIterations(max_iterations)
-    previous = {}
-
-    def monitor(t) -> None:
-        X = t.getSolution().getArray(readonly=True)
-        f = t.getObjectiveValue()
-        if "X" in previous and (np.max(np.abs(X - previous["X"])) <= step_tol
-                                or previous["f"] - f <= F_RTOL * previous["f"]):
-            t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
-        previous.update(X=X.copy(), f=f)
-
     tao.setFromOptions()
-    inner = tao.getBRGNSubsolver()          # BRGN iterates in its subsolver
-    inner.setTolerances(gatol=1e-12, grtol=1e-14, gttol=0.0)
-    inner.setMaximumIterations(max_iterations)
-    inner.setMonitor(monitor)
+    inner = tao.getBRGNSubsolver() if method == "brgn" else tao   # BRGN iterates inside
+    if method == "brgn":
+        inner.setOptionsPrefix(prefix + "brgn_")      # PETSc 3.18 gives it no prefix of ours
+        inner.setFromOptions()
+        inner.setTolerances(gatol=1e-12, grtol=1e-14, gttol=0.0)
+        inner.setMaximumIterations(max_iterations)
+        inner.setMonitor(monitor)
+    else:
+        tao.setTolerances(gatol=POUNDERS_GATOL, grtol=POUNDERS_GRTOL, gttol=0.0)
+        tao.setMaximumIterations(POUNDERS_ITERATIONS_PER_PARAMETER * P_ * max_iterations)
     try:
         tao.solve(x)
         theta = theta0 + scale * x.getArray(readonly=True)
-        return theta, converged_reason(inner), inner.getIterationNumber()
+        reason = inner.getConvergedReason()
+        return theta, reason_name(TAO_REASONS, reason), inner.getIterationNumber()
     finally:
         for obj in (tao, x, R, Jm, xl, xu):
             obj.destroy()
@@ -303,13 +320,16 @@ class Fit:
     evaluations: int
     seconds: float
     branches: list = field(default_factory=list)
+    method: str = "brgn"
 
 
 def fit(problem: CalibrationProblem, theta0=None, *, huber_mm: float | None = None,
-        max_iterations: int = 50, reweightings: int = 8, prefix: str = "calib_") -> Fit:
+        method: str = "brgn", max_iterations: int = 50, reweightings: int = 8,
+        prefix: str = "calib_") -> Fit:
     """Least-squares fit from ``theta0`` (default: the model's start), branches
-    matched first; with ``huber_mm`` iteratively reweighted until the row
-    weights settle (at most ``reweightings`` fits)."""
+    matched first, by :func:`least_squares` (``method``); with ``huber_mm``
+    iteratively reweighted until the row weights settle (at most
+    ``reweightings`` fits)."""
     t0 = time.perf_counter()
     theta = problem.model.start() if theta0 is None else np.asarray(theta0, float)
     branches = problem.match_branches(theta)
@@ -317,8 +337,8 @@ def fit(problem: CalibrationProblem, theta0=None, *, huber_mm: float | None = No
     weights, rows = huber_weights(problem, ev.residual, huber_mm)
     iterations, reason = 0, ""
     for _ in range(reweightings if huber_mm is not None else 1):
-        theta, reason, its = brgn(problem, theta, weights, max_iterations=max_iterations,
-                                  prefix=prefix)
+        theta, reason, its = least_squares(problem, theta, weights, method=method,
+                                           max_iterations=max_iterations, prefix=prefix)
         iterations += its
         ev = problem.evaluate(theta)
         new_weights, new_rows = huber_weights(problem, ev.residual, huber_mm)
@@ -327,4 +347,4 @@ def fit(problem: CalibrationProblem, theta0=None, *, huber_mm: float | None = No
         if settled:
             break
     return Fit(theta, ev, weights, rows, reason, iterations, problem.evaluations,
-               time.perf_counter() - t0, branches)
+               time.perf_counter() - t0, branches, method)

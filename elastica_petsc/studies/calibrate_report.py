@@ -92,6 +92,7 @@ def uncertainty(problem: CalibrationProblem, result: Fit) -> dict:
             "undetermined_combinations": null_words, "residual_variance_mm2": s2,
             "dof": dof,
             "remaining_step_sigma": float(np.max(np.abs(step) / sd_det)) if model.size else 0.0,
+            "remaining_step_scaled": float(np.max(np.abs(step) / scale)) if model.size else 0.0,
             "fisher_scaled": Js.T @ Js / s2 if s2 > 0 else Js.T @ Js}
 
 
@@ -198,6 +199,14 @@ class CalibrationResult:
         """The fitted arm in its own frame (what the TOML holds)."""
         return self.model.arm(self.fit.theta)
 
+    @property
+    def converged(self) -> bool:
+        """The Gauss-Newton step still to go is below 0.01 standard deviations,
+        or below 1e-6 of every parameter's scale (noise-free data, where the
+        deviations themselves are round-off)."""
+        return self.report["remaining_step_sigma"] < 1e-2 or \
+            self.report["remaining_step_scaled"] < 1e-6
+
     def parameters(self) -> list[dict]:
         start = self.model.start()
         return [{"name": p.name, "unit": p.unit, "start": float(s), "value": float(v),
@@ -230,9 +239,12 @@ class CalibrationResult:
                                     np.flatnonzero(self.fit.row_weights < 1.0)],
             "cross_validation": None if cv is None else
             {k: v for k, v in cv.items() if k != "per_row_mm"},
-            "solver": {"tao_reason": self.fit.reason, "iterations": self.fit.iterations,
+            "solver": {"method": self.fit.method, "tao_reason": self.fit.reason, "iterations": self.fit.iterations,
                        "evaluations": self.fit.evaluations, "seconds": self.fit.seconds,
-                       "remaining_step_sigma": rep["remaining_step_sigma"]},
+                       "remaining_step_sigma": rep["remaining_step_sigma"],
+                       "remaining_step_scaled": rep["remaining_step_scaled"],
+                       "failed_trial_points": self.problem.failed_trials,
+                       "converged": self.converged},
             "next_measurements": self.next_measurements,
         }
 
@@ -251,13 +263,14 @@ def tip_covariance(problem: CalibrationProblem, result: Fit, cov) -> np.ndarray:
 
 def calibrate(model, data: CalibrationData, *, elements: int | None = None,
               huber_mm: float | None = None, folds: int = 5, candidates=None,
-              next_count: int = 5, progress=None, comm=None) -> CalibrationResult:
+              next_count: int = 5, progress=None, comm=None,
+              method: str = "brgn") -> CalibrationResult:
     """Fit ``model``'s parameters to ``data`` and report (module docstring);
     ``comm``: rows over its ranks (:class:`CalibrationProblem`)."""
     problem = CalibrationProblem(model, data, elements, comm)
     if progress is not None:
         progress(0, "fitting")
-    result = fit(problem, huber_mm=huber_mm)
+    result = fit(problem, huber_mm=huber_mm, method=method)
     report = uncertainty(problem, result)
     stats = residual_stats(problem, result)
     cov = np.where(np.isfinite(report["covariance"]), report["covariance"], 0.0)

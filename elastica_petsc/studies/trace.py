@@ -190,6 +190,23 @@ class TraceResult:
     def n_points(self) -> int:
         return len(self.targets_mm)
 
+    def to_xarray(self):
+        """The traced path as an ``xarray.Dataset`` (xarray optional), dimensions
+        ``point``, ``tendon``, ``component`` as in the HDF5 file's ``path/``."""
+        from ..io.dims import xarray_dataset
+
+        P2, PT = ("point", "component"), ("point", "tendon")
+        return xarray_dataset({
+            "target": (P2, self.targets_mm, "mm", "target tip positions, in tracing order"),
+            "tip": (P2, self.tips_mm, "mm", "tip positions reached"),
+            "tip_error": (("point",), self.tip_errors_mm, "mm", "|tip - target|"),
+            "tensions": (PT, self.p, "P l^2/B", "non-dimensional tensions"),
+            "tensions_N": (PT, self.tensions_N, "N", "tensions"),
+            "cable_lengths": (PT, self.cable_lengths_mm, "mm", "cable lengths |r_i - x_i|"),
+            "iterations": (("point",), self.iterations, "1", "optimiser iterations per point"),
+            "converged": (("point",), self.converged, "1", "tip within tolerance of the target"),
+        }, coords={"point": np.arange(self.n_points)}, attrs={"seconds": self.seconds})
+
     def monotonic_fraction(self, tol_mm: float = 1e-9, tol_N: float = 1e-12) -> np.ndarray:
         """Per tendon: fraction of steps i -> i+1 in which the cable length and
         the tension change with opposite signs (dL_j dP_j < 0, Sec. 4.1).

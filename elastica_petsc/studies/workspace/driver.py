@@ -43,13 +43,15 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
             comm=None, out=None, resume: bool = False, overwrite: bool = False,
             progress=None, checkpoint_seconds: float | None = None,
             provenance: dict | None = None, global_search: bool = True,
-            share: str | None = None, min_tension_N: float = 0.0) -> WorkspaceMap:
+            share: str | None = None, min_tension_N: float = 0.0,
+            region: str = "half-disc") -> WorkspaceMap:
     """Sample the workspace W_0 of ``arm`` (Eq. (18), Fig. 4) and its restrictions
     W_Y, W_S, W_E, W_P (Eqs. (19)-(22), Fig. 5) on ``disc``.
 
     Mode ``targets``: tip control (Eqs. (10)-(12)) to every target of a square
-    lattice of ``spacing_mm`` mm over the half-disc y >= 0 within reach l, or
-    over ``box_mm`` = (xmin, xmax, ymin, ymax) in mm.  Mode ``tensions``:
+    lattice of ``spacing_mm`` mm over the half-disc y >= 0 within reach l
+    (``region`` "half-disc", the paper's), the whole disc ("disc"), or over
+    ``box_mm`` = (xmin, xmax, ymin, ymax) in mm.  Mode ``tensions``:
     forward solves (Eq. (9)) on the lattice 0 <= p_i <= ``tension_max`` of
     step ``tension_spacing`` (non-dimensional p = P l^2/B).  W_0 means: tips
     of stable equilibria connected to the straight arm by quasi-static loading
@@ -104,7 +106,7 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
         try:
             try:
                 grid = make_grid(arm, disc, mode, spacing_mm, box_mm, tension_spacing,
-                                 tension_max, chunk)
+                                 tension_max, chunk, region)
                 if checkpoint_seconds is None:
                     checkpoint_seconds = checkpoint_interval()
                 settings = SamplerSettings.make(arm, grid.mode, global_search, share,

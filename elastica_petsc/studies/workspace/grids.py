@@ -19,25 +19,35 @@ def _check_size(count: float, what: str) -> None:
                          "(use a larger spacing)")
 
 
-def target_grid(length_mm: float, spacing_mm: float, box=None, chunk: int = 24) -> Grid:
-    """Targets on a square lattice of ``spacing_mm``: by default the half-plane
-    y >= 0 within the arm's reach |x| <= l (paper Fig. 4), else ``box`` =
-    (xmin, xmax, ymin, ymax) in mm.  Rows of constant y, cut into chunks."""
+REGIONS = ("half-disc", "disc")
+
+
+def target_grid(length_mm: float, spacing_mm: float, box=None, chunk: int = 24,
+                region: str = "half-disc") -> Grid:
+    """Targets on a square lattice of ``spacing_mm``: without ``box`` the
+    half-plane y >= 0 within the arm's reach |x| <= l (``region`` "half-disc",
+    paper Fig. 4) or the whole disc of reach ("disc"), else ``box`` = (xmin,
+    xmax, ymin, ymax) in mm.  Rows of constant y, cut into chunks."""
+    if region not in REGIONS:
+        raise InputError(f"region {region!r}: expected one of {', '.join(REGIONS)}")
     if not (spacing_mm > 0 and np.isfinite(spacing_mm)):
         raise InputError(f"--spacing must be a positive number of mm, got {spacing_mm}")
     if box is not None and not np.all(np.isfinite(np.asarray(box, float))):
         raise InputError(f"--box {tuple(box)}: expected four finite numbers of mm")
     if box is None:
-        _check_size(2 * (length_mm / spacing_mm + 1) ** 2, f"--spacing {spacing_mm:g}")
+        rows = 2 if region == "half-disc" else 4            # quarter squares of the lattice
+        _check_size(rows * (length_mm / spacing_mm + 1) ** 2, f"--spacing {spacing_mm:g}")
     else:
         _check_size((abs(box[1] - box[0]) / spacing_mm + 1) * (abs(box[3] - box[2]) / spacing_mm
                                                                 + 1), f"--spacing {spacing_mm:g}")
     if box is None:
         reach = length_mm
         xs = np.arange(-np.floor(reach / spacing_mm), np.floor(reach / spacing_mm) + 1) * spacing_mm
-        ys = np.arange(0, np.floor(reach / spacing_mm) + 1) * spacing_mm
+        lowest = 0 if region == "half-disc" else -np.floor(reach / spacing_mm)
+        ys = np.arange(lowest, np.floor(reach / spacing_mm) + 1) * spacing_mm
         inside = lambda x, y: x * x + y * y <= reach * reach * (1 + 1e-12)
-        region = f"half-disc y >= 0, |x| <= l = {length_mm:g} mm"
+        region = (f"half-disc y >= 0, |x| <= l = {length_mm:g} mm" if region == "half-disc"
+                  else f"disc |x| <= l = {length_mm:g} mm")
     else:
         xmin, xmax, ymin, ymax = map(float, box)
         if not (xmax > xmin and ymax > ymin):
@@ -79,7 +89,7 @@ def tension_grid(n_tendons: int, spacing: float, p_max: float, chunk: int = 24) 
 
 
 def make_grid(arm, disc, mode: str, spacing_mm: float, box_mm, tension_spacing: float,
-              tension_max: float, chunk: int) -> Grid:
+              tension_max: float, chunk: int, region: str = "half-disc") -> Grid:
     """The sample grid of :func:`run_map`; :class:`InputError` for a bad request."""
     if mode not in ("targets", "tensions"):
         raise InputError(f"mode {mode!r}: expected 'targets' or 'tensions'")
@@ -90,5 +100,5 @@ def make_grid(arm, disc, mode: str, spacing_mm: float, box_mm, tension_spacing: 
             raise InputError("mode targets needs at least 2 tendons (a 2-D workspace); "
                              "use --mode tensions")
         return target_grid(arm.length_mm, spacing_mm, None if box_mm is None else tuple(box_mm),
-                           chunk)
+                           chunk, region)
     return tension_grid(disc.n_tendons, tension_spacing, tension_max, chunk)

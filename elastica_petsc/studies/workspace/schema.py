@@ -186,6 +186,23 @@ class WorkspaceMap:
     def complete(self) -> bool:
         return bool(self.chunk_done.all())
 
+    def to_xarray(self):
+        """The samples and masks as an ``xarray.Dataset`` (xarray optional), with
+        the dimensions, CF units and long names of the file's ``samples/``."""
+        from ...io.dims import xarray_dataset
+        from ...io.workspace import sample_dims
+
+        variables = {}
+        for name, (shape, _, units, text) in fields(self.samples["tensions"].shape[1]).items():
+            if name in self.samples:
+                values = self.samples[name]
+                values = values.astype(str) if values.dtype.kind == "S" else values
+                variables[name] = (("sample",) + sample_dims(name, shape), values, units, text)
+        for name, mask in self.masks.items():
+            variables[name] = (("sample",), mask, "1", f"sample in the admissible set {name}")
+        return xarray_dataset(variables, coords={"sample": np.arange(self.samples_total)},
+                              attrs={"mode": self.mode, "share": self.share})
+
     @property
     def samples_total(self) -> int:
         return len(self.points)
