@@ -88,6 +88,8 @@ class RowSolver:
         self.options.apply(self.ksp)
         self.rhs = PETSc.Vec().createSeq(self.load_system.size, comm=comm)
         self.sol = self.rhs.duplicate()
+        for obj in (self.A, self.rhs, self.sol):
+            obj.setOptionsPrefix(self.options.name("tan_"))
 
     # --- equilibria ------------------------------------------------------------------------
     def solve(self, kind: str, drive, order=None, warm: RowState | None = None) -> RowState:
