@@ -11,7 +11,7 @@ A library first, in millimetres and newtons at its edge::
 One call per study: :func:`solve`, :func:`control`, :func:`trace`,
 :func:`schedule`, :func:`stability`, :func:`frequencies`, :func:`lengths`, :func:`equilibria`,
 :func:`workspace`, :func:`boundary`, :func:`design`, :func:`design_area`,
-:func:`design_sweep`, :func:`calibrate`, :func:`read`.  The solver classes
+:func:`design_sweep`, :func:`calibrate`, :func:`read`, :func:`simulate`.  The solver classes
 (:class:`EquilibriumSolver`, :class:`TipController`, :class:`LengthSolver`,
 :class:`StabilitySolver`) can be kept for loops; they work in the
 non-dimensional units of docs/model.md §3.
@@ -31,7 +31,7 @@ _EXPORTS = {
     "stability": ".api", "frequencies": ".api", "lengths": ".api", "equilibria": ".api",
     "workspace": ".api", "boundary": ".api", "design": ".api",
     "design_area": ".api", "design_sweep": ".api",
-    "read": ".api", "calibrate": ".api",
+    "read": ".api", "calibrate": ".api", "simulate": ".api",
     "Equilibrium": ".solvers.equilibrium", "EquilibriumSolver": ".solvers.equilibrium",
     "TipController": ".solvers.control", "LengthSolver": ".solvers.lengths",
     "StabilitySolver": ".solvers.stability",

@@ -11,10 +11,12 @@ from petsc4py import PETSc
 
 import elastica_petsc.solvers.control as control
 import elastica_petsc.solvers.equilibrium as equilibrium
+from elastica_petsc.core.dynamics import Inertia
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.continuation import CurveTracer
 from elastica_petsc.solvers.control import TipController
+from elastica_petsc.solvers.dynamics import DynamicsSolver
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.solvers.lengths import LengthSolver
 from elastica_petsc.solvers.calibration import RowSolver
@@ -49,7 +51,8 @@ def test_every_solver_checks_its_prefix(paper_arm, disc):
               lambda: CurveTracer(disc, options_prefix=""),
               lambda: TipController(paper_arm, n_elements=30, options_prefix="ctl"),
               lambda: RowSolver(paper_arm, 30, options_prefix="calib"),
-              lambda: BoundedMinimiser(2, max_iterations=1, options_prefix="design")]
+              lambda: BoundedMinimiser(2, max_iterations=1, options_prefix="design"),
+              lambda: DynamicsSolver(disc, Inertia.build(disc), options_prefix="sim")]
     for make in makers:
         with pytest.raises(InputError, match="options prefix"):
             make()

@@ -26,7 +26,7 @@ import sys
 from ..core.errors import InputError
 
 COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "design", "lengths",
-            "equilibria", "replay", "schedule", "reproduce", "calibrate")
+            "equilibria", "replay", "schedule", "simulate", "reproduce", "calibrate")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed

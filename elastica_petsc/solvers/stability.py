@@ -100,6 +100,7 @@ import scipy.sparse as sp
 from petsc4py import PETSc
 from slepc4py import SLEPc
 
+from ..core.dynamics import EB_BETA1, mass_apply, node_masses
 from ..core.fem import Discretisation
 from .inertia import InertiaCounter
 from ..core.model import Arm
@@ -111,8 +112,6 @@ MASS_MODELS = ("lumped", "paper")
 OPERATORS = ("jacobian", "symmetric")
 CONTROLS = ("load", "length")
 
-# beta_1 l of the clamped-free Euler-Bernoulli beam: cos(bl) cosh(bl) = -1
-EB_BETA1 = 1.8751040687119611
 
 class StabilityError(RuntimeError):
     """An eigen solve that did not converge."""
@@ -201,28 +200,12 @@ def max_tracing_speed_mm_s(f1_hz: float, amplitude_mm: float) -> float:
 
 
 # --- O(N) kinetic mass --------------------------------------------------------------
-def node_masses(disc: Discretisation, tip_mass: float = 0.0) -> np.ndarray:
-    """Trapezoidal nodal masses of nodes 1..N in units of rho_A l (tip: h/2 + tip_mass)."""
-    m = np.full(disc.n_elements, disc.h)
-    m[-1] = 0.5 * disc.h + tip_mass
-    return m
-
-
 def kinetic_mass_apply(disc: Discretisation, theta: np.ndarray, v: np.ndarray,
                        weights: np.ndarray) -> np.ndarray:
-    """M_phys v / (rho_A l^3) = G^T D G v in O(N).
-
+    """M_phys v / (rho_A l^3) = G^T D G v in O(N) (:func:`core.dynamics.mass_apply`):
     G v are the nodal velocities x_dot_k = sum_{e<k} h n_e (v_e + v_{e+1})/2
-    (Eq. (2) differentiated with the midpoint rule; v_0 = 0), D = diag(weights).
-    """
-    phi = disc.element_angles(theta)
-    a = disc.h * np.column_stack((-np.sin(phi), np.cos(phi)))        # h n_e
-    vt = np.concatenate(([0.0], v))
-    xdot = np.cumsum(a * (0.5 * (vt[:-1] + vt[1:]))[:, None], axis=0)  # nodes 1..N
-    f = weights[:, None] * xdot
-    tail = np.cumsum(f[::-1], axis=0)[::-1]        # tail[e] = sum over nodes k > e
-    g = np.einsum("ec,ec->e", a, tail)             # d/d phi_e
-    return 0.5 * (g + np.append(g[1:], 0.0))
+    (Eq. (2) differentiated with the midpoint rule; v_0 = 0), D = diag(weights)."""
+    return mass_apply(disc, theta, v, weights)
 
 
 # --- helpers -------------------------------------------------------------------------
