@@ -11,7 +11,6 @@ about 4201 workspace targets).
 from __future__ import annotations
 
 import datetime
-import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from .core import jsontext
 from .core.model import load_config
 from .core.model import Arm
 
@@ -52,6 +52,7 @@ class Context:
     traces: dict = field(default_factory=dict)     # name -> TraceResult
     seconds: dict = field(default_factory=dict)
     command: str = "elastica-petsc reproduce"
+    checkpoint_seconds: float | None = None        # None: the library's default
 
     @property
     def trace_step_mm(self) -> float:
@@ -85,7 +86,7 @@ def fig8(ctx: Context) -> None:
     from .solvers.lengths import LengthSolver
     from .studies.search import length_equilibria
     from .plots.lengths import plot_states
-    from .core.progress import Progress
+    from .ui.progress import Progress
 
     arm, l_mm = ctx.arm, ctx.arm.length_mm
     disc = Discretisation.from_arm(arm)
@@ -159,7 +160,7 @@ def _trace(ctx: Context, name: str, points, figure: str):
     from .plots.control import plot_trace
     from .core.schedule import schedule_from_trace
 
-    from .core.progress import Progress
+    from .ui.progress import Progress
 
     targets = densify(points, ctx.trace_step_mm)
     with TipController(ctx.arm) as controller, Progress(len(targets), f"trace {name}") as bar:
@@ -222,16 +223,17 @@ def workspace(ctx: Context) -> Path:
     outside mpiexec, a job of that many ranks is spawned: :mod:`.studies.workspace_job`)."""
     from .core.errors import InputError
     from .core.fem import Discretisation
-    from .core.progress import quiet
+    from .ui.progress import quiet
     from .studies.workspace import run_map
 
     out = ctx.out / "fig4_workspace.h5"
     kwargs = dict(spacing_mm=ctx.spacing_mm, out=str(out), overwrite=True,
-                  provenance={"command_line": ctx.command})
+                  provenance={"command_line": ctx.command},
+                  checkpoint_seconds=ctx.checkpoint_seconds)
     if ctx.comm.size == 1 and ctx.jobs > 1:
         from .studies.workspace_job import spawn
         # the job's progress: a bar if our stdout is a terminal, else lines on stderr
-        status = spawn(ctx.arm, ctx.arm.elements, ctx.jobs, progress=False if quiet() else None,
+        status = spawn(ctx.arm, ctx.arm.elements, ctx.jobs, progress=not quiet(),
                        **kwargs)
         if status == 130:
             raise KeyboardInterrupt
@@ -239,7 +241,7 @@ def workspace(ctx: Context) -> Path:
             raise InputError(f"the workspace job on {ctx.jobs} ranks ended with status {status}")
     else:
         result = run_map(ctx.arm, Discretisation.from_arm(ctx.arm), comm=ctx.comm,
-                         **kwargs)                  # a bar on rank 0 (none with --quiet)
+                         progress=True, **kwargs)                  # a bar on rank 0 (none with --quiet)
         if not result.complete:
             raise KeyboardInterrupt
     return out
@@ -356,7 +358,8 @@ def write_report(ctx: Context, command: str) -> Path:
         lines.append(f"- {figure}: " + ", ".join(f"`{n}`" for n in names))
     path = ctx.out / "REPORT.md"
     path.write_text("\n".join(lines) + "\n")
-    (ctx.out / "report.json").write_text(json.dumps([r.__dict__ for r in ctx.rows], indent=1))
+    (ctx.out / "report.json").write_text(jsontext.dumps([r.__dict__ for r in ctx.rows],
+                                                        indent=1))
     return path
 
 
@@ -373,9 +376,10 @@ def planned_files() -> list[str]:
 def check_output_folder(out: str | Path, overwrite: bool) -> Path:
     """Before any computation: ``out`` is (or can be made) a writable folder, and
     no file :func:`run` would write exists there unless ``overwrite``.
-    Creates the folder and returns it."""
+    Creates nothing (the caller makes the folder once every check has passed:
+    a refusal leaves no empty folder behind); returns it."""
     from .core.errors import InputError
-    from .io.hdf5 import check_output_path
+    from .io.hdf5 import probe_writable, check_output_path
 
     if not str(out).strip():
         raise InputError("--out: empty folder name")
@@ -387,10 +391,12 @@ def check_output_folder(out: str | Path, overwrite: bool) -> Path:
         more = f" and {len(existing) - 1} more" if len(existing) > 1 else ""
         raise InputError(f"{out} already holds {existing[0]}{more}; pass --overwrite to "
                          "replace them")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise InputError(f"--out {out}: cannot create the folder ({err.strerror})") from None
+    if not out.is_dir():
+        parent = next(p for p in out.absolute().parents if p.exists())
+        if not parent.is_dir():
+            raise InputError(f"--out {out}: {parent} is not a folder")
+        probe_writable(parent, out)
+        return out
     for name in planned_files():
         check_output_path(out / name, overwrite=True)
     return out

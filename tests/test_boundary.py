@@ -18,6 +18,8 @@ from elastica_petsc.solvers.equilibrium import EquilibriumSolver, newton_converg
 from elastica_petsc.core.geometry import clip_half_plane, shoelace, union_area, winding_number
 from elastica_petsc.studies.boundary import BoundaryError, compare_with_samples, trace_boundary
 
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 ELEMENTS = 60          # the paper's arm on a coarser mesh (attachments on nodes): fast
 
 

@@ -1,6 +1,6 @@
-"""The area objective of ``design`` and ``design --sweep`` (issue 13): the exact
-gradient (Taylor test), the union area of the re-sampling, the sweep's file,
-resume and ranks, and one-line errors."""
+"""The area objective of ``design`` and ``design --sweep`` (issue 13; its gradient
+against finite differences of ``boundary``: tests/test_traced_area.py): the union
+area of the re-sampling, the sweep's file, resume and ranks, and one-line errors."""
 from __future__ import annotations
 
 import os
@@ -12,50 +12,31 @@ import h5py
 import numpy as np
 import pytest
 
+from elastica_petsc.core.geometry import triangles_union_area
 from elastica_petsc.core.model import load_config
-from elastica_petsc.studies.design import DesignError, with_routes
-from elastica_petsc.core.geometry import shoelace, triangles_union_area
-from elastica_petsc.studies.design_area import box_area, box_loop, resampled_area
+from elastica_petsc.studies.design import DesignError
+from elastica_petsc.studies.design_area import resampled_area
 from elastica_petsc.studies.design_sweep import design_arm, parse_axis, run_sweep
+from elastica_petsc.studies.traced_area import traced_area
+
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
 
 ELEMENTS = 30
 P_MAX = 18.0                                  # 10 N on the paper's arm
 
 
-def test_area_gradient_taylor_order_two():
-    """A(q + e d) - A(q) - e dA/dq . d = O(e^2): halving e divides it by ~4
-    (routing points of both tendons, a random direction, mm)."""
-    arm = load_config()
-    q0 = np.array([46.3, -97.1, 26.1, 51.1])
-    a0 = box_area(arm, [0, 1], P_MAX, elements=ELEMENTS, nodes_per_edge=10)
-    assert a0.feasible and a0.area_mm2 > 1e4
-    d = np.random.default_rng(3).normal(size=4)
-    residuals = []
-    for eps in (2.0, 1.0, 0.5):
-        a = box_area(with_routes(arm, [0, 1], q0 + eps * d), [0, 1], P_MAX, elements=ELEMENTS,
-                     nodes_per_edge=10)
-        residuals.append(abs(a.area_mm2 - a0.area_mm2 - eps * a0.gradient @ d))
-    orders = np.log2(np.array(residuals[:-1]) / residuals[1:])
-    assert np.all(orders > 1.8), (residuals, orders)
-    # and the first-order term is not negligible: the gradient is being tested
-    assert abs(a0.gradient @ d) * 0.5 > 20 * residuals[-1]
-
-
-def test_loop_and_union_area_closed_forms():
-    loop = box_loop(2.0, 4)
-    assert loop.shape == (16, 2) and np.allclose(loop[0], 0) and np.allclose(loop[4], [2, 0])
-    assert shoelace(loop) == pytest.approx(4.0)                  # counter-clockwise
+def test_union_area_closed_forms():
     square = np.array([[[0, 0], [10, 0], [10, 10]], [[0, 0], [10, 10], [0, 10]]], float)
     assert triangles_union_area(square, 0.05) == pytest.approx(100.0, rel=0.02)
     overlapping = np.concatenate((square, square + [5.0, 0.0]))          # union: 15 x 10
     assert triangles_union_area(overlapping, 0.05) == pytest.approx(150.0, rel=0.02)
 
 
-def test_resampling_agrees_with_the_loop_area():
+def test_resampling_agrees_with_the_traced_area():
     """The independent re-sampling (forward solves on a tension grid, union of
-    the cells' images) against the loop's shoelace area on the paper's arm."""
+    the cells' images) against the traced boundary's area on the paper's arm."""
     arm = load_config()
-    a = box_area(arm, [], P_MAX, elements=ELEMENTS, nodes_per_edge=24)
+    a = traced_area(arm, [], P_MAX, elements=ELEMENTS)
     r = resampled_area(arm, P_MAX, elements=ELEMENTS, cells=16, lattice_mm=0.5)
     assert r.samples == 289 and r.stable == 289 and r.cables_clear == 289
     assert abs(r.area_mm2 - a.area_mm2) < r.error_mm2 + 0.02 * a.area_mm2, (r, a.area_mm2)
@@ -84,7 +65,7 @@ def test_sweep_file_resume_and_values(tmp_path):
     out = tmp_path / "s.h5"
     sweep = run_sweep(arm, 24, axes, P_MAX, comm=MPI.COMM_SELF, out=out, progress=False)
     assert sweep.complete and len(sweep.designs) == 4
-    direct = box_area(design_arm(arm, axes, sweep.designs[3]), [], P_MAX, elements=24)
+    direct = traced_area(design_arm(arm, axes, sweep.designs[3]), [], P_MAX, elements=24)
     assert sweep.values["area"][3] == direct.area_mm2
     with h5py.File(out, "r") as fh:
         assert fh.attrs["complete"] and fh["samples/area"].attrs["units"] == "mm^2"
@@ -105,6 +86,7 @@ def _clean_env() -> dict:
             if k in keep or not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="needs mpiexec")
 def test_sweep_on_two_ranks_equals_one(tmp_path):
     common = [sys.executable, "-m", "elastica_petsc.cli", "design", "--sweep",
@@ -145,7 +127,7 @@ def test_area_design_small_run_and_plot(tmp_path):
     from elastica_petsc.studies.design_area import design_for_area
 
     arm = load_config()
-    r = design_for_area(arm, [0, 1], P_MAX, elements=ELEMENTS, reach_mm=5.0, nodes_per_edge=8,
+    r = design_for_area(arm, [0, 1], P_MAX, elements=ELEMENTS, reach_mm=5.0,
                         max_iterations=1, resample_cells=6)
     assert r.history and r.after.area_mm2 >= r.before.area_mm2 == r.history[0]["area_mm2"]
     q = np.concatenate([t.route_mm for t in r.arm_after.tendons])
@@ -163,9 +145,9 @@ def test_attachment_search_on_nodes():
 
     arm = load_config()
     r = design_for_area(arm, [], P_MAX, elements=ELEMENTS, attaches=[0], reach_mm=20.0,
-                        nodes_per_edge=8, resample_cells=None)
-    direct = {s: box_area(with_attachment(arm, 0, s), [], P_MAX, elements=ELEMENTS,
-                          nodes_per_edge=8) for s in (180.0, 200.0, 220.0)}
+                        resample_cells=None)
+    direct = {s: traced_area(with_attachment(arm, 0, s), [], P_MAX, elements=ELEMENTS)
+              for s in (180.0, 200.0, 220.0)}
     best = max((a.area_mm2, s) for s, a in direct.items() if a.feasible)
     assert r.arm_after.tendons[0].attach_mm == best[1]
     assert r.after.area_mm2 == pytest.approx(best[0], rel=1e-9)

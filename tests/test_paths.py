@@ -82,10 +82,16 @@ def test_read_csv(tmp_path):
     bare = tmp_path / "bare.csv"
     bare.write_text("1,2\n3,4\n")
     np.testing.assert_array_equal(paths.read_csv(bare), [[1, 2], [3, 4]])
+    swapped = tmp_path / "swapped.csv"                 # read by name, not by position
+    swapped.write_text("y_mm,x_mm\n200,400\n199,401.5\n")
+    np.testing.assert_array_equal(paths.read_csv(swapped), [[400.0, 200.0], [401.5, 199.0]])
 
     cases = {
-        "cols.csv": ("x,y\n1,2,3\n", r"cols\.csv:2: expected 2 columns"),
-        "nan.csv": ("x,y\n1,2\n3,abc\n", r"nan\.csv:3: not a number"),
+        "cols.csv": ("x_mm,y_mm\n1,2,3\n", r"cols\.csv:2: expected 2 columns"),
+        "nan.csv": ("x_mm,y_mm\n1,2\n3,abc\n", r"nan\.csv:3: not a number"),
+        "xy.csv": ("x,y\n1,2\n", r"xy\.csv:1: header 'x,y'.*unknown: x, y"),
+        "onecol.csv": ("x_mm\n1\n", r"onecol\.csv:1: header 'x_mm': expected"),
+        "extra.csv": ("x_mm,y_mm,z_mm\n1,2,3\n", r"unknown: z_mm"),
         "inf.csv": ("1,inf\n", r"inf\.csv:1: non-finite"),
         "empty.csv": ("x_mm,y_mm\n", r"empty\.csv: no points"),
     }

@@ -7,7 +7,7 @@ in this process; the interpreter's, MPI's and PETSc's start-up, 0.8 s on an idle
 command, so 2 s of wall time in all); plus the numbered items of the issue that
 need more than one command.  The fault-injection study
 (signals to mpiexec, its process group and each rank, 20+ trials) is
-``scripts/fault_study.py``; here a few of its cases run once each.
+``scripts/studies/fault_study.py``; here a few of its cases run once each.
 """
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
            OMPI_MCA_rmaps_base_oversubscribe="1")
 
 # timing is part of what these tests check: scripts/test.sh runs them alone
-pytestmark = pytest.mark.serial
+pytestmark = [pytest.mark.serial, pytest.mark.slow]
 
 
 def cli(*args, cwd=None, env=None, timeout=60) -> tuple[subprocess.CompletedProcess, float]:
@@ -130,7 +130,7 @@ def bad_inputs(tmp: Path) -> list[tuple[list, list[str]]]:
         (["lengths", "--lengths", 1e6, 472], ["cable 1", "longest possible"]),
         (["lengths", "--lengths", 1e300, 472], ["cable 1", "longest possible"]),
         (ws + ["--out", tmp / "w.h5", "--spacing", 1e-9], ["--spacing", "samples"]),
-        (ws + ["--out", tmp / "w.h5", "--spacing", "inf"], ["--spacing", "positive number"]),
+        (ws + ["--out", tmp / "w.h5", "--spacing", "inf"], ["--spacing", "finite"]),
         (ws + ["--out", tmp / "w.h5", "--box", 0, "inf", 0, 100], ["--box", "finite"]),
         (ws + ["--mode", "tensions", "--out", tmp / "w.h5", "--tension-spacing", 1e-9],
          ["--tension-spacing", "samples"]),
@@ -161,6 +161,7 @@ def test_bad_inputs_one_line_exit_2_fast(tmp_path, monkeypatch, capsys):
     """Every bad input of issue 15 (5) and every unwritable output location (4): one
     line, exit 2, and less than 1 s of work before the answer."""
     monkeypatch.chdir(tmp_path)
+    run_main(["solve", "--tensions", 1], capsys)    # start-up (PETSc, imports): not timed
     failures = []
     for args, words in bad_inputs(tmp_path):
         status, stderr, seconds = run_main(args, capsys)
@@ -267,6 +268,7 @@ def test_trace_on_sigterm_says_interrupted_and_exits_130(tmp_path):
     assert stderr.strip().splitlines()[-1] == "elastica-petsc: interrupted"
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(MPIEXEC is None, reason="mpiexec not found")
 def test_input_error_under_mpiexec_is_one_line(tmp_path):
     """Found by every rank, said once (by rank 0); mpiexec's banner silenced as the

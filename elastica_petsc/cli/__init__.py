@@ -90,6 +90,21 @@ def split_petsc_options(parser: argparse.ArgumentParser, rest: list[str]) -> lis
     return petsc
 
 
+OPTIONS_FILE_FLAGS = ("-options_file", "-options_file_yaml")
+
+
+def check_options_files(petsc_options: list[str]) -> None:
+    """A PETSc options file that PETSc could not open (it would abort its own
+    initialisation with an error stack): one line instead."""
+    for flag, value in zip(petsc_options, petsc_options[1:] + [None]):
+        if flag not in OPTIONS_FILE_FLAGS:
+            continue
+        if value is None or value.startswith("-"):
+            raise InputError(f"{flag} needs a file name")
+        if not os.path.isfile(value) or not os.access(value, os.R_OK):
+            raise InputError(f"{flag} {value}: no such readable file")
+
+
 def _is_number(token: str) -> bool:
     try:
         float(token)
@@ -125,10 +140,17 @@ def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     args, rest = parser.parse_known_args(argv)
     petsc_options = split_petsc_options(parser, rest)
+    try:
+        check_options_files(petsc_options)
+    except InputError as err:
+        print(f"elastica-petsc: error: {err}", file=sys.stderr)
+        if getattr(args, "json", False):
+            _json_error("INPUT_ERROR", str(err))
+        return 2
     from ..solvers import runtime
     # PETSc errors become one line here (main), not PETSc's error stack on stderr
     runtime.init(parser.prog, petsc_options)
-    from ..core import progress
+    from ..ui import progress
     # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     signal.signal(signal.SIGTERM, _interrupt)   # again: PETSc's initialisation may take it
@@ -164,6 +186,9 @@ def _main(argv: list[str] | None) -> int:
         if as_json and status == 2:
             _json_error("PETSC_OPTION_ERROR", f"PETSc: {what}")
         return status
+    finally:
+        from .common import release_outputs
+        release_outputs()
     warn_unused(petsc_options)
     return status
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 
 from ..core.model import load_config
@@ -64,7 +65,7 @@ def add_tension_option(parser: argparse.ArgumentParser, flag: str, *, help: str,
 
 def newton_forms(args, arm: Arm) -> None:
     """Replace every given ``--X-N`` value (newtons) by ``--X`` in p = P l^2/B."""
-    import math
+    from ..core.inputs import tensions as check
 
     for key in list(vars(args)):
         value = getattr(args, key)
@@ -72,9 +73,8 @@ def newton_forms(args, arm: Arm) -> None:
             continue
         flag = "--" + key[:-2].replace("_", "-") + "-N"
         values = value if isinstance(value, list) else [value]
-        if not all(math.isfinite(v) and v >= 0 for v in values):
-            raise InputError(f"{flag}: tensions must be finite and >= 0 N, got {value}")
-        p = [float(v) for v in arm.tensions_from_N(values)]
+        p = [float(v) for v in arm.tensions_from_N(check(values, len(values), flag, "N",
+                                                         arm.force_scale_N))]
         setattr(args, key[:-2], p if isinstance(value, list) else p[0])
 
 
@@ -88,21 +88,27 @@ def load_arm(args) -> tuple[Arm, "Discretisation"]:
     """The configured arm and its mesh (``--config``, ``--elements``)."""
     from ..core.fem import Discretisation
 
+    from ..core import inputs
+
+    if args.elements != "auto":
+        inputs.elements(args.elements, "--elements")       # before reading the config
     arm = load_config(args.config)
     newton_forms(args, arm)
     if args.elements == "auto":
         from ..core.fem import nearest_element_count
         args.elements = nearest_element_count(arm)
-    if args.elements is not None and args.elements < 2:
-        raise InputError(f"--elements must be at least 2, got {args.elements}")
-    return arm, Discretisation.from_arm(arm, args.elements)
+    return arm, Discretisation.from_arm(arm, inputs.elements(args.elements, "--elements"))
 
 
 def tensions(args, arm: Arm):
-    """Non-dimensional tensions from --tensions or --tensions-N (validated later)."""
+    """Non-dimensional tensions from --tensions or --tensions-N, checked in the
+    unit given."""
+    from ..core.inputs import tensions as check
+
     if getattr(args, "tensions_N", None) is not None:
-        return list(arm.tensions_from_N(args.tensions_N))
-    return args.tensions
+        return list(arm.tensions_from_N(check(args.tensions_N, arm.n_tendons, "--tensions-N",
+                                              "N", arm.force_scale_N)))
+    return list(check(args.tensions, arm.n_tendons, "--tensions", "P l^2/B"))
 
 
 def guess(args, disc):
@@ -110,8 +116,8 @@ def guess(args, disc):
     ``--guess-N`` (newtons, converted by :func:`load_arm`), or None."""
     if args.guess is None:
         return None
-    from ..solvers.equilibrium import check_tensions
-    return check_tensions(args.guess, disc.n_tendons)
+    from ..core.inputs import tensions as check
+    return check(args.guess, disc.n_tendons, "--guess", "P l^2/B")
 
 
 def order(args) -> tuple[int, ...] | None:
@@ -124,48 +130,11 @@ def order(args) -> tuple[int, ...] | None:
                          "e.g. 2,1") from None
 
 
-def check_cable_lengths(arm: Arm, lengths_mm) -> None:
-    """Refuse a cable length no state of the arm can have taut: the attachment x_i
-    lies within s_i of the clamp (inextensible arm), so |r_i - x_i| <= |r_i| + s_i.
-    A longer cable is slack in every state (and the continuation towards it would
-    take a number of steps that grows with the length)."""
-    import math
-
-    for i, (tendon, L) in enumerate(zip(arm.tendons, lengths_mm), 1):
-        longest = math.hypot(*tendon.route_mm) + tendon.attach_mm
-        if L > longest:
-            raise InputError(f"--lengths: cable {i} cannot be {L:g} mm long and taut: its "
-                             f"longest possible span is |r_{i}| + s_{i} = {longest:.1f} mm")
+_LOCKS: list = []          # the outputs' locks, held until the command ends (release_outputs)
 
 
-MAX_TARGET_DISTANCE = 100.0      # arm lengths
-MAX_PATH_POINTS = 1_000_000
-
-
-def check_target_mm(arm: Arm, target, option: str = "--target") -> None:
-    """A target in mm: finite, and within 100 arm lengths of the clamp (farther,
-    E of Eq. (10) would overflow; nothing there is reachable anyway)."""
-    import math
-
-    if not all(math.isfinite(v) for v in target):
-        raise InputError(f"{option} must be two finite numbers in mm")
-    if math.hypot(*target) > MAX_TARGET_DISTANCE * arm.length_mm:
-        raise InputError(f"{option} ({target[0]:g}, {target[1]:g}) mm lies more than "
-                         f"{MAX_TARGET_DISTANCE:g} arm lengths from the clamp; the arm reaches "
-                         f"{arm.length_mm:g} mm")
-
-
-def check_path_points(points, step_mm: float) -> None:
-    """Refuse a path that ``step_mm`` would cut into more than a million targets."""
-    import numpy as np
-
-    length = float(np.sum(np.linalg.norm(np.diff(np.asarray(points, float), axis=0), axis=1)))
-    if not (np.isfinite(length) and length / step_mm <= MAX_PATH_POINTS):
-        raise InputError(f"--step {step_mm:g} mm would cut the {length:.6g} mm path into more "
-                         f"than {MAX_PATH_POINTS:,} targets; use a larger --step")
-
-
-def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None:
+def check_outputs(args, extra: dict | None = None, resume: bool = False,
+                  lock: bool = True) -> None:
     """Fail early, before any computing, on output paths that would be refused:
     --out (.h5), --plot (.png/.pdf/.svg), --schedule (.csv), the --vtk folder
     and ``extra`` ({option: path}); two options naming one file are refused too.  With
@@ -185,9 +154,25 @@ def check_outputs(args, extra: dict | None = None, resume: bool = False) -> None
         check_output_path(path, args.overwrite, None, option)
         paths[option] = path
     check_distinct(paths)
-    if getattr(args, "vtk", None):
+    if getattr(args, "vtk", None) is not None:
         from ..io.vtk import check_directory
         check_directory(args.vtk, args.overwrite)
+    if lock:
+        lock_outputs(paths.values())
+
+
+def lock_outputs(paths) -> None:
+    """Own the output files until the command ends: another run on one of them
+    is refused now, before computing (the lock rules of io/exclusive.py);
+    ``lock=False`` on the ranks other than 0 under mpiexec."""
+    from ..io.exclusive import lock_outputs as take
+
+    _LOCKS.extend(take(paths))
+
+
+def release_outputs() -> None:
+    while _LOCKS:
+        _LOCKS.pop().release()
 
 
 JSON_SCHEMA_VERSION = 1     # elastica_petsc/schema/output.schema.json, docs/json.md
@@ -195,7 +180,27 @@ JSON_SCHEMA_VERSION = 1     # elastica_petsc/schema/output.schema.json, docs/jso
 
 def print_json(kind: str, data: dict) -> None:
     """One JSON object on stdout: ``kind`` (the command, or ``error``),
-    ``schema_version``, then ``data`` (docs/json.md)."""
-    json.dump({"kind": kind, "schema_version": JSON_SCHEMA_VERSION, **data}, sys.stdout,
-              indent=2)
+    ``schema_version``, then ``data`` (docs/json.md); numpy values as JSON
+    (core/jsontext.py, the one encoder)."""
+    from ..core import jsontext
+
+    jsontext.dump({"kind": kind, "schema_version": JSON_SCHEMA_VERSION, **data}, sys.stdout,
+                  indent=2)
     sys.stdout.write("\n")
+
+
+CHECKPOINT_ENV = "ELASTICA_PETSC_CHECKPOINT_SECONDS"
+
+
+def checkpoint_seconds() -> float | None:
+    """``$ELASTICA_PETSC_CHECKPOINT_SECONDS`` (seconds between checkpoints of the
+    MPI studies; None when unset: the library's default), or :class:`InputError`."""
+    from ..studies.chunks import check_checkpoint_seconds
+
+    value = os.environ.get(CHECKPOINT_ENV)
+    if value is None:
+        return None
+    try:
+        return check_checkpoint_seconds(value)
+    except InputError:
+        raise InputError(f"{CHECKPOINT_ENV}={value!r}: expected seconds >= 0") from None

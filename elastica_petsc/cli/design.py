@@ -20,8 +20,8 @@ def add_parser(sub) -> None:
                     "in W_0 (sum over targets of min_p |x_t - x_d|^2/2, Danskin's gradient). "
                     "--objective area: the area of W_0 within 0 <= P_i <= --tension-max "
                     "(attachments, tendonK.attach, by a pattern search over mesh nodes) "
-                    "(shoelace area of the image of the tension box's boundary, gradient the "
-                    "boundary integral of the normal tip derivative), confirmed by an "
+                    "(on its traced boundary, the area `boundary` reports for that motor limit; "
+                    "gradient the boundary integral of the normal tip derivative), confirmed by an "
                     "independent tension-grid re-sampling of both arms. --sweep: evaluate the "
                     "area (and a path's misfit) over a grid of designs on all ranks of mpiexec, "
                     "into one HDF5 file (resumable). W_0: tips of stable equilibria connected to "
@@ -75,10 +75,11 @@ def run(args) -> int:
     if not args.vary or not args.objective:
         raise InputError("design needs --vary and --objective (area or path:FILE.csv), "
                          "or --sweep")
-    if args.iterations < 1:
-        raise InputError(f"--iterations must be at least 1, got {args.iterations}")
-    if not (args.reach > 0 and args.clearance >= 0):
-        raise InputError("--reach must be positive and --clearance non-negative")
+    from ..core.inputs import design_options
+    design_options({k: "--" + k.removesuffix("_mm").replace("_", "-") for k in
+                    ("iterations", "reach_mm", "clearance_mm", "margin", "resample_cells")},
+                   iterations=args.iterations, reach_mm=args.reach, clearance_mm=args.clearance,
+                   margin=args.margin, resample_cells=args.resample_cells)
     from ..io.hdf5 import PLOT_SUFFIXES, check_output_path
     if args.out:
         check_output_path(args.out, args.overwrite, (".toml",))
@@ -86,6 +87,7 @@ def run(args) -> int:
         if args.objective != "area":
             raise InputError("--plot draws an area design; use it with --objective area")
         check_output_path(args.plot, args.overwrite, PLOT_SUFFIXES, "--plot")
+    common.lock_outputs([args.out, args.plot])
     if args.objective == "area":
         return _run_area(args)
     return _run_path(args)
@@ -93,18 +95,25 @@ def run(args) -> int:
 
 def _path_targets(objective: str):
     from ..core.errors import InputError
+    from ..core.inputs import design_points, design_points_limit
     from ..studies.trace import read_csv
 
     kind, _, source = objective.partition(":")
     if kind != "path" or not source:
         raise InputError(f"--objective {objective!r}: expected area or path:FILE.csv")
-    return read_csv(source)
+    targets = read_csv(source, max_rows=design_points_limit() + 1)   # no need to read more
+    design_points(targets, f"--objective path:{source}")
+    return targets
 
 
 def _tension_max(args, arm) -> float:
-    if args.tension_max is not None:
-        return float(args.tension_max)
-    return float(arm.tensions_from_N([DEFAULT_TENSION_MAX_N])[0])
+    """--tension-max (p; --tension-max-N was converted by load_arm) or the default."""
+    from ..core.inputs import positive, tensions
+
+    if args.tension_max is None:
+        return float(arm.tensions_from_N([DEFAULT_TENSION_MAX_N])[0])
+    p = tensions([args.tension_max], 1, "--tension-max", "P l^2/B")[0]
+    return positive(p, "--tension-max", "P l^2/B", at_least=1e-3 / arm.force_scale_N)
 
 
 # outcome codes of an optimised design (JSON "outcome"); only IMPROVED writes --out
@@ -139,7 +148,7 @@ def _step_line(s: dict) -> str:
 
 
 def _run_path(args) -> int:
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..studies.design import design_for_path, parse_vary
 
     targets = _path_targets(args.objective)
@@ -150,7 +159,10 @@ def _run_path(args) -> int:
                                  reach_mm=args.reach, clearance_mm=args.clearance,
                                  margin=args.margin, max_iterations=args.iterations,
                                  progress=bar)
-    summary = _summary(result, disc.n_elements, len(targets))
+    from ..io.summaries import path_design_summary
+
+    summary = path_design_summary(result, disc.n_elements)
+    summary["outcome"] = path_outcome(result)
     _write(args, result.arm_after, summary, _lines)
     _show(args, summary, result.history, _lines)
     return 0 if result.misfit_after.reached.all() else 1
@@ -175,12 +187,10 @@ def _show(args, summary: dict, history, lines) -> None:
 
 def _run_area(args) -> int:
     from ..core.errors import InputError
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..studies.design import parse_design_variables
     from ..studies.design_area import design_for_area
 
-    if args.resample_cells < 2:
-        raise InputError(f"--resample-cells must be at least 2, got {args.resample_cells}")
     arm, disc = common.load_arm(args)
     if disc.n_tendons != 2:
         raise InputError("--objective area needs exactly two tendons")
@@ -191,7 +201,13 @@ def _run_area(args) -> int:
                                  reach_mm=args.reach, clearance_mm=args.clearance,
                                  max_iterations=args.iterations,
                                  resample_cells=args.resample_cells, progress=bar)
+    from ..io.summaries import area_summary
+
+    from ..studies.design_area import infeasibility
+
     summary = area_summary(result, disc.n_elements)
+    summary.update(outcome=area_outcome(result), start=result.history[0] | infeasibility(
+        result.before, result.arm_before.force_scale_N))
     _write(args, result.arm_after, summary, area_lines)
     if args.plot:
         from ..plots.design import plot_area_design
@@ -233,35 +249,6 @@ def infeasible_start_lines(start: dict, tension_max_N: float) -> list[str]:
                                     "a smaller --tension-max or other routing points")
                  + ", and run design again")
     return lines
-
-
-def area_summary(r, elements: int) -> dict:
-    """The JSON summary of an area design (mm, mm^2, N)."""
-    from ..studies.design_area import infeasibility
-
-    def sampled(s):
-        if s is None:                            # not re-sampled (an infeasible start)
-            return None
-        return {"area_mm2": s.area_mm2, "error_mm2": s.error_mm2, "samples": s.samples,
-                "reached": s.reached, "stable": s.stable, "cables_clear": s.cables_clear}
-    force = r.arm_before.force_scale_N
-    return {
-        "objective": "area", "elements": elements, "tension_max": r.p_max,
-        "tension_max_N": r.p_max * force,
-        "area_before_mm2": r.before.area_mm2, "area_after_mm2": r.after.area_mm2,
-        "fold_sign_changes_before": r.before.det_sign_changes,
-        "fold_sign_changes_after": r.after.det_sign_changes,
-        "resampled_before": sampled(r.resampled_before),
-        "resampled_after": sampled(r.resampled_after),
-        "confirmed": bool(r.confirmed),
-        "routes_before_mm": [list(t.route_mm) for t in r.arm_before.tendons],
-        "routes_after_mm": [list(t.route_mm) for t in r.arm_after.tendons],
-        "attach_before_mm": [t.attach_mm for t in r.arm_before.tendons],
-        "attach_after_mm": [t.attach_mm for t in r.arm_after.tendons],
-        "iterations": r.iterations, "evaluations": len(r.history), "seconds": r.seconds,
-        "tao_reason": r.reason, "outcome": area_outcome(r),
-        "start": r.history[0] | infeasibility(r.before, force),
-    }
 
 
 def area_lines(s: dict) -> list[str]:
@@ -314,44 +301,31 @@ def _run_sweep(args) -> int:
 
     comm = MPI.COMM_WORLD
     try:                       # input errors agreed on by all ranks (one line, exit 2)
-        common.check_outputs(args, resume=args.resume)
+        common.check_outputs(args, resume=args.resume, lock=comm.rank == 0)
         arm, disc = common.load_arm(args)
         axes = [parse_axis(text, disc.n_tendons) for text in args.sweep]
         targets = None
         if args.objective and args.objective != "area":
             targets = _path_targets(args.objective)
+        seconds = common.checkpoint_seconds()
         error = None
     except InputError as err:
         error = str(err)
     agree(comm, error)
     sweep = run_sweep(arm, disc.n_elements, axes, _tension_max(args, arm), targets_mm=targets,
                       comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
-                      provenance={"command_line": " ".join(sys.argv)})
+                      provenance={"command_line": " ".join(sys.argv)},
+                      checkpoint_seconds=seconds, progress=True)
     if comm.rank != 0:
         return 0
-    summary = sweep_summary(sweep, arm)
+    from ..io.summaries import sweep_summary
+
+    summary = sweep_summary(sweep)
     if args.json:
         common.print_json(args.command, summary)
     else:
         print("\n".join(sweep_lines(summary)))
     return 0 if sweep.complete else 130
-
-
-def sweep_summary(sweep, arm) -> dict:
-    v = sweep.values
-    best = sweep.best()
-    return {"objective": "sweep", "designs": int(len(sweep.designs)),
-            "done": int(sweep.done.sum()),
-            "complete": sweep.complete, "ranks": sweep.ranks, "axes": sweep.names,
-            "file": sweep.file,
-            "errors": int(np.sum(v["error"][sweep.done] != b"")),
-            "not_converged": int(np.sum(~v["area_converged"][sweep.done])),
-            "cables_crossing": int(np.sum(~v["cables_clear"][sweep.done])),
-            "best": None if best is None else {
-                "design_mm": dict(zip(sweep.names, sweep.designs[best].tolist())),
-                "area_mm2": float(v["area"][best]),
-                "path_reached": int(v["path_reached"][best])},
-            "seconds_designs": float(np.nansum(v["seconds"]))}
 
 
 def sweep_lines(s: dict) -> list[str]:
@@ -366,23 +340,6 @@ def sweep_lines(s: dict) -> list[str]:
     if s["file"]:
         lines.append(f"  wrote {s['file']}")
     return lines
-
-
-def _summary(result, elements: int, count: int) -> dict:
-    before, after = result.misfit_before, result.misfit_after
-    best = min(result.history, key=lambda h: h["f_mm2"])
-    return {
-        "objective": "path", "elements": elements, "targets": count,
-        "margin_path_reached": best["reached"], "margin_path_misfit_mm2": best["f_mm2"],
-        "smallest_tension_after_N": float(np.min(after.p) * result.arm_after.force_scale_N),
-        "reached_before": int(before.reached.sum()), "reached_after": int(after.reached.sum()),
-        "max_error_before_mm": float(before.errors_mm.max()),
-        "max_error_after_mm": float(after.errors_mm.max()),
-        "routes_before_mm": [list(t.route_mm) for t in result.arm_before.tendons],
-        "routes_after_mm": [list(t.route_mm) for t in result.arm_after.tendons],
-        "iterations": result.iterations, "evaluations": result.evaluations,
-        "seconds": result.seconds, "tao_reason": result.reason, "outcome": path_outcome(result),
-    }
 
 
 def _lines(s: dict) -> list[str]:

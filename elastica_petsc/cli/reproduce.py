@@ -51,16 +51,25 @@ def run(args) -> int:
     from ..studies.chunks import agree
 
     out, error = Path(args.out), None
+    alu = Path(args.aluminium_config) if args.aluminium_config else \
+        Path(str(resources.files("elastica_petsc") / "configs" / "aluminium.toml"))
     try:
         if comm.rank == 0:
             check_output_folder(args.out, args.overwrite)
         arm = load_config(args.config)
+        load_config(alu)                    # refused now, not after the other experiments
+        seconds = common.checkpoint_seconds()
     except InputError as err:
         error = str(err)
     agree(comm, error)
-    alu = Path(args.aluminium_config) if args.aluminium_config else \
-        Path(str(resources.files("elastica_petsc") / "configs" / "aluminium.toml"))
-    ctx = Context(arm=arm, out=out, quick=args.quick, jobs=args.jobs, comm=comm)
+    if comm.rank == 0:
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise InputError(f"--out {out}: cannot create the folder ({err.strerror})") \
+                from None
+    ctx = Context(arm=arm, out=out, quick=args.quick, jobs=args.jobs, comm=comm,
+                  checkpoint_seconds=seconds)
     log = ((lambda message: None) if args.quiet else
            (lambda message: print(message, file=sys.stderr, flush=True)))
     report = run_all(ctx, "elastica-petsc " + " ".join(sys.argv[1:]), alu, log=log)

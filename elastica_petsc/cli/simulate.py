@@ -94,7 +94,7 @@ def _check(args) -> None:
 
 def run(args) -> int:
     from ..core.errors import InputError
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..io.simulation import read_theta, write_simulation
     from ..studies.simulate import simulate
     from ..studies.simulate import time_scale_s

@@ -32,18 +32,13 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from .. import api
-    from ..core.errors import InputError
+    from ..core.inputs import modes as check_modes
+    from ..core.inputs import positive
     from ..io.summary import format_stability, stability_summary
 
-    if args.modes < 1:
-        raise InputError(f"--modes must be at least 1, got {args.modes}")
-    if not args.amplitude_mm > 0:
-        raise InputError(f"--amplitude-mm must be positive, got {args.amplitude_mm}")
+    positive(args.amplitude_mm, "--amplitude-mm", "mm", at_least=1e-6)
     arm, disc = common.load_arm(args)
-    if args.modes > disc.n_elements:
-        raise InputError(f"--modes must be at most {disc.n_elements} (the stiffness of "
-                         f"{disc.n_elements} elements has {disc.n_elements} eigenvalues), "
-                         f"got {args.modes}")
+    check_modes(args.modes, disc.n_elements, "--modes")
     common.check_outputs(args)
     state = solve_state(args, arm, disc)
     if not state.converged:

@@ -85,6 +85,7 @@ def _run(args, comm) -> int:
     # Input errors are agreed on by all ranks before any collective work (one line, exit 2).
     try:
         arm, disc = _check_inputs(args)
+        seconds = common.checkpoint_seconds()
         error = None
     except InputError as err:
         error = str(err)
@@ -94,8 +95,10 @@ def _run(args, comm) -> int:
         tension_spacing=args.tension_spacing, tension_max=args.tension_max, chunk=args.chunk,
         comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
         global_search=not args.local_only, share=args.share, min_tension_N=args.min_tension_N,
-        region=default_region(args))
+        region=default_region(args), checkpoint_seconds=seconds, progress=True)
     if comm.rank != 0:
+        if comm.size > 1 and not result.complete:
+            _exit_without_finalize(130, None)       # as rank 0 below
         return 0
     from ..studies.map_area import map_json
     described = map_json(result, args.box)     # status codes, region, lattice, area
@@ -109,7 +112,10 @@ def _run(args, comm) -> int:
     if not summary["complete"]:
         message = (f"interrupted: {summary['samples_done']} of {summary['samples_total']} "
                    f"samples saved in {args.out}; continue with --resume")
-        if result.stranded:
+        if result.stranded or comm.size > 1:
+            # after a stop under mpiexec, MPI's finalisation waits on a launcher that is
+            # tearing the job down (measured: every rank held there until killed ~2 s
+            # after the signal, exit status 1): every rank ends here, status 130
             _exit_without_finalize(130, message)
         print(f"elastica-petsc: {message}", file=sys.stderr)
         return 130
@@ -130,13 +136,15 @@ def default_region(args) -> str:
     return "half-disc" if args.config is None else "disc"
 
 
-def _exit_without_finalize(status: int, message: str) -> None:
+def _exit_without_finalize(status: int, message: str | None) -> None:
     """End this rank now: another rank is busy and will never join MPI's
     finalisation; the launcher ends the others once this one is gone."""
     import os
 
-    print(f"elastica-petsc: {message}", file=sys.stderr, flush=True)
+    if message:
+        print(f"elastica-petsc: {message}", file=sys.stderr, flush=True)
     sys.stdout.flush()
+    common.release_outputs()                   # no lock file left beside the output
     os._exit(status)
 
 
@@ -146,14 +154,22 @@ def _check_inputs(args):
 
     if not args.out:
         raise InputError("workspace needs --out FILE.h5 (results are written as they come)")
+    from ..api import MIN_SPACING_MM
+    from ..core.inputs import positive, tensions
+    positive(args.spacing, "--spacing", "mm", at_least=MIN_SPACING_MM)
+    arm, disc = common.load_arm(args)             # --tension-max-N etc. now in p
+    for flag in ("--tension-max", "--tension-spacing"):
+        tensions([getattr(args, flag[2:].replace("-", "_"))], 1, flag, "P l^2/B")
+    positive(args.tension_spacing, "--tension-spacing", "P l^2/B", at_least=1e-9)
     if args.vtk:
         from ..io.vtk import check_directory
         check_directory(args.vtk, args.overwrite)
-    arm, disc = common.load_arm(args)
     if args.overlay:
         from ..plots.workspace import read_overlays
         read_overlays(args.overlay)                 # refuse a bad file before computing
-    common.check_outputs(args, _derived_plots(args), resume=args.resume)
+    from mpi4py import MPI
+    common.check_outputs(args, _derived_plots(args), resume=args.resume,
+                         lock=MPI.COMM_WORLD.rank == 0)
     return arm, disc
 
 

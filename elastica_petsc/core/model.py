@@ -202,11 +202,20 @@ def validate(arm: Arm) -> None:
             positive(f"arm.{key}", getattr(arm, key))
     if not isinstance(arm.elements, int) or isinstance(arm.elements, bool) or arm.elements < 2:
         raise ModelError(f"arm.elements must be an integer >= 2, got {arm.elements!r}")
-    if len(arm.tendons) < 1:
-        raise ModelError("tendon: at least one [[tendon]] is needed")
+    from .inputs import elements
+    elements(arm.elements, "arm.elements")
+    if not isinstance(arm.tendons, (tuple, list)) or len(arm.tendons) < 1:
+        raise ModelError("tendon: at least one [[tendon]] (an ep.Tendon) is needed")
+    if arm.thickness_mm >= arm.length_mm:
+        raise ModelError(f"arm.length_mm = {arm.length_mm:g} is not longer than the strip's "
+                         f"thickness_mm = {arm.thickness_mm:g}: lengths are in millimetres "
+                         "(typed in metres?)")
     _validate_weight(arm)
     for i, tendon in enumerate(arm.tendons, start=1):
         key = f"tendon[{i}]"
+        if not isinstance(tendon, Tendon):
+            raise ModelError(f"{key} must be an ep.Tendon(attach_mm, route_mm), got "
+                             f"{type(tendon).__name__}")
         positive(f"{key}.attach_mm", tendon.attach_mm)
         if tendon.attach_mm > arm.length_mm * (1 + 1e-12):
             raise ModelError(
@@ -226,6 +235,7 @@ def validate(arm: Arm) -> None:
             raise ModelError(
                 f"{key}.route_mm coincides with the cable's first point on the straight arm "
                 "(a segment of zero length)")
+    _distinct_tendons(arm)
     motor = arm.motor
     positive("motor.spool_radius_mm", motor.spool_radius_mm)
     for name in ("steps_per_rev", "microsteps"):
@@ -314,3 +324,17 @@ def load_config(path=None) -> Arm:
         return arm_from_dict(data)
     except (ConfigError, ModelError) as err:
         raise ConfigError(f"{path}: {err}") from None
+
+def _distinct_tendons(arm: Arm) -> None:
+    """Two tendons with one path (routing point, guides, end point) pull as one:
+    the tip map's Jacobian (Eq. (13)) is singular everywhere; refuse them."""
+    seen = {}
+    for i, t in enumerate(arm.tendons, start=1):
+        points = [*t.route_mm, *(v for g in t.guides for v in (g.s_mm, g.offset_mm)),
+                  t.attach_mm, t.attach_offset_mm]
+        key = tuple(round(v / arm.length_mm, 9) for v in points)
+        if key in seen:
+            raise ModelError(f"tendon[{i}] is the same as tendon[{seen[key]}] (attach_mm "
+                             f"{t.attach_mm:g}, route_mm {list(t.route_mm)}): two identical "
+                             "tendons act as one; merge them")
+        seen[key] = i

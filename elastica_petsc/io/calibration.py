@@ -13,11 +13,11 @@ measurement frame, is in its header comments) and an HDF5 file::
 """
 from __future__ import annotations
 
-import json
 import math
 
 import numpy as np
 
+from ..core import jsontext
 from .design import write_config
 from .hdf5 import atomic_h5, provenance, put, write_attrs
 
@@ -54,7 +54,7 @@ def write_calibration_h5(path, result, overwrite: bool = False) -> None:
     summary = result.summary()
     with atomic_h5(path, overwrite) as fh:
         write_attrs(fh, provenance(result.arm, "calibration"))
-        fh.attrs["summary_json"] = json.dumps(summary)
+        fh.attrs["summary_json"] = jsontext.dumps(summary)
         g = fh.create_group("parameters")
         put(g, "names", np.array([p["name"].encode() for p in params]), "", "parameters")
         put(g, "units", np.array([p["unit"].encode() for p in params]), "", "their units")

@@ -37,8 +37,10 @@ def config_toml(arm, header_lines=()) -> str:
 
 def write_config(path, arm, header_lines=(), overwrite: bool = False) -> Path:
     """Write ``arm`` as TOML to ``path`` (refuses to clobber unless ``overwrite``)."""
+    from .exclusive import replace_file
+
     path = check_output_path(path, overwrite)
-    path.write_text(config_toml(arm, header_lines))
+    replace_file(path, config_toml(arm, header_lines).encode())
     return path
 
 

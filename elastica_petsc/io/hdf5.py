@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import contextlib
 import datetime
-import json
 import os
 import platform
 import sys
@@ -40,12 +39,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core import jsontext
 from .. import __version__
 from ..core.clearance import state_cable_clear
 from ..core.config import arm_to_dict
 from ..solvers.equilibrium import Equilibrium
 from ..core.errors import InputError
 from ..core.model import Arm
+from .exclusive import OutputLock, replace_file  # noqa: F401 - OutputLock: re-exported
 
 
 H5_SUFFIXES = (".h5", ".hdf5")
@@ -76,11 +77,11 @@ def check_output_path(path: str | Path, overwrite: bool, suffixes=None,
     folder = path.parent
     if not folder.is_dir():
         raise OutputError(f"{folder}: no such directory for the output file")
-    _probe_writable(folder, path)
+    probe_writable(folder, path)
     return path
 
 
-def _probe_writable(folder: Path, path: Path) -> None:
+def probe_writable(folder: Path, path: Path) -> None:
     """Create and remove a file beside ``path`` (root ignores permission bits, so
     only trying tells a read-only mount); an existing file must be replaceable."""
     probe = folder / f".{path.name}.probe-{os.getpid()}"
@@ -136,55 +137,12 @@ def atomic_h5(path: str | Path, overwrite: bool = False):
     buffer = io.BytesIO()
     with h5py.File(buffer, "w") as fh:
         yield fh
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
-        with open(tmp, "wb") as raw:
-            raw.write(buffer.getbuffer())
-            raw.flush()
-            os.fsync(raw.fileno())
-        os.replace(tmp, path)
+        replace_file(path, buffer.getbuffer())
+    except InputError:
+        raise
     except OSError as err:
         raise OutputError(f"cannot write {path}: {err.strerror or err}") from None
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
-class OutputLock:
-    """Exclusive ownership of an output file for the duration of a run: an
-    ``flock`` on ``.<name>.lock`` beside it (released by the kernel if the
-    process dies, so it never goes stale).  A second run on the same file is
-    refused with :class:`OutputError`."""
-
-    def __init__(self, path: str | Path):
-        import fcntl
-
-        self.path = Path(path)
-        self.lock = self.path.with_name(f".{self.path.name}.lock")
-        self.fd = os.open(self.lock, os.O_CREAT | os.O_RDWR, 0o644)
-        try:
-            fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            owner = os.pread(self.fd, 32, 0).decode(errors="replace").strip() or "?"
-            os.close(self.fd)
-            raise OutputError(f"{self.path} is being written by another run (pid {owner}); "
-                              "wait for it to end or choose another --out") from None
-        os.ftruncate(self.fd, 0)
-        os.pwrite(self.fd, str(os.getpid()).encode(), 0)
-        remove_orphans(self.path)
-
-    def release(self) -> None:
-        if self.fd is not None:
-            with contextlib.suppress(OSError):
-                self.lock.unlink()
-            os.close(self.fd)                   # closing releases the flock
-            self.fd = None
-
-    def __enter__(self) -> "OutputLock":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.release()
 
 
 # PETSc options that change no number (monitors, viewers, logging): not part of a result
@@ -208,7 +166,7 @@ def provenance(arm: Arm, kind: str) -> dict:
 
     info = {
         "kind": kind,
-        "config_json": json.dumps(arm_to_dict(arm)),
+        "config_json": jsontext.dumps(arm_to_dict(arm)),
         "elastica_petsc_version": __version__,
         "petsc_version": "%d.%d.%d" % PETSc.Sys.getVersion(),
         "python_version": platform.python_version(),

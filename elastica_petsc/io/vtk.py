@@ -40,16 +40,21 @@ VTK_VERTEX, VTK_LINE, VTK_QUAD = 1, 3, 9
 _TYPES = {"f": "Float64", "i": "Int64", "u": "UInt8", "b": "UInt8"}
 
 
-def check_directory(path, overwrite: bool = False) -> Path:
+def check_directory(path, overwrite: bool = False, option: str = "--vtk") -> Path:
     """An output folder for VTK files: created if missing (its parent must
-    exist); an existing non-empty one only with ``overwrite``."""
+    exist and be writable); an existing non-empty one only with ``overwrite``."""
+    from .hdf5 import probe_writable
+
+    if not str(path).strip():
+        raise InputError(f"{option}: empty folder name")
     path = Path(path)
     if path.exists() and not path.is_dir():
-        raise InputError(f"{path}: exists and is not a directory (--vtk wants a folder)")
+        raise InputError(f"{option} {path}: exists and is not a directory (a folder is wanted)")
     if path.is_dir() and any(path.iterdir()) and not overwrite:
         raise InputError(f"{path}: folder is not empty; pass --overwrite to write into it")
     if not path.parent.exists():
         raise InputError(f"{path.parent}: no such directory for the VTK folder")
+    probe_writable(path if path.is_dir() else path.parent, path)
     return path
 
 
@@ -114,13 +119,9 @@ def write_pvd(path, entries) -> Path:
 
 
 def _write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    from .exclusive import replace_file
+
+    replace_file(path, text.encode())
 
 
 # --- states and paths -----------------------------------------------------------------------

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core import jsontext
 from ..core.errors import InputError
 
 # the sampler attribute of a file (part of what a resume must match); files
@@ -236,7 +237,7 @@ def continue_provenance(out: Path, attrs: dict) -> None:
         first = {key: fh.attrs[key] for key in ("command_line", "created_utc") if key in fh.attrs}
         resumed = json.loads(fh.attrs.get("resumed_command_lines", "[]"))
     resumed.append(attrs.get("command_line", ""))
-    attrs.update(first, resumed_command_lines=json.dumps(resumed))
+    attrs.update(first, resumed_command_lines=jsontext.dumps(resumed))
 
 
 def read_map_file(path, new_results) -> tuple:

@@ -37,21 +37,20 @@ class Frame:
     cables_mm: tuple = ()         # each cable's polyline, routing point to end (guides between)
 
 
-def check_animation_path(path, overwrite: bool = False) -> Path:
+def check_animation_path(path, overwrite: bool = False, option: str = "--animate") -> Path:
     """Refuse (InputError, one line) a file we could not write, before computing."""
     from matplotlib import animation
 
+    from ..io.hdf5 import check_output_path
+
     path = Path(path)
     if path.suffix.lower() not in FORMATS:
-        raise InputError(f"{path}: animations are written as .gif or .mp4, got {path.suffix!r}")
+        raise InputError(f"{option} {path}: animations are written as .gif or .mp4, got "
+                         f"{path.suffix!r}")
     if path.suffix.lower() == ".mp4" and not animation.writers.is_available("ffmpeg"):
         raise InputError(f"{path}: MP4 needs the ffmpeg program, which is not installed "
                          "(apt-get install ffmpeg); write a .gif instead")
-    if path.exists() and not overwrite:
-        raise InputError(f"{path} exists; pass --overwrite to replace it")
-    if not path.parent.exists():
-        raise InputError(f"{path.parent}: no such directory for the animation")
-    return path
+    return check_output_path(path, overwrite, FORMATS, option)
 
 
 def _frame(arm: Arm, eq, caption: str) -> Frame:

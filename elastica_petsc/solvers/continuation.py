@@ -64,6 +64,8 @@ import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
 
+from ..core import interrupt
+from ..core.errors import SolverError
 from ..core.fem import Discretisation
 from .inertia import InertiaCounter
 from .linalg import use_bordered_lu
@@ -89,7 +91,7 @@ def use_pivoting_lu(ksp: PETSc.KSP) -> PETSc.KSP:
     raise ContinuationError("no pivoting sparse LU (UMFPACK, SuperLU or MUMPS) in this PETSc")
 
 
-class ContinuationError(RuntimeError):
+class ContinuationError(SolverError):
     """The curve could not be followed (step too small, singular system)."""
 
 
@@ -870,6 +872,7 @@ class CurveTracer:
         """One predictor-corrector step of length ds: (point | None, iterations).
         The corrector gets ``step_max_it`` Newton iterations: from the tangent
         predictor a step that needs more is too long (it is halved)."""
+        interrupt.check()                         # a run's stop, inside long work
         w_pred = pt.w + ds * pt.t
         w, ok, its = self._solve(w_pred, [self._row(constraint), self._arclength_row(pt.t, w_pred)],
                                  max_it=self.step_max_it)

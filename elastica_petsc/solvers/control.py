@@ -75,6 +75,12 @@ METHODS = ("blmvm", "gd", "brgn")
 # and the unit step was accepted; 47 iterations to the closest boundary point
 # became 4).
 LINE_SEARCH_GTOL = "0.1"
+
+
+class StartFailed(RuntimeError):
+    """No equilibrium could be computed at the initial tensions of a solve
+    (e.g. a guess that pulls a cable onto its routing point): a failed start,
+    which the global search answers by trying its next strategy."""
 # TAO BRGN (method "brgn"): a proximal weight (E ~ 1e-16 at the target, so
 # PETSc's 1e-4 dominates the Gauss-Newton matrix: 277 iterations on Fig. 2)
 # and an Armijo line search in its BNLS subsolver (14 evaluations on Fig. 2
@@ -444,7 +450,7 @@ class TipController:
         if ev is None:
             ev = problem.last_good
         if ev is None:
-            raise RuntimeError(
+            raise StartFailed(
                 "tip control could not compute any equilibrium from the initial tensions "
                 f"{p0}: {problem.failure}")
         return self._result(problem, ev, tao_reason, iterations)

@@ -16,6 +16,8 @@ from functools import cached_property
 import numpy as np
 from petsc4py import PETSc
 
+from ..core import interrupt
+from ..core.results import Result
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from .bifurcation import (BIFURCATION_TOL, AmplitudeContinuation, Bifurcation, critical_mode,
@@ -43,8 +45,8 @@ BRANCH_ENDS = {
 SIDES = ("left", "right")
 
 
-@dataclass(frozen=True)
-class Equilibrium:
+@dataclass(frozen=True, repr=False)
+class Equilibrium(Result):
     """A solved state of the arm, non-dimensional (lengths / l, p = P l^2 / B)."""
 
     disc: Discretisation
@@ -353,6 +355,7 @@ class EquilibriumSolver:
         reason = "CONVERGED_ITERATING"
         n_angles = self.disc.n_elements
         while lam < 1.0:
+            interrupt.check()                     # a run's stop, inside long work
             step = min(dlam, 1.0 - lam)
             if u_prev is not None:
                 predictor = u + (u - u_prev) * (step / dlam_prev)

@@ -110,7 +110,7 @@ DEFLATION_OPTIONS = {"snes_linesearch_type": "l2"}
 
 
 # --- results -----------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class LengthEquilibrium(Equilibrium):
     """An equilibrium found under length control (or a load-controlled one
     re-examined under length control).

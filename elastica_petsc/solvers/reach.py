@@ -58,7 +58,7 @@ import numpy as np
 
 from ..core.clearance import state_cable_clear
 from ..core.loading import Loading
-from .control import ControlResult, TipController
+from .control import ControlResult, StartFailed, TipController
 from .equilibrium import COLLAPSE_LENGTH, Equilibrium
 
 BEYOND_REACH = "BEYOND_REACH"            # reason and evidence: |x_d| > l
@@ -264,7 +264,7 @@ class Reacher:
     progress : None, or a callable ``progress(steps, note)`` told of every
         search step of :meth:`reach` (a local solve, a homotopy sub-target,
         building the seed library, the boundary proof) with what it is doing
-        (core/progress.py: ``control`` shows it while the global search runs).
+        (ui/progress.py: ``control`` shows it while the global search runs).
     """
 
     def __init__(self, controller: TipController, *, homotopy_step: float = 0.08,
@@ -355,7 +355,7 @@ class Reacher:
                                        local_reason=first.reason, evidence=evidence,
                                        message=evidence)
         self.step("local tip control")
-        first = ctl.solve(target, p0=p0, start=start, start_loading=start_loading)
+        first = self._first(target, p0, start, start_loading)
         if first.converged:
             return self._clear(target, first, cables)
         if not global_search:
@@ -379,6 +379,19 @@ class Reacher:
                 res = dataclasses.replace(res, strategy=f"{kind} from {s.label}")
                 return self._clear(target, res, cables)
         return self._outside(target, self._closest(target, tried))
+
+    def _first(self, target, p0, start, start_loading) -> ControlResult:
+        """The local solve from the given start; a start at which no equilibrium
+        can be computed (a guess that collapses a cable) is a failed start like
+        any other: the local solve from the straight arm follows."""
+        try:
+            return self.controller.solve(target, p0=p0, start=start, start_loading=start_loading)
+        except StartFailed as failed:
+            if p0 is None and start is None:
+                raise
+            self.step("the initial tensions failed: local tip control from the straight arm")
+            res = self.controller.solve(target)
+            return dataclasses.replace(res, strategy=f"local from the straight arm ({failed})")
 
     def _outside(self, target: np.ndarray, res: ControlResult) -> ControlResult:
         """An undecided result becomes ``reachable=False`` (OUTSIDE_BOUNDARY)

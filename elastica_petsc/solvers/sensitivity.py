@@ -29,13 +29,14 @@ import numpy as np
 from petsc4py import PETSc
 
 from .equilibrium import Equilibrium, EquilibriumSolver
+from ..core.errors import SolverError
 from ..core.fem import Discretisation
 from .linalg import use_bordered_lu
 from .options import SolverOptions, check_comm
 from .reasons import KSP_REASONS, reason_name
 
 
-class SensitivityError(RuntimeError):
+class SensitivityError(SolverError):
     """The tangent at the equilibrium could not be factored (singular: a limit point)."""
 
 

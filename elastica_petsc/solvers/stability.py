@@ -100,6 +100,8 @@ import scipy.sparse as sp
 from petsc4py import PETSc
 from slepc4py import SLEPc
 
+from ..core.results import Result
+from ..core.errors import SolverError
 from ..core.dynamics import EB_BETA1, mass_apply, node_masses
 from ..core.fem import Discretisation
 from .inertia import InertiaCounter
@@ -113,13 +115,13 @@ OPERATORS = ("jacobian", "symmetric")
 CONTROLS = ("load", "length")
 
 
-class StabilityError(RuntimeError):
+class StabilityError(SolverError):
     """An eigen solve that did not converge."""
 
 
 # --- results -------------------------------------------------------------------
-@dataclass(frozen=True)
-class Stability:
+@dataclass(frozen=True, repr=False)
+class Stability(Result):
     """Smallest eigenvalues of K v = lambda M v at one equilibrium (Sec. 4.3 (ii)).
 
     ``eigenvalues`` are real parts of lambda l^2 / B, ascending (``max_imag``
@@ -155,8 +157,8 @@ class Stability:
         return self.negative == self.inertia_negative
 
 
-@dataclass(frozen=True)
-class Frequencies:
+@dataclass(frozen=True, repr=False)
+class Frequencies(Result):
     """Lowest small-vibration eigenpairs about an equilibrium.
 
     ``omega2`` = omega^2 rho_A l^4 / B (non-dimensional, ascending; negative:

@@ -44,6 +44,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..core.loading import Loading
+from ..core.results import Result
 from .equilibrium import COLLAPSE_LENGTH, Equilibrium
 from .sensitivity import Sensitivity
 
@@ -83,8 +84,8 @@ class Evaluation:
     loading: Loading | None = None      # how the equilibrium was reached (None: unknown)
 
 
-@dataclass(frozen=True)
-class ControlResult:
+@dataclass(frozen=True, repr=False)
+class ControlResult(Result):
     """Outcome of one tip-control solve.  Non-dimensional: lengths in units of
     l (``length_mm``), tensions p = P l^2 / B (``force_scale_N`` = B / l^2)."""
 

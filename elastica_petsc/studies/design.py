@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.results import Result
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm
@@ -155,8 +156,8 @@ def path_misfit(arm: Arm, tendons, targets_mm, elements: int | None = None) -> P
     return PathMisfit(f, grad, np.array(reached), np.array(errors), np.array(tensions))
 
 
-@dataclass
-class DesignResult:
+@dataclass(frozen=True, repr=False)
+class DesignResult(Result):
     """History and outcome of a path design (mm, mm^2)."""
 
     arm_before: Arm
@@ -169,6 +170,12 @@ class DesignResult:
     iterations: int = 0
     evaluations: int = 0
     seconds: float = 0.0
+
+    def summary(self) -> dict:
+        """What ``design --json`` prints for a path (targets reached before/after)."""
+        from ..io.summaries import path_design_summary
+
+        return path_design_summary(self)
 
 
 def scaled_path(targets_mm, margin: float) -> np.ndarray:

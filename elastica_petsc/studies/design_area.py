@@ -15,89 +15,39 @@ targets (1029 against 1401): the gain was an artefact of folds.
 We therefore optimise the **restricted** workspace W_0 ∩ W_P of a motor limit
 P_max (Eq. (22) with P_crit = P_max, default 10 N): the tips of the equilibria
 reached by quasi-static loading from the straight arm with 0 <= P_i <= P_max.
-Where the tip map has no fold on the box B = [0, p_max]^2 (p = P l^2/B) its
-image is bounded by the image of the box's boundary, and
+Its area A(q) [mm^2] and dA/dq are those of its traced boundary
+(studies/traced_area.py: the set and area that ``boundary`` reports for the
+arm with that motor limit, the gradient from the normal velocity of the
+traced loop's nodes; TAO BLMVM).  Until issue 21 the objective was the
+shoelace area of the image of the tension box's boundary at 24 nodes per
+edge, whose straight chords cut the curved inner edge (1.9 % too large on
+the paper's arm, the gradient 15 % off).
 
-    A(q) = | 1/2 ∮_{x_t(∂B)} (x dy - y dx) |                       [mm^2]
-
-Discretised on K nodes p_k of ∂B fixed in tension space (``nodes_per_edge``
-per edge), with tips x_k(q) reached along the loop (each solve continued from
-the previous node, a quasi-static loading path), A is the shoelace area of
-the nodes, a smooth function of the design q (routing points, mm).  Its
-derivative is the discrete boundary integral of the normal component of the
-tip derivative:
-
-    dA/dq = sigma sum_k  n_k . d x_k/d q,   n_k = 1/2 (y_{k+1} - y_{k-1}, x_{k-1} - x_{k+1})
-
-(sigma the loop's orientation) with d x_k/d q at fixed tensions from one more
-right-hand side of the tangent system, K du/dr_i = -dF/dr_i (the tendon's
-border columns, :meth:`Manifold.route_derivative`), Eq. (13) for the tip.
-Verified by a Taylor test of order 2 (tests/test_design_area.py).
-
-**Its validity is checked, not assumed.**  Along the loop, det(d x_t/d p)
-(two more right-hand sides: K du/dp = -dF/dp, Eq. (14)) must keep one sign;
-a change is a fold reaching the boundary and is reported.  Interior folds,
-unstable states and states off the quasi-static branch are what the
-independent re-sampling (:func:`resampled_area`) catches: a forward tension-
-grid map (``workspace --mode tensions``) over B, its cells' images as
-triangles, and the area of their union counted on a fine lattice.  Where
-the map folds, the union is smaller than A; so the optimiser's gain is
-claimed only if the re-sampled areas before and after differ by more than
-their errors.
+**Its validity is checked, not assumed.**  Along the loop the intrinsic
+tip-map test (det(d x_t/d p)) must keep one sign (``det_sign_changes``
+reports a fold reaching the boundary); interior folds, unstable states and
+states off the quasi-static branch are what the independent re-sampling
+(:func:`resampled_area`) catches: a forward tension-grid map (``workspace
+--mode tensions``) over B, its cells' images as triangles, and the area of
+their union counted on a fine lattice.  Where the map folds, the union is
+smaller than A; so the optimiser's gain is claimed only if the re-sampled
+areas before and after differ by more than their errors.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse.linalg as spla
 
+from ..core.results import Result
 from ..core.clearance import state_cable_clear
 from ..core.fem import Discretisation
-from ..core.geometry import shoelace, shoelace_normals, triangles_union_area
+from ..core.geometry import triangles_union_area
 from ..core.model import Arm
-from ..solvers.continuation import Manifold
-from ..solvers.equilibrium import EquilibriumSolver
+from .traced_area import TracedArea, traced_area
 
 
-def box_loop(p_max: float, nodes_per_edge: int) -> np.ndarray:
-    """Tensions (K, 2) around the box [0, p_max]^2, counter-clockwise in p from
-    the origin: P_2 = 0, P_1 = p_max, P_2 = p_max, P_1 = 0 (``nodes_per_edge``
-    nodes per edge, the corners once)."""
-    t = np.arange(nodes_per_edge) / nodes_per_edge * p_max
-    zero, top = np.zeros_like(t), np.full_like(t, p_max)
-    return np.concatenate([np.column_stack((t, zero)), np.column_stack((top, t)),
-                           np.column_stack((p_max - t, top)), np.column_stack((zero, p_max - t))])
-
-
-@dataclass
-class BoxArea:
-    """The area objective of one design (module docstring), mm and mm^2."""
-
-    area_mm2: float
-    gradient: np.ndarray        # dA/dq [mm^2/mm], 2 per varied tendon
-    loop_mm: np.ndarray         # tips at the loop's nodes (K, 2)
-    tensions: np.ndarray        # the nodes in tension space (K, 2), p = P l^2/B
-    det_sign_changes: int       # sign changes of det(d x_t/d p) along the loop
-    node_converged: np.ndarray  # (K,) the node's equilibrium solved
-    node_clear: np.ndarray      # (K, n) cable i clear of the arm at the node (core/clearance.py)
-
-    @property
-    def converged(self) -> bool:
-        """Every node solved along the loop."""
-        return bool(self.node_converged.all())
-
-    @property
-    def cables_clear(self) -> bool:
-        """No cable crosses the arm at any node."""
-        return bool(self.node_clear.all())
-
-    @property
-    def feasible(self) -> bool:
-        return self.converged and self.cables_clear
-
-
-def infeasibility(area: BoxArea, force_scale_N: float) -> dict:
+def infeasibility(area: TracedArea, force_scale_N: float) -> dict:
     """Which constraint a design's loop violates, in N: the tensions of the nodes
     whose equilibrium was not solved, and per crossing tendon (numbered from 1)
     how many nodes, the first and last along the loop, and the smallest
@@ -113,50 +63,6 @@ def infeasibility(area: BoxArea, force_scale_N: float) -> dict:
                               "lowest_max_tension_N": float(P[at].max(axis=1).min().round(4))})
     return {"unsolved_tensions_N": P[~area.node_converged].round(4).tolist(),
             "crossings": crossings}
-
-
-def _node_derivatives(mf: Manifold, u: np.ndarray, p: np.ndarray, tendons) -> np.ndarray:
-    """d x_t/d(p_1, p_2, r_i...) at fixed everything else, (2, 2 + 2 len(tendons)):
-    one factorisation of K, right-hand sides -dF/dp (Eq. (14)) and -dF/dr_i."""
-    w = np.concatenate((u, p))
-    rhs = [mf.load_columns(w)] + [mf.route_derivative(w, i) for i in tendons]
-    du = spla.splu(mf.jacobian(w).tocsc()).solve(-np.hstack(rhs))
-    zeros = np.zeros(mf.n)
-    return np.column_stack([mf.tip_velocity(w, np.concatenate((du[:, c], zeros)))
-                            for c in range(du.shape[1])])
-
-
-def box_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
-             nodes_per_edge: int = 24) -> BoxArea:
-    """A(q) and dA/dq (module docstring) for the routing points of ``tendons``
-    (0-based) of ``arm``, on the box 0 <= p_i <= ``p_max`` (non-dimensional).
-    Two tendons only."""
-    disc = Discretisation.from_arm(arm, elements)
-    if disc.n_tendons != 2:
-        raise ValueError("the area objective needs exactly two tendons")
-    l_mm = arm.length_mm
-    mf = Manifold(disc)
-    tensions = box_loop(p_max, nodes_per_edge)
-    tips, dtip, dets, ok, clear, previous = [], [], [], [], [], None
-    with EquilibriumSolver(disc) as solver:            # the routing points live in disc
-        for p in tensions:
-            eq = solver.solve(p, start=previous)
-            ok.append(bool(eq.converged))
-            clear.append(state_cable_clear(eq))
-            previous = eq
-            d = _node_derivatives(mf, eq.u, eq.p, tendons)
-            tips.append(eq.tip * l_mm)
-            dets.append(np.linalg.det(d[:, :2]))
-            dtip.append(d[:, 2:])                      # mm per mm: x_t/l per r/l
-    loop = np.array(tips)
-    signed = shoelace(loop)
-    sigma = 1.0 if signed >= 0 else -1.0
-    normals = shoelace_normals(loop)
-    grad = sigma * np.einsum("ka,kaj->j", normals, np.array(dtip))
-    signs = np.sign(dets)
-    changes = int(np.sum(signs != np.roll(signs, 1)))
-    return BoxArea(abs(signed), grad, loop, tensions, changes, np.array(ok, bool),
-                   np.array(clear, bool).reshape(len(tensions), -1))
 
 
 # --- independent re-sampling -------------------------------------------------------------------
@@ -197,7 +103,8 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
     s^2 estimate, a third of it, was too small on coarse grids) plus
     perimeter x lattice spacing (a bound on the counting's).  Measured on the
     paper's arm (60 elements, P_max = 10 N): A = 60917, 58914 mm^2 at 16, 32
-    cells against 58472 mm^2 for the loop's shoelace at 48 nodes per edge."""
+    cells against 58472 mm^2 for the box loop's shoelace at 48 nodes per edge
+    (the objective before issue 21)."""
     from mpi4py import MPI
 
     from .workspace import Status, run_map
@@ -230,16 +137,16 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
 # --- the optimiser -----------------------------------------------------------------------------
 INFEASIBLE_START = "INFEASIBLE_START"   # AreaDesign.reason: the start violates a constraint
 STALL_GAIN = 1e-3        # relative area gain over 3 iterations below which TAO is stopped
-@dataclass
-class AreaDesign:
+@dataclass(frozen=True, repr=False)
+class AreaDesign(Result):
     """Outcome of ``design --objective area`` (mm, mm^2, N)."""
 
     arm_before: Arm
     arm_after: Arm
     tendons: list
     p_max: float                    # the box's bound, non-dimensional
-    before: BoxArea
-    after: BoxArea
+    before: TracedArea
+    after: TracedArea
     resampled_before: Resampled | None
     resampled_after: Resampled | None
     history: list
@@ -256,12 +163,18 @@ class AreaDesign:
             return None
         return b.area_mm2 - b.error_mm2 > a.area_mm2 + a.error_mm2
 
+    def summary(self) -> dict:
+        """What ``design --objective area --json`` prints (areas before/after, routes)."""
+        from ..io.summaries import area_summary
+
+        return area_summary(self)
+
 
 def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm: float):
     """Attachment arc lengths on mesh nodes: a pattern search (move one
     attachment by one node, keep the move if the design is feasible and the
     area grows, until no move helps), within +- ``reach_mm`` of the start and
-    on (0, l].  ``evaluate(arm) -> BoxArea``.  Returns (arm, its BoxArea)."""
+    on (0, l].  ``evaluate(arm) -> TracedArea``.  Returns (arm, its TracedArea)."""
     from .design import with_attachment
 
     h = arm.length_mm / elements
@@ -284,7 +197,7 @@ def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm:
 
 def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
                     attaches=(), reach_mm: float = 100.0, clearance_mm: float = 10.0,
-                    nodes_per_edge: int = 24, max_iterations: int = 15, scale_mm: float = 10.0,
+                    max_iterations: int = 15, scale_mm: float = 10.0,
                     resample_cells: int | None = 32, options_prefix: str = "design_",
                     progress=None) -> AreaDesign:
     """Routing points (mm) of ``tendons`` (0-based) maximising the area A of the
@@ -312,8 +225,7 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
         key = tuple((t.attach_mm, *t.route_mm) for t in candidate.tendons)
         if key in seen:                          # TAO's first call is the start, evaluated
             return seen[key]
-        a = seen[key] = box_area(candidate, tendons, p_max, elements=elements,
-                                 nodes_per_edge=nodes_per_edge)
+        a = seen[key] = traced_area(candidate, tendons, p_max, elements=elements)
         if not first:
             first.append(a)
         history.append({"attach_mm": [t.attach_mm for t in candidate.tendons],
@@ -382,4 +294,5 @@ def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm,
 
     return minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
                             max_iterations=max_iterations, options_prefix=options_prefix,
-                            line_search="armijo", done=stalled)
+                            line_search="armijo",
+                            done=stalled)

@@ -7,11 +7,10 @@ fall on a mesh node, as every attachment does: see
 included).  The grid is their Cartesian product.  Every design gets:
 
 * the area objective of :mod:`elastica_petsc.studies.design_area`: the area
-  A of the workspace W_0 ∩ {0 <= P_i <= P_max} (shoelace area of the image of
-  the tension box's boundary, mm^2), whether every node of the loop was
-  solved and left every cable clear of the arm (core/clearance.py), and the
-  sign changes of det(d x_t/d p) along the loop (a fold: A is then not the
-  image's area);
+  A of the workspace W_0 ∩ {0 <= P_i <= P_max} (mm^2, on its traced boundary:
+  studies/traced_area.py, as ``boundary`` measures it), whether the walk
+  around it closed and left every cable clear of the arm (core/clearance.py),
+  and the sign changes of det(d x_t/d p) along the loop;
 * with a path (``path:CSV``): the misfit f = sum_k min_p |x_t - x_k|^2/2 and
   the number of targets reached (:func:`~elastica_petsc.studies.design.path_misfit`).
 
@@ -24,18 +23,19 @@ equals its interrupted-and-resumed twin and does not depend on the ranks.
 from __future__ import annotations
 
 import itertools
-import json
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..core import jsontext
+from ..core.results import Result
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm
 from .design import DesignError, path_misfit
-from .design_area import box_area
 from .chunks import ChunkResults, Grid, Stop, agree, check_out, empty_fields, run
+from .traced_area import traced_area
 
 KINDS = ("route.x", "route.y", "attach", "offset")   # offset: the cable's guides and end
                                                     # at one offset (docs/model.md §11)
@@ -160,7 +160,7 @@ class SweepSampler:
             t0 = time.perf_counter()
             arm = design_arm(self.arm, self.axes, values)
             try:
-                a = box_area(arm, range(0), self.p_max, elements=self.elements)
+                a = traced_area(arm, (), self.p_max, elements=self.elements)
                 out["area"][k], out["area_converged"][k] = a.area_mm2, a.converged
                 out["cables_clear"][k], out["det_sign_changes"][k] = a.cables_clear, \
                     a.det_sign_changes
@@ -176,8 +176,8 @@ class SweepSampler:
         pass
 
 
-@dataclass
-class Sweep:
+@dataclass(frozen=True, repr=False)
+class Sweep(Result):
     """A finished (or interrupted) sweep: designs (D, k) in mm and per-design fields."""
 
     names: list
@@ -199,19 +199,25 @@ class Sweep:
         return None if not ok.any() else int(np.flatnonzero(ok)[np.argmax(
             self.values["area"][ok])])
 
+    def summary(self) -> dict:
+        """What ``design --sweep --json`` prints (counts, the best design)."""
+        from ..io.summaries import sweep_summary
+
+        return sweep_summary(self)
+
 
 def run_sweep(arm: Arm, elements: int, axes, p_max: float, *, targets_mm=None, comm=None,
               out=None, resume: bool = False, overwrite: bool = False, progress=None,
               checkpoint_seconds: float | None = None, provenance: dict | None = None) -> Sweep:
     """Evaluate every design of ``axes`` (list of :class:`Axis`) over the ranks of
-    ``comm`` (default COMM_WORLD): the area objective on the tension box
+    ``comm`` (default COMM_SELF: this process alone): the area objective on the tension box
     0 <= p_i <= ``p_max`` (p = P l^2/B) and, with ``targets_mm``, the path
     misfit.  ``out`` (.h5), ``resume``, ``overwrite``, ``progress`` and
     ``checkpoint_seconds`` as in :func:`~elastica_petsc.studies.workspace.run_map`.
     Collective; returns the :class:`Sweep` on every rank."""
     from mpi4py import MPI
 
-    comm = MPI.COMM_WORLD if comm is None else comm
+    comm = MPI.COMM_SELF if comm is None else comm
     lock = path = grid = None
     with Stop() as stop:
         try:
@@ -257,6 +263,7 @@ def _attrs(arm, elements, grid, p_max, targets_mm, extra) -> dict:
         path=None if targets_mm is None else np.asarray(targets_mm, float).tolist())
     attrs.update(mode=grid.mode, sampler="design-sweep", elements=elements,
                  n_tendons=len(arm.tendons),
-                 config_json=json.dumps(arm_to_dict(arm)), grid_json=json.dumps(meta))
+                 config_json=jsontext.dumps(arm_to_dict(arm)),
+                 grid_json=jsontext.dumps(meta))
     attrs.update(extra or {})
     return attrs

@@ -19,6 +19,7 @@ import itertools
 
 import numpy as np
 
+from ..core.results import Result
 from ..core.deflation import Deflation
 from ..core.errors import InputError
 from ..solvers.equilibrium import (Equilibrium, EquilibriumSolver, check_order, check_tensions,
@@ -59,15 +60,19 @@ DEFAULT_STEPS = 12
 DEFAULT_DEFLATION_ROUNDS = 2
 
 
-def effort_settings(effort: int = 1, levels=None) -> dict:
+MAX_EFFORT = 16
+
+
+def effort_settings(effort: int = 1, levels=None, name: str = "the search effort") -> dict:
     """Search settings that spend ``effort`` (>= 1) times the default work:
     ``steps`` (deflated continuation points per path segment) and
     ``deflation_rounds`` scale with it, and the tension levels of the starts
     (``levels``, default :data:`DEFAULT_LEVELS`) gain effort - 1 doublings
     of the largest."""
     effort = int(effort)
-    if effort < 1:
-        raise InputError(f"the search effort must be an integer >= 1, got {effort}")
+    if not 1 <= effort <= MAX_EFFORT:
+        raise InputError(f"{name} must be an integer >= 1 and <= {MAX_EFFORT} (each "
+                         f"doubles the top tension level once more), got {effort}")
     levels = sorted(float(v) for v in (DEFAULT_LEVELS if levels is None else levels))
     levels += [levels[-1] * 2.0 ** k for k in range(1, effort)]
     return {"steps": DEFAULT_STEPS * effort, "levels": tuple(levels),
@@ -107,8 +112,8 @@ def state_numbers(states) -> list[int]:
     return numbers
 
 
-@dataclass(frozen=True)
-class SearchResult:
+@dataclass(frozen=True, repr=False)
+class SearchResult(Result):
     """Distinct equilibria found from a set of starts.  Not a proof that no
     other equilibrium exists: only what these starts and methods reached."""
 
@@ -167,7 +172,18 @@ class SearchResult:
                 + ("" if not c["outside_the_box"] else
                    f", {c['outside_the_box']} found beyond it not listed"))
 
-    def summary(self) -> str:
+    def summary(self) -> dict:
+        """The search's coverage (what ``lengths --all``/``equilibria --json`` print as
+        ``search``) and the states found (``states``: p, L/l, tip in units of l)."""
+        from ..io.summaries import search_summary
+
+        return dict(search_summary(self), states=[
+            {"number": f.number, "p": f.state.p.tolist(),
+             "cable_lengths": f.state.cable_lengths.tolist(), "tip": f.state.tip.tolist(),
+             "unstable_modes": int(f.state.unstable_modes)} for f in self.states])
+
+    def report(self) -> str:
+        """The search in a few lines of text (a list, not a proof)."""
         what = "cable lengths L/l" if self.control == "length" else "tensions p"
         lines = [f"{len(self.states)} distinct equilibria at {what} = "
                  + ", ".join(f"{v:.6g}" for v in self.target)

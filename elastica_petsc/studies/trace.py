@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.results import Result
 from ..solvers.control import ControlResult, Evaluation, TipController
 from ..core.errors import InputError
 
@@ -129,9 +130,12 @@ def densify(points, step_mm: float) -> np.ndarray:
     return np.vstack(out)
 
 
-def read_csv(path) -> np.ndarray:
-    """Points ``x_mm,y_mm`` from a CSV file (one per line, optional header line,
-    blank lines and ``#`` comments ignored), shape (k, 2)."""
+def read_csv(path, max_rows: int | None = None) -> np.ndarray:
+    """Points from a CSV file, shape (k, 2): columns read by the header's names
+    ``x_mm`` and ``y_mm`` (in either order; any other or a missing name is
+    refused), or, without a header line, ``x_mm,y_mm`` by position.  Blank
+    lines and ``#`` comments are ignored.  ``max_rows``: stop after that many
+    points (a caller with a limit need not parse a huge file to refuse it)."""
     path = Path(path)
     try:
         text = path.read_text()
@@ -139,33 +143,51 @@ def read_csv(path) -> np.ndarray:
         raise PathError(f"{path}: no such path file") from None
     except (OSError, UnicodeDecodeError) as err:
         raise PathError(f"{path}: cannot read: {err}") from None
-    rows = []
-    first = True
+    rows, columns = [], None
     for lineno, row in enumerate(csv.reader(text.splitlines()), start=1):
         if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
             continue
         cells = [c.strip() for c in row]
+        if columns is None:
+            columns = _csv_columns(path, lineno, cells)
+            if columns is not None:
+                continue                     # the header line
+            columns = (0, 1)
         if len(cells) != 2:
             raise PathError(f"{path}:{lineno}: expected 2 columns x_mm,y_mm, got {len(cells)}")
         try:
-            x, y = float(cells[0]), float(cells[1])
+            x, y = float(cells[columns[0]]), float(cells[columns[1]])
         except ValueError:
-            if first:                      # a header line
-                first = False
-                continue
             raise PathError(f"{path}:{lineno}: not a number: {','.join(cells)!r}") from None
-        first = False
         if not (math.isfinite(x) and math.isfinite(y)):
             raise PathError(f"{path}:{lineno}: non-finite coordinate {','.join(cells)!r}")
         rows.append((x, y))
+        if max_rows is not None and len(rows) >= max_rows:
+            break
     if not rows:
         raise PathError(f"{path}: no points (expected lines x_mm,y_mm)")
     return np.array(rows)
 
 
+def _csv_columns(path: Path, lineno: int, cells: list[str]) -> tuple[int, int] | None:
+    """The (x, y) column indices named by a header line, or None for a data line."""
+    try:
+        [float(c) for c in cells]
+        return None
+    except ValueError:
+        pass
+    names = [c.lower() for c in cells]
+    unknown = [c for c in cells if c.lower() not in ("x_mm", "y_mm")]
+    if unknown or sorted(names) != ["x_mm", "y_mm"]:
+        raise PathError(f"{path}:{lineno}: header {','.join(cells)!r}: expected the columns "
+                        "x_mm and y_mm (in mm, either order)"
+                        + (f"; unknown: {', '.join(unknown)}" if unknown else ""))
+    return names.index("x_mm"), names.index("y_mm")
+
+
 # --- tracing ------------------------------------------------------------------------
-@dataclass(frozen=True)
-class TraceResult:
+@dataclass(frozen=True, repr=False)
+class TraceResult(Result):
     """Tip control along a path.  mm and newtons (converted with the arm's
     l and B / l^2); per point i = 0..k-1, per tendon j."""
 
@@ -227,6 +249,12 @@ class TraceResult:
         if len(dL) == 0:
             return float("nan")
         return float(np.mean(np.sum(dL * dP, axis=1) < 0))
+
+    def summary(self) -> dict:
+        """What ``trace --json`` prints about the path (without the motor schedule)."""
+        from ..io.summaries import trace_summary
+
+        return trace_summary(self)
 
 
 def monotonic_fraction(lengths, tensions, tol_L: float = 1e-9, tol_P: float = 1e-12):

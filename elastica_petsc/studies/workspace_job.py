@@ -16,6 +16,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+from ..core import jsontext
 from ..core.errors import InputError
 
 
@@ -33,7 +34,7 @@ def spawn(arm, elements: int, ranks: int, **kwargs) -> int:
         env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
     with tempfile.TemporaryDirectory() as tmp:
         spec = Path(tmp) / "spec.json"
-        spec.write_text(json.dumps({"arm": arm_to_dict(arm), "elements": elements,
+        spec.write_text(jsontext.dumps({"arm": arm_to_dict(arm), "elements": elements,
                                     "kwargs": kwargs}))
         # our stdout (the job writes nothing else there): on a terminal, rank 0 draws its bar
         return subprocess.run([mpiexec, "-n", str(ranks), sys.executable, "-m", __name__,
@@ -45,14 +46,16 @@ def main(argv: list[str]) -> int:
     petsc4py.init(argv[:1])
     from ..core.model import arm_from_dict
     from ..core.fem import Discretisation
+    from mpi4py import MPI
+
     from .workspace import run_map
 
     spec = json.loads(Path(argv[1]).read_text())
-    spec["kwargs"].setdefault("progress", False)      # None: progress lines on stderr
+    spec["kwargs"].setdefault("progress", False)      # True: a bar, or lines on stderr
     arm = arm_from_dict(spec["arm"])
     try:
         result = run_map(arm, Discretisation.from_arm(arm, spec["elements"]),
-                         **spec["kwargs"])
+                         comm=MPI.COMM_WORLD, **spec["kwargs"])
     except InputError as err:
         print(f"elastica-petsc: error: {err}", file=sys.stderr)
         return 2

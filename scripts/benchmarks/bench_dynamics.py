@@ -5,7 +5,7 @@ P = (0, 0.05) N (the free vibration of the issue's first command), on one core, 
 the median wall time per step over repeated runs, per element and relative to N = 180,
 and the real-time factor at 180 elements.
 
-    python scripts/bench_dynamics.py [--repeats 3] [--steps 40]
+    python scripts/benchmarks/bench_dynamics.py [--repeats 3] [--steps 40]
 """
 from __future__ import annotations
 

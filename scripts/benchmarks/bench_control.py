@@ -12,7 +12,7 @@
 3. Where the time goes on the path: equilibrium solves (SNES with load
    stepping), sensitivities (assembly + LU), the rest (TAO, Python).
 
-Usage: python scripts/bench_control.py [--repeat 5] [--step 1.0] [--center 400,200]
+Usage: python scripts/benchmarks/bench_control.py [--repeat 5] [--step 1.0] [--center 400,200]
        [--elements 180] [--method blmvm|brgn|gd] [--no-gd] [PETSc options, e.g. -ctl_tao_monitor]
 """
 from __future__ import annotations
