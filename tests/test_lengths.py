@@ -20,7 +20,7 @@ from scipy.special import ellipe, ellipk
 from elastica_petsc.studies.buckling import aligned_family, critical_configuration, segment_geometry
 from elastica_petsc.core.model import load_config
 from elastica_petsc.core.deflation import Deflation
-from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver, newton_converged
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.lengths import (AugmentedSystem, LengthInertia, LengthSolver,
@@ -447,10 +447,9 @@ def test_fold_relation_between_load_and_length_stability(eqs, ls, fig7):
         for j in range(2):
             e = np.zeros(2)
             e[j] = 1e-5
-            ua, _, _ = eqs.newton(st.u, st.p + e)
-            assert eqs.converged()
-            ub, _, _ = eqs.newton(st.u, st.p - e)
-            assert eqs.converged()
+            ua, _, reason_a = eqs.newton(st.u, st.p + e)
+            ub, _, reason_b = eqs.newton(st.u, st.p - e)
+            assert newton_converged(reason_a) and newton_converged(reason_b)
             S[:, j] = (ls.lengths_of(ua) - ls.lengths_of(ub)) / 2e-5
         pos = int(np.sum(np.linalg.eigvalsh(0.5 * (S + S.T)) > 0))
         assert st.length_unstable_modes == st.unstable_modes - pos

@@ -61,7 +61,8 @@ from petsc4py import PETSc
 from ..core.drive import LengthDrive, TensionDrive
 from ..core.dynamics import BandedInverse, Inertia, elastic_band
 from ..core.fem import Discretisation
-from .options import set_from_options
+from .options import SolverOptions, check_comm
+from .reasons import TS_REASONS, reason_name
 
 FORCE, TAUT, SLACK = 0, 1, 2
 MODE_NAMES = {FORCE: "force", TAUT: "taut", SLACK: "slack"}
@@ -115,17 +116,22 @@ class DynamicsSolver:
     ``adaptive``: TSAdapt ``basic`` with tolerances ``rtol``/``atol`` on the
     angles (rad) and angular velocities, first step ``dt0``; otherwise fixed
     steps ``dt0`` (tau).  ``radius``: rho_inf of the alpha method;
-    ``max_steps``: cap on accepted steps.
+    ``max_steps``: cap on accepted steps.  ``comm``, ``options_prefix``
+    (``sim_``), ``petsc_options``: the contract of :mod:`.options`.
     """
 
     def __init__(self, disc: Discretisation, inertia: Inertia, *, rtol: float = 1e-6,
                  atol: float = 1e-8, radius: float = 1.0, dt0: float = 1e-3,
-                 adaptive: bool = True, contact_tol: float = 1e-6, prefix: str = "sim_",
-                 max_steps: int = 10**7):
+                 adaptive: bool = True, contact_tol: float = 1e-6, max_steps: int = 10**7,
+                 comm=None, options_prefix: str = "sim_", petsc_options=None):
+        self.options = SolverOptions(options_prefix, petsc_options, {
+            "ts_alpha_radius": radius, "ts_adapt_type": "basic" if adaptive else "none",
+            "snes_linesearch_type": "basic"})
+        self.comm = check_comm(comm)
         self.adaptive = adaptive
         self.disc, self.inertia = disc, inertia
         self.rtol, self.atol, self.radius, self.dt0 = rtol, atol, radius, dt0
-        self.prefix, self.max_steps = prefix, max_steps
+        self.prefix, self.max_steps = self.options.prefix, max_steps
         self.N, self.n = disc.n_elements, disc.n_tendons
         self.L_band = elastic_band(disc)
         self.attach = list(disc.attach_nodes)
@@ -260,7 +266,7 @@ class DynamicsSolver:
 
     # --- the TS ----------------------------------------------------------------------
     def _make_ts(self, t0, t_end, U0, V0, record, dt0):
-        comm = PETSc.COMM_SELF
+        comm = self.comm
         size = self.N + self.n
         ts = PETSc.TS().create(comm)
         ts.setOptionsPrefix(self.prefix)
@@ -320,10 +326,8 @@ class DynamicsSolver:
                 self._fired = [int(i) for i in events_fired]
 
             ts.setEventHandler([-1] * self.n, [True] * self.n, events, post)
-        set_from_options(ts, self.prefix, {
-            "ts_alpha_radius": self.radius,
-            "ts_adapt_type": "basic" if self.adaptive else "none",
-            "snes_linesearch_type": "basic"})
+        self.options.label(F, J, U, V)
+        self.options.apply(ts)
         return ts, (U, V, F, J, atol, rtol)
 
     def run(self, theta0, omega0, p0, drive, modes, t_end: float, *,
@@ -430,5 +434,4 @@ class DynamicsSolver:
 
 
 def _reason(code: int) -> str:
-    names = {v: k for k, v in vars(PETSc.TS.ConvergedReason).items() if not k.startswith("_")}
-    return names.get(code, str(code))
+    return reason_name(TS_REASONS, code)

@@ -198,7 +198,7 @@ def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm:
 def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
                     attaches=(), reach_mm: float = 100.0, clearance_mm: float = 10.0,
                     max_iterations: int = 15, scale_mm: float = 10.0,
-                    resample_cells: int | None = 32, prefix: str = "design_",
+                    resample_cells: int | None = 32, options_prefix: str = "design_",
                     progress=None) -> AreaDesign:
     """Routing points (mm) of ``tendons`` (0-based) maximising the area A of the
     workspace within 0 <= p_i <= ``p_max`` (= P_max l^2/B; module docstring),
@@ -251,7 +251,7 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
         reason, iterations = _optimise_routes(designed, tendons, evaluate, history,
                                               reach_mm=reach_mm, clearance_mm=clearance_mm,
                                               scale_mm=scale_mm, max_iterations=max_iterations,
-                                              prefix=prefix)
+                                              options_prefix=options_prefix)
     after_arm = best.get("arm", arm)
     checks = [None, None]
     if resample_cells:
@@ -264,11 +264,12 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
 
 
 def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm, scale_mm,
-                     max_iterations, prefix):
+                     max_iterations, options_prefix):
     """TAO BLMVM on the routing points of ``tendons`` (f = -A/A_0); an
     infeasible design (a node unreachable, or a cable across the arm) returns
     f = 1, so that the (Armijo) line search backs off."""
-    from .design import minimise_bounded, route_bounds, with_routes
+    from ..solvers.minimise import minimise_bounded
+    from .design import route_bounds, with_routes
 
     q0 = np.concatenate([arm.tendons[i].route_mm for i in tendons]).astype(float)
     lo, hi = route_bounds(arm, tendons, reach_mm, clearance_mm)
@@ -292,5 +293,6 @@ def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm,
         return len(b) > 3 and b[-1] - b[-4] < STALL_GAIN * b[-1]
 
     return minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
-                            max_iterations=max_iterations, prefix=prefix, line_search="armijo",
+                            max_iterations=max_iterations, options_prefix=options_prefix,
+                            line_search="armijo",
                             done=stalled)

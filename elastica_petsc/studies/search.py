@@ -609,7 +609,7 @@ class LoadSolves:
                  length_mm: float | None = None):
         self.eq_solver, self.disc, self.length_mm = eq_solver, eq_solver.disc, length_mm
         self.system = AugmentedSystem(self.disc, "load", prefix, Deflation(self.disc.h),
-                                      options=DEFLATION_OPTIONS)
+                                      petsc_options=DEFLATION_OPTIONS)
         self.length_inertia = LengthInertia(self.disc)
 
     def examined(self, eq: Equilibrium | None, label: str = ""):
