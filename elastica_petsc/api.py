@@ -7,12 +7,28 @@ values of the solvers (lengths / l, p = P l^2 / B, docs/model.md §3) sit
 beside them (``tensions``, ``equilibrium``).  Solver objects stay available
 for loops (``with TipController(arm) as c: c.solve_mm(...)``).
 
-PETSc is initialised on first use with no options; to pass PETSc options
-from a script call ``petsc4py.init(sys.argv)`` before importing this package
-(the command line does exactly that).
+Every study takes ``petsc_options=`` (a mapping such as
+``{"snes_rtol": 1e-10}`` or ``{"eq_snes_monitor": None}``, names with or
+without their leading dash): they are put in PETSc's options database for
+that call only, so they apply to the solvers it creates whether or not an
+earlier call has solved; names that no solver of the call read raise
+:class:`~elastica_petsc.core.errors.InputError` (a misspelt or misplaced
+option never passes silently).  PETSc itself is initialised on first use
+(``petsc4py.init(sys.argv)`` before the first call also works, as the
+command line does).
+
+The library prints nothing unless asked: the long studies take
+``progress=`` (False by default; True draws the command line's bar on
+stderr, a callable is called as ``progress(done, note)``).  Single-arm
+studies run on ``PETSc.COMM_SELF``; the sampled studies (:func:`workspace`,
+:func:`design_sweep`) take ``comm=`` and run on this process alone unless a
+communicator is given (``comm=MPI.COMM_WORLD``: collective over its ranks).
 """
 from __future__ import annotations
 
+import functools
+import inspect
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -20,14 +36,15 @@ from pathlib import Path
 import numpy as np
 
 from .core import inputs
+from .core.results import Result
 from .core.errors import InputError
 from .core.fem import Discretisation
 from .core.model import Arm
 from .solvers.equilibrium import Equilibrium, EquilibriumSolver, check_order
 
 
-@dataclass(frozen=True)
-class State:
+@dataclass(frozen=True, repr=False)
+class State(Result):
     """A load-controlled equilibrium (Eq. (9)) of ``arm`` in user units.
 
     ``equilibrium`` is the solver's non-dimensional state; ``loading`` says how
@@ -93,6 +110,13 @@ class State:
         """max_s l |theta'| (Fig. 5a), non-dimensional."""
         return float(self.equilibrium.kappa_max)
 
+    def to_vtk(self, directory) -> list[Path]:
+        """The state as ParaView files in ``directory`` (created if missing), as
+        ``solve --vtk`` writes them (``solve.vtu``: arm and cables, mm, N)."""
+        from .io.vtk import write_states
+
+        return write_states(directory, self.arm, [self.equilibrium], name="solve")
+
     def summary(self) -> dict:
         """The JSON object that ``elastica-petsc solve --json`` prints."""
         from .io.summary import equilibrium_summary
@@ -105,6 +129,54 @@ def _arm(arm) -> Arm:
         raise InputError(f"arm must be an ep.Arm (Arm.paper() or Arm.from_toml(path)), got "
                          f"{type(arm).__name__}")
     return arm
+
+
+@contextmanager
+def _petsc_options_in_force(petsc_options):
+    """``petsc_options`` ({name: value}; None values for flags) in PETSc's
+    options database for the ``with`` block only (earlier values restored);
+    InputError for names nothing read during the block."""
+    if not petsc_options:
+        yield
+        return
+    if not hasattr(petsc_options, "items"):
+        raise InputError("petsc_options must be a mapping {name: value}, "
+                         "e.g. {'eq_snes_rtol': 1e-10}")
+    from petsc4py import PETSc
+
+    from .solvers.options import unused_options
+
+    opts = PETSc.Options()
+    names = [str(name).lstrip("-") for name in petsc_options]
+    before = {name: opts.getString(name) for name in names if opts.hasName(name)}
+    for name, value in zip(names, petsc_options.values()):
+        opts.setValue(name, "" if value is None else
+                      str(value).lower() if isinstance(value, bool) else str(value))
+    try:
+        yield
+        unused = unused_options(names)
+    finally:
+        for name in names:
+            opts.delValue(name)
+            if name in before:
+                opts.setValue(name, before[name])
+    if unused:
+        raise InputError(f"PETSc options not used by any solver of this call: "
+                         f"{' '.join(unused)} (check the name and its prefix)")
+
+
+def _takes_petsc_options(study):
+    """Give ``study`` the keyword ``petsc_options=`` (see the module docstring)."""
+    @functools.wraps(study)
+    def with_options(*args, petsc_options=None, **kwargs):
+        with _petsc_options_in_force(petsc_options):
+            return study(*args, **kwargs)
+
+    signature = inspect.signature(study)
+    option = inspect.Parameter("petsc_options", inspect.Parameter.KEYWORD_ONLY, default=None)
+    with_options.__signature__ = signature.replace(
+        parameters=[*signature.parameters.values(), option])
+    return with_options
 
 
 def _mesh(arm: Arm, elements: int | None) -> Discretisation:
@@ -139,12 +211,12 @@ def _floor_N(min_tension_N) -> float:
 
 def _progress(progress, label: str, unit: str, delay: float = 0.0):
     """``progress=`` of the long studies as a context: True draws the command
-    line's bar (lines in logs; core/progress.py; on a terminal only after
+    line's bar (lines in logs; ui/progress.py; on a terminal only after
     ``delay`` seconds), a callable is called as ``progress(done, note)``,
     None/False report nothing."""
     from contextlib import nullcontext
 
-    from .core.progress import Progress
+    from .ui.progress import Progress
 
     if progress is True:
         return Progress(None, label, unit=unit, delay=delay)
@@ -155,6 +227,7 @@ def _loading(order) -> str:
     return "proportional" if order is None else "order " + ",".join(map(str, order))
 
 
+@_takes_petsc_options
 def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None, side: str | None = None,
           elements: int | None = None) -> State:
     """The equilibrium reached by loading the straight arm to the given tensions
@@ -178,6 +251,7 @@ def solve(arm: Arm, tensions_N=None, *, tensions=None, order=None, side: str | N
     return State(arm, eq, _loading(order))
 
 
+@_takes_petsc_options
 def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blmvm",
             tol_mm: float = 1e-5, global_search: bool = True, cables: str = "prefer",
             share: str | None = None, min_tension_N: float = 0.0, animate=None,
@@ -251,6 +325,7 @@ def _points(points_mm, arm: Arm | None = None, name: str = "points_mm") -> np.nd
     return inputs.points_mm(points_mm, name, arm)
 
 
+@_takes_petsc_options
 def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | None = None,
           min_tension_N: float = 0.0, elements: int | None = None):
     """Tip control along a path, each target warm-started from the previous
@@ -274,6 +349,7 @@ def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | Non
         return paths.trace(ctl, points, sharer=sharer)
 
 
+@_takes_petsc_options
 def schedule(arm: Arm, points_mm, *, step_mm: float = 1.0, speed_mm_s: float | None = None,
              amplitude_mm: float = 1.0, approach: bool = True, guess_N=None, guess=None,
              on_point=None, share: str | None = None, min_tension_N: float = 0.0,
@@ -307,6 +383,7 @@ def schedule(arm: Arm, points_mm, *, step_mm: float = 1.0, speed_mm_s: float | N
                               sharer=_sharer(arm, ctl, share, _floor_N(min_tension_N)))
 
 
+@_takes_petsc_options
 def stability(state: State, *, modes: int = 4):
     """The smallest eigenvalues of K v = lambda M v at ``state`` (SLEPc,
     Sec. 4.3 (ii)); ``lambda l^2/B`` is pi^2/4 for the unloaded arm.  Returns a
@@ -326,6 +403,7 @@ def _state(state) -> State:
     return state
 
 
+@_takes_petsc_options
 def frequencies(state: State, *, control: str = "load", modes: int = 3):
     """The lowest natural frequencies about ``state`` (small vibrations,
     K v = Omega M v with the arm's mass per length), with tensions held
@@ -345,33 +423,45 @@ def frequencies(state: State, *, control: str = "load", modes: int = 3):
         return solver.frequencies(eq.u, eq.p, state.arm, nev=modes, control=control)
 
 
-def lengths(arm: Arm, lengths_mm, *, all: bool = False, elements: int | None = None,
-            progress=None):
+@_takes_petsc_options
+def lengths(arm: Arm, lengths_mm, *, elements: int | None = None):
     """Length control (Sec. 4.6, Eq. (23)): the equilibrium, with its tensions,
-    that prescribed cable lengths (mm) impose (slack cables carry no tension).
-    With ``all=True``, the search for every equilibrium with 0 <= P_i <= P_crit
-    (Eq. (22)) of :func:`~elastica_petsc.studies.search.search_lengths` (curve
-    search and multi-start; a ``SearchResult``: the list found, not a proof
-    that there are no more); ``progress`` (True: a bar, or a callable
-    ``progress(steps, note)``) reports its search steps (curves, continuation
-    points and attempts from starts)."""
-    from .studies.search import follow_lengths, search_lengths
+    that prescribed cable lengths (mm) impose (slack cables carry no tension),
+    reached from the straight arm by length continuation; a
+    ``LengthEquilibrium``.  Every equilibrium at these lengths:
+    :func:`length_equilibria`."""
+    from .studies.search import follow_lengths
 
     disc = _mesh(arm, elements)
     lengths_mm = inputs.cable_lengths_mm(arm, lengths_mm, "lengths_mm")
-    if not all:
-        return follow_lengths(arm, lengths_mm, elements=disc.n_elements)
+    return follow_lengths(arm, lengths_mm, elements=disc.n_elements)
+
+
+@_takes_petsc_options
+def length_equilibria(arm: Arm, lengths_mm, *, elements: int | None = None, progress=None):
+    """Equilibria with 0 <= P_i <= P_crit (Eq. (22)) that prescribed cable
+    lengths (mm) admit, by the search of
+    :func:`~elastica_petsc.studies.search.search_lengths` (curve search and
+    multi-start; a ``SearchResult``: the list found, not a proof that there
+    are no more); ``progress`` (True: a bar, or a callable
+    ``progress(steps, note)``) reports its search steps (curves, continuation
+    points and attempts from starts)."""
+    from .studies.search import search_lengths
+
+    lengths_mm = inputs.cable_lengths_mm(arm, lengths_mm, "lengths_mm")
     with _progress(progress, "lengths search", "search steps") as bar:
-        return search_lengths(arm, lengths_mm, elements=disc.n_elements, progress=bar)
+        return search_lengths(arm, lengths_mm, elements=_mesh(arm, elements).n_elements,
+                              progress=bar)
 
 
+@_takes_petsc_options
 def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None = None,
                progress=None):
     """Equilibria that share the given tensions (N, or non-dimensional
     ``tensions`` p = P l^2/B; load control, Eq. (9), Fig. 8), by the search of
     :func:`~elastica_petsc.studies.search.search_tensions` (loading paths,
     curve search, multi-start); a ``SearchResult``: a list, not a proof that
-    there are no more.  ``progress``: as for :func:`lengths`."""
+    there are no more.  ``progress``: as for :func:`length_equilibria`."""
     from .studies.search import search_tensions
 
     p = _tensions(arm, tensions_N, tensions)
@@ -383,15 +473,17 @@ def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None
 MIN_SPACING_MM = 1e-100        # finer: the grid count overflows before its limit is checked
 
 
+@_takes_petsc_options
 def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",
               out: str | Path | None = None, overwrite: bool = False, comm=None,
               elements: int | None = None, global_search: bool = True,
-              share: str | None = None, min_tension_N: float = 0.0):
+              share: str | None = None, min_tension_N: float = 0.0, progress: bool = False):
     """Sample the workspace W_0 and its restrictions (Eqs. (18)-(22), Figs. 4-5)
     on a grid of targets (``mode="targets"``: tip control to each) or of
-    tensions (``"tensions"``).  Runs serially, or on every rank of ``comm``
-    (default ``MPI.COMM_WORLD``) when launched with ``mpiexec``; writes HDF5
-    only when ``out`` is given.  Returns a ``WorkspaceMap`` of per-sample
+    tensions (``"tensions"``).  Runs in this process alone (``comm`` None:
+    ``MPI.COMM_SELF``, also on one rank of ``mpiexec``), or collectively on
+    every rank of ``comm`` (e.g. ``MPI.COMM_WORLD``); writes HDF5 only when
+    ``out`` is given.  ``progress=True``: a bar (rank 0; default none).  Returns a ``WorkspaceMap`` of per-sample
     arrays (``status``, masks ``W0``... , ``tip_mm``, ``tensions_N``).
     Targets (mm) that local tip control does not reach go through the global
     search (seeds over every loading order, reached neighbours) and are
@@ -415,9 +507,10 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
         check_output_path(out, overwrite, H5_SUFFIXES, "out")
     return run_map(arm, disc, mode=mode, spacing_mm=spacing_mm, box_mm=box_mm,
                    comm=comm, out=out, overwrite=overwrite, global_search=global_search,
-                   share=share, min_tension_N=_floor_N(min_tension_N))
+                   share=share, min_tension_N=_floor_N(min_tension_N), progress=progress)
 
 
+@_takes_petsc_options
 def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None,
              progress=None):
     """The boundary of the workspace W_0 of a two-tendon arm (and of the
@@ -438,6 +531,7 @@ def boundary(arm: Arm, *, restricted: bool = True, elements: int | None = None,
         return trace_boundary(arm, _mesh(arm, elements), restricted=restricted, progress=bar)
 
 
+@_takes_petsc_options
 def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
            reach_mm: float = 100.0, margin: float = 1.1, elements: int | None = None,
            progress=None):
@@ -471,6 +565,7 @@ def _tension_max(arm: Arm, tension_max_N) -> float:
                                                       at_least=1e-3)])[0])
 
 
+@_takes_petsc_options
 def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
                 tension_max_N: float = 10.0, reach_mm: float = 100.0,
                 iterations: int = 15, resample_cells: int | None = 32,
@@ -498,15 +593,17 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
                            resample_cells=resample_cells)
 
 
+@_takes_petsc_options
 def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
                  out: str | Path | None = None, overwrite: bool = False, resume: bool = False,
-                 comm=None, elements: int | None = None):
+                 comm=None, elements: int | None = None, progress: bool = False):
     """Evaluate a grid of designs: ``axes`` are strings
     ``"tendonK.route.x|route.y|attach|offset=START:STOP:STEP"`` (mm; attachments on
     mesh nodes).  Per design: the area [mm^2] of W_0 within 0 <= P_i <=
     ``tension_max_N`` (as :func:`design_area`) and, with ``path_mm``, the
-    path's misfit [mm^2] and targets reached.  On every rank of ``comm``
-    (default ``MPI.COMM_WORLD``), checkpointed to ``out`` (.h5) and
+    path's misfit [mm^2] and targets reached.  In this process alone (``comm``
+    None), or collectively on every rank of ``comm``; ``progress=True``: a
+    bar (default none); checkpointed to ``out`` (.h5) and
     resumable.  Returns a ``Sweep`` (``designs``, ``values``, ``best()``)."""
     from .studies.design_sweep import parse_axis, run_sweep
 
@@ -517,9 +614,19 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
         inputs.design_points(_points(path_mm, arm, "path_mm"), "path_mm")
     return run_sweep(arm, disc.n_elements, parsed, p_max,
                      targets_mm=None if path_mm is None else _points(path_mm), comm=comm,
-                     out=out, resume=resume, overwrite=overwrite, progress=False)
+                     out=out, resume=resume, overwrite=overwrite, progress=progress)
 
 
+def save(result, path: str | Path, *, overwrite: bool = False) -> Path:
+    """Write any result of this package to ``path`` (.h5, also ``result.save(path)``):
+    the command line's layout where it has one, with units and provenance, and
+    the whole result, so that :func:`read` returns an equal one."""
+    from .io.save import save_result
+
+    return save_result(path, result, overwrite=overwrite)
+
+
+@_takes_petsc_options
 def calibrate(arm: Arm, data, vary, *, bounds=None, input: str | None = None,
               huber_mm: float | None = None, folds: int = 5, candidates=None,
               method: str = "brgn", elements: int | None = None):
@@ -547,12 +654,41 @@ def calibrate(arm: Arm, data, vary, *, bounds=None, input: str | None = None,
 
 
 def read(path: str | Path):
-    """Load a file written by the tool back into its result: a :class:`State`
-    for ``solve``/``control``/``stability`` files (the final state), a
-    ``WorkspaceMap`` for workspace maps, otherwise a dict of its datasets."""
-    from .io.reader import file_kind, read_file
+    """Load a file written by the tool back into its result: the saved type
+    itself for files written by :func:`save` (``result.save(path)``) and by
+    ``control --out`` (a ``ControlResult``), ``trace --out`` (a
+    ``TracedSchedule``) and ``boundary --out`` (a ``BoundaryResult``); a :class:`State` for ``solve``/``stability`` files
+    (the final state), a ``WorkspaceMap`` for workspace maps, otherwise a
+    dict of its datasets."""
+    from .io.reader import file_kind, open_h5, read_file
+    from .io.records import has_result, read_result
 
+    with open_h5(path) as fh:
+        if has_result(fh):
+            return read_result(fh)
     if file_kind(path) == "workspace":
         from .studies.workspace import read_map
         return read_map(path)
     return read_file(path, State)
+
+
+@_takes_petsc_options
+def simulate(arm: Arm, *, tensions_N=None, history_csv=None, schedule_csv=None,
+             initial_tensions_N=None, order=None, from_file=None, duration_s=None,
+             settle_s: float = 0.0, dt_s: float | None = None, adaptive: bool = False,
+             rtol: float = 1e-6, atol: float = 1e-8, radius: float = 1.0,
+             elements: int | None = None):
+    """The arm in motion (PETSc TS, docs/model.md §16) from rest: the straight arm, the
+    equilibrium at ``initial_tensions_N`` (loaded in ``order``) or the last shape in
+    ``from_file``; driven by constant ``tensions_N``, a tension history CSV or a motor
+    schedule CSV (cable lengths, slack cables as events).  Returns a
+    ``SimulationResult`` (``time_s``, ``tip_mm``, ``x_mm``, ``tensions_N``,
+    ``cable_lengths_mm``, ``energy_J``, ``summary()``); needs the arm's mass per length."""
+    from .io.simulation import read_theta
+    from .studies.simulate import simulate as run
+
+    return run(arm, elements=elements, initial_tensions_N=initial_tensions_N,
+               order=order, from_theta=None if from_file is None else read_theta(from_file),
+               tensions_N=tensions_N, history_csv=history_csv, schedule_csv=schedule_csv,
+               settle_s=settle_s, duration_s=duration_s, rtol=rtol, atol=atol, radius=radius,
+               dt_s=dt_s, adaptive=adaptive)

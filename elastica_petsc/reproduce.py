@@ -52,6 +52,7 @@ class Context:
     traces: dict = field(default_factory=dict)     # name -> TraceResult
     seconds: dict = field(default_factory=dict)
     command: str = "elastica-petsc reproduce"
+    checkpoint_seconds: float | None = None        # None: the library's default
 
     @property
     def trace_step_mm(self) -> float:
@@ -85,7 +86,7 @@ def fig8(ctx: Context) -> None:
     from .solvers.lengths import LengthSolver
     from .studies.search import length_equilibria
     from .plots.lengths import plot_states
-    from .core.progress import Progress
+    from .ui.progress import Progress
 
     arm, l_mm = ctx.arm, ctx.arm.length_mm
     disc = Discretisation.from_arm(arm)
@@ -159,7 +160,7 @@ def _trace(ctx: Context, name: str, points, figure: str):
     from .plots.control import plot_trace
     from .core.schedule import schedule_from_trace
 
-    from .core.progress import Progress
+    from .ui.progress import Progress
 
     targets = densify(points, ctx.trace_step_mm)
     with TipController(ctx.arm) as controller, Progress(len(targets), f"trace {name}") as bar:
@@ -222,16 +223,17 @@ def workspace(ctx: Context) -> Path:
     outside mpiexec, a job of that many ranks is spawned: :mod:`.studies.workspace_job`)."""
     from .core.errors import InputError
     from .core.fem import Discretisation
-    from .core.progress import quiet
+    from .ui.progress import quiet
     from .studies.workspace import run_map
 
     out = ctx.out / "fig4_workspace.h5"
     kwargs = dict(spacing_mm=ctx.spacing_mm, out=str(out), overwrite=True,
-                  provenance={"command_line": ctx.command})
+                  provenance={"command_line": ctx.command},
+                  checkpoint_seconds=ctx.checkpoint_seconds)
     if ctx.comm.size == 1 and ctx.jobs > 1:
         from .studies.workspace_job import spawn
         # the job's progress: a bar if our stdout is a terminal, else lines on stderr
-        status = spawn(ctx.arm, ctx.arm.elements, ctx.jobs, progress=False if quiet() else None,
+        status = spawn(ctx.arm, ctx.arm.elements, ctx.jobs, progress=not quiet(),
                        **kwargs)
         if status == 130:
             raise KeyboardInterrupt
@@ -239,7 +241,7 @@ def workspace(ctx: Context) -> Path:
             raise InputError(f"the workspace job on {ctx.jobs} ranks ended with status {status}")
     else:
         result = run_map(ctx.arm, Discretisation.from_arm(ctx.arm), comm=ctx.comm,
-                         **kwargs)                  # a bar on rank 0 (none with --quiet)
+                         progress=True, **kwargs)                  # a bar on rank 0 (none with --quiet)
         if not result.complete:
             raise KeyboardInterrupt
     return out

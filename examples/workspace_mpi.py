@@ -8,7 +8,9 @@ from mpi4py import MPI
 import elastica_petsc as ep
 
 arm = ep.Arm.paper()
-wmap = ep.workspace(arm, spacing_mm=60.0)    # no file is written unless out= is given
+# collective over every rank (the default, comm=None, maps in this process alone);
+# no file is written unless out= is given
+wmap = ep.workspace(arm, spacing_mm=60.0, comm=MPI.COMM_WORLD)
 if MPI.COMM_WORLD.rank == 0:
     print(f"{MPI.COMM_WORLD.size} rank(s): {len(wmap.status)} targets, "
           f"{int(wmap.masks['W0'].sum())} in W_0 (reached with P >= 0)")

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Set up (idempotent) and run the test suite (or the tests given as arguments).
+# Set up (idempotent) and run the test suite (or the tests given as arguments; --fast:
+# the tests not marked slow or mpi, for the edit-test loop, under 90 s on two idle cores).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 venv="$(bash "$here/scripts/setup.sh")"
@@ -11,6 +12,11 @@ cd "$here"
 "$venv/bin/python" -c "import meshio" 2>/dev/null ||
     "$venv/bin/python" -m pip install -q --no-deps meshio==5.3.5 rich==13.9.4
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+if [[ "${1:-}" == "--fast" ]]; then                # the edit-test loop: no slow, no mpi tests
+  shift
+  "$venv/bin/python" -m pytest -q -n auto --dist loadfile -m "not slow and not mpi and not serial" "$@"
+  exec "$venv/bin/python" -m pytest -q -m "serial and not slow and not mpi" "$@"
+fi
 if (($#)); then                                   # the tests asked for, in one process
   exec "$venv/bin/python" -m pytest -q "$@"
 fi

@@ -19,6 +19,7 @@ print(*s.cable_lengths_mm, *c.tensions_N, len(w.status), int(w.masks["W0"].sum()
 """
 
 
+@pytest.mark.slow
 def test_fifteen_line_script_reproduces_fig8_and_fig2(tmp_path):
     """The issue's script: Fig. 8 state 1, Fig. 2 and a map without writing a file."""
     assert len(SCRIPT.splitlines()) <= 15
@@ -88,6 +89,7 @@ def test_read_refuses_what_it_cannot_read(tmp_path):
         ep.read(tmp_path / "missing.h5")
 
 
+@pytest.mark.slow
 def test_readme_python_block_runs(tmp_path):
     """The README's Python section is a script that runs as shown."""
     from pathlib import Path
@@ -145,6 +147,7 @@ def test_boundary_in_one_call():
     assert any(winding_number(poly, tip[None, :])[0] != 0 for poly in b.polygons_mm["W0"])
 
 
+@pytest.mark.slow
 def test_workspace_file_reads_back_as_the_map(tmp_path):
     arm = ep.Arm.paper()
     wmap = ep.workspace(arm, spacing_mm=150, out=tmp_path / "w.h5")

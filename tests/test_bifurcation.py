@@ -24,7 +24,8 @@ from scipy.optimize import brentq, fsolve
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.core.model import Arm, Tendon
 from elastica_petsc.solvers.bifurcation import critical_mode, orthogonality
-from elastica_petsc.solvers.equilibrium import BIFURCATION, Equilibrium, EquilibriumSolver
+from elastica_petsc.solvers.equilibrium import (BIFURCATION, Equilibrium, EquilibriumSolver,
+                                                 newton_converged)
 
 DEAD = (-1e9, 0.0)          # routing point (mm) far behind the clamp: a dead load
 CLAMP = (0.0, 0.0)          # aimed at the clamp
@@ -116,8 +117,8 @@ def imperfect_fold():
     with EquilibriumSolver(disc) as solver:
         natural = solver.solve([25.0])
         assert natural.converged and not natural.bifurcations    # no crossing: imperfect
-        u, _, _ = solver.newton(disc.consistent_state(-natural.theta), [25.0])
-        assert solver.converged()
+        u, _, reason = solver.newton(disc.consistent_state(-natural.theta), [25.0])
+        assert newton_converged(reason)
         state = solver.solve([19.0], start=Equilibrium(disc, np.array([25.0]), u, True, "", 0, 0))
         assert state.converged and state.stable and state.tip[1] < 0
         lo, hi = 18.5, 19.0

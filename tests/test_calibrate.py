@@ -129,7 +129,7 @@ def test_synthetic_noise_within_three_sigma():
 
 
 def test_coverage_small():
-    """A small honest version of the coverage study (scripts/calibration_coverage.py:
+    """A small honest version of the coverage study (scripts/studies/calibration_coverage.py:
     50 draws): over 4 noise draws the 95 % intervals of 7 parameters contain
     the truth in at least 85 % of the 28 cases (binomial: P(< 85 %) ~ 4 %)."""
     model = ParameterModel(ARM, VARY)

@@ -8,6 +8,7 @@ import sys
 
 import h5py
 import numpy as np
+import pytest
 
 from elastica_petsc.core.clearance import cable_clear, crossing_elements, segment_hits
 from elastica_petsc.core.model import load_config
@@ -84,6 +85,7 @@ def test_solve_reports_cable_clear_in_json_text_and_hdf5(tmp_path):
     assert run.returncode == 0 and "tendon 2's cable crosses the arm" in run.stdout
 
 
+@pytest.mark.slow
 def test_tip_control_cable_policies():
     """The tip of state 3 (tendon 2 through the arm): 'prefer' keeps the reached
     state (flagged) when no clear one is found, 'require' reports it as not

@@ -48,6 +48,7 @@ def test_control_unreachable_exit_3_with_message():
     assert "Traceback" not in run.stderr
 
 
+@pytest.mark.slow
 def test_control_then_solve_from_file_lands_on_the_target(tmp_path):
     """The branch travels with the result: control --out, then solve --from the file
     replays the recorded loading (order 2,1 here, not proportional loading)."""
@@ -82,6 +83,7 @@ def test_control_bad_input():
         assert run.returncode == 2 and message in run.stderr and "Traceback" not in run.stderr
 
 
+@pytest.mark.slow
 def test_trace_paper_triangle_schedule_and_hdf5(tmp_path):
     """Fig. 3a on a coarse step: every point reached, warm-started points need < 5
     iterations (Sec. 4.5 (v)), the schedule CSV has the documented columns."""
@@ -127,6 +129,7 @@ def test_trace_paper_triangle_schedule_and_hdf5(tmp_path):
     assert run.returncode == 2 and "--point" in run.stderr
 
 
+@pytest.mark.slow
 def test_trace_csv_path_and_errors(tmp_path):
     points = tmp_path / "points.csv"
     points.write_text("x_mm,y_mm\n450,150\n460,160\n")

@@ -26,6 +26,8 @@ from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.lengths import LengthSolver
 
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 L_MM = 600.0
 P_FIG8 = np.array([25.2, 10.8])
 L_FIG8_MM = np.array([147.1, 472.5])
@@ -197,7 +199,7 @@ def test_fig8_lengths_finds_states_1_and_2(fig8_lengths, fig8_load, disc, ls):
 
     assert data["control"] == "length" and data["lengths_mm"] == [147.1, 472.5]
     states = data["equilibria"]
-    # issue 12: the reference (scripts/equilibria_reference.py) finds six states with
+    # issue 12: the reference (scripts/studies/equilibria_reference.py) finds six states with
     # 0 <= p_i <= P_crit l^2/B = 203.22, four unstable; the curve search finds all six
     assert len(states) == 6
     assert all(min(s["tensions"]) >= 0 for s in states)

@@ -223,7 +223,7 @@ def test_options_and_input_errors(arm):
         with pytest.raises(InputError, match="initial tensions"):
             ctl.solve([0.5, 0.5], p0=[1.0])
     # PETSc options under the ctl_ prefix reach the TAO (here: its line search)
-    with TipController(arm, n_elements=30, options={"tao_ls_type": "armijo"}) as ctl:
+    with TipController(arm, n_elements=30, petsc_options={"tao": {"ls_type": "armijo"}}) as ctl:
         assert ctl.tao.getType() == "blmvm"
         res = ctl.solve_mm(FIG2_TARGET_MM)
         assert res.converged

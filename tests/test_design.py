@@ -51,6 +51,7 @@ def test_parse_vary_and_bounds():
     assert np.allclose(hi, [146.3, -10.0, 126.1, 151.1])
 
 
+@pytest.mark.slow
 def test_design_task_example(tmp_path):
     """The circle of radius 80 mm about (420, 260) mm: 30 of 37 targets on the
     paper's arm, all of them (traced again, 10 mm steps) after the design."""

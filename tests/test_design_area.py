@@ -19,6 +19,8 @@ from elastica_petsc.studies.design_area import resampled_area
 from elastica_petsc.studies.design_sweep import design_arm, parse_axis, run_sweep
 from elastica_petsc.studies.traced_area import traced_area
 
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 ELEMENTS = 30
 P_MAX = 18.0                                  # 10 N on the paper's arm
 
@@ -84,6 +86,7 @@ def _clean_env() -> dict:
             if k in keep or not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="needs mpiexec")
 def test_sweep_on_two_ranks_equals_one(tmp_path):
     common = [sys.executable, "-m", "elastica_petsc.cli", "design", "--sweep",

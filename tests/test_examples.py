@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
@@ -56,6 +58,7 @@ def test_trace_schedule(tmp_path):
     assert int(line.split()[1]) > int(out.split()[0])         # the approach comes first
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="needs mpiexec")
 def test_workspace_mpi(tmp_path):
     out = run("mpiexec", "-n", "2", sys.executable, str(EXAMPLES / "workspace_mpi.py"),

@@ -55,6 +55,8 @@ RUNS = [
     ("design-sweep", ["design", "--sweep", "tendon2.route.y=50:60:10", *E, *Q], {0}),
     ("calibrate", ["calibrate", "--data", "cal.csv", "--vary", "tendon1.route", "--folds", "0",
                    *E, *Q], {0, 1}),
+    ("simulate", ["simulate", "--initial-tensions-N", "0", "0.05", "--tensions-N", "0", "0",
+                  "--duration", "0.2", *E, *Q], {0}),
     # exit status 2: a usage error, bad input, an output that cannot be written
     ("usage-error", ["solve", "--tensions", "x"], {2}),
     ("input-error", ["solve", "--tensions", "1"], {2}),

@@ -1,4 +1,4 @@
-"""The package's layers import one way (issue 10): core < solvers < io < studies < plots
+"""The package's layers import one way (issue 10): core < solvers < io < ui < studies < plots
 < api/reproduce < cli, and the command line builds no PETSc object and touches no file format."""
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import ast
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "elastica_petsc"
-ORDER = ["core", "solvers", "io", "studies", "plots", "api", "reproduce", "cli"]
+ORDER = ["core", "solvers", "io", "ui", "studies", "plots", "api", "reproduce", "cli"]
 FORBIDDEN_IN = {
     "core": {"petsc4py", "slepc4py", "mpi4py", "h5py", "matplotlib"},
     "cli": {"petsc4py", "slepc4py", "h5py", "matplotlib"},

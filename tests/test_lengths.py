@@ -20,7 +20,7 @@ from scipy.special import ellipe, ellipk
 from elastica_petsc.studies.buckling import aligned_family, critical_configuration, segment_geometry
 from elastica_petsc.core.model import load_config
 from elastica_petsc.core.deflation import Deflation
-from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver, newton_converged
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.lengths import (AugmentedSystem, LengthInertia, LengthSolver,
@@ -177,6 +177,7 @@ def test_bad_lengths_are_input_errors(ls):
 
 
 # --- Fig. 8 ------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_fig8_length_control_finds_states_1_and_2(eqs, ls, starts):
     """Fig. 8: L = (147.1, 472.5) mm has (at least) two equilibria, with
     p = (25.2, 10.8) (state 1) and p = (9.7, 12.6) (state 2).
@@ -192,7 +193,7 @@ def test_fig8_length_control_finds_states_1_and_2(eqs, ls, starts):
     constrained strain energy), which is checked as well."""
     L = L_FIG8_MM / L_MM
     res = length_equilibria(ls, L, starts, p_max=load_config().max_tension)
-    # issue 12: the reference (scripts/equilibria_reference.py) finds six states with
+    # issue 12: the reference (scripts/studies/equilibria_reference.py) finds six states with
     # 0 <= p_i <= P_crit l^2/B = 203.22, four of them unstable; the default search finds
     # all six, first by the curve search (studies.preimage)
     assert len(res) == 6, res.summary()
@@ -220,6 +221,7 @@ def test_fig8_length_control_finds_states_1_and_2(eqs, ls, starts):
     assert np.linalg.norm(s1.attachments[0] - s2.attachments[0]) * L_MM < 10.0
 
 
+@pytest.mark.slow
 def test_fig8_load_control_finds_states_1_and_3(eqs, starts):
     """Fig. 8: p = (25.2, 10.8) has states with L = (147.1, 472.5) mm (state 1)
     and L = (96.2, 454.3) mm (state 3); both stable.  The search may find
@@ -445,10 +447,9 @@ def test_fold_relation_between_load_and_length_stability(eqs, ls, fig7):
         for j in range(2):
             e = np.zeros(2)
             e[j] = 1e-5
-            ua, _, _ = eqs.newton(st.u, st.p + e)
-            assert eqs.converged()
-            ub, _, _ = eqs.newton(st.u, st.p - e)
-            assert eqs.converged()
+            ua, _, reason_a = eqs.newton(st.u, st.p + e)
+            ub, _, reason_b = eqs.newton(st.u, st.p - e)
+            assert newton_converged(reason_a) and newton_converged(reason_b)
             S[:, j] = (ls.lengths_of(ua) - ls.lengths_of(ub)) / 2e-5
         pos = int(np.sum(np.linalg.eigvalsh(0.5 * (S + S.T)) > 0))
         assert st.length_unstable_modes == st.unstable_modes - pos

@@ -1,4 +1,4 @@
-"""Progress (core/progress.py): a live bar on a terminal (also under mpiexec, where
+"""Progress (ui/progress.py): a live bar on a terminal (also under mpiexec, where
 only rank 0's stdout may be one), sparse log lines otherwise, nothing with --quiet."""
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ import time
 import numpy as np
 import pytest
 
-from elastica_petsc.core import progress
-from elastica_petsc.core.progress import Progress
+from elastica_petsc.ui import progress
+from elastica_petsc.ui.progress import Progress
 
 # timing is part of what these tests check: scripts/test.sh runs them alone
 pytestmark = pytest.mark.serial
@@ -123,6 +123,7 @@ def assert_timely(times) -> None:
     assert max((b - a for a, b in zip(times, times[1:])), default=0.0) <= 5.0, times
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="needs mpiexec")
 def test_mpi_workspace_shows_progress_in_a_terminal(tmp_path):
     """`mpiexec -n 2 ... workspace` on a pseudo-terminal: the bar appears within
@@ -185,11 +186,13 @@ COMMANDS = {   # small meshes (attachments at 200 and 600 mm: a multiple of 3 el
     "design": ["design", "--vary", "tendon1.route", "tendon2.route", "--objective",
                "path:circle.csv", "--elements", "30"],
 }
+SLOW_COMMANDS = ("equilibria", "lengths --all")     # left out by scripts/test.sh --fast
 UNITS = {"equilibria": "search steps", "lengths --all": "search steps",
          "boundary": "continuation solves", "design": "path traces"}
 
 
-@pytest.mark.parametrize("label", list(COMMANDS))
+@pytest.mark.parametrize("label", [pytest.param(label, marks=pytest.mark.slow)
+                                   if label in SLOW_COMMANDS else label for label in COMMANDS])
 def test_long_commands_show_progress_in_a_terminal(label, tmp_path):
     """Each long command in a pseudo-terminal: a line within 5 s, redrawn at
     least every 5 s, counting its own unit of work upwards, ending on 'done'."""
@@ -251,6 +254,7 @@ def test_a_long_note_is_cut_to_the_terminal_width(monkeypatch):
     assert any(d.startswith("equilibria: 13 search steps  0 s  x ") for d in draws)
 
 
+@pytest.mark.slow
 def test_replay_shows_its_points_in_a_terminal(tmp_path):
     """`replay` knows its number of points: a bar with the time left, ending at K/K."""
     made = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "trace", "--shape", "line",

@@ -4,7 +4,7 @@ lasted 1 s, is redrawn at least every 5 s and ends on 'done'; a fast control
 draws nothing (checked on the bar itself: a command's run time depends on the
 machine's load, so the terminal test sets the delay to 0 and does not depend on
 how fast the machine finds the target); ``--quiet`` silences it; not a terminal: at most a line every
-10 s (core/progress.py), none for a run shorter than that."""
+10 s (ui/progress.py), none for a run shorter than that."""
 from __future__ import annotations
 
 import io
@@ -16,10 +16,10 @@ import time
 import pytest
 from test_progress import assert_timely, run_in_pty
 
-from elastica_petsc.core.progress import Progress
+from elastica_petsc.ui.progress import Progress
 
 # timing is part of what these tests check: scripts/test.sh runs them alone
-pytestmark = pytest.mark.serial
+pytestmark = [pytest.mark.serial, pytest.mark.slow]
 
 # at 30 elements the local solve stalls at (500, 0) mm (on the x axis: every target there
 # is stationary from the straight arm's sensitivities) and the global search reaches it from

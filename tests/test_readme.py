@@ -9,6 +9,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

@@ -7,7 +7,7 @@ in this process; the interpreter's, MPI's and PETSc's start-up, 0.8 s on an idle
 command, so 2 s of wall time in all); plus the numbered items of the issue that
 need more than one command.  The fault-injection study
 (signals to mpiexec, its process group and each rank, 20+ trials) is
-``scripts/fault_study.py``; here a few of its cases run once each.
+``scripts/studies/fault_study.py``; here a few of its cases run once each.
 """
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
            OMPI_MCA_rmaps_base_oversubscribe="1")
 
 # timing is part of what these tests check: scripts/test.sh runs them alone
-pytestmark = pytest.mark.serial
+pytestmark = [pytest.mark.serial, pytest.mark.slow]
 
 
 def cli(*args, cwd=None, env=None, timeout=60) -> tuple[subprocess.CompletedProcess, float]:
@@ -268,6 +268,7 @@ def test_trace_on_sigterm_says_interrupted_and_exits_130(tmp_path):
     assert stderr.strip().splitlines()[-1] == "elastica-petsc: interrupted"
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(MPIEXEC is None, reason="mpiexec not found")
 def test_input_error_under_mpiexec_is_one_line(tmp_path):
     """Found by every rank, said once (by rank 0); mpiexec's banner silenced as the

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 ROOT = Path(__file__).resolve().parents[1]
 SPEC_ITEMS = [  # docs/model.md §6: every reference number appears in REPORT.md
     "(147.1, 472.5)", "(96.2, 454.3)", "(25.2, 10.8)", "(9.7, 12.6)", "over a dozen",

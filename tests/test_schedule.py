@@ -163,6 +163,7 @@ def test_approach_targets_and_untimed_schedule():
         sched.lengths_at(0.0)
 
 
+@pytest.mark.slow
 def test_trace_command_per_point_json_schedule_and_speed(tmp_path):
     """`trace --json --per-point --schedule --speed-mm-s`: the JSON points, the
     CSV's path rows and the HDF5 schedule agree; a line leaving the workspace

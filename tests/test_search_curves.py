@@ -2,7 +2,7 @@
 crossings of curves of the equilibrium manifold whose cable lengths move on a line
 through the target (Sec. 4.6, Eq. (23)), followed through folds.
 
-The reference (scripts/equilibria_reference.py: 52 loading-order starts on a tension
+The reference (scripts/studies/equilibria_reference.py: 52 loading-order starts on a tension
 grid and 400 random shapes, plain Newton on the length equations) finds at the Fig. 8
 lengths L = (147.1, 472.5) mm, 180 elements, six states with 0 <= p_i <= P_crit l^2/B
 = 203.22: p = (6.49, 53.62), (9.62, 12.58), (14.57, 121.62), (25.25, 10.80),
@@ -19,6 +19,8 @@ from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.lengths import LengthSolver
 from elastica_petsc.studies.preimage import (CurveSearch, FaceChord, LengthLine, SearchTracer,
                                              TensionLine)
+
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
 
 L_FIG8 = np.array([147.1, 472.5]) / 600.0
 # p of the six states at 45 elements (each within 1.1 of its 180-element value)

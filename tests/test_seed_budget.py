@@ -17,6 +17,8 @@ from elastica_petsc.core.model import Tendon
 from elastica_petsc.solvers.control import TipController
 from elastica_petsc.solvers.reach import MAX_SEED_SOLVES, SEARCH_EXHAUSTED, Reacher, SeedLibrary
 
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 LEVELS = (2.0, 6.0, 14.0, 28.0, 50.0, 80.0)
 

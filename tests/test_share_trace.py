@@ -3,7 +3,7 @@ arm closes in cable space; the floor holds; minimum norm and minimum strain
 energy are checked at every point by the KKT conditions (least-squares
 multipliers, independent of the solver's) and at a few points by brute force
 over the one-parameter family of tension sets that put the tip on the target.
-Coarse mesh, few points: the full study is scripts/share_study.py."""
+Coarse mesh, few points: the full study is scripts/studies/share_study.py."""
 from __future__ import annotations
 
 import json
@@ -21,6 +21,8 @@ from elastica_petsc.solvers.control import Evaluation, TipController
 from elastica_petsc.solvers.share import (SHARE_INFEASIBLE, SHARE_STALLED, TensionSharer,
                                           family, kkt_residual, objective)
 from elastica_petsc.studies import trace as paths
+
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "three_tendon.toml"
 ELEMENTS = 30

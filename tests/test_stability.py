@@ -220,7 +220,7 @@ def test_command_line_options_under_prefix(paper_arm):
     opts = PETSc.Options()
     opts["stabtest_eps_nev"] = 7
     try:
-        with StabilitySolver(disc, prefix="stabtest_") as solver:
+        with StabilitySolver(disc, options_prefix="stabtest_") as solver:
             assert solver.nev == 7
             assert solver.eps.getOptionsPrefix() == "stabtest_"
             r = solver.solve(disc.straight(), np.zeros(2))

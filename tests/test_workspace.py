@@ -22,6 +22,8 @@ import h5py
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 ROOT = Path(__file__).resolve().parents[1]
 MPIEXEC = shutil.which("mpiexec")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
@@ -116,6 +118,7 @@ def tensions_1(tmp_path_factory):
 
 
 # --- a. MPI equals serial ------------------------------------------------------------------
+@pytest.mark.mpi
 @needs_mpi
 @pytest.mark.parametrize("mode", ["targets", "tensions"])
 def test_two_ranks_equal_one_rank(mode, targets_1, tensions_1, tmp_path):
@@ -200,6 +203,7 @@ def test_interrupt_and_resume_one_rank(targets_1, tmp_path):
     assert_same_samples(targets_1, out)
 
 
+@pytest.mark.mpi
 @needs_mpi
 @pytest.mark.parametrize("target", ["mpiexec", "rank 0", "group", "rank 1"])
 def test_interrupt_and_resume_two_ranks(target, slow_targets_1, tmp_path):
@@ -207,7 +211,7 @@ def test_interrupt_and_resume_two_ranks(target, slow_targets_1, tmp_path):
     or to rank 1 alone (it stops the others through the chunk counter), SIGINT to the
     whole process group (Ctrl-C): every rank stops, rank 0 writes a last checkpoint and
     the job ends; --resume completes it to the uninterrupted map (issue 15; the
-    20-trial study is scripts/fault_study.py)."""
+    20-trial study is scripts/studies/fault_study.py)."""
     out = tmp_path / "ws.h5"
     proc = start(*SLOW_TARGETS, "--out", out, ranks=2)
     wait_for_checkpoint(out, proc)
@@ -226,11 +230,11 @@ def test_interrupt_and_resume_two_ranks(target, slow_targets_1, tmp_path):
 
 
 def _fault_study():
-    """scripts/fault_study.py (its helpers find the ranks of an mpiexec)."""
+    """scripts/studies/fault_study.py (its helpers find the ranks of an mpiexec)."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("fault_study",
-                                                  ROOT / "scripts" / "fault_study.py")
+                                                  ROOT / "scripts" / "studies" / "fault_study.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -241,6 +245,7 @@ def rank_pids(mpiexec_pid: int) -> dict[int, int]:
     return _fault_study().rank_pids(mpiexec_pid)
 
 
+@pytest.mark.mpi
 @needs_mpi
 @pytest.mark.parametrize("victim", [1, 0], ids=["worker", "writer"])
 def test_killed_rank_ends_job_and_leaves_a_resumable_file(victim, slow_targets_1, tmp_path):
@@ -427,7 +432,7 @@ def one_error_line(run: subprocess.CompletedProcess, *words: str) -> None:
         assert word in first, first
 
 
-@pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=needs_mpi)])
+@pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=[needs_mpi, pytest.mark.mpi])])
 def test_resume_with_another_spacing_is_refused(ranks, targets_1, tmp_path):
     out = tmp_path / "ws.h5"
     shutil.copy(targets_1, out)

@@ -20,6 +20,8 @@ import pytest
 
 from test_workspace import assert_same_samples, needs_mpi, ok, one_error_line, samples, workspace
 
+pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
+
 ROOT = Path(__file__).resolve().parents[1]
 THREE = ["--config", str(ROOT / "configs" / "three_tendon.toml"), "--elements", "30",
          "--box", "300", "420", "150", "270", "--spacing", "60", "--chunk", "3"]

@@ -23,10 +23,11 @@ import os
 import signal
 import sys
 
+from ..core import inputs
 from ..core.errors import InputError
 
 COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "design", "lengths",
-            "equilibria", "replay", "schedule", "reproduce", "calibrate")
+            "equilibria", "replay", "schedule", "simulate", "reproduce", "calibrate")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed
@@ -150,13 +151,14 @@ def _main(argv: list[str] | None) -> int:
     from ..solvers import runtime
     # PETSc errors become one line here (main), not PETSc's error stack on stderr
     runtime.init(parser.prog, petsc_options)
-    from ..core import progress
+    from ..ui import progress
     # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     signal.signal(signal.SIGTERM, _interrupt)   # again: PETSc's initialisation may take it
     progress.configure(quiet=getattr(args, "quiet", False), delay=_progress_delay())
     as_json = getattr(args, "json", False)
     try:
+        inputs.configure_limits(os.environ)     # ELASTICA_PETSC_MAX_*: the size limits
         status = args.run(args)
     except InputError as err:
         progress.close_all()

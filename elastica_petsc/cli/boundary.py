@@ -28,7 +28,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..studies.boundary import compare_map, compare_restricted, trace_boundary
 
     common.check_outputs(args)
@@ -36,7 +36,9 @@ def run(args) -> int:
     samples = _read_samples(args.overlay) if args.overlay else None
     with Progress(None, "boundary", unit="continuation solves") as bar:
         result = trace_boundary(arm, disc, restricted=not args.no_restricted, progress=bar)
-    summary = _summary(result)
+    from ..io.summaries import boundary_summary
+
+    summary = boundary_summary(result)
     if samples is not None:
         summary["agreement"] = compare_map(result, samples["target"], samples["status"],
                                            samples["spacing"])
@@ -88,27 +90,6 @@ def _as_data(result) -> dict:
                          "folds": result.fold_polylines_mm if name == "W0" else [],
                          "faces": result.faces if name == "W0" else []}
     return {"regions": regions, "tip_folds": result.tip_folds_mm}
-
-
-def _summary(result) -> dict:
-    return {
-        "area_mm2": result.areas_mm2["W0"],
-        "restricted_area_mm2": result.areas_mm2.get("restricted"),
-        "solves": result.solves,
-        "scan_solves": result.scan_solves,
-        "rejected_steps": result.rejected_steps,
-        "scan": [{"ray": ray, "sign_changes": n, "unexplained": bad}
-                 for ray, n, bad in result.scan],
-        "seconds": result.seconds,
-        "area_bounds_mm2": list(result.area_bounds_mm2),
-        "fold_curves": len(result.fold_curves),
-        "untraced_folds": result.untraced_folds,
-        "closed": {k: r.closed for k, r in result.regions.items()},
-        "curves": {k: [c.constraint for c in r.curves] for k, r in result.regions.items()},
-        "messages": result.messages,
-        "polygon_convention": "closed (last vertex joins the first); inside = nonzero "
-                              "winding number; no separate hole lists",
-    }
 
 
 def _format(s: dict) -> str:

@@ -82,7 +82,7 @@ def check_options(args) -> None:
 def run(args) -> int:
     from ..core.calibration_data import read_calibration_csv
     from ..core.calibration_params import ParameterModel, parse_bounds
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..solvers.calibration import RowError
     from ..studies.calibrate import CalibrationProblem
     from ..studies.calibrate_report import calibrate

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import sys
 
 from ..core.model import load_config
@@ -185,3 +187,20 @@ def print_json(kind: str, data: dict) -> None:
     jsontext.dump({"kind": kind, "schema_version": JSON_SCHEMA_VERSION, **data}, sys.stdout,
                   indent=2)
     sys.stdout.write("\n")
+
+
+CHECKPOINT_ENV = "ELASTICA_PETSC_CHECKPOINT_SECONDS"
+
+
+def checkpoint_seconds() -> float | None:
+    """``$ELASTICA_PETSC_CHECKPOINT_SECONDS`` (seconds between checkpoints of the
+    MPI studies; None when unset: the library's default), or :class:`InputError`."""
+    from ..studies.chunks import check_checkpoint_seconds
+
+    value = os.environ.get(CHECKPOINT_ENV)
+    if value is None:
+        return None
+    try:
+        return check_checkpoint_seconds(value)
+    except InputError:
+        raise InputError(f"{CHECKPOINT_ENV}={value!r}: expected seconds >= 0") from None

@@ -66,41 +66,6 @@ def add_share_options(parser, where: str = "the target") -> None:
                              "(every cable taut; implies --share min-norm unless given)")
 
 
-def control_summary(arm, result) -> dict:
-    from ..io.summary import equilibrium_summary, rounded
-
-    state = equilibrium_summary(arm, result.equilibrium)
-    return {
-        "converged": bool(result.converged),
-        "reachable": result.reachable,
-        "evidence": result.evidence,
-        "reason": result.reason,
-        "local_reason": result.local_reason or result.reason,
-        "strategy": result.strategy,
-        "loading": None if result.loading is None else result.loading.to_json(),
-        "tao_reason": result.tao_reason,
-        "message": result.message,
-        "method": result.method,
-        "iterations": int(result.iterations),
-        "evaluations": int(result.evaluations),
-        "target_mm": rounded(result.target_mm),
-        "tip_mm": state["tip_mm"],
-        "tip_error_mm": float(f"{result.tip_error_mm:.6g}"),
-        "tensions": state["tensions"],
-        "tensions_N": state["tensions_N"],
-        "cable_lengths_mm": state["cable_lengths_mm"],
-        "attachments_mm": state["attachments_mm"],
-        "cable_clear": state["cable_clear"],
-        "on_bound": [{"tendon": i, "bound": side} for i, side in result.on_bound],
-        "tip_sensitivity": [rounded(v * arm.length_mm) for v in result.sensitivity.tip],
-        "stable": state["stable"],
-        "strain_energy": state["strain_energy"],
-        "kappa_max": state["kappa_max"],
-        "units": {"tensions": "P l^2/B", "tensions_N": "N", "tip_sensitivity":
-                  "d x_t / d p_i in mm per unit p (Eq. (13)), one [x, y] per tendon"},
-    }
-
-
 def unreachable_message(s: dict) -> str:
     """Not reached: proven unreachable (with its evidence) or undecided."""
     bounds = ", ".join(
@@ -166,16 +131,16 @@ def run(args) -> int:
                          global_search=not args.local, cables=args.cables, share=args.share,
                          min_tension_N=args.min_tension_N, animate=args.animate,
                          elements=disc.n_elements, progress=True)
+    from ..io.summaries import control_summary
+
     summary = control_summary(arm, result)
     if args.json:
         common.print_json(args.command, summary)
     else:
         print(format_control(summary))
     if args.out:
-        from ..io.hdf5 import atomic_h5, provenance, write_attrs, write_control
-        with atomic_h5(args.out, args.overwrite) as fh:
-            write_attrs(fh, provenance(arm, "control"))
-            write_control(fh, arm, result)
+        from ..io.save import save_control
+        save_control(args.out, arm, result, overwrite=args.overwrite)
     if args.plot:
         from ..plots.control import plot_descent
         plot_descent(arm, result, args.plot)

@@ -148,7 +148,7 @@ def _step_line(s: dict) -> str:
 
 
 def _run_path(args) -> int:
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..studies.design import design_for_path, parse_vary
 
     targets = _path_targets(args.objective)
@@ -159,7 +159,10 @@ def _run_path(args) -> int:
                                  reach_mm=args.reach, clearance_mm=args.clearance,
                                  margin=args.margin, max_iterations=args.iterations,
                                  progress=bar)
-    summary = _summary(result, disc.n_elements, len(targets))
+    from ..io.summaries import path_design_summary
+
+    summary = path_design_summary(result, disc.n_elements)
+    summary["outcome"] = path_outcome(result)
     _write(args, result.arm_after, summary, _lines)
     _show(args, summary, result.history, _lines)
     return 0 if result.misfit_after.reached.all() else 1
@@ -184,7 +187,7 @@ def _show(args, summary: dict, history, lines) -> None:
 
 def _run_area(args) -> int:
     from ..core.errors import InputError
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..studies.design import parse_design_variables
     from ..studies.design_area import design_for_area
 
@@ -198,7 +201,13 @@ def _run_area(args) -> int:
                                  reach_mm=args.reach, clearance_mm=args.clearance,
                                  max_iterations=args.iterations,
                                  resample_cells=args.resample_cells, progress=bar)
+    from ..io.summaries import area_summary
+
+    from ..studies.design_area import infeasibility
+
     summary = area_summary(result, disc.n_elements)
+    summary.update(outcome=area_outcome(result), start=result.history[0] | infeasibility(
+        result.before, result.arm_before.force_scale_N))
     _write(args, result.arm_after, summary, area_lines)
     if args.plot:
         from ..plots.design import plot_area_design
@@ -240,35 +249,6 @@ def infeasible_start_lines(start: dict, tension_max_N: float) -> list[str]:
                                     "a smaller --tension-max or other routing points")
                  + ", and run design again")
     return lines
-
-
-def area_summary(r, elements: int) -> dict:
-    """The JSON summary of an area design (mm, mm^2, N)."""
-    from ..studies.design_area import infeasibility
-
-    def sampled(s):
-        if s is None:                            # not re-sampled (an infeasible start)
-            return None
-        return {"area_mm2": s.area_mm2, "error_mm2": s.error_mm2, "samples": s.samples,
-                "reached": s.reached, "stable": s.stable, "cables_clear": s.cables_clear}
-    force = r.arm_before.force_scale_N
-    return {
-        "objective": "area", "elements": elements, "tension_max": r.p_max,
-        "tension_max_N": r.p_max * force,
-        "area_before_mm2": r.before.area_mm2, "area_after_mm2": r.after.area_mm2,
-        "fold_sign_changes_before": r.before.det_sign_changes,
-        "fold_sign_changes_after": r.after.det_sign_changes,
-        "resampled_before": sampled(r.resampled_before),
-        "resampled_after": sampled(r.resampled_after),
-        "confirmed": bool(r.confirmed),
-        "routes_before_mm": [list(t.route_mm) for t in r.arm_before.tendons],
-        "routes_after_mm": [list(t.route_mm) for t in r.arm_after.tendons],
-        "attach_before_mm": [t.attach_mm for t in r.arm_before.tendons],
-        "attach_after_mm": [t.attach_mm for t in r.arm_after.tendons],
-        "iterations": r.iterations, "evaluations": len(r.history), "seconds": r.seconds,
-        "tao_reason": r.reason, "outcome": area_outcome(r),
-        "start": r.history[0] | infeasibility(r.before, force),
-    }
 
 
 def area_lines(s: dict) -> list[str]:
@@ -327,38 +307,25 @@ def _run_sweep(args) -> int:
         targets = None
         if args.objective and args.objective != "area":
             targets = _path_targets(args.objective)
+        seconds = common.checkpoint_seconds()
         error = None
     except InputError as err:
         error = str(err)
     agree(comm, error)
     sweep = run_sweep(arm, disc.n_elements, axes, _tension_max(args, arm), targets_mm=targets,
                       comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
-                      provenance={"command_line": " ".join(sys.argv)})
+                      provenance={"command_line": " ".join(sys.argv)},
+                      checkpoint_seconds=seconds, progress=True)
     if comm.rank != 0:
         return 0
-    summary = sweep_summary(sweep, arm)
+    from ..io.summaries import sweep_summary
+
+    summary = sweep_summary(sweep)
     if args.json:
         common.print_json(args.command, summary)
     else:
         print("\n".join(sweep_lines(summary)))
     return 0 if sweep.complete else 130
-
-
-def sweep_summary(sweep, arm) -> dict:
-    v = sweep.values
-    best = sweep.best()
-    return {"objective": "sweep", "designs": int(len(sweep.designs)),
-            "done": int(sweep.done.sum()),
-            "complete": sweep.complete, "ranks": sweep.ranks, "axes": sweep.names,
-            "file": sweep.file,
-            "errors": int(np.sum(v["error"][sweep.done] != b"")),
-            "not_converged": int(np.sum(~v["area_converged"][sweep.done])),
-            "cables_crossing": int(np.sum(~v["cables_clear"][sweep.done])),
-            "best": None if best is None else {
-                "design_mm": dict(zip(sweep.names, sweep.designs[best].tolist())),
-                "area_mm2": float(v["area"][best]),
-                "path_reached": int(v["path_reached"][best])},
-            "seconds_designs": float(np.nansum(v["seconds"]))}
 
 
 def sweep_lines(s: dict) -> list[str]:
@@ -373,23 +340,6 @@ def sweep_lines(s: dict) -> list[str]:
     if s["file"]:
         lines.append(f"  wrote {s['file']}")
     return lines
-
-
-def _summary(result, elements: int, count: int) -> dict:
-    before, after = result.misfit_before, result.misfit_after
-    best = min(result.history, key=lambda h: h["f_mm2"])
-    return {
-        "objective": "path", "elements": elements, "targets": count,
-        "margin_path_reached": best["reached"], "margin_path_misfit_mm2": best["f_mm2"],
-        "smallest_tension_after_N": float(np.min(after.p) * result.arm_after.force_scale_N),
-        "reached_before": int(before.reached.sum()), "reached_after": int(after.reached.sum()),
-        "max_error_before_mm": float(before.errors_mm.max()),
-        "max_error_after_mm": float(after.errors_mm.max()),
-        "routes_before_mm": [list(t.route_mm) for t in result.arm_before.tendons],
-        "routes_after_mm": [list(t.route_mm) for t in result.arm_after.tendons],
-        "iterations": result.iterations, "evaluations": result.evaluations,
-        "seconds": result.seconds, "tao_reason": result.reason, "outcome": path_outcome(result),
-    }
 
 
 def _lines(s: dict) -> list[str]:

@@ -35,12 +35,12 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..solvers.equilibrium import check_tensions
     from ..studies.search import search_tensions
     from ..io.summary import rounded
-    from .lengths import NOT_COMPLETE, check_search_options, finish, search_summary, \
-        state_summary
+    from ..io.summaries import search_summary, state_summary
+    from .lengths import NOT_COMPLETE, check_search_options, finish
 
     arm, disc = common.load_arm(args)
     p = check_tensions(common.tensions(args, arm), disc.n_tendons)

@@ -5,23 +5,10 @@ Without ``--all``: the equilibrium reached from the straight arm by continuation
 in the cable lengths (a stable path; snaps and buckling are recorded).  With
 ``--all``: the multi-start deflated search of :func:`elastica_petsc.studies.search.length_equilibria`.
 
-The helpers below (state summaries, text report, HDF5 layout) are shared with
+The helpers below (text report, plots) are shared with
 ``elastica-petsc equilibria`` (load control), which prints the same layout.
 
-HDF5 layout (``--out``), besides the provenance attributes of every file::
-
-    target/lengths_mm        (n,)  mm        prescribed cable lengths   (lengths)
-    target/tensions          (n,)  P l^2/B   prescribed tensions        (equilibria)
-    target/tensions_N        (n,)  N
-    equilibria/state_K/...   one group per state K (the paper's numbers for Fig. 8's
-                             states, see studies.search.state_numbers): the layout of io.hdf5.write_equilibrium
-                             plus tendons/lengths_requested (mm), tendons/slack (mm),
-                             tendons/taut (1); solver attributes also hold
-                             length_unstable_modes, stable_under_length_control,
-                             found_start, found_method, hits
-    root attributes          control, n_equilibria, state_numbers, search_* (method, starts,
-                             attempts, failed, refound, start_labels_json, coverage_json,
-                             effort_json), note
+HDF5 layout (``--out``): :mod:`elastica_petsc.io.states`.
 """
 from __future__ import annotations
 
@@ -97,72 +84,6 @@ def check_search_options(args) -> dict:
 
 
 # --- plain data ------------------------------------------------------------------------
-def state_summary(arm, state, control: str, found=None) -> dict:
-    """One equilibrium (a LengthEquilibrium) in the user's units.  ``stable`` is
-    the stability under the command's own control (length or load)."""
-    import numpy as np
-
-    from ..io.summary import equilibrium_summary, rounded
-
-    l_mm = arm.length_mm
-    s = equilibrium_summary(arm, state)
-    length_modes = int(getattr(state, "length_unstable_modes", -1))
-    by_length = None if length_modes < 0 else length_modes == 0
-    slack = np.asarray(state.slack_mm, float)
-    slack = np.where(slack > 0.0, slack, 0.0)
-    s.update({
-        "stable_under_load_control": bool(state.stable),
-        "stable_under_length_control": by_length,
-        "unstable_modes_length_control": length_modes,
-        "stable": by_length if control == "length" else bool(state.stable),
-        "stability_control": control,
-        "lengths_requested_mm": rounded(state.lengths_requested * l_mm),
-        "slack_mm": rounded(slack),
-        "taut": [bool(t) for t in state.taut],
-        "jumps_at_lengths_mm": [rounded(np.asarray(L) * l_mm) for L in state.jumps],
-        "instabilities_at_lengths_mm": [rounded(np.asarray(L) * l_mm)
-                                        for L in state.instabilities],
-    })
-    s["number"] = int(found.number) if found is not None and found.number else 1
-    if found is not None:
-        s["found_from"] = {"start": found.start, "method": found.method,
-                           "attempts_reaching_it": int(found.hits)}
-    s["units"].update({"slack_mm": "mm", "lengths_requested_mm": "mm",
-                       "cable_lengths_mm": "mm"})
-    return s
-
-
-def search_summary(result, settings: dict) -> dict:
-    """How a SearchResult was obtained, and its coverage."""
-    what = "cable lengths" if result.control == "length" else "tensions"
-    how = "length continuation" if result.control == "length" else "loading paths"
-    method = (f"deflated continuation in the {what} from the straight arm along every "
-              f"loading order ({settings['steps']} points per segment; Farrell et al. 2016), "
-              f"then a multi-start search: {how} and up to {settings['deflation_rounds']} "
-              "deflated Newton solves (Farrell et al. 2015) from each start (load-controlled "
-              "states at the tension levels " + " ".join(f"{v:g}" for v in settings["levels"])
-              + " in every loading order, and any branch the continuation lost)")
-    if result.control == "load":
-        method = ("loading paths from the straight arm (every order, both sides of each "
-                  "bifurcation), " + method)
-    if settings["effort"] > 1:
-        method += (f"; effort {settings['effort']}: the searches of every lower effort first, "
-                   "then this one (the numbers above are its own)")
-    if result.curves:
-        method = result.curve_method() + "; around it (its curves also followed from the "\
-            "states these add): " + method
-    return {"method": method, "effort": settings,
-            "coverage": {"by_method": {m: {"attempts": a, "new_states": k}
-                                       for m, (a, k) in result.methods().items()},
-                         "last_new_state_at_attempt": result.last_new_attempt,
-                         "curves": dict(result.curves)},
-            "starts": len(result.starts), "attempts": int(result.attempts),
-            "failed": int(result.failures), "refound": int(result.duplicates),
-            "start_labels": list(result.starts),
-            "found_from": [{"state": f.number, "start": f.start, "method": f.method,
-                            "attempts_reaching_it": int(f.hits)}
-                           for f in result.states],
-            "complete": False}
 
 
 def format_states(arm, data: dict) -> str:
@@ -231,54 +152,6 @@ def format_states(arm, data: dict) -> str:
     return "\n".join(lines)
 
 
-# --- HDF5 ------------------------------------------------------------------------------
-def write_states(path, overwrite: bool, arm, data: dict, states, kind: str) -> None:
-    from ..core import jsontext as json
-    from ..io.hdf5 import atomic_h5, provenance, put, write_attrs, write_equilibrium
-
-    l_mm = arm.length_mm
-    with atomic_h5(path, overwrite) as fh:
-        write_attrs(fh, provenance(arm, kind))
-        search = data["search"]
-        write_attrs(fh, {"control": data["control"], "n_equilibria": len(states),
-                         "elements": int(data["elements"]),
-                         "search_method": search["method"], "search_starts": search["starts"],
-                         "search_attempts": search["attempts"], "search_failed": search["failed"],
-                         "search_refound": search["refound"],
-                         "search_start_labels_json": json.dumps(search["start_labels"]),
-                         "search_coverage_json": json.dumps(search.get("coverage", {})),
-                         "search_effort_json": json.dumps(search.get("effort", {})),
-                         "search_complete": False, "note": data["note"],
-                         "state_numbers": [int(s["number"]) for s in data["equilibria"]]})
-        target = fh.create_group("target")
-        if data["control"] == "length":
-            put(target, "lengths_mm", data["lengths_mm"], "mm", "prescribed cable lengths L_i",
-                ("tendon",))
-        else:
-            put(target, "tensions", data["tensions"], "P l^2/B", "prescribed tensions p_i",
-                ("tendon",))
-            put(target, "tensions_N", data["tensions_N"], "N", "prescribed tensions P_i",
-                ("tendon",))
-        group = fh.create_group("equilibria")
-        for state, summary in zip(states, data["equilibria"]):
-            g = group.create_group(f"state_{summary['number']}")
-            write_equilibrium(g, arm, state)
-            put(g["tendons"], "lengths_requested", state.lengths_requested * l_mm, "mm",
-                "prescribed cable lengths L_i (load control: the state's own chords)", ("tendon",))
-            put(g["tendons"], "slack", summary["slack_mm"], "mm",
-                "L_i - |r_i - x_i| (> 0: slack cable, tension 0)", ("tendon",))
-            put(g["tendons"], "taut", summary["taut"], "1", "cable carries tension", ("tendon",))
-            solver = g["solver"]
-            write_attrs(solver, {
-                "length_unstable_modes": int(summary["unstable_modes_length_control"]),
-                "stable_under_length_control": bool(summary["stable_under_length_control"]),
-                "stable_under_load_control": bool(summary["stable_under_load_control"])})
-            if "found_from" in summary:
-                f = summary["found_from"]
-                write_attrs(solver, {"found_start": f["start"], "found_method": f["method"],
-                                     "hits": int(f["attempts_reaching_it"])})
-
-
 def plot(arm, data: dict, states, path, title: str) -> None:
     from ..plots.lengths import plot_states
 
@@ -301,11 +174,12 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
     else:
         print(format_states(arm, data))
     if args.out:
+        from ..io.states import write_states
         write_states(args.out, args.overwrite, arm, data, states, kind)
     if args.plot and states:
         plot(arm, data, states, args.plot, title)
     if args.vtk and states:
-        from ..io.vtk import write_states as write_vtk       # write_states: the HDF5 above
+        from ..io.vtk import write_states as write_vtk       # io.states.write_states: HDF5
         write_vtk(args.vtk, arm, states, numbers=[s["number"] for s in data["equilibria"]])
     if not states:
         msg = data.get("message") or "no equilibrium converged"
@@ -316,8 +190,9 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
 
 # --- the command -----------------------------------------------------------------------
 def run(args) -> int:
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..studies.search import follow_lengths, search_lengths
+    from ..io.summaries import search_summary, state_summary
     from ..io.summary import rounded
 
     arm, disc = common.load_arm(args)

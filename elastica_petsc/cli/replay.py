@@ -58,7 +58,7 @@ def run(args) -> int:
     import numpy as np
 
     from ..core.errors import InputError
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
     from ..studies.replay import replay_trace
     from ..io.replay import read_trace, write_replay
     from ..io.summary import replay_summary

@@ -58,6 +58,7 @@ def run(args) -> int:
             check_output_folder(args.out, args.overwrite)
         arm = load_config(args.config)
         load_config(alu)                    # refused now, not after the other experiments
+        seconds = common.checkpoint_seconds()
     except InputError as err:
         error = str(err)
     agree(comm, error)
@@ -67,7 +68,8 @@ def run(args) -> int:
         except OSError as err:
             raise InputError(f"--out {out}: cannot create the folder ({err.strerror})") \
                 from None
-    ctx = Context(arm=arm, out=out, quick=args.quick, jobs=args.jobs, comm=comm)
+    ctx = Context(arm=arm, out=out, quick=args.quick, jobs=args.jobs, comm=comm,
+                  checkpoint_seconds=seconds)
     log = ((lambda message: None) if args.quiet else
            (lambda message: print(message, file=sys.stderr, flush=True)))
     report = run_all(ctx, "elastica-petsc " + " ".join(sys.argv[1:]), alu, log=log)

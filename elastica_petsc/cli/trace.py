@@ -99,74 +99,10 @@ def targets(args, arm):
     return paths.densify(points, args.step)
 
 
-def trace_summary(arm, result, schedule) -> dict:
-    import numpy as np
-
-    from ..core.clearance import state_cable_clear
-    from ..io.summary import rounded
-
-    mono = result.monotonic_fraction()
-    return {
-        "points": int(result.n_points),
-        "reached": int(np.sum(result.converged)),
-        "all_reached": bool(result.all_converged),
-        "max_tip_error_mm": float(f"{np.max(result.tip_errors_mm):.6g}"),
-        "iterations_median": float(np.median(result.iterations[1:] if result.n_points > 1
-                                             else result.iterations)),
-        "iterations_max_warm": int(np.max(result.iterations[1:])) if result.n_points > 1 else None,
-        "iterations_first": int(result.iterations[0]),
-        "seconds": round(result.seconds, 4),
-        "seconds_per_point": round(result.seconds / result.n_points, 6),
-        "tension_range_N": [rounded([result.tensions_N[:, i].min(), result.tensions_N[:, i].max()])
-                            for i in range(result.tensions_N.shape[1])],
-        "cable_length_range_mm": [rounded([result.cable_lengths_mm[:, i].min(),
-                                           result.cable_lengths_mm[:, i].max()])
-                                  for i in range(result.cable_lengths_mm.shape[1])],
-        "monotonic_fraction": [None if np.isnan(v) else round(float(v), 4) for v in mono],
-        "work_fraction": round(float(result.work_fraction()), 4),
-        "closes": bool(np.allclose(result.targets_mm[0], result.targets_mm[-1], atol=1e-9)),
-        "closure_cable_length_change_mm": float(f"{np.max(np.abs(result.cable_lengths_mm[-1] - result.cable_lengths_mm[0])):.3g}"),
-        "cable_crossing_points": [int(sum(1 for r in result.results
-                                          if not state_cable_clear(r.equilibrium)[i]))
-                                  for i in range(result.tensions_N.shape[1])],
-        "not_reached_undecided": int(sum(1 for r in result.results
-                                         if not r.converged and r.reachable is None)),
-        "not_reached_proven_unreachable": int(sum(1 for r in result.results
-                                                  if r.reachable is False)),
-        "loading_first_point": (None if not result.results or result.results[0].loading is None
-                                else result.results[0].loading.to_json()),
-        "loading_note": "each point's loading path from the straight arm is in the HDF5 "
-                        "/loading tree (/path/loading_node); `solve --from FILE --point K` "
-                        "replays it",
-        "max_rounding_error_mm": float(f"{np.max(np.abs(schedule.rounding_error_mm)):.3g}"),
-        "mm_per_microstep": float(f"{schedule.mm_per_step:.6g}"),
-        "min_tension_N": rounded(result.tensions_N.min(axis=0)),
-    }
-
-
 def share_summary(args) -> dict:
     """The sharing rule asked for (the library resolves None the same way)."""
     share = args.share or ("min-norm" if args.min_tension_N > 0 else "none")
     return {"share": share, "min_tension_floor_N": args.min_tension_N}
-
-
-def point_entries(result, schedule) -> list[dict]:
-    """One JSON entry per path point (mm, N, p = P l^2/B, s)."""
-    import math
-
-    from ..io.summary import rounded
-
-    times = schedule.time_s[schedule.path_rows()]
-    out = []
-    for k, r in enumerate(result.results):
-        out.append({"point": k, "target_mm": rounded(result.targets_mm[k]),
-                    "tip_mm": rounded(result.tips_mm[k]), "reached": bool(result.converged[k]),
-                    "tip_error_mm": float(f"{result.tip_errors_mm[k]:.6g}"),
-                    "tensions": rounded(result.p[k]), "tensions_N": rounded(result.tensions_N[k]),
-                    "cable_lengths_mm": rounded(result.cable_lengths_mm[k]),
-                    "iterations": int(result.iterations[k]), "reason": r.reason,
-                    "time_s": None if math.isnan(times[k]) else round(float(times[k]), 4)})
-    return out
 
 
 def format_trace(s: dict) -> str:
@@ -229,58 +165,6 @@ def format_trace(s: dict) -> str:
     return "\n".join(lines)
 
 
-def schedule_summary(planned, guessed: bool) -> dict:
-    """The approach and the timing of the schedule (for the summary)."""
-    import math
-
-    sched, before = planned.schedule, planned.approach
-    out = {"approach_start": None if before is None else
-           ("load-controlled state at --guess" if guessed else "straight arm"),
-           "approach_points": 0 if before is None else int(before.n_points),
-           "approach_reached": None if before is None else int(before.converged.sum()),
-           "schedule_rows": int(sched.n_rows),
-           "speed_mm_s": planned.speed["speed_mm_s"],
-           "speed_source": planned.speed["speed_source"],
-           "duration_s": None if math.isnan(sched.duration_s) else round(sched.duration_s, 3)}
-    out.update(motor_summary(sched))
-    return out
-
-
-def motor_summary(sched) -> dict:
-    """Peak motor rates of the timed schedule, the limits and where they slowed the tip."""
-    import math
-    from collections import Counter
-
-    from ..core.motion import rates_and_accelerations
-    from ..io.summary import rounded
-
-    if math.isnan(sched.duration_s) or sched.n_rows < 2:
-        return {"motor_limits": None, "peak_speed_steps_s": None, "peak_accel_steps_s2": None,
-                "rows_slowed_by_motor": 0, "slowed_by": {}, "slowed_rows": [],
-                "time_bound_s": None}
-    r, a = rates_and_accelerations(sched.positions_steps, sched.durations_s[1:])
-    labels = [str(x) for x in sched.limited_by]
-    slowed = [x for x in labels if x.startswith(("speed_", "accel_"))]
-    return {"motor_limits": None if sched.limits is None else sched.limits.to_json(),
-            "peak_speed_steps_s": rounded(abs(r).max(axis=0)),
-            "peak_accel_steps_s2": rounded(abs(a).max(axis=0)),
-            "rows_slowed_by_motor": len(slowed), "slowed_by": dict(sorted(Counter(slowed).items())),
-            "slowed_rows": slowed_runs(labels), "time_bound_s": round(sched.speed_bound_s, 6)}
-
-
-def slowed_runs(labels: list[str]) -> list[list]:
-    """[first row, last row, limit code] of each run of rows a motor limit slowed."""
-    runs = []
-    for k, label in enumerate(labels):
-        if not label.startswith(("speed_", "accel_")):
-            continue
-        if runs and runs[-1][1] == k - 1 and runs[-1][2] == label:
-            runs[-1][1] = k
-        else:
-            runs.append([k, k, label])
-    return runs
-
-
 def check_options(args) -> None:
     """Refuse, before any computing, options and output paths that cannot work."""
     from ..core.errors import InputError
@@ -308,14 +192,10 @@ def write_outputs(args, arm, disc, planned) -> None:
     if args.step_table:
         schedule.write_step_tables(args.step_table)
     if args.out:
-        from ..io.hdf5 import atomic_h5, provenance, write_attrs, write_trace
-        with atomic_h5(args.out, args.overwrite) as fh:
-            write_attrs(fh, provenance(arm, "trace"))
-            fh.attrs["elements"] = disc.n_elements
-            fh.attrs["step_mm"] = args.step
-            fh.attrs["source"] = args.path or args.shape
-            write_attrs(fh, share_summary(args))
-            write_trace(fh, arm, result, schedule)
+        from ..io.save import save_trace
+        attrs = dict(elements=disc.n_elements, step_mm=args.step,
+                     source=args.path or args.shape, **share_summary(args))
+        save_trace(args.out, arm, planned, attrs, overwrite=args.overwrite)
     if args.plot:
         from ..plots.control import plot_trace_figures
         plot_trace_figures(arm, result, args.plot)
@@ -332,7 +212,7 @@ def write_outputs(args, arm, disc, planned) -> None:
 
 def run(args) -> int:
     from .. import api
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
 
     arm, disc = common.load_arm(args)
     check_options(args)
@@ -345,7 +225,9 @@ def run(args) -> int:
                                min_tension_N=args.min_tension_N,
                                on_point=lambda done, total: bar.update(done, total=total))
     result = planned.path
-    summary = trace_summary(arm, result, planned.schedule)
+    from ..io.summaries import point_entries, schedule_summary, trace_summary
+
+    summary = trace_summary(result, planned.schedule)
     summary.update(share_summary(args))
     summary.update({k: v for k, v in planned.speed.items() if k not in ("speed_mm_s",
                                                                            "speed_source")})

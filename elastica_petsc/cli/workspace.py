@@ -85,6 +85,7 @@ def _run(args, comm) -> int:
     # Input errors are agreed on by all ranks before any collective work (one line, exit 2).
     try:
         arm, disc = _check_inputs(args)
+        seconds = common.checkpoint_seconds()
         error = None
     except InputError as err:
         error = str(err)
@@ -94,7 +95,7 @@ def _run(args, comm) -> int:
         tension_spacing=args.tension_spacing, tension_max=args.tension_max, chunk=args.chunk,
         comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
         global_search=not args.local_only, share=args.share, min_tension_N=args.min_tension_N,
-        region=default_region(args))
+        region=default_region(args), checkpoint_seconds=seconds, progress=True)
     if comm.rank != 0:
         if comm.size > 1 and not result.complete:
             comm.Barrier()                          # rank 0 has printed (a rank that ends

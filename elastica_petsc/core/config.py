@@ -58,11 +58,17 @@ SCHEMA: dict[str, dict[str, tuple[type | tuple, object, str]]] = {
         "failure_strain": (float, 0.025, "failure strain eps_Y, Eq. (19)"),
         "strain_energy_max_SE0": (float, 18.0, "SE_max in units of B/(2l), Eq. (21)"),
     },
+    "dynamics": {
+        "damping_ratio": (float, 0.0, "damping ratio zeta_1 of the unloaded first mode"),
+        "kelvin_voigt_fraction": (float, 0.5, "share of zeta_1 from Kelvin-Voigt damping, "
+                                              "the rest viscous (docs/model.md §16)"),
+        "rotary_inertia": (bool, False, "include the rotary inertia of the cross-section"),
+    },
 }
 
 
 # the file's sections; "guide" is the schema of each entry of a tendon's guides
-SECTIONS = ("arm", "tendon", "motor", "limits")
+SECTIONS = ("arm", "tendon", "motor", "limits", "dynamics")
 
 
 class ConfigError(InputError):
@@ -117,7 +123,7 @@ def _typed(value, kind, where: str):
     kind = float if kind == (float, list) else kind
     if kind is float and isinstance(value, int) and not isinstance(value, bool):
         value = float(value)
-    if isinstance(value, bool) or not isinstance(value, kind):
+    if (isinstance(value, bool) and kind is not bool) or not isinstance(value, kind):
         raise ConfigError(
             f"{where}: expected {kind.__name__}, got {type(value).__name__} {value!r}")
     return value
@@ -189,7 +195,8 @@ def config_values(data: dict) -> dict:
                         "attach_offset_mm": values["attach_offset_mm"], "guides": guides})
     return {"arm": arm, "tendons": tendons,
             "motor": _section(data.get("motor", {}), "motor", "motor"),
-            "limits": _section(data.get("limits", {}), "limits", "limits")}
+            "limits": _section(data.get("limits", {}), "limits", "limits"),
+            "dynamics": _section(data.get("dynamics", {}), "dynamics", "dynamics")}
 
 
 def arm_to_dict(arm) -> dict:
@@ -203,7 +210,8 @@ def arm_to_dict(arm) -> dict:
                 if v is not None and not (k == "tip_mass_kg" and v == 0.0)}
 
     return {"arm": given({k: data[k] for k in SCHEMA["arm"]}), "tendon": data["tendon"],
-            "motor": given(data["motor"]), "limits": given(data["limits"])}
+            "motor": given(data["motor"]), "limits": given(data["limits"]),
+            "dynamics": data["dynamics"]}
 
 
 def _tendon_dict(t: dict) -> dict:

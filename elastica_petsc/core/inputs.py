@@ -9,7 +9,6 @@ limits can be raised with the environment variables named in the message.
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 
@@ -28,18 +27,30 @@ MAX_ITERATIONS = 1_000            # optimiser iterations (a design's default: 20
 MAX_CELLS = 1_000                 # re-sampling cells per tension axis ((K+1)^2 solves)
 
 
+_RAISED: dict[str, int] = {}      # limits raised by the command line (configure_limits)
+
+
+def configure_limits(environ) -> None:
+    """Raise the size limits from ``environ``, a mapping of the command line's
+    environment (the library itself reads no environment variable): each of
+    ``ELASTICA_PETSC_MAX_*`` present must be a whole number >= 1."""
+    for env in (MAX_PATH_POINTS_ENV, MAX_ELEMENTS_ENV, MAX_DESIGN_POINTS_ENV):
+        text = environ.get(env, "").strip()
+        if not text:
+            _RAISED.pop(env, None)
+            continue
+        try:
+            value = int(text)
+        except ValueError:
+            raise InputError(f"{env}={text!r}: expected a whole number") from None
+        if value < 1:
+            raise InputError(f"{env}={text!r}: expected a whole number >= 1")
+        _RAISED[env] = value
+
+
 def limit(env: str, default: int) -> int:
-    """A size limit: ``default`` unless the environment variable ``env`` raises it."""
-    text = os.environ.get(env, "").strip()
-    if not text:
-        return default
-    try:
-        value = int(text)
-    except ValueError:
-        raise InputError(f"{env}={text!r}: expected a whole number") from None
-    if value < 1:
-        raise InputError(f"{env}={text!r}: expected a whole number >= 1")
-    return value
+    """A size limit: ``default`` unless :func:`configure_limits` raised it."""
+    return _RAISED.get(env, default)
 
 
 def numbers(values, name: str, unit: str = "", count: int | None = None) -> np.ndarray:

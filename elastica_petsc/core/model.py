@@ -70,6 +70,15 @@ class Limits:
 
 
 @dataclass(frozen=True)
+class Dynamics:
+    """Damping and inertia options of the arm in motion (docs/model.md §16)."""
+
+    damping_ratio: float = 0.0           # zeta_1: damping ratio of the unloaded first mode
+    kelvin_voigt_fraction: float = 0.5   # share of zeta_1 from Kelvin-Voigt (stiffness) damping
+    rotary_inertia: bool = False         # add rho I theta_dot^2 / 2 (I = A h^2 / 12)
+
+
+@dataclass(frozen=True)
 class Arm:
     """A planar inextensible elastica clamped at the origin along +x (Sec. 2)."""
 
@@ -86,6 +95,7 @@ class Arm:
     tip_mass_kg: float = 0.0
     motor: Motor = field(default_factory=Motor)
     limits: Limits = field(default_factory=Limits)
+    dynamics: Dynamics = field(default_factory=Dynamics)
 
     def __post_init__(self) -> None:
         validate(self)
@@ -251,6 +261,7 @@ def _validate_weight(arm: Arm) -> None:
     """Gravity needs a mass; a tip mass is >= 0 (docs/model.md §11)."""
     if not (_finite(arm.tip_mass_kg) and arm.tip_mass_kg >= 0):
         raise ModelError(f"arm.tip_mass_kg must be a number >= 0, got {arm.tip_mass_kg!r}")
+    _validate_dynamics(arm.dynamics)
     if arm.gravity_m_s2 is None:
         return
     g = arm.gravity_m_s2
@@ -259,6 +270,14 @@ def _validate_weight(arm: Arm) -> None:
     if arm.mass_per_length_kg_m is None and not arm.tip_mass_kg and any(g):
         raise ModelError("arm.gravity_m_s2 is given but neither arm.mass_per_length_kg_m nor "
                          "arm.tip_mass_kg: gravity needs a mass")
+
+
+def _validate_dynamics(dyn: Dynamics) -> None:
+    if not (_finite(dyn.damping_ratio) and dyn.damping_ratio >= 0):
+        raise ModelError(f"dynamics.damping_ratio must be a number >= 0, got {dyn.damping_ratio!r}")
+    if not (_finite(dyn.kelvin_voigt_fraction) and 0 <= dyn.kelvin_voigt_fraction <= 1):
+        raise ModelError("dynamics.kelvin_voigt_fraction must lie in [0, 1], got "
+                         f"{dyn.kelvin_voigt_fraction!r}")
 
 
 def _validate_path(arm: Arm, tendon: Tendon, key: str) -> None:
@@ -295,7 +314,7 @@ def arm_from_dict(data: dict) -> Arm:
                     for t in values["tendons"])
     return Arm(tendons=tendons,
                motor=Motor(**values["motor"]), limits=Limits(**values["limits"]),
-               **values["arm"])
+               dynamics=Dynamics(**values["dynamics"]), **values["arm"])
 
 
 def load_config(path=None) -> Arm:

@@ -33,34 +33,43 @@ from .hdf5 import atomic_h5, provenance, put, write_attrs
 
 
 def write_boundary(path, result, overwrite: bool = False) -> None:
-    """Write a :class:`~elastica_petsc.studies.boundary.BoundaryResult`."""
+    """Write a :class:`~elastica_petsc.studies.boundary.BoundaryResult`: the layout
+    above and the whole result under ``/result`` (``elastica_petsc.read`` returns it)."""
+    from .records import RESULT_GROUP, encode
+
+    with atomic_h5(path, overwrite) as fh:
+        write_boundary_layout(fh, result)
+        encode(fh, RESULT_GROUP, result)
+
+
+def write_boundary_layout(fh, result) -> None:
+    """The layout of the module docstring into the open file ``fh``."""
     arm = result.arm
     l_mm = arm.length_mm
-    with atomic_h5(path, overwrite) as fh:
-        write_attrs(fh, provenance(arm, "boundary"))
-        fh.attrs["solves"] = result.solves
-        fh.attrs["seconds"] = result.seconds
-        fh.attrs["messages_json"] = jsontext.dumps(result.messages)
-        for name, region in result.regions.items():
-            group = fh.create_group(name)
-            group.attrs["closed"] = bool(region.closed)
-            group.attrs["message"] = region.message
-            group.attrs["area_mm2"] = result.areas_mm2[name]
-            put(group, "polygon", result.polygons_mm[name][0], "mm",
-                "closed polygon of the region's boundary; inside = nonzero winding number")
-            nodes = region.nodes()
-            sub = group.create_group("nodes")
-            put(sub, "tip", nodes["tip"] * l_mm, "mm", "continuation nodes around the loop")
-            put(sub, "tensions", nodes["p"], "P l^2/B", "tensions p_i at the nodes")
-            put(sub, "tensions_N", arm.tensions_to_N(nodes["p"]), "N", "tensions P_i")
-            put(sub, "curve", nodes["curve"], "1", "index of the curve of each node")
-            curves = group.create_group("curves")
-            curves.attrs["names_json"] = jsontext.dumps([c.constraint for c in region.curves])
-            curves.attrs["ends_json"] = jsontext.dumps([c.end for c in region.curves])
-        if "W0" in fh:
-            _write_folds(fh["W0"], result)
-        put(fh, "tip_folds", result.tip_folds_mm, "mm",
-            "points of the W0 loop where det(d x_t/d p) changes sign (tip-map folds)")
+    write_attrs(fh, provenance(arm, "boundary"))
+    fh.attrs["solves"] = result.solves
+    fh.attrs["seconds"] = result.seconds
+    fh.attrs["messages_json"] = jsontext.dumps(result.messages)
+    for name, region in result.regions.items():
+        group = fh.create_group(name)
+        group.attrs["closed"] = bool(region.closed)
+        group.attrs["message"] = region.message
+        group.attrs["area_mm2"] = result.areas_mm2[name]
+        put(group, "polygon", result.polygons_mm[name][0], "mm",
+            "closed polygon of the region's boundary; inside = nonzero winding number")
+        nodes = region.nodes()
+        sub = group.create_group("nodes")
+        put(sub, "tip", nodes["tip"] * l_mm, "mm", "continuation nodes around the loop")
+        put(sub, "tensions", nodes["p"], "P l^2/B", "tensions p_i at the nodes")
+        put(sub, "tensions_N", arm.tensions_to_N(nodes["p"]), "N", "tensions P_i")
+        put(sub, "curve", nodes["curve"], "1", "index of the curve of each node")
+        curves = group.create_group("curves")
+        curves.attrs["names_json"] = jsontext.dumps([c.constraint for c in region.curves])
+        curves.attrs["ends_json"] = jsontext.dumps([c.end for c in region.curves])
+    if "W0" in fh:
+        _write_folds(fh["W0"], result)
+    put(fh, "tip_folds", result.tip_folds_mm, "mm",
+        "points of the W0 loop where det(d x_t/d p) changes sign (tip-map folds)")
 
 
 def _write_folds(group, result) -> None:

@@ -246,7 +246,7 @@ def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
     if eq.bifurcations:
         put(solver, "bifurcation_tensions", np.array([b.p_critical for b in eq.bifurcations]),
             "P l^2/B", "critical tensions of the symmetric bifurcations crossed, in order",
-            ("bifurcation",))
+            ("bifurcation", "tendon"))
         write_attrs(solver, {"bifurcation_sides": [b.side for b in eq.bifurcations],
                              "bifurcation_rules": [b.rule for b in eq.bifurcations]})
 

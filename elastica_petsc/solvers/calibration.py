@@ -39,9 +39,10 @@ from petsc4py import PETSc
 from ..core.deflation import Deflation
 from ..core.fem import Discretisation
 from ..core.model import Arm
-from .equilibrium import EquilibriumSolver
+from .equilibrium import EquilibriumSolver, newton_converged
 from .lengths import TAUT_TOL, AugmentedSystem, LengthSolver
 from .linalg import use_bordered_lu
+from .options import SolverOptions, check_comm
 
 
 class RowError(RuntimeError):
@@ -62,20 +63,33 @@ class RowState:
 class RowSolver:
     """Row equilibria and derivatives for one arm (its own frame), on ``n_elements``."""
 
-    def __init__(self, arm: Arm, n_elements: int | None = None, jump_tol: float = 0.5):
+    def __init__(self, arm: Arm, n_elements: int | None = None, jump_tol: float = 0.5, *,
+                 comm=None, options_prefix: str = "calib_", petsc_options=None):
+        """The contract of :mod:`.options`: the equilibrium solves use
+        ``<prefix>eq_``, the length solves ``<prefix>len_``, the tangent
+        solves ``<prefix>tan_`` (``petsc_options`` keys relative to ``<prefix>``)."""
+        self.options = SolverOptions(options_prefix, petsc_options)
+        self.comm = comm = check_comm(comm)
         self.arm, self.l_mm = arm, arm.length_mm
         self.disc = disc = Discretisation.from_arm(arm, n_elements)
         self.jump_tol = jump_tol
-        self.eq = EquilibriumSolver(disc, prefix="calib_eq_")
-        self.len = LengthSolver(disc, length_mm=arm.length_mm, prefix="calib_len_")
-        self.load_system = AugmentedSystem(disc, "load", "calib_tan_")
+        part = self.options.part
+        self.eq = EquilibriumSolver(disc, comm=comm, options_prefix=self.options.name("eq_"),
+                                    petsc_options=part("eq_"))
+        self.len = LengthSolver(disc, length_mm=arm.length_mm, comm=comm,
+                                options_prefix=self.options.name("len_"),
+                                petsc_options=part("len_"))
+        self.load_system = AugmentedSystem(disc, "load", self.options.name("tan_"), comm=comm,
+                                           petsc_options=part("tan_"))
         self.A = self.load_system.J.duplicate()
-        self.ksp = PETSc.KSP().create(PETSc.COMM_SELF)
-        self.ksp.setOptionsPrefix("calib_tan_")
+        self.ksp = PETSc.KSP().create(comm)
+        self.ksp.setOptionsPrefix(self.options.name("tan_"))
         use_bordered_lu(self.ksp)
-        self.ksp.setFromOptions()
-        self.rhs = PETSc.Vec().createSeq(self.load_system.size, comm=PETSc.COMM_SELF)
+        self.options.apply(self.ksp)
+        self.rhs = PETSc.Vec().createSeq(self.load_system.size, comm=comm)
         self.sol = self.rhs.duplicate()
+        for obj in (self.A, self.rhs, self.sol):
+            obj.setOptionsPrefix(self.options.name("tan_"))
 
     # --- equilibria ------------------------------------------------------------------------
     def solve(self, kind: str, drive, order=None, warm: RowState | None = None) -> RowState:
@@ -94,8 +108,8 @@ class RowSolver:
     def _warm(self, kind, drive, warm: RowState) -> RowState | None:
         N = self.disc.n_elements
         if kind == "tension":
-            u, _, _ = self.eq.newton(warm.u, drive)
-            if not self.eq.converged():
+            u, _, reason = self.eq.newton(warm.u, drive)
+            if not newton_converged(reason):
                 return None
             p = np.asarray(drive, float)
         else:

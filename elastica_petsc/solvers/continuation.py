@@ -65,11 +65,12 @@ import scipy.sparse as sp
 from petsc4py import PETSc
 
 from ..core import interrupt
+from ..core.errors import SolverError
 from ..core.fem import Discretisation
-from .equilibrium import SNES_REASONS
 from .inertia import InertiaCounter
 from .linalg import use_bordered_lu
-from .options import set_from_options
+from .options import SolverOptions, check_comm
+from .reasons import converged_reason
 
 # LU with partial pivoting for the extended systems: their leading block J is
 # singular on the fold and their last rows have no diagonal entry, so the
@@ -90,7 +91,7 @@ def use_pivoting_lu(ksp: PETSc.KSP) -> PETSc.KSP:
     raise ContinuationError("no pivoting sparse LU (UMFPACK, SuperLU or MUMPS) in this PETSc")
 
 
-class ContinuationError(RuntimeError):
+class ContinuationError(SolverError):
     """The curve could not be followed (step too small, singular system)."""
 
 
@@ -461,16 +462,19 @@ class FoldSystem:
     """The minimally extended system of the module docstring: sigma(w) and its
     gradient, with LU solves (PETSc KSP) of J bordered by b and c."""
 
-    def __init__(self, manifold: Manifold, prefix: str = "fold_"):
+    def __init__(self, manifold: Manifold, *, comm=None, options_prefix: str = "fold_",
+                 petsc_options=None):
+        self.options = SolverOptions(options_prefix, petsc_options)
+        self.comm = comm = check_comm(comm)
         self.mf = manifold
         self.mat = BorderedAIJ(*manifold.csr, manifold.size, 1)
-        self.rhs = PETSc.Vec().createSeq(manifold.size + 1, comm=PETSc.COMM_SELF)
+        self.rhs = PETSc.Vec().createSeq(manifold.size + 1, comm=comm)
         self.sol = self.rhs.duplicate()
-        self.ksp = PETSc.KSP().create(PETSc.COMM_SELF)
-        self.ksp.setOptionsPrefix(prefix)
+        self.ksp = PETSc.KSP().create(comm)
+        self.options.label(self.ksp, self.mat.mat, self.rhs, self.sol)
         self.ksp.setOperators(self.mat.mat)
         use_pivoting_lu(self.ksp)
-        self.ksp.setFromOptions()
+        self.options.apply(self.ksp)
         self.b = self.c = None
         self._cache = {}
 
@@ -671,41 +675,48 @@ class Curve:
 
 class CurveTracer:
     """Pseudo-arclength continuation on M with one active constraint and SNES
-    as the corrector (options prefix ``cont_``).  ``solves`` counts the
-    corrector solves (each one nonlinear solve of the extended system),
-    ``rejected`` the steps among them that were not accepted."""
+    as the corrector.  ``solves`` counts the corrector solves (each one
+    nonlinear solve of the extended system), ``rejected`` the steps among
+    them that were not accepted.  The contract of :mod:`.options`: ``comm``
+    (one process), ``options_prefix`` (default ``cont_``; the tangent solves
+    ``<prefix>tangent_``), ``petsc_options``."""
 
     def __init__(self, disc: Discretisation, *, jump_tol: float = 0.5,
-                 max_tip_step: float = 0.2, ds_max: float = 4.0, prefix: str = "cont_"):
+                 max_tip_step: float = 0.2, ds_max: float = 4.0, comm=None,
+                 options_prefix: str = "cont_", petsc_options=None):
+        # full Newton steps by default: the predictor is close, and a corrector
+        # that would need damping is a step to halve (one residual per iteration)
+        self.options = SolverOptions(options_prefix, petsc_options,
+                                     {"snes_linesearch_type": "basic"})
+        self.comm = comm = check_comm(comm)
         self.mf = Manifold(disc)
         mf = self.mf
         self.jump_tol, self.max_tip_step, self.ds_max = jump_tol, max_tip_step, ds_max
         self.step_max_it = 6
         self.A = BorderedAIJ(*mf.csr, mf.size, mf.n)
-        self.x = PETSc.Vec().createSeq(mf.m, comm=PETSc.COMM_SELF)
+        self.x = PETSc.Vec().createSeq(mf.m, comm=comm)
         self.f = self.x.duplicate()
-        snes = PETSc.SNES().create(PETSc.COMM_SELF)
-        snes.setOptionsPrefix(prefix)
+        snes = PETSc.SNES().create(comm)
+        self.options.label(snes, self.A.mat, self.x, self.f)
         snes.setType(PETSc.SNES.Type.NEWTONLS)
         snes.setFunction(self._form_function, self.f)
         snes.setJacobian(self._form_jacobian, self.A.mat, self.A.mat)
         atol = max(1e-10, 1e-14 * disc.n_elements ** 1.5)
         snes.setTolerances(rtol=1e-10, atol=atol, stol=1e-14, max_it=12)
         use_pivoting_lu(snes.getKSP())
-        # full Newton steps by default: the predictor is close, and a corrector
-        # that would need damping is a step to halve (one residual per iteration)
-        set_from_options(snes, prefix, {"snes_linesearch_type": "basic"})
+        self.options.apply(snes)
         self.rtol, self.atol, self.stol, _ = snes.getTolerances()
         self.contraction = 0.5
         self.lag_below = 1e-7          # residual norm below which the Jacobian is kept
         self._fnorms = []
         snes.setConvergenceTest(self._converged)
         self.snes = snes
-        self.ksp = PETSc.KSP().create(PETSc.COMM_SELF)
-        self.ksp.setOptionsPrefix(prefix + "tangent_")
+        self.ksp = PETSc.KSP().create(comm)
+        self.ksp.setOptionsPrefix(self.options.name("tangent_"))
         use_pivoting_lu(self.ksp)
-        self.ksp.setFromOptions()
-        self.inertia = InertiaCounter(disc)
+        self.options.apply(self.ksp)
+        self.inertia = InertiaCounter(disc, comm=comm,
+                                      options_prefix=self.options.name("inertia_"))
         self.solves = 0
         self.rejected = 0            # steps whose corrector failed or was rejected (halved)
         self._rows = None            # the two scalar equations: callables (value, gradient)
@@ -730,6 +741,7 @@ class CurveTracer:
         self._fill(w, np.array([gradient(w) for _, gradient in self._rows]))
 
     def _solve(self, w0: np.ndarray, rows, max_it: int = 12) -> tuple[np.ndarray, bool, int]:
+        self.options.refresh(self.snes, self.ksp)
         self._rows = rows
         self.x.setArray(w0)
         self.snes.setTolerances(max_it=max_it)
@@ -740,7 +752,7 @@ class CurveTracer:
         return self.x.getArray().copy(), bool(ok), self.snes.getIterationNumber()
 
     def reason(self) -> str:
-        return SNES_REASONS.get(self.snes.getConvergedReason(), "UNKNOWN")
+        return converged_reason(self.snes)
 
     def _converged(self, snes, it, norms):
         """PETSc's tests (atol, rtol, stol, max_it) plus one for Newton from a

@@ -17,14 +17,15 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..core import interrupt
+from ..core.results import Result
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from .bifurcation import (BIFURCATION_TOL, AmplitudeContinuation, Bifurcation, critical_mode,
                           orthogonality, tip_side)
 from .inertia import InertiaCounter
 from .linalg import use_bordered_lu
-
-SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
+from .options import SolverOptions, check_comm
+from .reasons import SNES_REASONS
 
 # A cable shorter than this (in units of l) has collapsed onto its routing point.
 COLLAPSE_LENGTH = 2e-3
@@ -44,8 +45,8 @@ BRANCH_ENDS = {
 SIDES = ("left", "right")
 
 
-@dataclass(frozen=True)
-class Equilibrium:
+@dataclass(frozen=True, repr=False)
+class Equilibrium(Result):
     """A solved state of the arm, non-dimensional (lengths / l, p = P l^2 / B)."""
 
     disc: Discretisation
@@ -161,6 +162,24 @@ def check_order(order, n_tendons: int) -> tuple[int, ...] | None:
     return order
 
 
+def newton_converged(reason: str) -> bool:
+    """Whether a Newton solve that ended with ``reason``
+    (:meth:`EquilibriumSolver.newton`) converged."""
+    return reason.startswith("CONVERGED")
+
+
+@dataclass
+class _Path:
+    """What one :meth:`EquilibriumSolver.solve` learns on its way (per solve)."""
+
+    side: str | None                  # the branch asked for at a bifurcation
+    modes: int                        # negative eigenvalues of K at the current state
+    snaps: list = field(default_factory=list)
+    bifurcations: list = field(default_factory=list)
+    p_critical: np.ndarray | None = None       # a bifurcation with no stable side
+    branch_ends: list = field(default_factory=list)
+
+
 def check_tensions(p, n_tendons: int) -> np.ndarray:
     """Non-negative, finite, one per tendon (a cable cannot push)."""
     p = np.asarray(p, dtype=float).ravel()
@@ -188,11 +207,21 @@ class EquilibriumSolver:
         When the step cannot shrink further (a limit point), the arm snaps: a
         distant state is accepted only if it is stable, and the snap recorded.
     tip_moment : applied end moment M l / B (closed-form checks only).
-    prefix : PETSc options prefix; e.g. ``-eq_snes_monitor``.
+    comm : one process (default ``PETSc.COMM_SELF``).
+    options_prefix : PETSc options prefix of the SNES, its Jacobian and
+        vectors; e.g. ``-eq_snes_monitor``.
+    petsc_options : options without the prefix (nested dicts flatten,
+        :mod:`.options`); the command line wins.
+
+    The tensions of the current Newton solve (``_p``) are the context of the
+    SNES callbacks; everything else a solve learns is returned.
     """
 
     def __init__(self, disc: Discretisation, *, max_step: float = 2.0, jump_tol: float = 0.5,
-                 tip_moment: float = 0.0, prefix: str = "eq_"):
+                 tip_moment: float = 0.0, comm=None, options_prefix: str = "eq_",
+                 petsc_options=None):
+        self.options = SolverOptions(options_prefix, petsc_options)
+        self.comm = comm = check_comm(comm)
         self.disc = disc
         self.max_step = max_step
         self.jump_tol = jump_tol
@@ -203,11 +232,11 @@ class EquilibriumSolver:
         u0 = disc.straight()
         self.J = PETSc.Mat().createAIJ(
             size=(disc.size, disc.size), csr=(indptr, indices, disc.jacobian_values(u0, self._p)),
-            comm=PETSc.COMM_SELF)
-        self.x = PETSc.Vec().createSeq(disc.size)
+            comm=comm)
+        self.x = PETSc.Vec().createSeq(disc.size, comm=comm)
         self.f = self.x.duplicate()
-        snes = PETSc.SNES().create(PETSc.COMM_SELF)
-        snes.setOptionsPrefix(prefix)
+        snes = PETSc.SNES().create(comm)
+        self.options.label(snes, self.J, self.x, self.f)
         snes.setType(PETSc.SNES.Type.NEWTONLS)
         snes.setFunction(self._form_function, self.f)
         snes.setJacobian(self._form_jacobian, self.J, self.J)
@@ -221,9 +250,10 @@ class EquilibriumSolver:
         # tip would be piecewise constant in p at the optimiser's last steps
         snes.setForceIteration(True)
         use_bordered_lu(snes.getKSP())
-        snes.setFromOptions()
+        self.options.apply(snes)
         self.snes = snes
-        self.inertia = InertiaCounter(disc)
+        self.inertia = InertiaCounter(disc, comm=comm,
+                                      options_prefix=self.options.name("inertia_"))
 
     # --- PETSc callbacks ------------------------------------------------------
     def _form_function(self, snes, X, F) -> None:
@@ -235,20 +265,23 @@ class EquilibriumSolver:
 
     # --- one Newton solve -----------------------------------------------------
     def newton(self, u0: np.ndarray, p) -> tuple[np.ndarray, int, str]:
-        """One SNES solve at fixed tensions from ``u0``: (u, iterations, reason)."""
+        """One SNES solve at fixed tensions from ``u0``: (u, iterations,
+        reason); converged if :func:`newton_converged` (reason)."""
         self._p = np.asarray(p, dtype=float)
         self.x.setArray(u0)
         self.snes.solve(None, self.x)
         reason = self.snes.getConvergedReason()
         # a forced step from a state already at round-off cannot decrease the
         # residual, and the line search then reports failure: still converged
-        self._converged = reason > 0 or self.snes.getFunctionNorm() <= self.snes.getTolerances()[1]
-        name = SNES_REASONS[reason] if reason > 0 or not self._converged else "CONVERGED_FNORM_ABS"
+        converged = reason > 0 or self.snes.getFunctionNorm() <= self.snes.getTolerances()[1]
+        name = SNES_REASONS[reason] if reason > 0 or not converged else "CONVERGED_FNORM_ABS"
         return self.x.getArray().copy(), self.snes.getIterationNumber(), name
 
-    def converged(self) -> bool:
-        """Whether the last :meth:`newton` converged."""
-        return self._converged
+    def refresh_options(self) -> bool:
+        """Apply PETSc options given since the solver was configured (under its
+        prefix in the database, or by ``self.options.update``); True if any
+        were.  Every :meth:`solve` does this first."""
+        return self.options.refresh(self.snes)
 
     # --- load stepping ----------------------------------------------------------
     def solve(self, p, order=None, start: Equilibrium | None = None,
@@ -274,37 +307,45 @@ class EquilibriumSolver:
         neither side has a stable state (subcritical), ``converged`` is False
         with reason ``BIFURCATION``.
         """
-        disc = self.disc
-        p = check_tensions(p, disc.n_tendons)
-        order = check_order(order, disc.n_tendons)
+        p = check_tensions(p, self.disc.n_tendons)
+        order = check_order(order, self.disc.n_tendons)
         if side is not None and side not in SIDES:
             raise InputError(f"side must be one of {', '.join(SIDES)} (or None), got {side!r}")
-        self._side, self._bifurcations, self._p_critical = side, [], None
+        return self.follow(p, order=order, start=start, tangent=tangent, side=side)
+
+    def follow(self, p: np.ndarray, order=None, start: Equilibrium | None = None,
+               tangent: np.ndarray | None = None, side: str | None = None) -> Equilibrium:
+        """:meth:`solve` for arguments already checked (``p``: a float array
+        from :func:`check_tensions`, ``order`` from :func:`check_order`), for
+        callers that validated them once, such as tip control."""
+        disc = self.disc
+        self.refresh_options()
         u = disc.straight() if start is None else start.u.copy()
         p_now = np.zeros(disc.n_tendons) if start is None else np.asarray(start.p, float)
-        self._modes = (start.unstable_modes if start is not None
-                       else self.inertia.negative_eigenvalues(u, p_now))
-        keep_stable = self._modes == 0
-        self._snaps = []
+        path = _Path(side, start.unstable_modes if start is not None
+                     else self.inertia.negative_eigenvalues(u, p_now))
+        keep_stable = path.modes == 0
         iterations = steps = 0
         reason = "CONVERGED_FNORM_ABS"
         ok = True
         for pa, pb in loading_path(p_now, p, order):
-            u, p_now, its, nsteps, reason, ok = self._follow(u, pa, pb, keep_stable, tangent)
+            u, p_now, its, nsteps, reason, ok = self._follow(path, u, pa, pb, keep_stable,
+                                                             tangent)
             tangent = None                               # valid at the start only
             iterations += its
             steps += nsteps
             if not ok:
                 break
         result = dict(converged=ok, reason=reason, iterations=iterations, load_steps=steps,
-                      unstable_modes=self._modes, snaps=tuple(self._snaps),
-                      bifurcations=tuple(self._bifurcations), p_requested=p,
-                      message="; ".join(b.describe() for b in self._bifurcations))
+                      unstable_modes=path.modes, snaps=tuple(path.snaps),
+                      bifurcations=tuple(path.bifurcations), p_requested=p,
+                      message="; ".join(b.describe() for b in path.bifurcations))
         if not ok:
-            result["message"] = self._failure_message(u, p_now, p, reason)
+            result["message"] = self._failure_message(path, u, p_now, p, reason)
         return Equilibrium(disc, p_now, u, **result)
 
-    def _follow(self, u, pa, pb, keep_stable: bool, tangent=None, min_fraction: float = 1e-5):
+    def _follow(self, path: _Path, u, pa, pb, keep_stable: bool, tangent=None,
+                min_fraction: float = 1e-5):
         """Continuation from the equilibrium ``u`` at ``pa`` to tensions ``pb``
         (``tangent``: du/dp at ``pa`` for the first predictor, else a secant)."""
         span = float(np.max(np.abs(pb - pa))) if len(pa) else 0.0
@@ -326,7 +367,7 @@ class EquilibriumSolver:
             u_new, its, reason = self.newton(predictor, target)
             iterations += its
             limit_point = step <= min_fraction
-            if self.converged():
+            if newton_converged(reason):
                 # a branch jump only makes sense along a path: with fixed tensions
                 # (span 0) this is a plain Newton solve
                 jumped = span > 0 and \
@@ -338,11 +379,11 @@ class EquilibriumSolver:
                     reason = "BRANCH_JUMP"
                 else:
                     if jumped:
-                        self._snaps.append(target)
+                        path.snaps.append(target)
                         u_prev = None          # no secant across a snap
                     else:
                         u_prev, dlam_prev = u, step
-                    u, lam, steps, self._modes = u_new, lam + step, steps + 1, modes
+                    u, lam, steps, path.modes = u_new, lam + step, steps + 1, modes
                     if np.min(self.disc.shortest_segments(self.disc.split(u)[1])) < \
                             COLLAPSE_LENGTH:
                         # a cable collapsed onto its routing point: no load beyond
@@ -351,23 +392,23 @@ class EquilibriumSolver:
                         dlam = min(2.0 * dlam, full)
                     continue
             if limit_point and reason == "UNSTABLE_STATE":
-                switched = self._switch(u, lam, u_new, lam + step, pa, pb)
+                switched = self._switch(path, u, lam, u_new, lam + step, pa, pb)
                 if switched is not None:
-                    u, its, self._modes = switched
+                    u, its, path.modes = switched
                     return u, pb, iterations + its, steps + 1, "CONVERGED_FNORM_ABS", True
-                if self._p_critical is not None:
+                if path.p_critical is not None:
                     reason = BIFURCATION
             if limit_point:
                 return u, pa + lam * (pb - pa), iterations, steps, reason, False
             dlam = 0.5 * step
         return u, pb, iterations, steps, reason, True
 
-    def _switch(self, u, lam: float, u_unstable, lam_unstable: float, pa, pb):
+    def _switch(self, path: _Path, u, lam: float, u_unstable, lam_unstable: float, pa, pb):
         """At a loss of stability between the stable ``u`` (at ``lam``) and the
         unstable ``u_unstable``: if it is a bifurcation, the stable state at
         ``pb`` on the side chosen by the rule of :meth:`solve`, as (u,
         iterations, unstable modes); None at a limit point or if no side has
-        a stable state (then ``_p_critical`` is set for a bifurcation)."""
+        a stable state (then ``path.p_critical`` is set for a bifurcation)."""
         disc = self.disc
         mu0, v = critical_mode(disc, u, pa + lam * (pb - pa))
         if orthogonality(disc, u, pb - pa, v) > BIFURCATION_TOL:
@@ -375,33 +416,33 @@ class EquilibriumSolver:
         mu1, _ = critical_mode(disc, u_unstable, pa + lam_unstable * (pb - pa))
         # the smallest eigenvalue is linear in the load near its zero
         lam_c = lam + (lam_unstable - lam) * mu0 / (mu0 - mu1) if mu0 > 0 > mu1 else lam
-        self._p_critical = pa + lam_c * (pb - pa)
+        path.p_critical = pa + lam_c * (pb - pa)
         continuation = AmplitudeContinuation(disc, pa, pb, self.atol)
-        found, its, self._branch_ends = {}, 0, []
+        found, its, path.branch_ends = {}, 0, []
         for sign in (1.0, -1.0):
             outcome, ends = continuation.branch(u, lam, v, sign)
-            self._branch_ends.append(outcome)
+            path.branch_ends.append(outcome)
             if outcome != "reached":          # (ends[0] is None if lost at the first step)
                 continue
             (u0, l0), (u1, l1) = ends
-            u_end, n, _ = self.newton(u0 + (1.0 - l0) / (l1 - l0) * (u1 - u0), pb)
+            u_end, n, end_reason = self.newton(u0 + (1.0 - l0) / (l1 - l0) * (u1 - u0), pb)
             its += n
-            if self.converged() and self.inertia.negative_eigenvalues(u_end, pb) == 0:
+            if newton_converged(end_reason) and self.inertia.negative_eigenvalues(u_end, pb) == 0:
                 found.setdefault(tip_side(disc, u, u_end), u_end)
             else:
-                self._branch_ends[-1] = "unstable"
-        side, rule = self._choose_side(found, pb)
+                path.branch_ends[-1] = "unstable"
+        side, rule = self._choose_side(path.side, found, pb)
         if side is None:
             return None
-        self._bifurcations.append(Bifurcation(self._p_critical.copy(), side, rule))
-        self._p_critical = None
+        path.bifurcations.append(Bifurcation(path.p_critical.copy(), side, rule))
+        path.p_critical = None
         return found[side], its, 0
 
-    def _choose_side(self, found: dict, p) -> tuple[str | None, str]:
-        """The rule of :meth:`solve`: the requested side, else the lower
+    def _choose_side(self, asked: str | None, found: dict, p) -> tuple[str | None, str]:
+        """The rule of :meth:`solve`: the ``asked`` side, else the lower
         potential energy, else (equal energies) the left side."""
-        if self._side is not None:
-            return (self._side, "requested") if self._side in found else (None, "")
+        if asked is not None:
+            return (asked, "requested") if asked in found else (None, "")
         if len(found) < 2:
             return next(iter(found), None), "the only side with a stable state"
         energy = {k: self.disc.potential(self.disc.split(u)[0], p) for k, u in found.items()}
@@ -410,7 +451,7 @@ class EquilibriumSolver:
         low = min(energy, key=energy.get)
         return low, "the lower potential energy"
 
-    def _failure_message(self, u, p_reached, p_target, reason: str) -> str:
+    def _failure_message(self, path: _Path, u, p_reached, p_target, reason: str) -> str:
         lengths = self.disc.shortest_segments(self.disc.split(u)[1])
         shortest = int(np.argmin(lengths))
         where = "tensions p = (" + ", ".join(f"{v:.4g}" for v in p_reached) + ")"
@@ -421,12 +462,12 @@ class EquilibriumSolver:
             return (f"tendon {shortest + 1} {what} {lengths[shortest]:.2e} l) at {where}: the "
                     "cable direction is undefined beyond this load")
         if reason == BIFURCATION:
-            side = f"on the {self._side} side" if self._side else "on either side"
+            side = f"on the {path.side} side" if path.side else "on either side"
             return (f"the stable branch ends at {where} at a bifurcation (the critical mode is "
                     "orthogonal to the load, not a limit point) and no stable post-critical "
                     f"state was found {side}: " + "; ".join(
                         f"{k} branch: {BRANCH_ENDS[e]}" for k, e in
-                        zip(("one", "other"), self._branch_ends)))
+                        zip(("one", "other"), path.branch_ends)))
         if reason in ("BRANCH_JUMP", "UNSTABLE_STATE"):
             return (f"the stable equilibrium branch ends at {where} (limit point: the arm "
                     "snaps) and no stable state to snap to was found")

@@ -85,13 +85,14 @@ import scipy.sparse as sp
 from petsc4py import PETSc
 
 from ..core.deflation import Deflation
-from .equilibrium import SNES_REASONS, Equilibrium
+from .equilibrium import Equilibrium
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from .bifurcation import inverse_iteration
 from .inertia import BorderedInertia, InertiaCounter
-from .options import set_from_options
 from .linalg import use_bordered_lu
+from .options import SolverOptions, check_comm
+from .reasons import SNES_REASONS, reason_name
 
 # A tension below this (non-dimensional, p = P l^2/B) counts as zero: the
 # cable is slack or just taut and constrains nothing (module docstring).
@@ -109,7 +110,7 @@ DEFLATION_OPTIONS = {"snes_linesearch_type": "l2"}
 
 
 # --- results -----------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class LengthEquilibrium(Equilibrium):
     """An equilibrium found under length control (or a load-controlled one
     re-examined under length control).
@@ -196,13 +197,17 @@ class AugmentedSystem:
     ``mode="length"``: p rows g_i = L_i - |r_i - y_i| with p_i >= 0.
     ``mode="load"``: p rows p_i - p_i* (p fixed), no bounds on p.
     Rows of F and g are multiplied by mu, and mu - M(theta) = 0 (deflation).
+    The contract of :mod:`.options`: ``options_prefix`` (of the SNES, its
+    Jacobian and vectors), ``petsc_options``, ``comm`` (one process).
     """
 
-    def __init__(self, disc: Discretisation, mode: str, prefix: str,
+    def __init__(self, disc: Discretisation, mode: str, options_prefix: str,
                  deflation: Deflation | None = None, max_it: int = 50,
-                 options: dict | None = None):
+                 petsc_options=None, comm=None):
         if mode not in ("length", "load"):
             raise ValueError(f"mode must be 'length' or 'load', got {mode!r}")
+        self.options = SolverOptions(options_prefix, petsc_options)
+        self.comm = comm = check_comm(comm)
         self.disc, self.mode = disc, mode
         N, n = disc.n_elements, disc.n_tendons
         self.nu, self.n = disc.size, n
@@ -212,9 +217,9 @@ class AugmentedSystem:
         self.target = np.zeros(n)
         self._build_pattern()
         z0 = self.augment(disc.straight(), np.zeros(n))
-        self.J = PETSc.Mat().createAIJ(size=(self.size, self.size), comm=PETSc.COMM_SELF,
+        self.J = PETSc.Mat().createAIJ(size=(self.size, self.size), comm=comm,
                                        csr=(self.indptr, self.indices, self.jacobian_values(z0)))
-        self.x = PETSc.Vec().createSeq(self.size, comm=PETSc.COMM_SELF)
+        self.x = PETSc.Vec().createSeq(self.size, comm=comm)
         self.f = self.x.duplicate()
         self.xl, self.xu = self.x.duplicate(), self.x.duplicate()
         lower = np.full(self.size, PETSc.NINFINITY)
@@ -223,8 +228,8 @@ class AugmentedSystem:
         lower[self.imu] = 0.5                # mu = M >= shift^K at a solution (see newton)
         self.xl.setArray(lower)
         self.xu.set(PETSc.INFINITY)
-        snes = PETSc.SNES().create(PETSc.COMM_SELF)
-        snes.setOptionsPrefix(prefix)
+        snes = PETSc.SNES().create(comm)
+        self.options.label(snes, self.J, self.x, self.f, self.xl, self.xu)
         snes.setType("vinewtonrsls")
         snes.setFunction(self._form_function, self.f)
         snes.setJacobian(self._form_jacobian, self.J, self.J)
@@ -233,7 +238,7 @@ class AugmentedSystem:
         self.atol = max(1e-10, 1e-14 * N ** 1.5)
         snes.setTolerances(rtol=1e-10, atol=self.atol, stol=1e-14, max_it=max_it)
         use_bordered_lu(snes.getKSP())
-        set_from_options(snes, prefix, options)
+        self.options.apply(snes)
         self.snes = snes
 
     # --- layout ----------------------------------------------------------------------
@@ -319,6 +324,7 @@ class AugmentedSystem:
     def newton(self, z0, target, max_it: int | None = None) -> tuple[np.ndarray, int, str, bool]:
         """One VI Newton solve from z0: (z, iterations, reason, converged);
         ``max_it`` caps the Newton iterations of this solve only."""
+        self.options.refresh(self.snes)
         self.target = np.asarray(target, float)
         z0 = np.array(z0, float)
         if self.mode == "length":
@@ -343,7 +349,7 @@ class AugmentedSystem:
             self.snes.setTolerances(max_it=default_max_it)
         reason = self.snes.getConvergedReason()
         z = self.x.getArray().copy()
-        return z, self.snes.getIterationNumber(), SNES_REASONS.get(reason, str(reason)), \
+        return z, self.snes.getIterationNumber(), reason_name(SNES_REASONS, reason), \
             reason > 0 and self.verified(z)
 
     def verified(self, z) -> bool:
@@ -375,7 +381,7 @@ class LengthInertia(BorderedInertia):
     """Negative eigenvalues of K restricted to null(C^T) of the taut cables
     (module docstring), by the LDL^T inertia of the bordered H_c, O(N)."""
 
-    def __init__(self, disc: Discretisation, taut_tol: float = TAUT_TOL):
+    def __init__(self, disc: Discretisation, taut_tol: float = TAUT_TOL, **contract):
         self.disc, self.taut_tol = disc, taut_tol
         w_supports = disc.stability_pattern_supports
         supports = np.concatenate((w_supports, disc.length_supports))        # W cols, C cols
@@ -383,7 +389,7 @@ class LengthInertia(BorderedInertia):
         pattern = disc.bordered_pattern(supports, upper=True, starts=starts)
         self._src = pattern[2]
         super().__init__(pattern, disc.n_elements + len(supports),
-                         self.values(disc.straight(), np.zeros(disc.n_tendons))[0])
+                         self.values(disc.straight(), np.zeros(disc.n_tendons))[0], **contract)
 
     def values(self, u, p) -> tuple[np.ndarray, int]:
         """Upper-triangle entries of H_c and the number m of taut cables."""
@@ -460,24 +466,34 @@ class LengthSolver:
         halved (a larger change is a jump to another branch).
     max_step : largest change of any cable length (units of l) per
         continuation step.
-    prefix : PETSc options prefix, e.g. ``-len_snes_monitor``,
-        ``-len_snes_vi_monitor``.
+    comm : one process (default ``PETSc.COMM_SELF``).
+    options_prefix : PETSc options prefix, e.g. ``-len_snes_monitor``,
+        ``-len_snes_vi_monitor``; the deflated solves use ``<prefix>defl_``.
+    petsc_options : options without the prefix (``{"defl": {...}}`` for the
+        deflated solves), :mod:`.options`.
     """
 
     def __init__(self, disc: Discretisation, *, length_mm: float | None = None,
-                 jump_tol: float = 0.5, max_step: float = 0.02, prefix: str = "len_"):
+                 jump_tol: float = 0.5, max_step: float = 0.02, comm=None,
+                 options_prefix: str = "len_", petsc_options=None):
         self.disc = disc
         self.length_mm = length_mm
         self.jump_tol = jump_tol
         self.max_step = max_step
-        self.prefix = prefix
-        self.system = AugmentedSystem(disc, "length", prefix)
+        given = SolverOptions(options_prefix, petsc_options)
+        deflated = given.part("defl_")
+        plain = {k: v for k, v in given.options.items() if not k.startswith("defl_")}
+        self.system = AugmentedSystem(disc, "length", options_prefix, petsc_options=plain,
+                                      comm=comm)
+        self.prefix, self.comm = self.system.options.prefix, self.system.comm
         # deflated solves explore: the l2 (secant) line search leaves the basin
         # of the start far more often than backtracking (measured on Fig. 8)
-        self.deflated_system = AugmentedSystem(disc, "length", prefix + "defl_",
-                                                options=DEFLATION_OPTIONS)
-        self.inertia = LengthInertia(disc)
-        self.load_inertia = InertiaCounter(disc)
+        self.deflated_system = AugmentedSystem(disc, "length", self.prefix + "defl_",
+                                               petsc_options={**DEFLATION_OPTIONS, **deflated},
+                                               comm=comm)
+        self.inertia = LengthInertia(disc, comm=comm, options_prefix=self.prefix + "inertia_")
+        self.load_inertia = InertiaCounter(disc, comm=comm,
+                                           options_prefix=self.prefix + "load_inertia_")
 
     @classmethod
     def from_arm(cls, arm, n_elements: int | None = None, **kw) -> "LengthSolver":

@@ -23,7 +23,7 @@ def use_bordered_lu(ksp: PETSc.KSP) -> PETSc.KSP:
 def bordered_ldlt(matrix: PETSc.Mat) -> PETSc.PC:
     """LDL^T (PETSc Cholesky on symmetric storage) in the natural order, for
     Sylvester inertia counts (``getFactorMatrix().getInertia()``)."""
-    pc = PETSc.PC().create(PETSc.COMM_SELF)
+    pc = PETSc.PC().create(matrix.getComm())
     pc.setOperators(matrix)
     pc.setType(PETSc.PC.Type.CHOLESKY)
     pc.setFactorOrdering(PETSc.Mat.OrderingType.NATURAL)

@@ -1,9 +1,24 @@
-"""PETSc options: defaults given in code, and command-line options nobody read.
+"""PETSc options: the one contract of every class here that owns PETSc objects.
 
-* :func:`set_from_options` — options given in code are pushed under a
-  solver's prefix only for its ``setFromOptions()``, only where the user has
-  not set them (the command line wins), and removed again so they never leak
-  into the next solver.
+Every such class (the DOLFINx ``NonlinearProblem`` style) takes
+
+* ``comm``: the communicator of its objects (one process: each arm is a
+  small problem, parallelism is across arms), :func:`check_comm`;
+* ``options_prefix``: checked by :func:`check_prefix` (non-empty, ending in
+  ``_``, letters, digits and ``_``), given to its solvers, matrices and
+  vectors, so ``-eq_snes_monitor`` or ``-ctl_tao_view`` reach them;
+* ``petsc_options``: a mapping of options without the prefix, nested dicts
+  flattened (``{"snes": {"rtol": 1e-8}}`` is ``snes_rtol``,
+  :func:`flatten_options`).
+
+:class:`SolverOptions` holds them: the class's own defaults, then
+``petsc_options`` over them, are pushed under the prefix for the objects'
+``setFromOptions()`` only where the user has not set them (the command line
+wins), and removed again so they never leak into the next solver.  Options
+given after the first solve (in the database, or by
+:meth:`SolverOptions.update`) are applied at the next solve
+(:meth:`SolverOptions.refresh`).
+
 * :func:`unused_options` — options in PETSc's database that no solver read
   (like ``-options_left``).  petsc4py 3.18 has no binding for
   ``PetscOptionsUsed``; it is called through ctypes on the PETSc library this
@@ -14,22 +29,121 @@ from __future__ import annotations
 
 import ctypes
 import os
+import re
+from collections.abc import Mapping
+from contextlib import contextmanager
 
 from petsc4py import PETSc
 
+from ..core.errors import InputError
 
-def set_from_options(obj, prefix: str, defaults: dict | None = None) -> None:
-    """``obj.setFromOptions()`` with ``defaults`` ({"snes_rtol": 1e-8, ...}, keys
-    without the prefix) in force for that call only."""
+# An options prefix: starts with a letter, letters/digits/underscores, ends in "_".
+PREFIX_PATTERN = re.compile(r"[A-Za-z][A-Za-z0-9_]*_")
+
+
+def check_prefix(prefix) -> str:
+    """``prefix`` if it is a legal options prefix, else an InputError saying why."""
+    if not isinstance(prefix, str) or not prefix:
+        raise InputError(f"options prefix must be a non-empty string, got {prefix!r}")
+    if not PREFIX_PATTERN.fullmatch(prefix):
+        why = ("must end with '_'" if not prefix.endswith("_") else
+               "must start with a letter and hold only letters, digits and '_'")
+        raise InputError(f"options prefix {prefix!r} {why} (e.g. 'eq_')")
+    return prefix
+
+
+def check_comm(comm=None) -> PETSc.Comm:
+    """The communicator of a solver of one arm: COMM_SELF by default; any
+    other must hold a single process (parallelism is across arms)."""
+    comm = PETSc.COMM_SELF if comm is None else PETSc.Comm(comm)
+    if comm.getSize() != 1:
+        raise InputError(f"this solver works on one process (one arm); got a communicator of "
+                         f"{comm.getSize()} processes: give PETSc.COMM_SELF")
+    return comm
+
+
+def flatten_options(options: Mapping | None, parent: str = "") -> dict:
+    """``{"snes": {"rtol": 1e-8}, "ksp_type": "preonly"}`` ->
+    ``{"snes_rtol": 1e-8, "ksp_type": "preonly"}`` (keys without a leading '-')."""
+    flat = {}
+    for key, value in (options or {}).items():
+        if not isinstance(key, str) or not key.lstrip("-"):
+            raise InputError(f"PETSc option names must be non-empty strings, got {key!r}")
+        name = parent + key.lstrip("-")
+        if isinstance(value, Mapping):
+            flat.update(flatten_options(value, name + "_"))
+        else:
+            flat[name] = value
+    return flat
+
+
+@contextmanager
+def pushed_options(prefix: str, options: Mapping | None):
+    """``options`` (flat, keys without ``prefix``) in PETSc's database under
+    ``prefix`` for the duration, except those the user has set (they win)."""
     opts = PETSc.Options()
-    pushed = [prefix + key for key in (defaults or {}) if not opts.hasName(prefix + key)]
+    pushed = [prefix + key for key in (options or {}) if not opts.hasName(prefix + key)]
     for name in pushed:
-        opts[name] = defaults[name[len(prefix):]]
+        opts[name] = options[name[len(prefix):]]
     try:
-        obj.setFromOptions()
+        yield
     finally:
         for name in pushed:
             opts.delValue(name)
+
+
+def options_under(prefix: str) -> dict:
+    """The entries of PETSc's database whose names start with ``prefix``."""
+    return {k: v for k, v in PETSc.Options().getAll().items() if k.startswith(prefix)}
+
+
+class SolverOptions:
+    """The options of one PETSc-owning object (module doc): its checked
+    prefix, and the options given in code (``defaults`` of the class, then
+    ``petsc_options`` over them), flat and without the prefix."""
+
+    def __init__(self, options_prefix: str, petsc_options: Mapping | None = None,
+                 defaults: Mapping | None = None):
+        self.prefix = check_prefix(options_prefix)
+        self.options = {**flatten_options(defaults), **flatten_options(petsc_options)}
+        self._seen: dict | None = None        # the database under the prefix when applied
+        self._updated = False
+
+    def name(self, suffix: str = "") -> str:
+        """The prefix of a part, e.g. ``name("raw_")`` -> ``stab_raw_``."""
+        return self.prefix + suffix
+
+    def part(self, suffix: str) -> dict:
+        """The code options of a part with its own prefix ``<prefix><suffix>``,
+        keys relative to it: ``{"eq_snes_rtol": 1}`` -> ``part("eq_")`` = ``{"snes_rtol": 1}``."""
+        return {k[len(suffix):]: v for k, v in self.options.items() if k.startswith(suffix)}
+
+    def label(self, *objs) -> None:
+        """Give PETSc objects (solvers, Mats, Vecs) the prefix."""
+        for obj in objs:
+            obj.setOptionsPrefix(self.prefix)
+
+    def apply(self, *objs) -> None:
+        """``setFromOptions()`` of each object (it has its own prefix, this one
+        or longer) with the code options pushed under this prefix."""
+        with pushed_options(self.prefix, self.options):
+            for obj in objs:
+                obj.setFromOptions()
+        self._seen, self._updated = options_under(self.prefix), False
+
+    def update(self, petsc_options: Mapping) -> None:
+        """More options in code (over the earlier ones), applied at the next
+        :meth:`refresh`."""
+        self.options.update(flatten_options(petsc_options))
+        self._updated = True
+
+    def refresh(self, *objs) -> bool:
+        """Apply options given since the last :meth:`apply` (in the database
+        under the prefix, or by :meth:`update`) to ``objs``; True if any were."""
+        if not self._updated and options_under(self.prefix) == self._seen:
+            return False
+        self.apply(*objs)
+        return True
 
 
 def _petsc_library():

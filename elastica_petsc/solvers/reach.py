@@ -264,7 +264,7 @@ class Reacher:
     progress : None, or a callable ``progress(steps, note)`` told of every
         search step of :meth:`reach` (a local solve, a homotopy sub-target,
         building the seed library, the boundary proof) with what it is doing
-        (core/progress.py: ``control`` shows it while the global search runs).
+        (ui/progress.py: ``control`` shows it while the global search runs).
     """
 
     def __init__(self, controller: TipController, *, homotopy_step: float = 0.08,

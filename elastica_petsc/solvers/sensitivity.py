@@ -29,11 +29,14 @@ import numpy as np
 from petsc4py import PETSc
 
 from .equilibrium import Equilibrium, EquilibriumSolver
+from ..core.errors import SolverError
 from ..core.fem import Discretisation
 from .linalg import use_bordered_lu
+from .options import SolverOptions, check_comm
+from .reasons import KSP_REASONS, reason_name
 
 
-class SensitivityError(RuntimeError):
+class SensitivityError(SolverError):
     """The tangent at the equilibrium could not be factored (singular: a limit point)."""
 
 
@@ -79,23 +82,28 @@ def objective_gradient(eq: Equilibrium, sens: Sensitivity, target) -> tuple[floa
 class SensitivitySolver:
     """Owns a copy of the bordered Jacobian and one LU factorisation (KSP
     preonly, natural ordering: fill only in the border) reused for every
-    equilibrium of one discretised arm.  Options prefix ``sens_``."""
+    equilibrium of one discretised arm.  The contract of :mod:`.options`:
+    ``comm`` (one process), ``options_prefix`` (default ``sens_``, e.g.
+    ``-sens_ksp_view``), ``petsc_options``."""
 
-    def __init__(self, disc: Discretisation, *, prefix: str = "sens_"):
+    def __init__(self, disc: Discretisation, *, comm=None, options_prefix: str = "sens_",
+                 petsc_options=None):
+        self.options = SolverOptions(options_prefix, petsc_options)
+        self.comm = comm = check_comm(comm)
         self.disc = disc
         indptr, indices, _ = disc.pattern
         self._csr = (indptr, indices)
         u0 = disc.straight()
         self.J = PETSc.Mat().createAIJ(
-            size=(disc.size, disc.size), comm=PETSc.COMM_SELF,
+            size=(disc.size, disc.size), comm=comm,
             csr=(indptr, indices, disc.jacobian_values(u0, np.zeros(disc.n_tendons))))
-        self.rhs = PETSc.Vec().createSeq(disc.size, comm=PETSc.COMM_SELF)
+        self.rhs = PETSc.Vec().createSeq(disc.size, comm=comm)
         self.sol = self.rhs.duplicate()
-        ksp = PETSc.KSP().create(PETSc.COMM_SELF)
-        ksp.setOptionsPrefix(prefix)
+        ksp = PETSc.KSP().create(comm)
+        self.options.label(ksp, self.J, self.rhs, self.sol)
         ksp.setOperators(self.J)
         use_bordered_lu(ksp)
-        ksp.setFromOptions()
+        self.options.apply(ksp)
         self.ksp = ksp
         # midpoint weights: element e gets (alpha_e + alpha_{e+1}) / 2
         self._h = disc.h
@@ -107,6 +115,7 @@ class SensitivitySolver:
     def compute(self, eq: Equilibrium) -> Sensitivity:
         """Sensitivities at the equilibrium ``eq`` (one factorisation, n solves)."""
         disc = self.disc
+        self.options.refresh(self.ksp)
         if not eq.converged:
             raise SensitivityError(
                 "sensitivities need a converged equilibrium: " + (eq.message or eq.reason))
@@ -128,7 +137,8 @@ class SensitivitySolver:
             self.ksp.solve(self.rhs, self.sol)
             reason = self.ksp.getConvergedReason()
             if reason < 0:
-                raise SensitivityError(f"sensitivity solve failed, KSP reason {reason}")
+                raise SensitivityError("sensitivity solve failed, KSP reason "
+                                       + reason_name(KSP_REASONS, reason))
             du[i] = self.sol.getArray(readonly=True)
         if not np.all(np.isfinite(du)):
             raise SensitivityError("non-finite sensitivities: the tangent is singular")

@@ -60,7 +60,8 @@ import dataclasses
 import numpy as np
 from petsc4py import PETSc
 
-from .options import set_from_options
+from .options import SolverOptions, check_comm
+from .reasons import converged_reason
 from ..core.errors import InputError
 from ..core.qp import FREE, closest_in_box, solve_box_qp
 from .control import TARGET_REACHED, ControlResult, Evaluation, TipController
@@ -185,7 +186,13 @@ class TensionSharer:
 
     def __init__(self, controller: TipController, share: str = "min-norm",
                  min_tension: float = 0.0, *, method: str = "newton", max_it: int = 30,
-                 max_evaluations: int = 60, trust: float = 10.0, kkt_tol: float = KKT_TOL):
+                 max_evaluations: int = 60, trust: float = 10.0, kkt_tol: float = KKT_TOL,
+                 comm=None, options_prefix: str = "share_", petsc_options=None):
+        # almm: the subsolver (BQNLS) otherwise stalls at a gradient ~1e-8 of the
+        # scaled problem for thousands of iterations (measured on a traced circle)
+        self.options = SolverOptions(options_prefix, petsc_options,
+                                     {"tao_almm_subsolver_tao_max_it": "100"})
+        self.comm = check_comm(comm)
         if share not in SHARES:
             raise InputError(f"unknown tension sharing {share!r} (choose from {SHARES})")
         if method not in METHODS:
@@ -412,7 +419,7 @@ class TensionSharer:
         try:
             vecs[0].setArray(np.maximum(reached.p, self.min_tension))
             tao.solve(vecs[0])
-            reason = tao.getConvergedReason()
+            reason = converged_reason(tao)
             its = tao.getIterationNumber()
             p = np.maximum(vecs[0].getArray(readonly=True).copy(), self.min_tension)
         finally:
@@ -430,12 +437,12 @@ class TensionSharer:
         return dataclasses.replace(res, strategy=f"{reached.strategy}; shared {self.share}")
 
     def _create(self, n: int, target: np.ndarray):
-        x = PETSc.Vec().createSeq(n, comm=PETSc.COMM_SELF)
+        x = PETSc.Vec().createSeq(n, comm=self.comm)
         lb, ub = x.duplicate(), x.duplicate()
         lb.set(self.min_tension)
         ub.set(PETSc.INFINITY if self.controller.upper is None else self.controller.upper)
-        ce = PETSc.Vec().createSeq(2, comm=PETSc.COMM_SELF)
-        J = PETSc.Mat().createDense((2, n), comm=PETSc.COMM_SELF)
+        ce = PETSc.Vec().createSeq(2, comm=self.comm)
+        J = PETSc.Mat().createDense((2, n), comm=self.comm)
         J.setUp()
 
         # scaling: f / f_0 (f_0 at the reached state) and the tip error in units of
@@ -461,8 +468,8 @@ class TensionSharer:
             A.setValues(range(2), range(n), ev.sensitivity.tip.T.ravel() / c_scale)
             A.assemble()
 
-        tao = PETSc.TAO().create(PETSc.COMM_SELF)
-        tao.setOptionsPrefix("share_")
+        tao = PETSc.TAO().create(self.comm)
+        self.options.label(tao, x, lb, ub, ce, J)
         tao.setType(PETSc.TAO.Type.ALMM)
         tao.setSolution(x)
         tao.setObjectiveGradient(fg, None)
@@ -472,9 +479,7 @@ class TensionSharer:
         tao.setTolerances(gatol=GATOL)
         tao.setConstraintTolerances(catol=1e-9 / c_scale)
         tao.setMaximumIterations(self.max_it)
-        # the subsolver (BQNLS) otherwise stalls at a gradient ~1e-8 of the scaled
-        # problem for thousands of iterations (measured on a traced circle)
-        set_from_options(tao, "share_", {"tao_almm_subsolver_tao_max_it": "100"})
+        self.options.apply(tao)
         return tao, (x, lb, ub, ce, J)
 
 

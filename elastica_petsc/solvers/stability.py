@@ -100,28 +100,28 @@ import scipy.sparse as sp
 from petsc4py import PETSc
 from slepc4py import SLEPc
 
+from ..core.results import Result
+from ..core.errors import SolverError
+from ..core.dynamics import EB_BETA1, mass_apply, node_masses
 from ..core.fem import Discretisation
 from .inertia import InertiaCounter
 from ..core.model import Arm
 from .linalg import use_bordered_lu
+from .options import SolverOptions, check_comm
+from .reasons import KSP_REASONS, eps_reasons, reason_name
 
 MASS_MODELS = ("lumped", "paper")
 OPERATORS = ("jacobian", "symmetric")
 CONTROLS = ("load", "length")
 
-# beta_1 l of the clamped-free Euler-Bernoulli beam: cos(bl) cosh(bl) = -1
-EB_BETA1 = 1.8751040687119611
 
-EPS_REASONS = {v: k for k, v in vars(SLEPc.EPS.ConvergedReason).items() if not k.startswith("_")}
-
-
-class StabilityError(RuntimeError):
+class StabilityError(SolverError):
     """An eigen solve that did not converge."""
 
 
 # --- results -------------------------------------------------------------------
-@dataclass(frozen=True)
-class Stability:
+@dataclass(frozen=True, repr=False)
+class Stability(Result):
     """Smallest eigenvalues of K v = lambda M v at one equilibrium (Sec. 4.3 (ii)).
 
     ``eigenvalues`` are real parts of lambda l^2 / B, ascending (``max_imag``
@@ -157,8 +157,8 @@ class Stability:
         return self.negative == self.inertia_negative
 
 
-@dataclass(frozen=True)
-class Frequencies:
+@dataclass(frozen=True, repr=False)
+class Frequencies(Result):
     """Lowest small-vibration eigenpairs about an equilibrium.
 
     ``omega2`` = omega^2 rho_A l^4 / B (non-dimensional, ascending; negative:
@@ -202,28 +202,12 @@ def max_tracing_speed_mm_s(f1_hz: float, amplitude_mm: float) -> float:
 
 
 # --- O(N) kinetic mass --------------------------------------------------------------
-def node_masses(disc: Discretisation, tip_mass: float = 0.0) -> np.ndarray:
-    """Trapezoidal nodal masses of nodes 1..N in units of rho_A l (tip: h/2 + tip_mass)."""
-    m = np.full(disc.n_elements, disc.h)
-    m[-1] = 0.5 * disc.h + tip_mass
-    return m
-
-
 def kinetic_mass_apply(disc: Discretisation, theta: np.ndarray, v: np.ndarray,
                        weights: np.ndarray) -> np.ndarray:
-    """M_phys v / (rho_A l^3) = G^T D G v in O(N).
-
+    """M_phys v / (rho_A l^3) = G^T D G v in O(N) (:func:`core.dynamics.mass_apply`):
     G v are the nodal velocities x_dot_k = sum_{e<k} h n_e (v_e + v_{e+1})/2
-    (Eq. (2) differentiated with the midpoint rule; v_0 = 0), D = diag(weights).
-    """
-    phi = disc.element_angles(theta)
-    a = disc.h * np.column_stack((-np.sin(phi), np.cos(phi)))        # h n_e
-    vt = np.concatenate(([0.0], v))
-    xdot = np.cumsum(a * (0.5 * (vt[:-1] + vt[1:]))[:, None], axis=0)  # nodes 1..N
-    f = weights[:, None] * xdot
-    tail = np.cumsum(f[::-1], axis=0)[::-1]        # tail[e] = sum over nodes k > e
-    g = np.einsum("ec,ec->e", a, tail)             # d/d phi_e
-    return 0.5 * (g + np.append(g[1:], 0.0))
+    (Eq. (2) differentiated with the midpoint rule; v_0 = 0), D = diag(weights)."""
+    return mass_apply(disc, theta, v, weights)
 
 
 # --- helpers -------------------------------------------------------------------------
@@ -313,15 +297,14 @@ class StabilitySolver:
     operator : ``"jacobian"`` (default; the SNES bordered Jacobian
         [[T, B], [C, I]], non-symmetric storage) or ``"symmetric"``
         (H = [[T, W], [W^T, -I]] stored in full as AIJ).
-    prefix : PETSc options prefix, e.g. ``-stab_eps_view``,
-        ``-stab_eps_target``, ``-stab_st_pc_factor_mat_ordering_type``.
-        The raw-K solve uses ``<prefix>raw_``, the frequency solve
-        ``<prefix>freq_``.  Options set on the command line win: each EPS
-        calls ``setFromOptions()`` last.
+    comm, options_prefix, petsc_options : the contract of :mod:`.options`
+        (one process; ``-stab_eps_view``, ``-stab_eps_target``; the raw-K
+        solve ``<prefix>raw_``, the frequency solve ``<prefix>freq_``).
     """
 
     def __init__(self, disc: Discretisation, *, nev: int = 4, mass: str = "lumped",
-                 operator: str = "jacobian", tol: float = 1e-12, prefix: str = "stab_"):
+                 operator: str = "jacobian", tol: float = 1e-12, comm=None,
+                 options_prefix: str = "stab_", petsc_options=None):
         if mass not in MASS_MODELS:
             raise ValueError(f"mass must be one of {MASS_MODELS}, got {mass!r}")
         if operator not in OPERATORS:
@@ -329,8 +312,9 @@ class StabilitySolver:
         self.disc = disc
         self.mass = mass
         self.operator = operator
-        self.prefix = prefix
-        self.comm = PETSc.COMM_SELF      # one arm is a small problem (parallel: across arms)
+        self.options = SolverOptions(options_prefix, petsc_options)
+        self.prefix = prefix = self.options.prefix
+        self.comm = check_comm(comm)     # one arm is a small problem (parallel: across arms)
         N, n = disc.n_elements, disc.n_tendons
         self.m = np.full(N, disc.h)
         if mass == "lumped":
@@ -349,6 +333,7 @@ class StabilitySolver:
         self.A = PETSc.Mat().createAIJ(size=(size, size), csr=(indptr, indices, values),
                                        comm=self.comm)
         self.B = _diag_mat(np.concatenate((self.m, np.zeros(self.n_border))))
+        self.options.label(self.A, self.B)
         # a fixed initial vector: each eigen solve is reproducible bit for bit,
         # whatever solves the process did before (workspace results must not
         # depend on how samples are spread over ranks)
@@ -356,13 +341,17 @@ class StabilitySolver:
         self._v0.setArray(np.random.default_rng(2019).standard_normal(size))
         self.eps = self._make_eps(self.A, self.B, min(int(nev), N), tol, prefix)
         self.nev = self.eps.getDimensions()[0]
-        self._user_target = PETSc.Options(prefix).hasName("eps_target")
         self.eps_raw = None
         if mass != "paper":
             self.B_raw = _diag_mat(np.concatenate((np.ones(N), np.zeros(self.n_border))))
             self.eps_raw = self._make_eps(self.A, self.B_raw, 1, tol, prefix + "raw_")
-            self._user_target_raw = PETSc.Options(prefix + "raw_").hasName("eps_target")
-        self.inertia = InertiaCounter(disc)
+        self.inertia = InertiaCounter(disc, comm=self.comm,
+                                      options_prefix=self.options.name("inertia_"))
+
+    def _target_given(self, part: str) -> bool:
+        """Whether the user set ``-<prefix><part>eps_target`` (command line or code)."""
+        return (PETSc.Options(self.prefix + part).hasName("eps_target")
+                or part + "eps_target" in self.options.options)
 
     def _make_eps(self, A, B, nev, tol, prefix):
         eps = SLEPc.EPS().create(self.comm)
@@ -378,7 +367,7 @@ class StabilitySolver:
         st.setType(SLEPc.ST.Type.SINVERT)
         st.setMatStructure(PETSc.Mat.Structure.SUBSET)   # diag(M, 0) lies on A's diagonal
         use_bordered_lu(st.getKSP())
-        eps.setFromOptions()
+        self.options.apply(eps)
         n_theta = self.disc.n_elements
         if eps.getDimensions()[0] > n_theta:          # -<prefix>eps_nev beyond N: clamp
             eps.setDimensions(n_theta)
@@ -422,10 +411,11 @@ class StabilitySolver:
                                probes)
 
     # --- stability ------------------------------------------------------------------------
-    def _run(self, eps, B, u, p, nev: int, negatives: int, user_target: bool,
+    def _run(self, eps, B, u, p, nev: int, negatives: int, part: str,
              weights) -> tuple[float, int]:
-        """Set the target (module docstring), solve, check convergence."""
-        if not user_target:
+        """Set the target (module docstring) unless the user set it for this
+        ``part`` of the prefix ("" or "raw_"), solve, check convergence."""
+        if not self._target_given(part):
             # -1 in units of lambda l^2/B, whatever the weights' scale
             target = -self.disc.h / float(np.max(weights))
             if negatives > 0:
@@ -441,7 +431,7 @@ class StabilitySolver:
         if reason < 0 or eps.getConverged() < 1:
             raise StabilityError(
                 f"SLEPc EPS ({eps.getOptionsPrefix()}) did not converge: "
-                f"{EPS_REASONS.get(reason, reason)}, {eps.getConverged()} eigenpairs converged")
+                f"{reason_name(eps_reasons(), reason)}, {eps.getConverged()} eigenpairs converged")
         return eps.getTarget(), reason
 
     def solve(self, u, p, *, raw: bool = True) -> Stability:
@@ -452,18 +442,19 @@ class StabilitySolver:
         ``mass="paper"``).
         """
         disc = self.disc
+        self.options.refresh(*filter(None, (self.eps, self.eps_raw)))
         u = np.asarray(u, float)
         p = np.asarray(p, float)
         negatives = self.inertia.negative_eigenvalues(u, p)
         self._assemble(u, p)
         nev = min(max(self.nev, negatives + 1), disc.n_elements)
-        target, reason = self._run(self.eps, self.B, u, p, nev, negatives, self._user_target,
+        target, reason = self._run(self.eps, self.B, u, p, nev, negatives, "",
                                    self.m)
         values, imag, modes = _real_eigenpairs(self.eps, self.A, disc.n_elements, nev)
         if self.mass == "paper":
             raw_min = disc.h * float(values[0])
         elif raw:
-            self._run(self.eps_raw, self.B_raw, u, p, 1, negatives, self._user_target_raw,
+            self._run(self.eps_raw, self.B_raw, u, p, 1, negatives, "raw_",
                       np.ones(disc.n_elements))
             raw_values, _, _ = _real_eigenpairs(self.eps_raw, self.A, disc.n_elements, 1)
             raw_min = float(raw_values[0])
@@ -476,7 +467,7 @@ class StabilitySolver:
                          inertia_negative=negatives, max_imag=imag, mass=self.mass,
                          operator=self.operator, target=float(target),
                          iterations=self.eps.getIterationNumber(),
-                         reason=EPS_REASONS.get(reason, str(reason)))
+                         reason=reason_name(eps_reasons(), reason))
 
     # --- eigenfrequencies --------------------------------------------------------------------
     def _constrained_matrix(self, u, p, control: str) -> sp.csr_matrix:
@@ -528,9 +519,10 @@ class StabilitySolver:
                                        Ac.data))
         ksp = PETSc.KSP().create(self.comm)
         ksp.setOptionsPrefix(self.prefix + "freq_inv_")
+        A.setOptionsPrefix(self.prefix + "freq_")
         ksp.setOperators(A)
         use_bordered_lu(ksp)
-        ksp.setFromOptions()
+        self.options.apply(ksp)
         rhs, sol = A.createVecs()
         buf = np.zeros(size)
 
@@ -539,7 +531,8 @@ class StabilitySolver:
             rhs.setArray(buf)
             ksp.solve(rhs, sol)
             if ksp.getConvergedReason() < 0:
-                raise StabilityError(f"bordered solve failed: KSP reason {ksp.getConvergedReason()}")
+                raise StabilityError("bordered solve failed: KSP reason "
+                                     + reason_name(KSP_REASONS, ksp.getConvergedReason()))
             return sol.getArray(readonly=True)[:N].copy()
 
         op = PETSc.Mat().createPython([N, N], _ShellOperator(apply), comm=self.comm)
@@ -552,12 +545,12 @@ class StabilitySolver:
             eps.setWhichEigenpairs(SLEPc.EPS.Which.LARGEST_MAGNITUDE)
             eps.setDimensions(nev)
             eps.setTolerances(tol, 500)
-            eps.setFromOptions()
+            self.options.apply(eps)
             eps.solve()
             reason = eps.getConvergedReason()
             if reason < 0 or eps.getConverged() < 1:
                 raise StabilityError(f"frequency solve did not converge: "
-                                     f"{EPS_REASONS.get(reason, reason)}")
+                                     f"{reason_name(eps_reasons(), reason)}")
             nu, _, modes = _real_eigenpairs(eps, op, N, nev)   # nu = 1 / Omega
             keep = np.abs(nu) > 0
             omega2 = 1.0 / nu[keep]
@@ -571,7 +564,7 @@ class StabilitySolver:
             return Frequencies(omega2=omega2, hz=hz, modes=modes, control=control,
                                converged=eps.getConverged(),
                                iterations=eps.getIterationNumber(),
-                               reason=EPS_REASONS.get(reason, str(reason)))
+                               reason=reason_name(eps_reasons(), reason))
         finally:
             for obj in (eps, op, ksp, A, rhs, sol):
                 obj.destroy()

@@ -97,7 +97,7 @@ from scipy.optimize import brentq
 
 from ..core.deflation import Deflation
 from ..solvers.equilibrium import Equilibrium, EquilibriumSolver
-from ..core.errors import InputError
+from ..core.errors import InputError, SolverError
 from ..solvers.lengths import LengthEquilibrium, LengthSolver, constrained_mode
 
 PAPER = "Handral & Rangarajan (2019), Sec. 4.6, Fig. 7"
@@ -106,7 +106,7 @@ ALIGNED_SHORTENINGS_MM = (0.5, 1.0, 1.5, 2.0)
 EXPERIMENT_SHORTENINGS_MM = tuple(np.round(np.arange(0.25, 6.0001, 0.25), 10))
 
 
-class BucklingError(RuntimeError):
+class BucklingError(SolverError):
     """The Fig. 7 scenario could not be computed (no critical configuration,
     no crossing, a solve that did not converge); the message says where."""
 

@@ -37,6 +37,7 @@ from ..core.calibration_params import ParameterModel
 from ..core.errors import InputError
 from ..solvers.calibration import RowError, RowSolver, RowState
 from ..solvers.lengths import SAME_SHAPE_TOL
+from ..solvers.reasons import TAO_REASONS, reason_name
 
 # Convergence: no scaled parameter moved by more in one Gauss-Newton iteration.
 STEP_TOL = 1e-7
@@ -50,7 +51,6 @@ POUNDERS_GRTOL = 1e-10           # ... or on |g| / f (residuals that do not vani
 # ... or after max_iterations x this x parameters iterations.
 POUNDERS_ITERATIONS_PER_PARAMETER = 4
 METHODS = ("brgn", "pounders")
-TAO_REASONS = {v: k for k, v in vars(PETSc.TAO.Reason).items() if not k.startswith("_")}
 
 
 class CalibrationError(InputError):
@@ -290,7 +290,7 @@ def least_squares(problem: CalibrationProblem, theta0, weights, *, method: str =
         tao.solve(x)
         theta = theta0 + scale * x.getArray(readonly=True)
         reason = inner.getConvergedReason()
-        return theta, TAO_REASONS.get(reason, str(reason)), inner.getIterationNumber()
+        return theta, reason_name(TAO_REASONS, reason), inner.getIterationNumber()
     finally:
         for obj in (tao, x, R, Jm, xl, xu):
             obj.destroy()

@@ -39,10 +39,11 @@ valid when a process dies mid-write; the measured I/O share is reported in
 the file (``timing`` attributes: ``seconds_wall`` and ``seconds_io`` up to
 the start of the last write, which cannot time itself; ``ranks``).
 
-Checkpoint interval: 2 s by default; the environment variable
-``ELASTICA_PETSC_CHECKPOINT_SECONDS`` overrides it (0: after every chunk,
-as the interruption tests use; larger on a cluster with big grids, where
-each checkpoint rewrites the whole file).
+Checkpoint interval: ``checkpoint_seconds``, 2 s by default (0: after every
+chunk, as the interruption tests use; larger on a cluster with big grids,
+where each checkpoint rewrites the whole file).  The command line reads it
+from the environment variable ``ELASTICA_PETSC_CHECKPOINT_SECONDS``; the
+library reads no environment variable.
 
 Errors in the input (a bad grid, a file to resume made for another grid or
 arm) are agreed on by all ranks before any work starts and raised on every
@@ -51,7 +52,6 @@ line and exit with status 2 without ``MPI_Abort``.
 """
 from __future__ import annotations
 
-import os
 import signal
 import time
 from dataclasses import dataclass, field
@@ -65,7 +65,7 @@ from ..io.workspace import continue_provenance, read_results
 
 
 TAG_RESULT, TAG_FINISHED = 11, 12
-CHECKPOINT_ENV = "ELASTICA_PETSC_CHECKPOINT_SECONDS"
+CHECKPOINT_SECONDS = 2.0  # default interval between checkpoints
 STOP_GRACE = 5.0          # s rank 0 waits, after a stop, for the other ranks' last samples
 
 
@@ -82,16 +82,15 @@ def agree(comm, error: str | None) -> None:
         raise CollectiveInputError(first)
 
 
-def checkpoint_interval() -> float:
-    """Seconds between checkpoints: ``$ELASTICA_PETSC_CHECKPOINT_SECONDS`` or 2."""
-    value = os.environ.get(CHECKPOINT_ENV, "2")
+def check_checkpoint_seconds(seconds) -> float:
+    """``seconds`` between checkpoints as a float >= 0, or :class:`InputError`."""
     try:
-        seconds = float(value)
-    except ValueError:
-        seconds = float("nan")
-    if not seconds >= 0:
-        raise InputError(f"{CHECKPOINT_ENV}={value!r}: expected seconds >= 0")
-    return seconds
+        value = float(seconds)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not value >= 0:
+        raise InputError(f"checkpoint interval {seconds!r}: expected seconds >= 0")
+    return value
 
 
 @dataclass(frozen=True)
@@ -268,6 +267,31 @@ class ChunkCounter:
         self.win.Free()
 
 
+class LocalCounter:
+    """The chunk counter of a run on one process (``comm.size == 1``): a plain
+    integer with :class:`ChunkCounter`'s interface, no MPI window (a window on
+    COMM_SELF of one rank of a larger job makes OpenMPI's finalisation wait
+    for the other ranks forever)."""
+
+    def __init__(self):
+        self.count = 0
+        self.exhausted = False
+
+    def next(self) -> int:
+        k, self.count = self.count, self.count + 1
+        self.exhausted = k >= ChunkCounter.EXHAUSTED
+        return k
+
+    def peek(self) -> int:
+        return self.count
+
+    def exhaust(self) -> None:
+        self.count, self.exhausted = ChunkCounter.EXHAUSTED, True
+
+    def free(self) -> None:
+        pass
+
+
 class _Collector:
     """Rank 0's side: stores chunks (its own and those other ranks send), writes
     checkpoints, and knows how many ranks have finished."""
@@ -392,22 +416,24 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
     :class:`ChunkResults` (its own schema and file layout).  ``attrs``: the
     file's root attributes, which a resumed file must match
     (:func:`~elastica_petsc.io.workspace.read_results`); ``limits``: passed to
-    the results' :meth:`~ChunkResults.write`.
+    the results' :meth:`~ChunkResults.write`.  ``progress``: True (a bar on
+    rank 0, ui/progress.py), None/False (none), or an object with
+    ``update(done)`` and ``close(done)``.
     """
     if stop is None:
         with Stop() as stop:
             return run(grid, sampler, out, attrs, limits, comm=comm, resume=resume,
                        checkpoint_seconds=checkpoint_seconds, progress=progress,
                        progress_label=progress_label, stop=stop, new_results=new_results)
-    from ..core.progress import Progress
+    from ..ui.progress import Progress
 
-    if checkpoint_seconds is None:
-        checkpoint_seconds = checkpoint_interval()
+    checkpoint_seconds = check_checkpoint_seconds(
+        CHECKPOINT_SECONDS if checkpoint_seconds is None else checkpoint_seconds)
     results, todo = _load(out, attrs, resume, comm, new_results)
-    counter = stop.counter = ChunkCounter(comm)
+    counter = stop.counter = ChunkCounter(comm) if comm.size > 1 else LocalCounter()
     if comm.rank == 0:
         bar = (Progress(grid.size, progress_label, already=results.samples_done)
-               if progress is None else progress if progress else _NoProgress())
+               if progress is True else progress if progress else _NoProgress())
         rank0 = _Collector(comm, counter, results, out, attrs, limits, checkpoint_seconds,
                            bar)
         _work(grid, sampler, todo, counter, stop, rank0.store)
@@ -423,8 +449,8 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
     else:
         sends = []                                     # results on their way to rank 0
         # non-blocking: a chunk's results exceed the eager limit of shared-memory MPI,
-        # and a blocking send would wait until rank 0 ends its own chunk (measured:
-        # 23% of a worker's time); rank 0 receives until this rank says FINISHED
+        # and a blocking send would wait until rank 0 ends its own chunk (BENCHMARKS.md,
+        # "Timing notes from the docstrings"); rank 0 receives until this rank says FINISHED
         _work(grid, sampler, todo, counter, stop,
               lambda chunk, values: sends.append(
                   comm.isend((chunk, values), dest=0, tag=TAG_RESULT)))

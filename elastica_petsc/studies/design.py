@@ -36,15 +36,14 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from petsc4py import PETSc
 
+from ..core.results import Result
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm
 from ..solvers.continuation import CurveTracer, TensionBound
 from ..solvers.control import TipController
-
-TAO_REASONS = {v: k for k, v in vars(PETSc.TAO.Reason).items() if not k.startswith("_")}
+from ..solvers.minimise import minimise_bounded
 
 
 class DesignError(InputError):
@@ -157,8 +156,8 @@ def path_misfit(arm: Arm, tendons, targets_mm, elements: int | None = None) -> P
     return PathMisfit(f, grad, np.array(reached), np.array(errors), np.array(tensions))
 
 
-@dataclass
-class DesignResult:
+@dataclass(frozen=True, repr=False)
+class DesignResult(Result):
     """History and outcome of a path design (mm, mm^2)."""
 
     arm_before: Arm
@@ -172,6 +171,12 @@ class DesignResult:
     evaluations: int = 0
     seconds: float = 0.0
 
+    def summary(self) -> dict:
+        """What ``design --json`` prints for a path (targets reached before/after)."""
+        from ..io.summaries import path_design_summary
+
+        return path_design_summary(self)
+
 
 def scaled_path(targets_mm, margin: float) -> np.ndarray:
     """The path scaled by ``margin`` about its centroid (margin 1: unchanged)."""
@@ -180,59 +185,10 @@ def scaled_path(targets_mm, margin: float) -> np.ndarray:
     return c + margin * (t - c)
 
 
-def minimise_bounded(objective, q0, lo, hi, *, scale_mm: float, max_iterations: int,
-                     prefix: str, done=lambda: False, line_search: str | None = None,
-                     status: dict | None = None) -> tuple[str, int]:
-    """TAO BLMVM on q = q0 + scale_mm * X within lo <= q <= hi (mm).
-    ``objective(q) -> (f, df/dq)``; ``done()`` true stops it (CONVERGED_USER);
-    ``status["iteration"]`` follows TAO's iteration number.
-    ``line_search``: TAO's line search type unless ``-<prefix>tao_ls_type``
-    is given.  Returns (TAO's reason, iterations)."""
-    def form(tao, X, G) -> float:
-        f, g = objective(q0 + scale_mm * X.getArray(readonly=True))
-        G.setArray(np.asarray(g, float) * scale_mm)
-        return float(f)
-
-    x = PETSc.Vec().createSeq(len(q0), comm=PETSc.COMM_SELF)
-    x.set(0.0)
-    xl, xu = x.duplicate(), x.duplicate()
-    xl.setArray((lo - q0) / scale_mm)
-    xu.setArray((hi - q0) / scale_mm)
-    tao = PETSc.TAO().create(PETSc.COMM_SELF)
-    tao.setOptionsPrefix(prefix)
-    tao.setType(PETSc.TAO.Type.BLMVM)
-    tao.setObjectiveGradient(form, None)
-    tao.setVariableBounds(xl, xu)
-    tao.setTolerances(gatol=0.0, grtol=0.0, gttol=0.0)
-    tao.setMaximumIterations(max_iterations)
-    status = {} if status is None else status
-
-    def monitor(t) -> None:
-        status["iteration"] = t.getIterationNumber()
-        if done():
-            t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
-
-    tao.setMonitor(monitor)
-    options, key = PETSc.Options(), f"{prefix}tao_ls_type"
-    default_ls = line_search is not None and not options.hasName(key)
-    if default_ls:
-        options[key] = line_search
-    tao.setFromOptions()
-    if default_ls:
-        options.delValue(key)
-    try:
-        tao.solve(x)
-        reason = TAO_REASONS.get(tao.getConvergedReason(), str(tao.getConvergedReason()))
-        return reason, tao.getIterationNumber()
-    finally:
-        for obj in (tao, x, xl, xu):
-            obj.destroy()
-
-
 def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = None,
                     reach_mm: float = 100.0, clearance_mm: float = 10.0, margin: float = 1.1,
                     max_iterations: int = 20, scale_mm: float = 10.0,
-                    prefix: str = "design_", progress=None) -> DesignResult:
+                    options_prefix: str = "design_", progress=None) -> DesignResult:
     """Routing points (mm) of ``tendons`` (0-based) that make every target of the
     path reachable (f = 0 on the path scaled by ``margin``), by TAO BLMVM with
     the exact gradient of the module docstring.  Options prefix ``design_``.
@@ -260,7 +216,8 @@ def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = Non
 
     status = {}
     reason, iterations = minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
-                                          max_iterations=max_iterations, prefix=prefix,
+                                          max_iterations=max_iterations,
+                                          options_prefix=options_prefix,
                                           done=lambda: bool(best) and best["f"] == 0.0,
                                           status=status)
     after = with_routes(arm, tendons, best["q"])

@@ -39,6 +39,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.results import Result
+from ..core.clearance import state_cable_clear
 from ..core.fem import Discretisation
 from ..core.geometry import triangles_union_area
 from ..core.model import Arm
@@ -135,8 +137,8 @@ def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells
 # --- the optimiser -----------------------------------------------------------------------------
 INFEASIBLE_START = "INFEASIBLE_START"   # AreaDesign.reason: the start violates a constraint
 STALL_GAIN = 1e-3        # relative area gain over 3 iterations below which TAO is stopped
-@dataclass
-class AreaDesign:
+@dataclass(frozen=True, repr=False)
+class AreaDesign(Result):
     """Outcome of ``design --objective area`` (mm, mm^2, N)."""
 
     arm_before: Arm
@@ -160,6 +162,12 @@ class AreaDesign:
         if a is None or b is None:
             return None
         return b.area_mm2 - b.error_mm2 > a.area_mm2 + a.error_mm2
+
+    def summary(self) -> dict:
+        """What ``design --objective area --json`` prints (areas before/after, routes)."""
+        from ..io.summaries import area_summary
+
+        return area_summary(self)
 
 
 def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm: float):
@@ -190,7 +198,7 @@ def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm:
 def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
                     attaches=(), reach_mm: float = 100.0, clearance_mm: float = 10.0,
                     max_iterations: int = 15, scale_mm: float = 10.0,
-                    resample_cells: int | None = 32, prefix: str = "design_",
+                    resample_cells: int | None = 32, options_prefix: str = "design_",
                     progress=None) -> AreaDesign:
     """Routing points (mm) of ``tendons`` (0-based) maximising the area A of the
     workspace within 0 <= p_i <= ``p_max`` (= P_max l^2/B; module docstring),
@@ -243,7 +251,7 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
         reason, iterations = _optimise_routes(designed, tendons, evaluate, history,
                                               reach_mm=reach_mm, clearance_mm=clearance_mm,
                                               scale_mm=scale_mm, max_iterations=max_iterations,
-                                              prefix=prefix)
+                                              options_prefix=options_prefix)
     after_arm = best.get("arm", arm)
     checks = [None, None]
     if resample_cells:
@@ -256,11 +264,12 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
 
 
 def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm, scale_mm,
-                     max_iterations, prefix):
+                     max_iterations, options_prefix):
     """TAO BLMVM on the routing points of ``tendons`` (f = -A/A_0); an
     infeasible design (a node unreachable, or a cable across the arm) returns
     f = 1, so that the (Armijo) line search backs off."""
-    from .design import minimise_bounded, route_bounds, with_routes
+    from ..solvers.minimise import minimise_bounded
+    from .design import route_bounds, with_routes
 
     q0 = np.concatenate([arm.tendons[i].route_mm for i in tendons]).astype(float)
     lo, hi = route_bounds(arm, tendons, reach_mm, clearance_mm)
@@ -284,5 +293,6 @@ def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm,
         return len(b) > 3 and b[-1] - b[-4] < STALL_GAIN * b[-1]
 
     return minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
-                            max_iterations=max_iterations, prefix=prefix, line_search="armijo",
+                            max_iterations=max_iterations, options_prefix=options_prefix,
+                            line_search="armijo",
                             done=stalled)

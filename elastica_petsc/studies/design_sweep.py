@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core import jsontext
+from ..core.results import Result
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm
@@ -175,8 +176,8 @@ class SweepSampler:
         pass
 
 
-@dataclass
-class Sweep:
+@dataclass(frozen=True, repr=False)
+class Sweep(Result):
     """A finished (or interrupted) sweep: designs (D, k) in mm and per-design fields."""
 
     names: list
@@ -198,19 +199,25 @@ class Sweep:
         return None if not ok.any() else int(np.flatnonzero(ok)[np.argmax(
             self.values["area"][ok])])
 
+    def summary(self) -> dict:
+        """What ``design --sweep --json`` prints (counts, the best design)."""
+        from ..io.summaries import sweep_summary
+
+        return sweep_summary(self)
+
 
 def run_sweep(arm: Arm, elements: int, axes, p_max: float, *, targets_mm=None, comm=None,
               out=None, resume: bool = False, overwrite: bool = False, progress=None,
               checkpoint_seconds: float | None = None, provenance: dict | None = None) -> Sweep:
     """Evaluate every design of ``axes`` (list of :class:`Axis`) over the ranks of
-    ``comm`` (default COMM_WORLD): the area objective on the tension box
+    ``comm`` (default COMM_SELF: this process alone): the area objective on the tension box
     0 <= p_i <= ``p_max`` (p = P l^2/B) and, with ``targets_mm``, the path
     misfit.  ``out`` (.h5), ``resume``, ``overwrite``, ``progress`` and
     ``checkpoint_seconds`` as in :func:`~elastica_petsc.studies.workspace.run_map`.
     Collective; returns the :class:`Sweep` on every rank."""
     from mpi4py import MPI
 
-    comm = MPI.COMM_WORLD if comm is None else comm
+    comm = MPI.COMM_SELF if comm is None else comm
     lock = path = grid = None
     with Stop() as stop:
         try:

@@ -45,7 +45,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..solvers.continuation import Constraint, CurvePoint, CurveTracer, Manifold, TensionBound
-from ..solvers.options import set_from_options
 
 # a cable within this distance (units of l) of its routing point ends a curve
 COLLAPSE = 1e-3
@@ -63,8 +62,7 @@ class SearchTracer(CurveTracer):
     no inertia count per point, which cost a third of each step."""
 
     def __init__(self, disc, **kw):
-        super().__init__(disc, prefix="curve_", **kw)
-        set_from_options(self.snes, "curve_", CURVE_OPTIONS)
+        super().__init__(disc, options_prefix="curve_", petsc_options=CURVE_OPTIONS, **kw)
         self.A.pattern.determinant_sign = lambda lu: 1.0       # det sign unused
 
     def point(self, w, t, det_sign, iterations, tip_det: float = np.nan,

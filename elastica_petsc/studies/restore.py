@@ -25,7 +25,7 @@ from ..core.fem import Discretisation
 from ..core.loading import Loading
 from ..core.model import Arm
 from ..io.hdf5 import read_loading
-from ..solvers.equilibrium import Equilibrium, EquilibriumSolver
+from ..solvers.equilibrium import Equilibrium, EquilibriumSolver, newton_converged
 from ..solvers.reach import replay
 
 LOADED_KINDS = ("equilibrium", "control", "trace")
@@ -147,6 +147,6 @@ def state_from_file(path, point: int | None = None, state: int | None = None) ->
 
 def _newton(solver: EquilibriumSolver, disc: Discretisation, theta, p) -> Equilibrium:
     u, its, reason = solver.newton(disc.consistent_state(theta), p)
-    return Equilibrium(disc, p.copy(), u, converged=solver.converged(), reason=reason,
+    return Equilibrium(disc, p.copy(), u, converged=newton_converged(reason), reason=reason,
                        iterations=its, load_steps=0,
                        unstable_modes=solver.inertia.negative_eigenvalues(u, p))

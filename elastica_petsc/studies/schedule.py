@@ -21,14 +21,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.results import Result
 from ..core.errors import InputError
 from ..core.schedule import MotorSchedule, schedule_from_trace
 from ..solvers.control import TipController
 from .trace import TraceResult, trace
 
 
-@dataclass(frozen=True)
-class TracedSchedule:
+@dataclass(frozen=True, repr=False)
+class TracedSchedule(Result):
     """The approach (None if not asked for), the traced path, the timed
     schedule and how its speed was chosen (``speed``: the keys of
     :func:`suggested_speed`, plus ``speed_mm_s`` and ``speed_source``)."""
@@ -37,6 +38,12 @@ class TracedSchedule:
     path: TraceResult
     schedule: MotorSchedule
     speed: dict
+
+    def summary(self) -> dict:
+        """What ``trace --json`` prints: the path, its approach and the schedule's timing."""
+        from ..io.summaries import schedule_summary, trace_summary
+
+        return {**trace_summary(self.path, self.schedule), **schedule_summary(self)}
 
 
 APPROACH_TOL_MM = 0.05

@@ -19,6 +19,7 @@ import itertools
 
 import numpy as np
 
+from ..core.results import Result
 from ..core.deflation import Deflation
 from ..core.errors import InputError
 from ..solvers.equilibrium import (Equilibrium, EquilibriumSolver, check_order, check_tensions,
@@ -111,8 +112,8 @@ def state_numbers(states) -> list[int]:
     return numbers
 
 
-@dataclass(frozen=True)
-class SearchResult:
+@dataclass(frozen=True, repr=False)
+class SearchResult(Result):
     """Distinct equilibria found from a set of starts.  Not a proof that no
     other equilibrium exists: only what these starts and methods reached."""
 
@@ -171,7 +172,18 @@ class SearchResult:
                 + ("" if not c["outside_the_box"] else
                    f", {c['outside_the_box']} found beyond it not listed"))
 
-    def summary(self) -> str:
+    def summary(self) -> dict:
+        """The search's coverage (what ``lengths --all``/``equilibria --json`` print as
+        ``search``) and the states found (``states``: p, L/l, tip in units of l)."""
+        from ..io.summaries import search_summary
+
+        return dict(search_summary(self), states=[
+            {"number": f.number, "p": f.state.p.tolist(),
+             "cable_lengths": f.state.cable_lengths.tolist(), "tip": f.state.tip.tolist(),
+             "unstable_modes": int(f.state.unstable_modes)} for f in self.states])
+
+    def report(self) -> str:
+        """The search in a few lines of text (a list, not a proof)."""
         what = "cable lengths L/l" if self.control == "length" else "tensions p"
         lines = [f"{len(self.states)} distinct equilibria at {what} = "
                  + ", ".join(f"{v:.6g}" for v in self.target)
@@ -597,7 +609,7 @@ class LoadSolves:
                  length_mm: float | None = None):
         self.eq_solver, self.disc, self.length_mm = eq_solver, eq_solver.disc, length_mm
         self.system = AugmentedSystem(self.disc, "load", prefix, Deflation(self.disc.h),
-                                      options=DEFLATION_OPTIONS)
+                                      petsc_options=DEFLATION_OPTIONS)
         self.length_inertia = LengthInertia(self.disc)
 
     def examined(self, eq: Equilibrium | None, label: str = ""):

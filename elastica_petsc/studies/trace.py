@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.results import Result
 from ..solvers.control import ControlResult, Evaluation, TipController
 from ..core.errors import InputError
 
@@ -185,8 +186,8 @@ def _csv_columns(path: Path, lineno: int, cells: list[str]) -> tuple[int, int] |
 
 
 # --- tracing ------------------------------------------------------------------------
-@dataclass(frozen=True)
-class TraceResult:
+@dataclass(frozen=True, repr=False)
+class TraceResult(Result):
     """Tip control along a path.  mm and newtons (converted with the arm's
     l and B / l^2); per point i = 0..k-1, per tendon j."""
 
@@ -248,6 +249,12 @@ class TraceResult:
         if len(dL) == 0:
             return float("nan")
         return float(np.mean(np.sum(dL * dP, axis=1) < 0))
+
+    def summary(self) -> dict:
+        """What ``trace --json`` prints about the path (without the motor schedule)."""
+        from ..io.summaries import trace_summary
+
+        return trace_summary(self)
 
 
 def monotonic_fraction(lengths, tensions, tol_L: float = 1e-9, tol_P: float = 1e-12):

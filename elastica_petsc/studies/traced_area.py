@@ -20,7 +20,7 @@ curved inner edge with straight chords: on the paper's arm at 10 N it gave
 59,436 mm^2 against 58,330 mm^2 from ``boundary`` and a gradient 15 % off
 finite differences of ``boundary``; the traced loop agrees with ``boundary``
 by construction and its gradient with finite differences of ``boundary``
-to 2 % (within 1.3 % on the paper's arm; tests/test_traced_area.py, docs/model.md §16.3).
+to 2 % (within 1.3 % on the paper's arm; tests/test_traced_area.py, docs/model.md §17.3).
 """
 from __future__ import annotations
 

@@ -46,14 +46,16 @@ def main(argv: list[str]) -> int:
     petsc4py.init(argv[:1])
     from ..core.model import arm_from_dict
     from ..core.fem import Discretisation
+    from mpi4py import MPI
+
     from .workspace import run_map
 
     spec = json.loads(Path(argv[1]).read_text())
-    spec["kwargs"].setdefault("progress", False)      # None: progress lines on stderr
+    spec["kwargs"].setdefault("progress", False)      # True: a bar, or lines on stderr
     arm = arm_from_dict(spec["arm"])
     try:
         result = run_map(arm, Discretisation.from_arm(arm, spec["elements"]),
-                         **spec["kwargs"])
+                         comm=MPI.COMM_WORLD, **spec["kwargs"])
     except InputError as err:
         print(f"elastica-petsc: error: {err}", file=sys.stderr)
         return 2

@@ -60,7 +60,8 @@ sampled map); the plane geometry is :mod:`elastica_petsc.core.geometry`.
 """
 from .compare import compare_map, compare_restricted, compare_with_samples
 from .result import BoundaryResult
-from .trace import BoundaryError, boundary_proof, trace_boundary, traced_w0
+from .trace import BoundaryError, TraceCache, boundary_proof, trace_boundary, traced_w0
 
 __all__ = ["BoundaryError", "BoundaryResult", "boundary_proof", "compare_map",
-           "compare_restricted", "compare_with_samples", "trace_boundary", "traced_w0"]
+           "compare_restricted", "compare_with_samples", "TraceCache", "trace_boundary",
+           "traced_w0"]

@@ -6,13 +6,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...core.results import Result
 from ...core.geometry import winding_number
 from ...core.model import Arm
 from .faces import OutsideMap
 
 
-@dataclass
-class BoundaryResult:
+@dataclass(frozen=True, repr=False)
+class BoundaryResult(Result):
     """W_0 and restricted boundaries of one arm (units: mm and mm^2).
 
     fold_curves: fold curves of the tip map inside D (:class:`FoldTracer`),
@@ -64,7 +65,8 @@ class BoundaryResult:
         the fold images (:class:`OutsideMap`, built on first use)."""
         if self._outside is None:
             lines = self.polygons_mm["W0"] + self.fold_polylines_mm
-            self._outside = OutsideMap(lines, self.cell_mm, closed=(0,))
+            object.__setattr__(self, "_outside",                      # a cache, not a field value
+                               OutsideMap(lines, self.cell_mm, closed=(0,)))
         return self._outside
 
     def contains(self, points_mm) -> np.ndarray:
@@ -118,3 +120,9 @@ class BoundaryResult:
         return (f"OUTSIDE_BOUNDARY: the target lies in a hole of W_0, a bounded face of the "
                 f"plane minus the traced boundary ({curves}) with no preimage, counted along "
                 f"a ray to infinity; {dist:.3g} mm from the boundary (docs/model.md §9.1)"), dist
+
+    def summary(self) -> dict:
+        """What ``boundary --json`` prints (areas, solves, folds, messages)."""
+        from ...io.summaries import boundary_summary
+
+        return boundary_summary(self)

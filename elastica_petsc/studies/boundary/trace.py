@@ -3,6 +3,9 @@ traced (:func:`trace_boundary`), and the one trace per arm and mesh that a
 process shares (:func:`traced_w0`, :func:`boundary_proof`)."""
 from __future__ import annotations
 
+import dataclasses
+from collections import OrderedDict
+
 import time
 
 import numpy as np
@@ -102,51 +105,79 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
     messages += [f"W0: tip-map fold not traced: {why} (no OUTSIDE_BOUNDARY verdicts)"
                  for why in result.untraced_folds]
     if tip_folds and regions["W0"].closed and not result.untraced_folds:
-        _assemble_w0(result)
-    result.seconds = time.perf_counter() - t0
+        result = _assemble_w0(result)
+    result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     if progress is not None:
         progress(solves, "traced")
     return result
 
 
-def _assemble_w0(result: BoundaryResult) -> None:
+def _assemble_w0(result: BoundaryResult) -> BoundaryResult:
     """W_0's area from the faces (docs/model.md §9): the set the loop winds
     around, plus the faces of winding number 0 covered twice (N > 0);
     faces whose N is undecided widen ``area_bounds_mm2``."""
-    result.faces = classify_faces(result)
-    extra = sum(f["area_mm2"] for f in result.faces
+    faces = classify_faces(result)
+    extra = sum(f["area_mm2"] for f in faces
                 if f["winding"] == 0 and (f["preimages"] or 0) > 0)
-    undecided = sum(f["area_mm2"] for f in result.faces
+    undecided = sum(f["area_mm2"] for f in faces
                     if f["winding"] == 0 and f["preimages"] is None)
-    bad = [f for f in result.faces if f["preimages"] is not None
+    bad = [f for f in faces if f["preimages"] is not None
            and (f["preimages"] < abs(f["winding"]) or (f["preimages"] - f["winding"]) % 2)]
     lower = result.areas_mm2["W0"] + extra
     result.areas_mm2["W0"] = lower
-    result.area_bounds_mm2 = (lower, lower + undecided)
+    result = dataclasses.replace(result, faces=faces, area_bounds_mm2=(lower, lower + undecided))
     if undecided:
         result.messages.append(f"W0: {undecided:.0f} mm^2 of faces with winding number 0 are "
                                "undecided (every ray from them crosses a fold image)")
     if bad:
         result.messages.append(f"W0: {len(bad)} faces with a preimage count inconsistent with "
                                "their winding number (N >= |w|, N = w mod 2): check the loop")
+    return result
 
 
-_TRACED: dict = {}          # W_0 boundary per arm and mesh, in-process (traced_w0)
+TRACE_CACHE_SIZE = 4        # W_0 traces kept by the process's default cache (least recent out)
 
 
-def traced_w0(arm: Arm, disc: Discretisation) -> BoundaryResult:
+class TraceCache:
+    """W_0 boundaries per arm and mesh, at most ``size`` of them (the least
+    recently used is dropped).  A caller that owns one (a map's sampler, a
+    script tracing many arms) passes it to :func:`traced_w0`; the process's
+    default keeps the last :data:`TRACE_CACHE_SIZE`."""
+
+    def __init__(self, size: int = TRACE_CACHE_SIZE):
+        self.size = int(size)
+        self._traces: OrderedDict = OrderedDict()
+
+    def __len__(self) -> int:
+        return len(self._traces)
+
+    def get(self, arm: Arm, disc: Discretisation) -> BoundaryResult:
+        key = (arm.length_mm, disc.n_elements, disc.attach_nodes,
+               np.asarray(disc.routes).tobytes(), arm.max_tension, tuple(arm.tendons),
+               arm.gravity_m_s2, arm.tip_mass_kg, arm.mass_per_length_kg_m,
+               arm.bending_stiffness_Nm2)
+        if key in self._traces:
+            self._traces.move_to_end(key)
+        else:
+            self._traces[key] = trace_boundary(arm, disc, restricted=False)
+            while len(self._traces) > self.size:
+                self._traces.popitem(last=False)
+        return self._traces[key]
+
+
+_PROCESS_TRACES = TraceCache()
+
+
+def traced_w0(arm: Arm, disc: Discretisation, cache: TraceCache | None = None) -> BoundaryResult:
     """The W_0 boundary of a two-tendon arm (no restricted level curves),
-    traced on the first call and kept per arm and mesh for the process: the
-    one trace that tip control's proof and the sampled map share."""
-    key = (arm.length_mm, disc.n_elements, disc.attach_nodes, np.asarray(disc.routes).tobytes(),
-           arm.max_tension, tuple(arm.tendons), arm.gravity_m_s2, arm.tip_mass_kg,
-           arm.mass_per_length_kg_m, arm.bending_stiffness_Nm2)
-    if key not in _TRACED:
-        _TRACED[key] = trace_boundary(arm, disc, restricted=False)
-    return _TRACED[key]
+    traced on the first call and kept per arm and mesh in ``cache`` (default:
+    the process's, bounded to :data:`TRACE_CACHE_SIZE` arms): the one trace
+    that tip control's proof and the sampled map share."""
+    return (_PROCESS_TRACES if cache is None else cache).get(arm, disc)
 
 
-def boundary_proof(arm: Arm, disc: Discretisation | None = None):
+def boundary_proof(arm: Arm, disc: Discretisation | None = None,
+                   cache: TraceCache | None = None):
     """A callable for :class:`~elastica_petsc.solvers.reach.Reacher`'s ``boundary``:
     target (units of l) -> (evidence, distance in units of l), from
     :meth:`BoundaryResult.outside` on :func:`traced_w0` (traced on the first
@@ -156,7 +187,7 @@ def boundary_proof(arm: Arm, disc: Discretisation | None = None):
     def outside(target: np.ndarray) -> tuple[str, float]:
         if disc.n_tendons != 2:
             return "", float("nan")
-        evidence, dist = traced_w0(arm, disc).outside(np.asarray(target, float) * arm.length_mm)
+        evidence, dist = traced_w0(arm, disc, cache).outside(np.asarray(target, float) * arm.length_mm)
         return evidence, dist / arm.length_mm
 
     return outside

@@ -21,8 +21,8 @@ from __future__ import annotations
 from ...core import jsontext
 from ...core.errors import InputError
 from ...io.workspace import read_map_file
-from ..chunks import (CollectiveInputError, Grid, Stop, agree, check_out, checkpoint_interval,
-                      run)
+from ..chunks import (CollectiveInputError, Grid, Stop, agree, check_checkpoint_seconds,
+                      check_out, run)
 from .grids import make_grid
 from .samplers import make_sampler
 from .schema import Results, WorkspaceMap, limits_of
@@ -80,14 +80,15 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
     are file attributes (``share``,
     ``min_tension_N``, N; ``min_tension``, P l^2/B) that a resume must match.
 
-    Collective over ``comm`` (default ``MPI.COMM_WORLD``; one rank runs
-    serially).  With ``out`` (an ``.h5`` path) the results are checkpointed
-    there every ``checkpoint_seconds`` (default
-    ``$ELASTICA_PETSC_CHECKPOINT_SECONDS`` or 2 s) and at the end; ``resume``
+    Collective over ``comm`` (default ``MPI.COMM_SELF``: this process alone;
+    pass ``MPI.COMM_WORLD`` to share the map among the ranks of ``mpiexec``).
+    With ``out`` (an ``.h5`` path) the results are checkpointed
+    there every ``checkpoint_seconds`` (default 2 s; the command line reads
+    ``$ELASTICA_PETSC_CHECKPOINT_SECONDS``) and at the end; ``resume``
     continues the chunks not yet done in ``out`` (and starts the run if
     ``out`` does not exist); an existing ``out`` needs ``overwrite`` otherwise.
-    ``progress``: None (a bar on a terminal), False (none), or an object with
-    ``update(done)`` and ``close(done)``.  ``provenance``: root attributes
+    ``progress``: True (a bar on a terminal, lines in logs), None/False
+    (none), or an object with ``update(done)`` and ``close(done)``.  ``provenance``: root attributes
     added to the file (e.g. ``command_line``).
 
     Returns the :class:`WorkspaceMap` on every rank; ``complete`` is False after
@@ -100,15 +101,15 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
     """
     from mpi4py import MPI
 
-    comm = MPI.COMM_WORLD if comm is None else comm
+    comm = MPI.COMM_SELF if comm is None else comm
     lock = None
     with Stop() as stop:             # from here a signal stops the run at its first sample
         try:
             try:
                 grid = make_grid(arm, disc, mode, spacing_mm, box_mm, tension_spacing,
                                  tension_max, chunk, region)
-                if checkpoint_seconds is None:
-                    checkpoint_seconds = checkpoint_interval()
+                if checkpoint_seconds is not None:
+                    checkpoint_seconds = check_checkpoint_seconds(checkpoint_seconds)
                 settings = SamplerSettings.make(arm, grid.mode, global_search, share,
                                                 min_tension_N)
                 path = None if out is None else check_out(out, resume, overwrite)

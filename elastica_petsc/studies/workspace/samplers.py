@@ -97,8 +97,8 @@ class TargetSampler(_Sampler):
     * after a target outside W_0 (``NEEDS_NEGATIVE``): from that solve's
       end state, the tip on the boundary P_1 = 0 closest to the target, so
       a run of outside targets slides along the boundary instead of
-      restarting from afar (measured on the paper's half-disc, 4202 targets,
-      180 elements: 66 -> 12 ms per outside target).  If that start does not
+      restarting from afar (timing: BENCHMARKS.md, "Timing notes from the
+      docstrings").  If that start does not
       end reached or outside, the target is solved again from the last
       reached state of the chunk (or the head guess): a boundary state can
       have a cable pulled almost onto its routing point, a poor start for a
@@ -112,17 +112,16 @@ class TargetSampler(_Sampler):
       before a reached one (a chunk that starts outside W_0, where the head
       guess leads the optimiser to a cable collapse) is solved again from
       its reached neighbour, with a failure budget of ``retry_failures``
-      failed equilibria (the retries that fail run into snaps and collapses
-      at 0.1 s per failed equilibrium; with the solve's default budget of 25
-      they cost 50 s on the paper's half-disc).  Measured there (4202
-      targets, 180 elements): 5 more targets reached, 4.2 s of work.
+      failed equilibria (the retries that fail run into snaps and collapses;
+      with the solve's default budget of 25 they cost far more than they
+      reach: BENCHMARKS.md, "Timing notes from the docstrings").
 
     ``stationary_rtol`` (passed to :class:`~elastica_petsc.solvers.control.TipController`)
     is looser than the controller's default 1e-7: a target is classified as
     outside once the projected gradient is 1e-5 of |x_t - x_d| |S|; pinning
-    the closest boundary point to 1e-7 cost ~8 more iterations per outside
-    target and changed no classification (measured on a 30 mm grid, 649
-    targets).  Reached targets are unaffected (they stop on E < eps).
+    the closest boundary point to 1e-7 costs more iterations per outside
+    target and changed no classification (BENCHMARKS.md, "Timing notes from
+    the docstrings").  Reached targets are unaffected (they stop on E < eps).
 
     Global search (``global_search=True``, the default; the theme: a local run
     gives no global verdict).  After both passes, every target of the chunk
@@ -203,6 +202,7 @@ class TargetSampler(_Sampler):
                                         stationary_rtol=self.stationary_rtol)
         self.global_search = global_search
         self._library = None
+        self._traces = None            # the W_0 boundary of this arm, traced on first need
         self.share, self.min_tension = share, float(min_tension)
         self.sharer = None
         if share != "none" and disc.n_tendons >= 3:
@@ -312,7 +312,7 @@ class TargetSampler(_Sampler):
         of W_0 proves outside (class doc); the boundary is traced on first need."""
         from ..boundary import boundary_proof
 
-        outside = boundary_proof(self.arm, self.disc)     # one trace per process, on first need
+        outside = boundary_proof(self.arm, self.disc, self._trace_cache())
         for k, target in enumerate(points):
             if out["status"][k] in (Status.REACHED, Status.BEYOND_REACH):
                 continue
@@ -469,10 +469,17 @@ class TargetSampler(_Sampler):
         """Two tendons: whether ``target_mm`` has one preimage in the region D of the
         traced boundary of W_0 (:meth:`~elastica_petsc.studies.boundary.BoundaryResult.preimages`
         is 1: docs/model.md §9.1), so that the state reached is its only one (§9.3).
-        The boundary is the process's one trace (:func:`~elastica_petsc.studies.boundary.traced_w0`)."""
+        The boundary is the sampler's one trace (:func:`~elastica_petsc.studies.boundary.traced_w0`)."""
         from ..boundary import traced_w0
 
-        return traced_w0(self.arm, self.disc).preimages(target_mm)[0] == 1
+        return traced_w0(self.arm, self.disc, self._trace_cache()).preimages(target_mm)[0] == 1
+
+    def _trace_cache(self):
+        """The sampler's own cache of its arm's W_0 boundary (one entry)."""
+        if self._traces is None:
+            from ..boundary import TraceCache
+            self._traces = TraceCache(size=1)
+        return self._traces
 
     def _share_one(self, target_mm, k: int, out: dict, starts: tuple):
         """Track the shared tensions at sample ``k`` from each of ``starts`` (an

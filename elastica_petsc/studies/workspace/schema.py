@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...core.results import Result
 from ...io.workspace import write_results
 from ..chunks import ChunkResults, Grid
 
@@ -138,8 +139,8 @@ def _frozen(array: np.ndarray) -> np.ndarray:
     return array
 
 
-@dataclass(frozen=True)
-class WorkspaceMap:
+@dataclass(frozen=True, repr=False)
+class WorkspaceMap(Result):
     """A sampled workspace (Eq. (18), Fig. 4) and its restrictions (Eqs. (19)-(22), Fig. 5).
 
     W_0 (the workspace) is the set of tips of stable equilibria connected to
@@ -181,6 +182,16 @@ class WorkspaceMap:
                    _frozen(results.chunk_done), samples, masks, dict(limits),
                    dict(results.grid.meta), ranks, None if file is None else Path(file),
                    results.stranded, sampler, share[0], float(share[1]))
+
+    def to_vtk(self, directory) -> Path:
+        """The map as a ParaView file ``directory/workspace.vtu``, as ``workspace
+        --vtk`` writes it; from the map's HDF5 file (run it with ``out=``)."""
+        from ...core.errors import InputError
+        from ...io.vtk import write_workspace_vtk
+
+        if self.file is None:
+            raise InputError("to_vtk needs the map's HDF5 file: run the workspace with out=")
+        return write_workspace_vtk(directory, self.file)
 
     @property
     def complete(self) -> bool:

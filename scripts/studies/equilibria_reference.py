@@ -1,10 +1,10 @@
 """Exhaustive reference for the equilibrium searches (issue 12): a dense,
 deliberately brute-force multi-start, independent of the search it checks.
 
-    .venv/bin/python scripts/equilibria_reference.py [--elements 180] [--grid-max 160]
+    .venv/bin/python scripts/studies/equilibria_reference.py [--elements 180] [--grid-max 160]
         [--grid-step 10] [--random 400] [--pairs L1 L2 [L1 L2 ...]] [--json out.json]
-    .venv/bin/python scripts/equilibria_reference.py --tensions 25.2 10.8
-    .venv/bin/python scripts/equilibria_reference.py --compare ref.json
+    .venv/bin/python scripts/studies/equilibria_reference.py --tensions 25.2 10.8
+    .venv/bin/python scripts/studies/equilibria_reference.py --compare ref.json
 
 ``--compare`` runs the default search (studies.search.search_lengths /
 search_tensions) on every case of a reference JSON file written by ``--json``

@@ -1,6 +1,6 @@
 """Benchmark of cables through guides (issue 24) against the paper's arm.
 
-    .venv/bin/python scripts/bench_guided.py [--repeats 7] [--rounds 5]
+    .venv/bin/python scripts/benchmarks/bench_guided.py [--repeats 7] [--rounds 5]
 
 1. Warm forward solve (from the equilibrium at a nearby load, p + 0.1), both at
    N = 180: the paper's arm at p = (25.2, 10.8) against configs/guided.toml (5 guides
@@ -27,7 +27,7 @@ from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from timing import median_time
 
-CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 ARMS = {  # name: (config, tensions)
     "paper (no guides)": (CONFIGS / "paper.toml", np.array([25.2, 10.8])),
     "guided.toml (5 guides per tendon)": (CONFIGS / "guided.toml", np.array([40.0, 30.0])),

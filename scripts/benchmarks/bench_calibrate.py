@@ -2,9 +2,9 @@
 the cost of one Gauss-Newton evaluation (residuals + exact Jacobian, warm rows)
 against the number of rows, and a large fit on 1 or more MPI ranks.
 
-    .venv/bin/python scripts/bench_calibrate.py fit40 [elements] [repeats]
-    .venv/bin/python scripts/bench_calibrate.py scaling [elements]
-    mpiexec -n R .venv/bin/python scripts/bench_calibrate.py large [rows] [elements]
+    .venv/bin/python scripts/benchmarks/bench_calibrate.py fit40 [elements] [repeats]
+    .venv/bin/python scripts/benchmarks/bench_calibrate.py scaling [elements]
+    mpiexec -n R .venv/bin/python scripts/benchmarks/bench_calibrate.py large [rows] [elements]
 
 Synthetic data (0.5 mm noise) as in tests/test_calibrate.py; medians of repeats.
 """

@@ -8,7 +8,7 @@ against the time of the tracing it follows (a ratio, median of repeated runs),
 the passes' outcome (total time against the speed-only lower bound, rows the
 motors slowed) and a check of every row from the written CSV's columns.
 
-Usage: python scripts/bench_retime.py [--repeat 5] [--step 1.0] [--elements 180]
+Usage: python scripts/benchmarks/bench_retime.py [--repeat 5] [--step 1.0] [--elements 180]
        [--speed-mm-s 50] [--max-speed 1500] [--max-accel 5000]
 """
 from __future__ import annotations

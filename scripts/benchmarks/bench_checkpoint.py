@@ -3,7 +3,7 @@ written with one synced write (``io.hdf5.atomic_h5``, what the code does), again
 HDF5 writing the temporary file on disk itself (the previous way, which a full
 disk turned into HDF5 errors at close).  The paper's grid: 4202 targets.
 
-Usage: .venv/bin/python scripts/bench_checkpoint.py [--repeats 7]
+Usage: .venv/bin/python scripts/benchmarks/bench_checkpoint.py [--repeats 7]
 Prints a Markdown table (medians, interleaved) and the ratio.
 """
 from __future__ import annotations

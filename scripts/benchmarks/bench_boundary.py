@@ -1,7 +1,7 @@
 """Benchmark: `boundary` (workspace boundary by continuation, issue 13) against
 an earlier revision, interleaved, median of repeats.
 
-    python scripts/bench_boundary.py [--repeats 5] [--before 2b03bce] [--map MAP.h5]
+    python scripts/benchmarks/bench_boundary.py [--repeats 5] [--before 2b03bce] [--map MAP.h5]
 
 Each measurement is a fresh process that traces once to warm up (imports,
 PETSc start-up) and then times a second trace_boundary of the paper's arm
@@ -26,7 +26,7 @@ import subprocess
 import sys
 import tempfile
 
-HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+HERE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 SNIPPET = r"""
 import json, sys, time

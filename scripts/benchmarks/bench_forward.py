@@ -1,6 +1,6 @@
 """Benchmark of the forward (load-controlled) solve, issue "Forward statics".
 
-    .venv/bin/python scripts/bench_forward.py [--repeats 7]
+    .venv/bin/python scripts/benchmarks/bench_forward.py [--repeats 7]
 
 1. The paper's arm at 180 elements, p = (25.2, 10.8): median wall time of a
    warm-started solve (from the equilibrium at a nearby load, p + 0.1) and of

@@ -1,6 +1,6 @@
 """Benchmark of length control (issue 5: lengths.py).
 
-    .venv/bin/python scripts/bench_lengths.py [--repeats 7] [--elements 180]
+    .venv/bin/python scripts/benchmarks/bench_lengths.py [--repeats 7] [--elements 180]
 
 1. The paper's arm, Fig. 8 lengths L = (147.1, 472.5) mm: median wall time
    of a warm length-controlled solve (SNES vinewtonrsls from the state at

@@ -7,7 +7,7 @@ is in W_0, so each should be reached; none may be reported reachable: false.
 Prints the counts, the strategy that reached the hard ones, the total time and
 the mean time per target of the hardest 5 %.
 
-Usage: python scripts/reach_study.py [--targets 200] [--p-max 60] [--elements 180]
+Usage: python scripts/studies/reach_study.py [--targets 200] [--p-max 60] [--elements 180]
        [--seed 1] [--local] [--config configs/three_tendon.toml]
 """
 from __future__ import annotations

@@ -12,12 +12,12 @@ Parts (``--part``):
 ``fig3a``  the paper's arm (n = 2), the Fig. 3a drawing about (400, 200) mm
            at 1 mm steps, plain tracing: targets per second.  Uses only the
            API that predates sharing, so it can run against an older tree
-           (``PYTHONPATH=OLD python scripts/bench_share.py --part fig3a``)
+           (``PYTHONPATH=OLD python scripts/benchmarks/bench_share.py --part fig3a``)
            interleaved with this one.
 
 Median of ``--repeat`` runs.  Usage:
-    python scripts/bench_share.py --part share [--elements 180] [--step 1] [--repeat 3]
-    python scripts/bench_share.py --part fig3a [--repeat 3]
+    python scripts/benchmarks/bench_share.py --part share [--elements 180] [--step 1] [--repeat 3]
+    python scripts/benchmarks/bench_share.py --part fig3a [--repeat 3]
 """
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-CONFIG = Path(__file__).resolve().parents[1] / "configs" / "three_tendon.toml"
+CONFIG = Path(__file__).resolve().parents[2] / "configs" / "three_tendon.toml"
 
 
 def parse():

@@ -14,7 +14,7 @@ rank 1 or to both ranks, and then checks:
   had in hand (at most one per rank: 4 samples here);
 * ``--resume`` completes the file to exactly the uninterrupted map.
 
-Usage: ``python scripts/fault_study.py [--trials 20] [--load 1]`` (``--load N``
+Usage: ``python scripts/studies/fault_study.py [--trials 20] [--load 1]`` (``--load N``
 runs N busy-loop processes beside it).  Prints one line per trial and a
 summary; exit status 1 if any trial failed.
 """
@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MPIEXEC = shutil.which("mpiexec")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1", ELASTICA_PETSC_CHECKPOINT_SECONDS="1e6")

@@ -43,7 +43,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 STATUS = {1: "reached (W_0)", 2: "ended on P_i = 0 (local verdict)", 3: "not converged",
           4: "undecided after the global search", 5: "beyond reach |x| > l"}
 

@@ -15,7 +15,7 @@ floor (the rule changes the tensions, not the reach); with a floor, reached
 plus BELOW_FLOOR equals the plain map's reached set and every reached sample
 has every P_i >= the floor; every repeat gives the same samples (bitwise).
 
-Usage: python scripts/share_map_study.py [--elements 180] [--spacing 40]
+Usage: python scripts/studies/share_map_study.py [--elements 180] [--spacing 40]
            [--box 200 560 0 400] [--floor 1] [--repeats 3] [--json out.json]
 """
 from __future__ import annotations
@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-CONFIG = Path(__file__).resolve().parents[1] / "configs" / "three_tendon.toml"
+CONFIG = Path(__file__).resolve().parents[2] / "configs" / "three_tendon.toml"
 VARIANTS = {"plain": (None, 0.0), "min-norm": ("min-norm", 0.0),
             "min-norm floor": ("min-norm", None), "min-energy floor": ("min-energy", None)}
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Agreement of the traced W_0 boundary with a sampled target map (issue 13).
 
-    python scripts/boundary_agreement.py MAP.h5 [--elements N] [--json]
+    python scripts/studies/boundary_agreement.py MAP.h5 [--elements N] [--json]
 
 MAP.h5 from `elastica-petsc workspace --spacing 11.67 --out MAP.h5` (mode
 targets, the paper's Fig. 4 half-disc).  Traces the boundary of the map's arm

@@ -13,7 +13,7 @@
    FuncAnimation + PillowWriter (the figure redrawn twice per frame), same
    40 frames, median of ``--repeat // 2`` interleaved runs.
 
-Usage: python scripts/bench_export.py [--repeat 5] [--step 2] [--elements 180] [--interval 0.05]
+Usage: python scripts/benchmarks/bench_export.py [--repeat 5] [--step 2] [--elements 180] [--interval 0.05]
 """
 from __future__ import annotations
 
@@ -42,7 +42,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from elastica_petsc.core.model import load_config
-    from elastica_petsc.core.progress import Progress
+    from elastica_petsc.ui.progress import Progress
     from elastica_petsc.io.vtk import write_trace
     from elastica_petsc.plots.animate import animate_trace
     from elastica_petsc.solvers.control import TipController

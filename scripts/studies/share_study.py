@@ -15,7 +15,7 @@ points (:func:`elastica_petsc.solvers.share.family`): the shared objective
 must not exceed any family member with P >= the floor.  Plain tracing
 (no sharing) of the same circle for comparison.
 
-Usage: python scripts/share_study.py [--elements 180] [--step 1] [--picks 6]
+Usage: python scripts/studies/share_study.py [--elements 180] [--step 1] [--picks 6]
 """
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-CONFIG = Path(__file__).resolve().parents[1] / "configs" / "three_tendon.toml"
+CONFIG = Path(__file__).resolve().parents[2] / "configs" / "three_tendon.toml"
 
 
 def brute_force(ctl, sharer, result, k):

@@ -3,7 +3,7 @@
 offsets 2 mm; 30 elements); prints the share of intervals that hold the truth,
 per parameter and pooled (should be 90-99 %).
 
-    .venv/bin/python scripts/calibration_coverage.py [draws] [first_seed]
+    .venv/bin/python scripts/studies/calibration_coverage.py [draws] [first_seed]
 """
 from __future__ import annotations
 
