@@ -203,9 +203,11 @@ def _guess(arm: Arm, guess_N, guess) -> np.ndarray | None:
 
 
 def _floor_N(min_tension_N) -> float:
+    """The pretension floor P_min (N) of tension sharing: a number >= 0."""
     value = inputs.number(min_tension_N, "min_tension_N", "N")
     if value < 0:
-        raise InputError(f"min_tension_N must be >= 0 N, got {value:g}")
+        raise InputError(f"min_tension_N (the minimum tension of every cable) must be >= 0 N, "
+                         f"got {value:g}")
     return value
 
 

@@ -72,6 +72,8 @@ def newton_forms(args, arm: Arm) -> None:
         if not key.endswith("_N") or key == "tensions_N" or value is None:
             continue
         flag = "--" + key[:-2].replace("_", "-") + "-N"
+        if not isinstance(value, list) and value < 0:          # one value, not per tendon
+            raise InputError(f"{flag} must be >= 0 N, got {value:g} (a cable cannot push)")
         values = value if isinstance(value, list) else [value]
         p = [float(v) for v in arm.tensions_from_N(check(values, len(values), flag, "N",
                                                          arm.force_scale_N))]
