@@ -83,7 +83,7 @@ def bad_inputs(tmp: Path) -> list[tuple[list, list[str]]]:
           tmp / "rep"], ["missing.toml"]),
         (["reproduce", "--quick", "--config", tmp / "missing.toml", "--out", tmp / "rep2"],
          ["missing.toml"]),
-        # found by scripts/bad_inputs_study.py (tracebacks, or minutes of work, before)
+        # found by scripts/studies/bad_inputs_study.py (tracebacks, or minutes of work, before)
         (["control", "--target", 500, 100, "--tol-mm", 1e300], ["--tol-mm", "at most 600"]),
         (["equilibria", "--tensions", 1e300, 5], ["--tensions", "exceeds"]),
         (["lengths", "--lengths", 147.1, 472.5, "--effort", 99999999], ["--effort", "<= 16"]),

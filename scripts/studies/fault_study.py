@@ -76,6 +76,15 @@ def wait_for_ranks(proc: subprocess.Popen, timeout: float = 60.0) -> dict[int, i
     raise RuntimeError("the ranks did not start")
 
 
+def finish(proc, seconds: float = HANG_SECONDS):
+    """(stderr, hung): wait for the job; one still running after ``seconds`` is killed."""
+    try:
+        return proc.communicate(timeout=seconds)[1], False
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        return proc.communicate()[1], True
+
+
 def send(proc: subprocess.Popen, pids: dict[int, int], victim: str, sig: int) -> None:
     if victim == "mpiexec":
         proc.send_signal(sig)
@@ -162,13 +171,7 @@ def trial(folder: Path, reference: Path, victim: str, sig: int, delay: float | N
     ended_before = proc.poll() is not None
     t0 = time.monotonic()
     send(proc, pids, victim, sig)
-    try:
-        _, stderr = proc.communicate(timeout=HANG_SECONDS)
-        hang = False
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        _, stderr = proc.communicate()
-        hang = True
+    stderr, hang = finish(proc)
     alive = still_alive(pids.values(), deadline=t0 + HANG_SECONDS)
     seconds = time.monotonic() - t0
     row = {"victim": victim, "signal": signal.Signals(sig).name, "delay": delay,

@@ -23,7 +23,7 @@ A signal that comes once every sample is done (the map complete) finds the
 ranks in MPI's finalisation, where mpiexec kills them: the file is complete,
 no "interrupted" line is due; such trials are counted apart.
 
-Usage: ``python scripts/stop_trials.py [--trials 32] [--seed 21]``; one line per
+Usage: ``python scripts/studies/stop_trials.py [--trials 32] [--seed 21]``; one line per
 trial and the counts.  Exit status 1 if any trial of a run still sampling
 when signalled missed the file, the message, the ranks' own end or the resume.
 """
@@ -77,13 +77,7 @@ def trial(folder: Path, reference: Path, k: int, victim: str, sig: int, delay: f
     except ProcessLookupError:                     # the map ended just before
         ended_before = True
     ranks_s = _ranks_end(pids, t0)
-    try:
-        _, stderr = proc.communicate(timeout=HANG_SECONDS)
-        hang = False
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        _, stderr = proc.communicate()
-        hang = True
+    stderr, hang = fs.finish(proc, HANG_SECONDS)
     alive = fs.still_alive(pids.values(), deadline=t0 + HANG_SECONDS)
     row = {"trial": k, "victim": victim, "signal": signal.Signals(sig).name,
            "delay_s": round(delay, 2), "status": proc.returncode,

@@ -3,7 +3,7 @@ and library argument with values it must refuse, each answered within
 ``LIMIT_S`` seconds by one line ``elastica-petsc: error: ...`` and exit status 2
 (argparse's own usage + error lines count as refused) or by ``ep.InputError``.
 
-Usage: ``python scripts/bad_inputs_study.py [--only cli|api]``: one line per
+Usage: ``python scripts/studies/bad_inputs_study.py [--only cli|api]``: one line per
 failure, then a table (tried, refused, failed: traceback / accepted / slow).
 Runs in one process (PETSc starts once); a case that runs longer than
 ``LIMIT_S`` is stopped by an alarm and counted as slow.
@@ -20,7 +20,7 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 THREE = str(ROOT / "configs" / "three_tendon.toml")
 LIMIT_S = 10.0
 NUMBERS = ["nan", "inf", "-inf", "-1", "0", "1e300", "-1e300", "1e-300"]
