@@ -257,7 +257,10 @@ class TargetSampler(_Sampler):
         head = np.full(self.disc.n_tendons, self.head_guess)
         reached = boundary = None          # last reached state; state after an outside target
         for k, target in enumerate(points):
-            if out["status"][k] == Status.BEYOND_REACH:
+            if k in states:                # reached before this pass (boundary fill)
+                reached, boundary = states[k], None
+                continue
+            if out["status"][k] != Status.NOT_COMPUTED:
                 continue
             if stop():
                 return False
@@ -537,8 +540,14 @@ def _same_state(a, b, tol: float = 1e-9) -> bool:
 
 
 def make_sampler(arm: Arm, disc: Discretisation, settings: SamplerSettings):
-    """The sampler of ``settings`` (:class:`TargetSampler` in mode targets,
-    :class:`TensionSampler` in mode tensions); the caller destroys it."""
+    """The sampler of ``settings`` (in mode targets
+    :class:`~.fill.BoundaryFillSampler` for "boundary-fill", else
+    :class:`TargetSampler`; :class:`TensionSampler` in mode tensions); the
+    caller destroys it."""
+    if settings.name == "boundary-fill":
+        from .fill import BoundaryFillSampler
+        return BoundaryFillSampler(arm, disc, share=settings.share,
+                                   min_tension=settings.min_tension)
     if settings.mode == "targets":
         return TargetSampler(arm, disc, global_search=settings.global_search,
                              share=settings.share, min_tension=settings.min_tension)
