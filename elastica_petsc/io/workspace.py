@@ -217,7 +217,7 @@ def _difference(key: str, stored, now) -> str:
         return (f"the {stored!r} sampler (now {now!r}): its unreached samples are "
                 + ("local verdicts" if stored == "local" else "searched globally")
                 + "; start a new file, or resume it with the same sampler"
-                + f" (--sampler {stored})")
+                + f" (--sampler {stored}" + (" or --local-only)" if stored == "local" else ")"))
     if key in ATTR_DEFAULTS:
         option, what = (("--share", "the sharing rule") if key == "share" else
                         ("--min-tension-N", "the tension floor [N]"))

@@ -104,23 +104,49 @@ class BoundaryFillSampler(TargetSampler):
         return counts
 
     def _sweep(self, points, out: dict, counts: list, states: dict, stop) -> bool:
-        """Pass 2 (module doc) over the targets with N = 1; False if stopped."""
-        previous = None                    # (equilibrium, sensitivity) of the last reached
-        for k, target_mm in enumerate(points):
-            if counts[k] != 1:
+        """Pass 2 (module doc); False if stopped.  Forward along the chunk: a
+        target with N = 1 from the previous reached sample, else from the
+        nearest anchors; a target undecided by the boundary (None) from the
+        previous reached sample only.  Then backward: a target still not
+        reached from the next reached sample."""
+        if self._boundary is None:         # no trace (e.g. not two tendons): no sweep
+            return True
+        pairs = {}                         # sample -> (equilibrium, sensitivity) reached
+        previous = None
+        for k in range(len(points)):
+            if counts[k] not in (1, None) or out["status"][k] != Status.NOT_COMPUTED:
                 continue
             if stop():
                 return False
-            t0 = time.perf_counter()
-            target = target_mm / self.arm.length_mm
-            starts = ([previous] if previous is not None else []) + \
-                self._anchors.nearest(target, self.anchor_tries)
-            for start in starts:
-                state = self.newton.reach(target, start)
-                if state is not None and self._keep(out, k, state[0], t0):
-                    previous, states[k] = state, state[0]
-                    break
+            anchors = self.anchor_tries if counts[k] == 1 else 0
+            previous = self._reach(points, out, k, previous, anchors, pairs) or previous
+        following = None
+        for k in reversed(range(len(points))):
+            if k in pairs:
+                following = pairs[k]
+                continue
+            if following is None or counts[k] not in (1, None) or \
+                    out["status"][k] != Status.NOT_COMPUTED:
+                continue
+            if stop():
+                return False
+            following = self._reach(points, out, k, following, 0, pairs) or following
+        states.update({k: pair[0] for k, pair in pairs.items()})
         return True
+
+    def _reach(self, points, out: dict, k: int, start, anchors: int, pairs: dict):
+        """Newton on the tip to target ``k`` from ``start`` (None: none), then
+        from its ``anchors`` nearest anchors; the state kept (:meth:`_keep`), or None."""
+        t0 = time.perf_counter()
+        target = points[k] / self.arm.length_mm
+        starts = ([start] if start is not None else []) + \
+            (self._anchors.nearest(target, anchors) if anchors else [])
+        for begin in starts:
+            state = self.newton.reach(target, begin)
+            if state is not None and self._keep(out, k, state[0], t0):
+                pairs[k] = state
+                return state
+        return None
 
     def _keep(self, out: dict, k: int, eq, t0: float) -> bool:
         """Record the state reached by the sweep at sample ``k`` if it is stable
