@@ -46,6 +46,7 @@ class BoundaryFillSampler(TargetSampler):
     (module doc); the global search only for what the sweep misses."""
 
     anchor_tries = 2               # nearest loop nodes tried for a target with no start
+    start_reach_l = 0.15           # a reached sample farther than this (units of l) is no start
 
     def __init__(self, arm, disc, share: str = "none", min_tension: float = 0.0):
         super().__init__(arm, disc, global_search=True, share=share, min_tension=min_tension)
@@ -135,11 +136,14 @@ class BoundaryFillSampler(TargetSampler):
         return True
 
     def _reach(self, points, out: dict, k: int, start, anchors: int, pairs: dict):
-        """Newton on the tip to target ``k`` from ``start`` (None: none), then
-        from its ``anchors`` nearest anchors; the state kept (:meth:`_keep`), or None."""
+        """Newton on the tip to target ``k`` from ``start`` (None, or farther than
+        ``start_reach_l``: none), then from its ``anchors`` nearest anchors; the
+        state kept (:meth:`_keep`), or None."""
         t0 = time.perf_counter()
         target = points[k] / self.arm.length_mm
-        starts = ([start] if start is not None else []) + \
+        near = start is not None and \
+            np.linalg.norm(start[0].tip - target) <= self.start_reach_l
+        starts = ([start] if near else []) + \
             (self._anchors.nearest(target, anchors) if anchors else [])
         for begin in starts:
             state = self.newton.reach(target, begin)

@@ -44,7 +44,7 @@ class TipNewton:
     jump_tol = 0.5
     homotopy_l = 0.05
     path_tol = 1e-3
-    halvings = 4
+    halvings = 3
 
     def __init__(self, controller):
         self.solver, self.sens = controller.solver, controller.sens
