@@ -24,7 +24,8 @@ from ...io.workspace import read_map_file
 from ..chunks import (CollectiveInputError, Grid, Stop, agree, check_checkpoint_seconds,
                       check_out, run)
 from .grids import make_grid
-from .samplers import make_sampler
+from .fill import BoundaryFillSampler
+from .samplers import TargetSampler, TensionSampler
 from .schema import Results, WorkspaceMap, limits_of
 from .settings import SamplerSettings
 
@@ -159,6 +160,20 @@ def _sample(arm, disc, grid: Grid, settings: SamplerSettings, path, comm, resume
                    progress_label=f"workspace ({grid.mode}, {comm.size} rank(s))", stop=stop)
     finally:
         sampler.destroy()
+
+
+def make_sampler(arm, disc, settings: SamplerSettings):
+    """The sampler of ``settings``: in mode targets
+    :class:`~.fill.BoundaryFillSampler` ("boundary-fill") or
+    :class:`~.samplers.TargetSampler` ("global-search", "local"); in mode
+    tensions :class:`~.samplers.TensionSampler`.  The caller destroys it."""
+    if settings.fill:
+        return BoundaryFillSampler(arm, disc, share=settings.share,
+                                   min_tension=settings.min_tension)
+    if settings.mode == "targets":
+        return TargetSampler(arm, disc, global_search=settings.global_search,
+                             share=settings.share, min_tension=settings.min_tension)
+    return TensionSampler(arm, disc)
 
 
 def map_attrs(arm, disc, grid: Grid, extra: dict | None) -> dict:

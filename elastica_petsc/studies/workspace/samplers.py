@@ -28,7 +28,6 @@ from ...solvers.equilibrium import Equilibrium, EquilibriumSolver
 from ...solvers.stability import StabilityError, StabilitySolver
 from ..chunks import empty_fields
 from .schema import Status, fields
-from .settings import SamplerSettings
 
 
 class _Sampler:
@@ -537,18 +536,3 @@ def _same_state(a, b, tol: float = 1e-9) -> bool:
     p = P l^2/B): for a local solve, the same start."""
     return a is b or (np.allclose(a.p, b.p, rtol=tol, atol=tol)
                       and np.allclose(a.tip, b.tip, rtol=0.0, atol=tol))
-
-
-def make_sampler(arm: Arm, disc: Discretisation, settings: SamplerSettings):
-    """The sampler of ``settings`` (in mode targets
-    :class:`~.fill.BoundaryFillSampler` for "boundary-fill", else
-    :class:`TargetSampler`; :class:`TensionSampler` in mode tensions); the
-    caller destroys it."""
-    if settings.name == "boundary-fill":
-        from .fill import BoundaryFillSampler
-        return BoundaryFillSampler(arm, disc, share=settings.share,
-                                   min_tension=settings.min_tension)
-    if settings.mode == "targets":
-        return TargetSampler(arm, disc, global_search=settings.global_search,
-                             share=settings.share, min_tension=settings.min_tension)
-    return TensionSampler(arm, disc)

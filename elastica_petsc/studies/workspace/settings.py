@@ -1,7 +1,7 @@
 """How a workspace map samples (the sampler of a file, a resume must match it):
 a frozen settings object built and checked once from the request
 (:func:`SamplerSettings.make`), from which the sampler is built
-(:func:`~elastica_petsc.studies.workspace.samplers.make_sampler`) and the
+(:func:`~elastica_petsc.studies.workspace.driver.make_sampler`) and the
 file's root attributes are written (:meth:`SamplerSettings.attrs`)."""
 from __future__ import annotations
 
