@@ -96,25 +96,26 @@ class TipNewton:
     def reach(self, target: np.ndarray, start):
         """:meth:`solve` along the straight segment from ``start``'s tip to
         ``target`` (a homotopy in target space): steps of at most ``homotopy_l``,
-        halved after a refused step (at most ``halvings`` times in a row) and
-        doubled after an accepted one; None if the segment cannot be followed."""
+        halved after a refused step and doubled after an accepted one; None
+        once a step of ``homotopy_l / 2**halvings`` (or the last, shorter
+        remainder) is refused."""
         self.iterations = 0
         tip, state = start[0].tip, start
-        length = float(np.linalg.norm(target - tip))
-        s, ds, halved = 0.0, min(1.0, self.homotopy_l / max(length, 1e-300)), 0
+        length = max(float(np.linalg.norm(target - tip)), 1e-300)
+        ds_max = min(1.0, self.homotopy_l / length)
+        ds_min, s, ds = ds_max / 2 ** self.halvings, 0.0, ds_max
         while s < 1.0:
             step = min(ds, 1.0 - s)
-            last = s + step >= 1.0
-            found = self.solve(tip + (target - tip) * (s + step), state,
+            last = step >= 1.0 - s
+            found = self.solve(target if last else tip + (target - tip) * (s + step), state,
                                None if last else self.path_tol)
             if found is None:
-                halved += 1
-                if halved > self.halvings:
+                if step <= ds_min * (1.0 + 1e-12):
                     return None
                 ds = 0.5 * step
                 continue
-            state, s, halved = found, s + step, 0
-            ds = min(2.0 * step, self.homotopy_l / max(length, 1e-300))
+            state, s = found, (1.0 if last else s + step)
+            ds = min(2.0 * step, ds_max)
         return state
 
 
