@@ -72,12 +72,12 @@ def main(argv=None) -> None:
     parser.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--repeat", type=int, default=3, help="boundary-fill runs (median)")
     parser.add_argument("--global-repeat", type=int, default=1,
-                        help="global-search runs, one rank (median)")
+                        help="global-search runs, one rank (median; 0: none, no ratio)")
     parser.add_argument("--dir", help="keep the HDF5 files here (default: a temporary folder)")
     args = parser.parse_args(argv)
     folder = Path(args.dir) if args.dir else Path(tempfile.mkdtemp(prefix="bench_fill_"))
     folder.mkdir(parents=True, exist_ok=True)
-    keys = [(s, "global-search", 1) for s in args.spacings] + \
+    keys = [(s, "global-search", 1) for s in args.spacings if args.global_repeat > 0] + \
         [(s, "boundary-fill", r) for s in args.spacings for r in args.ranks]
     walls, sampling, loads = {k: [] for k in keys}, {k: [] for k in keys}, []
     for i in range(max(args.repeat, args.global_repeat)):              # interleaved
@@ -98,13 +98,13 @@ def main(argv=None) -> None:
         w, t = walls[s, sampler, ranks], statistics.median(sampling[s, sampler, ranks])
         fill1 = statistics.median(sampling[s, "boundary-fill", args.ranks[0]])
         ratio = (f"{statistics.median(sampling[s, 'global-search', 1]) / t:.1f}"
-                 if sampler == "boundary-fill" else "")
+                 if sampler == "boundary-fill" and args.global_repeat > 0 else "")
         speedup = (f"{fill1 / t:.2f}" if sampler == "boundary-fill" and ranks > args.ranks[0]
                    else "")
         print(f"| {s:g} mm | {sampler} | {ranks} | {len(w)} | {statistics.median(w):.2f} s "
               f"({min(w):.2f}-{max(w):.2f}) | {t:.2f} s | {ratio} | {speedup} |")
     print()
-    for s in args.spacings:
+    for s in args.spacings if args.global_repeat > 0 else ():
         ref = read(folder / f"ws_{s:g}_global-search_1.h5")[0]
         for r in args.ranks:
             fill = read(folder / f"ws_{s:g}_boundary-fill_{r}.h5")[0]
