@@ -10,6 +10,7 @@
  * here; outputs are written in place.  No numpy C API: the module builds
  * against Python's headers alone.
  */
+#define _GNU_SOURCE             /* sincos */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <float.h>
@@ -84,9 +85,7 @@ static void arm_trig(Arm *a, const double *angles)
 {
     double left = 0.0;
     for (Py_ssize_t e = 0; e < a->N; e++) {
-        double phi = 0.5 * (left + angles[e]);
-        a->c[e] = cos(phi);
-        a->s[e] = sin(phi);
+        sincos(0.5 * (left + angles[e]), a->s + e, a->c + e);
         left = angles[e];
     }
 }

@@ -59,6 +59,20 @@ except ImportError as err:      # a source tree whose extension was never built
         f"--no-deps --no-build-isolation -e .` in the source tree ({err})") from err
 
 
+def ldlt_negatives(pattern, values: np.ndarray, n_angles: int) -> int | None:
+    """Negative pivots of the LDL^T, natural order and no pivoting (the inertia of
+    PETSc's Cholesky on SBAIJ storage), of the symmetric bordered matrix whose upper
+    triangle is the CSR ``pattern`` (indptr, indices: int32) with entries ``values``:
+    a tridiagonal block of ``n_angles`` rows, then dense border rows and columns
+    (:meth:`Discretisation.bordered_pattern`; compiled, O(N nb^2)).  None at a zero
+    pivot (|d| <= 100 eps, PETSc's default): the matrix is numerically singular."""
+    count = _kernels.inertia(pattern[0], pattern[1], _floats(values), int(n_angles))
+    if count == -2:
+        raise ValueError("not a bordered tridiagonal pattern: rows of the angle block may "
+                         "reach only the next angle and the border")
+    return None if count < 0 else count
+
+
 def _floats(a) -> np.ndarray:
     """``a`` as a C-contiguous float64 array (no copy when it already is one)."""
     return np.ascontiguousarray(a, dtype=float)
@@ -258,7 +272,7 @@ class Discretisation:
     def cables(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Cable lengths L_i = |r_i - y_i| and unit directions d_i (Eq. (3))."""
         chord = self.routes - y
-        lengths = np.linalg.norm(chord, axis=1)
+        lengths = np.hypot(chord[:, 0], chord[:, 1])
         return lengths, chord / lengths[:, None]
 
     def shortest_segments(self, y: np.ndarray) -> np.ndarray:
@@ -402,6 +416,13 @@ class Discretisation:
         _kernels.stability(_floats(u), _floats(p), self._routes, self._nodes,
                            self._stability_src, out)
         return out
+
+    def stiffness_border(self, theta: np.ndarray, y: np.ndarray, p) -> np.ndarray:
+        """W, shape (n, N): W[i] = sqrt(p_i / L_i) (dX_i/dtheta)^T d_i^perp, so that
+        K = T + W^T W (docs/model.md §2); a tension p_i <= 0 gives a zero row."""
+        lengths, d = self.cables(y)
+        weights = np.sqrt(np.maximum(np.asarray(p, float), 0.0) / lengths)
+        return weights[:, None] * self.transverse_gradients(self.attachment_gradients(theta), d)
 
     @staticmethod
     def transverse_gradients(g: np.ndarray, d: np.ndarray) -> np.ndarray:

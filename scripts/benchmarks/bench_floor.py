@@ -13,16 +13,18 @@ driver of PETSc pays for such a solve.
 The forward solve: :meth:`EquilibriumSolver.solve` of the paper's arm at 180
 elements, p = (25.2, 10.8), warm-started from the equilibrium at p + 0.1 (3
 Newton iterations, 1 load step, plus the inertia check); and the cold solve
-from the straight arm.  Each is timed as the median over ``--repeats`` rounds
-of the mean of ``--calls`` calls; the floor and the solve alternate within a
-round, so their ratio is measured under the same load.
+from the straight arm.  Each round times ``--calls`` single calls of each and
+keeps their median (a shared machine preempts some calls; the median is the
+undisturbed solve); the report is the median over ``--repeats`` rounds, and
+the ratio is taken within each round (the floor and the solve alternate, so
+they run under the same load).
 """
 from __future__ import annotations
 
 import argparse
 import os
 import statistics
-import time
+import sys
 
 import numpy as np
 from petsc4py import PETSc
@@ -31,6 +33,9 @@ from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.core.model import load_config
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.solvers.linalg import use_bordered_lu
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from timing import median_time  # noqa: E402
 
 P = np.array([25.2, 10.8])
 N = 180
@@ -91,13 +96,6 @@ class Floor:
         return self.x.getArray().copy(), self.snes.getIterationNumber()
 
 
-def per_call(fn, calls: int) -> float:
-    t0 = time.perf_counter()
-    for _ in range(calls):
-        fn()
-    return (time.perf_counter() - t0) / calls
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=7)
@@ -113,13 +111,13 @@ def main() -> None:
         assert warm.converged and cold.converged
         t_floor, t_warm, t_cold = [], [], []
         for _ in range(args.repeats):
-            t_floor.append(per_call(lambda: floor.solve(near, 30.0), args.calls))
-            t_warm.append(per_call(lambda: solver.solve(P, start=start), args.calls))
-            t_cold.append(per_call(lambda: solver.solve(P), max(1, args.calls // 20)))
+            t_floor.append(median_time(lambda: floor.solve(near, 30.0), args.calls))
+            t_warm.append(median_time(lambda: solver.solve(P, start=start), args.calls))
+            t_cold.append(median_time(lambda: solver.solve(P), max(3, args.calls // 20)))
     floor_ms, warm_ms, cold_ms = (statistics.median(t) * 1e3 for t in (t_floor, t_warm, t_cold))
     ratios = [w / f for w, f in zip(t_warm, t_floor)]
     print(f"load average {os.getloadavg()[0]:.2f}; median of {args.repeats} rounds of "
-          f"{args.calls} calls")
+          f"{args.calls} calls each (cold: {max(3, args.calls // 20)})")
     print("| solve | median time | Newton iterations |")
     print("|---|---|---|")
     print(f"| floor: bare SNES, {N} unknowns, tridiagonal | {floor_ms:.3f} ms | {floor_its} |")
