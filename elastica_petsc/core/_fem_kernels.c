@@ -426,6 +426,95 @@ static PyObject *gradients(PyObject *self, PyObject *args)
     return result;
 }
 
+/* positions(angles, out): x_k at every node, (N+1, 2), x_0 = 0, x_{k+1} = x_k + h t_k
+ * (Eq. (2), midpoint rule). */
+static PyObject *positions(PyObject *self, PyObject *args)
+{
+    Py_buffer th, out;
+    if (!PyArg_ParseTuple(args, "y*w*", &th, &out))
+        return NULL;
+    PyObject *result = NULL;
+    Py_ssize_t N = th.len / (Py_ssize_t)sizeof(double);
+    Arm a;
+    Py_buffer none = {.len = 0};
+    if (arm_init(&a, &none, &none, N) == 0) {
+        if (!check_len(&out, 2 * (N + 1), sizeof(double), "out")) {
+            double *x = out.buf;
+            arm_trig(&a, th.buf);
+            x[0] = x[1] = 0.0;
+            for (Py_ssize_t e = 0; e < N; e++) {
+                x[2 * e + 2] = x[2 * e] + a.h * a.c[e];
+                x[2 * e + 3] = x[2 * e + 1] + a.h * a.s[e];
+            }
+            result = Py_None;
+            Py_INCREF(result);
+        }
+        arm_free(&a);
+    }
+    PyBuffer_Release(&th); PyBuffer_Release(&out);
+    return result;
+}
+
+/* position_derivative(angles, dstate, nodes, out): d x_m / dq at the queried nodes
+ * m (0..N) for k variations of the state (rows of dstate, (k, stride), the angle
+ * variations first): d x_m = sum_{e < m} h n_e (dtheta_e + dtheta_{e+1}) / 2, the
+ * derivative of Eq. (2) with the midpoint rule (Eq. (13) at the tip); out (k, q, 2). */
+static PyObject *position_derivative(PyObject *self, PyObject *args)
+{
+    Py_buffer th, dstate, nodes, out;
+    if (!PyArg_ParseTuple(args, "y*y*y*w*", &th, &dstate, &nodes, &out))
+        return NULL;
+    PyObject *result = NULL;
+    Py_ssize_t N = th.len / (Py_ssize_t)sizeof(double);
+    Py_ssize_t q = nodes.len / (Py_ssize_t)sizeof(int64_t);
+    Py_ssize_t k = q ? out.len / (Py_ssize_t)sizeof(double) / (2 * q) : 0;
+    Py_ssize_t stride = k ? dstate.len / (Py_ssize_t)sizeof(double) / k : 0;
+    Arm a;
+    Py_buffer none = {.len = 0};
+    if (arm_init(&a, &none, &none, N) == 0) {          /* no tendons: the trig only */
+        const int64_t *m = nodes.buf;
+        int ok = !check_len(&dstate, k * stride, sizeof(double), "dstate") &&
+                 !check_len(&out, 2 * k * q, sizeof(double), "out");
+        for (Py_ssize_t j = 0; ok && j < q; j++)
+            if (m[j] < 0 || m[j] > N) {
+                PyErr_Format(PyExc_ValueError, "node %lld outside 0..%zd", (long long)m[j], N);
+                ok = 0;
+            }
+        if (ok && stride < N) {
+            PyErr_SetString(PyExc_ValueError, "dstate rows shorter than the angles");
+            ok = 0;
+        }
+        if (ok) {
+            const double *dv = dstate.buf;
+            double *o = out.buf;
+            arm_trig(&a, th.buf);
+            for (Py_ssize_t r = 0; r < k; r++) {
+                const double *dt = dv + r * stride;       /* dtheta_1..dtheta_N */
+                double x = 0.0, y = 0.0, left = 0.0;
+                for (Py_ssize_t e = 0; e <= N; e++) {
+                    for (Py_ssize_t j = 0; j < q; j++)
+                        if (m[j] == e) {
+                            o[2 * (r * q + j)] = x;
+                            o[2 * (r * q + j) + 1] = y;
+                        }
+                    if (e == N)
+                        break;
+                    double dphi = 0.5 * (left + dt[e]);
+                    x -= a.h * a.s[e] * dphi;
+                    y += a.h * a.c[e] * dphi;
+                    left = dt[e];
+                }
+            }
+            result = Py_None;
+            Py_INCREF(result);
+        }
+        arm_free(&a);
+    }
+    PyBuffer_Release(&th); PyBuffer_Release(&dstate); PyBuffer_Release(&nodes);
+    PyBuffer_Release(&out);
+    return result;
+}
+
 /* inertia(indptr, indices, values, n_angles): negative pivots of the LDL^T, in the
  * natural order without pivoting (PETSc's Cholesky on SBAIJ), of the symmetric
  * matrix whose upper triangle is the CSR (int32) given: a tridiagonal block of
@@ -527,6 +616,9 @@ static PyMethodDef methods[] = {
     {"load_derivative", load_derivative, METH_VARARGS, "load_derivative(u, routes, nodes, out)"},
     {"band", band, METH_VARARGS, "band(c, s, force, out)"},
     {"gradients", gradients, METH_VARARGS, "gradients(angles, nodes, out)"},
+    {"positions", positions, METH_VARARGS, "positions(angles, out)"},
+    {"position_derivative", position_derivative, METH_VARARGS,
+     "position_derivative(angles, dstate, nodes, out)"},
     {"inertia", inertia, METH_VARARGS, "inertia(indptr, indices, values, n_angles) -> int"},
     {NULL, NULL, 0, NULL},
 };

@@ -191,15 +191,15 @@ class Discretisation:
     def straight(self) -> np.ndarray:
         """The undeformed arm as a bordered state vector."""
         theta = np.zeros(self.n_elements + 1)
-        return self.join(theta, self.node_positions(theta)[list(self.attach_nodes)])
+        return self.join(theta, self.node_positions(theta)[self.attach_index])
 
     def consistent_state(self, theta: np.ndarray) -> np.ndarray:
         """Bordered state with y_i = X_i(theta) exactly."""
-        return self.join(theta, self.node_positions(theta)[list(self.attach_nodes)])
+        return self.join(theta, self.node_positions(theta)[self.attach_index])
 
     def attachment_points(self, theta: np.ndarray) -> np.ndarray:
         """Where each cable ends, (n, 2)."""
-        return self.node_positions(theta)[list(self.attach_nodes)]
+        return self.node_positions(theta)[self.attach_index]
 
     def cable_lengths_of(self, theta: np.ndarray) -> np.ndarray:
         """L_i = |r_i - x_i| of the state ``theta`` (Eq. (3))."""
@@ -212,10 +212,11 @@ class Discretisation:
         return 0.5 * (theta[:-1] + theta[1:])
 
     def node_positions(self, theta: np.ndarray) -> np.ndarray:
-        """x_k at every node, shape (N+1, 2) (Eq. (2), midpoint rule)."""
-        phi = self.element_angles(theta)
-        steps = self.h * np.column_stack((np.cos(phi), np.sin(phi)))
-        return np.vstack((np.zeros((1, 2)), np.cumsum(steps, axis=0)))
+        """x_k at every node, shape (N+1, 2): x_0 = 0, x_{k+1} = x_k + h t_k (Eq. (2),
+        midpoint rule; compiled)."""
+        out = np.empty((self.n_elements + 1, 2))
+        _kernels.positions(_floats(theta[1:]), out)
+        return out
 
     def trig(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """cos phi_e and sin phi_e of the element angles (shared by the kernels)."""
@@ -227,11 +228,11 @@ class Discretisation:
         k-1 and k left of m_i (compiled; ``cs``, :meth:`trig` of theta, is
         accepted for the subclasses' interface and recomputed)."""
         g = np.empty((self.n_tendons, self.n_elements, 2))
-        _kernels.gradients(_floats(theta[1:]), self._nodes, g)
+        _kernels.gradients(_floats(theta[1:]), self.attach_index, g)
         return g
 
     @cached_property
-    def _nodes(self) -> np.ndarray:
+    def attach_index(self) -> np.ndarray:
         """The attachment nodes m_i as int64, for the compiled kernels."""
         return np.asarray(self.attach_nodes, dtype=np.int64)
 
@@ -239,6 +240,17 @@ class Discretisation:
     def _routes(self) -> np.ndarray:
         """The routing points as a contiguous float64 (n, 2) array."""
         return _floats(self.routes)
+
+    def position_derivative(self, theta: np.ndarray, dstate: np.ndarray, nodes) -> np.ndarray:
+        """d x_m / dq at the nodes ``nodes`` (0..N) for each row of ``dstate``
+        ((k, >= N): variations of theta_1..theta_N first), shape (k, len(nodes), 2):
+        d x_m = sum_{e < m} h n_e (dtheta_e + dtheta_{e+1}) / 2, Eq. (2) differentiated
+        (Eq. (13) at the tip, m = N; compiled)."""
+        dstate = _floats(dstate).reshape(len(dstate), -1)
+        nodes = np.ascontiguousarray(nodes, dtype=np.int64)
+        out = np.empty((len(dstate), len(nodes), 2))
+        _kernels.position_derivative(_floats(theta[1:]), dstate, nodes, out)
+        return out
 
     @cached_property
     def _support_matrix(self) -> np.ndarray:
@@ -264,7 +276,7 @@ class Discretisation:
 
     def potential(self, theta: np.ndarray, p, tip_moment: float = 0.0) -> float:
         """Discrete total potential Pi(theta) (docs/model.md §2)."""
-        x = self.node_positions(theta)[list(self.attach_nodes)]
+        x = self.node_positions(theta)[self.attach_index]
         lengths = np.linalg.norm(self.routes - x, axis=1)
         return self.strain_energy(theta) + float(np.dot(p, lengths)) - tip_moment * theta[-1]
 
@@ -312,7 +324,7 @@ class Discretisation:
         elements e = k-1, k (compiled; ``terms`` is accepted for the subclasses'
         interface and recomputed)."""
         out = np.empty(self.size)
-        _kernels.residual(_floats(u), _floats(p), self._routes, self._nodes,
+        _kernels.residual(_floats(u), _floats(p), self._routes, self.attach_index,
                           float(tip_moment), out)
         return out
 
@@ -392,7 +404,7 @@ class Discretisation:
         dF_y/dtheta = -dX/dtheta and the identity (compiled; ``terms`` and ``g`` are
         accepted for the subclasses' interface and recomputed)."""
         out = np.empty(len(self._pattern_src))
-        _kernels.jacobian(_floats(u), _floats(p), self._routes, self._nodes,
+        _kernels.jacobian(_floats(u), _floats(p), self._routes, self.attach_index,
                           self._pattern_src, out)
         return out
 
@@ -413,7 +425,7 @@ class Discretisation:
         (compiled; a tension p_i <= 0 gives a zero column).
         """
         out = np.empty(len(self._stability_src))
-        _kernels.stability(_floats(u), _floats(p), self._routes, self._nodes,
+        _kernels.stability(_floats(u), _floats(p), self._routes, self.attach_index,
                            self._stability_src, out)
         return out
 
@@ -436,7 +448,7 @@ class Discretisation:
         angles, zero on the border (right-hand sides of Eq. (14); compiled, ``g`` and
         ``d`` are accepted for the subclasses' interface and recomputed)."""
         out = np.empty((self.n_tendons, self.size))
-        _kernels.load_derivative(_floats(u), self._routes, self._nodes, out)
+        _kernels.load_derivative(_floats(u), self._routes, self.attach_index, out)
         return out
 
     def linearisation(self, u: np.ndarray, p, residual: bool = True) -> tuple:

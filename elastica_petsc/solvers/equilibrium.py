@@ -81,19 +81,20 @@ class Equilibrium(Result):
     def tip(self) -> np.ndarray:
         return self.x[-1]
 
-    @property
+    @cached_property
     def attachments(self) -> np.ndarray:
         """Where each cable ends (its offset included, docs/model.md §11)."""
         if self.disc.has_paths:
             return self.disc.attachment_points(self.theta)
-        return self.x[list(self.disc.attach_nodes)]
+        return self.x[self.disc.attach_index]
 
     @cached_property
     def cable_lengths(self) -> np.ndarray:
         """L_i = |r_i - x_i| in units of l (through the guides: the whole path)."""
         if self.disc.has_paths:
             return self.disc.cable_lengths_of(self.theta)
-        return np.linalg.norm(self.disc.routes - self.attachments, axis=1)
+        chord = self.disc.routes - self.attachments
+        return np.hypot(chord[:, 0], chord[:, 1])
 
     @property
     def directions(self) -> np.ndarray:
