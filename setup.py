@@ -3,6 +3,6 @@ else is declared in pyproject.toml.  Needs a C compiler and Python's headers
 (Debian: gcc, python3-dev, in scripts/system-packages-dev.txt)."""
 from setuptools import Extension, setup
 
-setup(ext_modules=[Extension("elastica_petsc.core._fem_kernels",
-                             ["elastica_petsc/core/_fem_kernels.c"],
+setup(ext_modules=[Extension("elastica_petsc.core.fem_kernels",
+                             ["elastica_petsc/core/fem_kernels.c"],
                              extra_compile_args=["-O2", "-std=c99"])])

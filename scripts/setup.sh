@@ -50,10 +50,10 @@ if [ ! -x "$venv/bin/python" ]; then
   /usr/bin/python3 -m venv --system-site-packages "$venv"
 fi
 # --no-deps --no-build-isolation: never let pip fetch numpy/h5py/mpi4py/petsc4py wheels.
-# The install compiles the kernels (elastica_petsc/core/_fem_kernels.c, setup.py) in
+# The install compiles the kernels (elastica_petsc/core/fem_kernels.c, setup.py) in
 # place; it runs again when the C source or the build files change.
-kernels="$here/elastica_petsc/core/_fem_kernels.c"
-built="$(compgen -G "$here/elastica_petsc/core/_fem_kernels*.so" | head -n 1 || true)"
+kernels="$here/elastica_petsc/core/fem_kernels.c"
+built="$(compgen -G "$here/elastica_petsc/core/fem_kernels*.so" | head -n 1 || true)"
 if ! "$venv/bin/python" -c "import elastica_petsc.core.fem" 2>/dev/null \
    || [ "$here/pyproject.toml" -nt "$venv/.elastica-installed" ] \
    || [ "$here/setup.py" -nt "$venv/.elastica-installed" ] \

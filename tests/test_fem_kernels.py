@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from elastica_petsc.core import fem
+from elastica_petsc.core import fem_kernels
 from elastica_petsc.core.fem import Discretisation, ldlt_negatives
 
 from conftest import make_arm
@@ -101,8 +101,8 @@ def test_wrong_sizes_are_refused():
     with pytest.raises(ValueError, match="^p: expected 2 items"):
         disc.residual(u, p[:1])
     with pytest.raises(ValueError, match="out"):
-        fem._kernels.residual(u, p, disc.routes, disc.attach_index, 0.0, np.empty(3))
+        fem_kernels.residual(u, p, disc.routes, disc.attach_index, 0.0, np.empty(3))
     with pytest.raises(ValueError, match="attachment node"):
-        fem._kernels.residual(u, p, disc.routes, np.array([0, 99]), 0.0, np.empty(u.size))
+        fem_kernels.residual(u, p, disc.routes, np.array([0, 99]), 0.0, np.empty(u.size))
     with pytest.raises(ValueError, match="node 13 outside"):
         disc.position_derivative(np.zeros(13), np.zeros((1, 12)), [13])

@@ -1,4 +1,4 @@
-"""Pure-numpy kernels of the P1 finite-element elastica (no PETSc here).
+"""Kernels of the P1 finite-element elastica (compiled in fem_kernels.c; no PETSc here).
 
 Non-dimensional throughout (docs/model.md §3): l = 1, B = 1, tensions p.
 
@@ -36,7 +36,7 @@ columns; eliminating y (Schur complement) gives back K exactly.  With the
 theta unknowns first, LU in the natural order fills only the border.
 
 The residual, the Jacobian values, dF/dp, the band, the attachment gradients
-and the stability values are compiled (``_fem_kernels.c``, docs/model.md §19);
+and the stability values are compiled (``fem_kernels.c``, docs/model.md §19);
 the methods here convert their arguments and hold the pattern data.
 """
 from __future__ import annotations
@@ -51,10 +51,10 @@ from .errors import InputError
 from .model import Arm
 
 try:
-    from . import _fem_kernels as _kernels
+    from . import fem_kernels
 except ImportError as err:      # a source tree whose extension was never built
     raise ImportError(
-        "elastica_petsc's compiled kernels (elastica_petsc/core/_fem_kernels.c) are not built: "
+        "elastica_petsc's compiled kernels (elastica_petsc/core/fem_kernels.c) are not built: "
         "run `bash scripts/setup.sh` (it needs gcc and python3-dev) or `python -m pip install "
         f"--no-deps --no-build-isolation -e .` in the source tree ({err})") from err
 
@@ -66,7 +66,7 @@ def ldlt_negatives(pattern, values: np.ndarray, n_angles: int) -> int | None:
     a tridiagonal block of ``n_angles`` rows, then dense border rows and columns
     (:meth:`Discretisation.bordered_pattern`; compiled, O(N nb^2)).  None at a zero
     pivot (|d| <= 100 eps, PETSc's default): the matrix is numerically singular."""
-    count = _kernels.inertia(pattern[0], pattern[1], _floats(values), int(n_angles))
+    count = fem_kernels.inertia(pattern[0], pattern[1], _floats(values), int(n_angles))
     if count == -2:
         raise ValueError("not a bordered tridiagonal pattern: rows of the angle block may "
                          "reach only the next angle and the border")
@@ -215,7 +215,7 @@ class Discretisation:
         """x_k at every node, shape (N+1, 2): x_0 = 0, x_{k+1} = x_k + h t_k (Eq. (2),
         midpoint rule; compiled)."""
         out = np.empty((self.n_elements + 1, 2))
-        _kernels.positions(_floats(theta[1:]), out)
+        fem_kernels.positions(_floats(theta[1:]), out)
         return out
 
     def trig(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -228,7 +228,7 @@ class Discretisation:
         k-1 and k left of m_i (compiled; ``cs``, :meth:`trig` of theta, is
         accepted for the subclasses' interface and recomputed)."""
         g = np.empty((self.n_tendons, self.n_elements, 2))
-        _kernels.gradients(_floats(theta[1:]), self.attach_index, g)
+        fem_kernels.gradients(_floats(theta[1:]), self.attach_index, g)
         return g
 
     @cached_property
@@ -249,7 +249,7 @@ class Discretisation:
         dstate = _floats(dstate).reshape(len(dstate), -1)
         nodes = np.ascontiguousarray(nodes, dtype=np.int64)
         out = np.empty((len(dstate), len(nodes), 2))
-        _kernels.position_derivative(_floats(theta[1:]), dstate, nodes, out)
+        fem_kernels.position_derivative(_floats(theta[1:]), dstate, nodes, out)
         return out
 
     @cached_property
@@ -324,7 +324,7 @@ class Discretisation:
         elements e = k-1, k (compiled; ``terms`` is accepted for the subclasses'
         interface and recomputed)."""
         out = np.empty(self.size)
-        _kernels.residual(_floats(u), _floats(p), self._routes, self.attach_index,
+        fem_kernels.residual(_floats(u), _floats(p), self._routes, self.attach_index,
                           float(tip_moment), out)
         return out
 
@@ -394,7 +394,7 @@ class Discretisation:
         else:
             c, s, force = terms.c, terms.s, terms.force
         band = np.empty((self.n_elements, 3))
-        _kernels.band(_floats(c), _floats(s), _floats(force), band)
+        fem_kernels.band(_floats(c), _floats(s), _floats(force), band)
         return band
 
     def jacobian_values(self, u: np.ndarray, p, terms: Terms | None = None,
@@ -404,7 +404,7 @@ class Discretisation:
         dF_y/dtheta = -dX/dtheta and the identity (compiled; ``terms`` and ``g`` are
         accepted for the subclasses' interface and recomputed)."""
         out = np.empty(len(self._pattern_src))
-        _kernels.jacobian(_floats(u), _floats(p), self._routes, self.attach_index,
+        fem_kernels.jacobian(_floats(u), _floats(p), self._routes, self.attach_index,
                           self._pattern_src, out)
         return out
 
@@ -425,7 +425,7 @@ class Discretisation:
         (compiled; a tension p_i <= 0 gives a zero column).
         """
         out = np.empty(len(self._stability_src))
-        _kernels.stability(_floats(u), _floats(p), self._routes, self.attach_index,
+        fem_kernels.stability(_floats(u), _floats(p), self._routes, self.attach_index,
                            self._stability_src, out)
         return out
 
@@ -448,7 +448,7 @@ class Discretisation:
         angles, zero on the border (right-hand sides of Eq. (14); compiled, ``g`` and
         ``d`` are accepted for the subclasses' interface and recomputed)."""
         out = np.empty((self.n_tendons, self.size))
-        _kernels.load_derivative(_floats(u), self._routes, self.attach_index, out)
+        fem_kernels.load_derivative(_floats(u), self._routes, self.attach_index, out)
         return out
 
     def linearisation(self, u: np.ndarray, p, residual: bool = True) -> tuple:

@@ -624,8 +624,8 @@ static PyMethodDef methods[] = {
 };
 
 static struct PyModuleDef module = {
-    PyModuleDef_HEAD_INIT, "_fem_kernels",
+    PyModuleDef_HEAD_INIT, "fem_kernels",
     "Compiled kernels of the P1 elastica (core/fem.py, docs/model.md §19).", -1, methods,
 };
 
-PyMODINIT_FUNC PyInit__fem_kernels(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit_fem_kernels(void) { return PyModule_Create(&module); }
