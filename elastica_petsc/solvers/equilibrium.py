@@ -387,7 +387,7 @@ class EquilibriumSolver:
                     else:
                         u_prev, dlam_prev = u, step
                     u, lam, steps, path.modes = u_new, lam + step, steps + 1, modes
-                    if self.disc.shortest_segments(self.disc.split(u)[1]).min() < \
+                    if self.disc.shortest_segments(u[n_angles:].reshape(-1, 2)).min() < \
                             COLLAPSE_LENGTH:
                         # a cable collapsed onto its routing point: no load beyond
                         return u, pa + lam * (pb - pa), iterations, steps, CABLE_COLLAPSE, False
