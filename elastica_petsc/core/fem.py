@@ -431,10 +431,11 @@ class Discretisation:
 
     def stiffness_border(self, theta: np.ndarray, y: np.ndarray, p) -> np.ndarray:
         """W, shape (n, N): W[i] = sqrt(p_i / L_i) (dX_i/dtheta)^T d_i^perp, so that
-        K = T + W^T W (docs/model.md §2); a tension p_i <= 0 gives a zero row."""
-        lengths, d = self.cables(y)
-        weights = np.sqrt(np.maximum(np.asarray(p, float), 0.0) / lengths)
-        return weights[:, None] * self.transverse_gradients(self.attachment_gradients(theta), d)
+        K = T + W^T W (docs/model.md §2); a tension p_i <= 0 gives a zero row (compiled)."""
+        out = np.empty((self.n_tendons, self.n_elements))
+        fem_kernels.stiffness(_floats(self.join(theta, y)), _floats(p), self._routes,
+                              self.attach_index, out)
+        return out
 
     @staticmethod
     def transverse_gradients(g: np.ndarray, d: np.ndarray) -> np.ndarray:

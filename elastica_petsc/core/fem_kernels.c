@@ -301,8 +301,23 @@ static PyObject *jacobian(PyObject *self, PyObject *args)
     return bordered_end(&b, 0);
 }
 
+/* W, (n, N): W[i, k] = sqrt(max(p_i, 0) / L_i) (dX_i/dtheta_{k+1}) . d_i^perp, so that
+ * K = T + W^T W (docs/model.md §2). */
+static void stiffness_rows(const Arm *a, const double *p, double *W)
+{
+    for (Py_ssize_t i = 0; i < a->n; i++) {
+        double px = -a->dy[i], py = a->dx[i];
+        double weight = sqrt((p[i] > 0.0 ? p[i] : 0.0) / a->len[i]);
+        for (Py_ssize_t k = 0; k < a->N; k++) {
+            double gx, gy;
+            gradient(a, i, k, &gx, &gy);
+            W[i * a->N + k] = weight * (gx * px + gy * py);
+        }
+    }
+}
+
 /* stability(u, p, routes, nodes, src, out): the upper triangle of
- * H = [[T, W^T], [W, -I]], W[i] = sqrt(max(p_i, 0) / L_i) (dX_i/dtheta)^T d_i^perp. */
+ * H = [[T, W^T], [W, -I]] in the order of its pattern. */
 static PyObject *stability(PyObject *self, PyObject *args)
 {
     Bordered b;
@@ -312,20 +327,39 @@ static PyObject *stability(PyObject *self, PyObject *args)
     Arm *a = &b.a;
     Py_ssize_t N = a->N, n = a->n, nb = b.nb;
     double *cols = b.source + 3 * N, *rows = cols + nb * N, *corner = rows + nb * N;
-    const double *p = b.p.buf;
+    stiffness_rows(a, b.p.buf, rows);                 /* the border rows are W itself */
     for (Py_ssize_t i = 0; i < n; i++) {
-        double px = -a->dy[i], py = a->dx[i];
-        double weight = sqrt((p[i] > 0.0 ? p[i] : 0.0) / a->len[i]);
-        for (Py_ssize_t k = 0; k < N; k++) {
-            double gx, gy;
-            gradient(a, i, k, &gx, &gy);
-            double w = weight * (gx * px + gy * py);
-            cols[k * nb + i] = w;
-            rows[i * N + k] = w;
-        }
+        for (Py_ssize_t k = 0; k < N; k++)
+            cols[k * nb + i] = rows[i * N + k];
         corner[i] = -1.0;
     }
     return bordered_end(&b, 0);
+}
+
+/* stiffness(u, p, routes, nodes, out): W, (n, N), of the state u. */
+static PyObject *stiffness(PyObject *self, PyObject *args)
+{
+    Py_buffer u, p, routes, nodes, out;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*w*", &u, &p, &routes, &nodes, &out))
+        return NULL;
+    PyObject *result = NULL;
+    Arm a;
+    Py_ssize_t n = nodes.len / (Py_ssize_t)sizeof(int64_t);
+    Py_ssize_t N = u.len / (Py_ssize_t)sizeof(double) - 2 * n;
+    if (arm_init(&a, &routes, &nodes, N) == 0) {
+        if (!check_len(&p, n, sizeof(double), "p") &&
+            !check_len(&out, n * N, sizeof(double), "out")) {
+            arm_trig(&a, u.buf);
+            arm_cables(&a, (const double *)u.buf + N);
+            stiffness_rows(&a, p.buf, out.buf);
+            result = Py_None;
+            Py_INCREF(result);
+        }
+        arm_free(&a);
+    }
+    PyBuffer_Release(&u); PyBuffer_Release(&p); PyBuffer_Release(&routes);
+    PyBuffer_Release(&nodes); PyBuffer_Release(&out);
+    return result;
 }
 
 /* load_derivative(u, routes, nodes, out): dF/dp, (n, size); row i is
@@ -613,6 +647,7 @@ static PyMethodDef methods[] = {
     {"residual", residual, METH_VARARGS, "residual(u, p, routes, nodes, tip_moment, out)"},
     {"jacobian", jacobian, METH_VARARGS, "jacobian(u, p, routes, nodes, src, out)"},
     {"stability", stability, METH_VARARGS, "stability(u, p, routes, nodes, src, out)"},
+    {"stiffness", stiffness, METH_VARARGS, "stiffness(u, p, routes, nodes, out)"},
     {"load_derivative", load_derivative, METH_VARARGS, "load_derivative(u, routes, nodes, out)"},
     {"band", band, METH_VARARGS, "band(c, s, force, out)"},
     {"gradients", gradients, METH_VARARGS, "gradients(angles, nodes, out)"},
