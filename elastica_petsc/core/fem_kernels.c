@@ -549,45 +549,23 @@ static PyObject *position_derivative(PyObject *self, PyObject *args)
     return result;
 }
 
-/* inertia(indptr, indices, values, n_angles): negative pivots of the LDL^T, in the
- * natural order without pivoting (PETSc's Cholesky on SBAIJ), of the symmetric
- * matrix whose upper triangle is the CSR (int32) given: a tridiagonal block of
- * n_angles rows, then dense border columns and a border block.  Eliminating the
- * angles first fills only the border (O(N nb^2)).  -1 at a zero pivot; -2 if
+/* The negative pivots of the LDL^T, in the natural order without pivoting (PETSc's
+ * Cholesky on SBAIJ), of the symmetric matrix of M rows whose upper triangle is the
+ * CSR given: a tridiagonal block of N rows, then dense border columns and a border
+ * block of nb = M - N rows.  Eliminating the angles first fills only the border
+ * (O(N nb^2)); work holds nb^2 + 2 nb doubles, zeroed.  -1 at a zero pivot; -2 if
  * the pattern is not of that shape. */
-static PyObject *inertia(PyObject *self, PyObject *args)
+static long bordered_ldlt(const int32_t *indptr, const int32_t *indices, const double *v,
+                          Py_ssize_t N, Py_ssize_t M, double *work)
 {
-    Py_buffer ip, ix, val;
-    Py_ssize_t N;
-    if (!PyArg_ParseTuple(args, "y*y*y*n", &ip, &ix, &val, &N))
-        return NULL;
-    Py_ssize_t M = ip.len / (Py_ssize_t)sizeof(int32_t) - 1, nb = M - N;
-    const int32_t *indptr = ip.buf, *indices = ix.buf;
-    const double *v = val.buf;
-    long count = 0;
-    double *work = NULL;
-    PyObject *result = NULL;
-    if (nb < 0) {
-        PyErr_SetString(PyExc_ValueError, "more angle rows than matrix rows");
-        goto done;
-    }
-    if (check_len(&ix, indptr[M], sizeof(int32_t), "indices") ||
-        check_len(&val, indptr[M], sizeof(double), "values"))
-        goto done;
-    work = calloc(nb * nb + 2 * nb + 1, sizeof(double));
-    if (!work) {
-        PyErr_NoMemory();
-        goto done;
-    }
+    Py_ssize_t nb = M - N;
     double *S = work, *carry = S + nb * nb, *b = carry + nb;
-    /* the border block */
-    for (Py_ssize_t r = N; r < M; r++)
+    long count = 0;
+    for (Py_ssize_t r = N; r < M; r++)                 /* the border block */
         for (int32_t k = indptr[r]; k < indptr[r + 1]; k++) {
             Py_ssize_t col = indices[k];
-            if (col < r) {
-                count = -2;
-                goto done;
-            }
+            if (col < r)
+                return -2;
             S[(r - N) * nb + (col - N)] = S[(col - N) * nb + (r - N)] = v[k];
         }
     double carry_diag = 0.0;
@@ -602,17 +580,13 @@ static PyObject *inertia(PyObject *self, PyObject *args)
                 upper = v[k];
             else if (col >= N)
                 b[col - N] += v[k];
-            else {
-                count = -2;
-                goto done;
-            }
+            else
+                return -2;
         }
-        if (fabs(diag) <= ZERO_PIVOT) {
-            count = -1;
-            goto done;
-        }
+        if (fabs(diag) <= ZERO_PIVOT)
+            return -1;
         count += diag < 0.0;
-        double l = upper / diag;
+        double l = upper / diag;           /* row r + 1 -= l row r; S -= b b^T / diag */
         carry_diag = -upper * l;
         for (Py_ssize_t j = 0; j < nb; j++) {
             carry[j] = -l * b[j];
@@ -621,13 +595,10 @@ static PyObject *inertia(PyObject *self, PyObject *args)
                 S[i * nb + j] -= b[i] * bj;
         }
     }
-    /* LDL^T of the dense Schur complement of the border, natural order */
-    for (Py_ssize_t j = 0; j < nb; j++) {
+    for (Py_ssize_t j = 0; j < nb; j++) {              /* LDL^T of the dense border block */
         double d = S[j * nb + j];
-        if (fabs(d) <= ZERO_PIVOT) {
-            count = -1;
-            goto done;
-        }
+        if (fabs(d) <= ZERO_PIVOT)
+            return -1;
         count += d < 0.0;
         for (Py_ssize_t i = j + 1; i < nb; i++) {
             double l = S[i * nb + j] / d;
@@ -635,10 +606,30 @@ static PyObject *inertia(PyObject *self, PyObject *args)
                 S[i * nb + k] -= l * S[j * nb + k];
         }
     }
-done:
-    free(work);
-    if (!PyErr_Occurred())
-        result = PyLong_FromLong(count);
+    return count;
+}
+
+/* inertia(indptr, indices, values, n_angles): bordered_ldlt of the CSR (int32) given. */
+static PyObject *inertia(PyObject *self, PyObject *args)
+{
+    Py_buffer ip, ix, val;
+    Py_ssize_t N;
+    if (!PyArg_ParseTuple(args, "y*y*y*n", &ip, &ix, &val, &N))
+        return NULL;
+    Py_ssize_t M = ip.len / (Py_ssize_t)sizeof(int32_t) - 1;
+    const int32_t *indptr = ip.buf;
+    PyObject *result = NULL;
+    if (M < N || N < 0)
+        PyErr_SetString(PyExc_ValueError, "more angle rows than matrix rows");
+    else if (!check_len(&ix, indptr[M], sizeof(int32_t), "indices") &&
+             !check_len(&val, indptr[M], sizeof(double), "values")) {
+        double *work = calloc((M - N) * (M - N + 2) + 1, sizeof(double));
+        if (!work)
+            PyErr_NoMemory();
+        else
+            result = PyLong_FromLong(bordered_ldlt(indptr, ix.buf, val.buf, N, M, work));
+        free(work);
+    }
     PyBuffer_Release(&ip); PyBuffer_Release(&ix); PyBuffer_Release(&val);
     return result;
 }
