@@ -37,7 +37,24 @@ def results():
         "DesignResult": ep.design(arm, [[500, 250], [480, 260]], elements=ELEMENTS),
         "AreaDesign": ep.design_area(arm, iterations=1, resample_cells=None,
                                      elements=ELEMENTS),
+        "SimulationResult": ep.simulate(arm, initial_tensions_N=[0.0, 0.05],
+                                        tensions_N=[0.0, 0.0], duration_s=0.05,
+                                        elements=ELEMENTS),
+        "CalibrationResult": ep.calibrate(arm, calibration_data(arm), ["tendon1.route"],
+                                          folds=2, elements=ELEMENTS),
     }
+
+
+def calibration_data(arm):
+    """Six synthetic rows of the paper arm with tendon 1's routing point moved 3 mm."""
+    from elastica_petsc.core.calibration_params import ParameterModel
+    from elastica_petsc.studies.calibration_synthetic import command_rows, synthesize
+
+    arm = dataclasses.replace(arm, elements=ELEMENTS)
+    P = np.column_stack((np.linspace(1, 9, 6), np.linspace(5, 0.5, 6)))
+    truth = ParameterModel(arm, ["tendon1.route"]).start() + [3.0, -2.0]
+    return synthesize(arm, ["tendon1.route"], truth, command_rows(arm, P, "tension"),
+                      noise_mm=0.2, seed=1, marker_s_mm=(300.0,))
 
 
 def assert_same(a, b, where: str = "result") -> None:
@@ -79,7 +96,8 @@ def test_every_result_type_is_exported(results):
 @pytest.mark.parametrize("name", ["State", "Equilibrium", "ControlResult", "Stability",
                                   "Frequencies", "LengthEquilibrium", "TraceResult",
                                   "TracedSchedule", "WorkspaceMap", "SearchResult",
-                                  "BoundaryResult", "Sweep", "DesignResult", "AreaDesign"])
+                                  "BoundaryResult", "Sweep", "DesignResult", "AreaDesign",
+                                  "SimulationResult", "CalibrationResult"])
 def test_read_of_save_is_the_same_result(results, name, tmp_path):
     result = results[name]
     path = result.save(tmp_path / f"{name}.h5")
@@ -186,3 +204,15 @@ def test_cli_boundary_file_reads_back_as_the_result(tmp_path):
     assert isinstance(back, ep.BoundaryResult)
     np.testing.assert_array_equal(back.polygons_mm["W0"][0], direct.polygons_mm["W0"][0])
     assert back.areas_mm2 == direct.areas_mm2
+
+
+def test_simulate_and_calibrate_files_read_back_as_their_results(results, tmp_path):
+    """``simulate --out`` and ``calibrate --h5`` files (their writers) hold the whole
+    result: ep.read returns a SimulationResult / CalibrationResult, not a dict."""
+    from elastica_petsc.io.calibration import write_calibration_h5
+    from elastica_petsc.io.simulation import write_simulation
+
+    write_simulation(tmp_path / "s.h5", False, results["SimulationResult"])
+    write_calibration_h5(tmp_path / "c.h5", results["CalibrationResult"])
+    assert_same(results["SimulationResult"], ep.read(tmp_path / "s.h5"), "simulate --out")
+    assert_same(results["CalibrationResult"], ep.read(tmp_path / "c.h5"), "calibrate --h5")
