@@ -110,12 +110,12 @@ class State(Result):
         """max_s l |theta'| (Fig. 5a), non-dimensional."""
         return float(self.equilibrium.kappa_max)
 
-    def to_vtk(self, directory) -> list[Path]:
+    def to_vtk(self, directory, *, name: str = "solve") -> list[Path]:
         """The state as ParaView files in ``directory`` (created if missing), as
-        ``solve --vtk`` writes them (``solve.vtu``: arm and cables, mm, N)."""
+        ``solve --vtk`` writes them (``<name>.vtu``: arm and cables, mm, N)."""
         from .io.vtk import write_states
 
-        return write_states(directory, self.arm, [self.equilibrium], name="solve")
+        return write_states(directory, self.arm, [self.equilibrium], name=name)
 
     def summary(self) -> dict:
         """The JSON object that ``elastica-petsc solve --json`` prints."""
@@ -306,7 +306,7 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
             result = sharer.solve(result)
         reacher.step("the simplest loading path that reaches the state")
         result = dataclasses.replace(result, loading=simplest_loading(
-            ctl.solver, result.equilibrium, result.loading))
+            ctl.solver, result.equilibrium, result.loading), arm=arm)
         if animate:
             from .plots.animate import animate_control
             animate_control(ctl, result, animate)
@@ -329,7 +329,7 @@ def _points(points_mm, arm: Arm | None = None, name: str = "points_mm") -> np.nd
 
 @_takes_petsc_options
 def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | None = None,
-          min_tension_N: float = 0.0, elements: int | None = None):
+          min_tension_N: float = 0.0, keep_results: bool = False, elements: int | None = None):
     """Tip control along a path, each target warm-started from the previous
     solution (Sec. 4.5, Fig. 3).  ``step_mm`` inserts points so that no two
     consecutive targets are further apart.  With n >= 3 tendons,
@@ -338,7 +338,9 @@ def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | Non
     per point among those that reach it (SQP on the KKT system, followed from
     point to point), so a closed path closes in cable space.  Returns a
     ``TraceResult`` (``tips_mm``, ``tensions_N``, ``cable_lengths_mm`` per
-    point); for a timed motor schedule with an approach move see :func:`schedule`."""
+    point; with ``keep_results`` also each point's ``ControlResult``, as
+    ``to_vtk`` needs); for a timed motor schedule with an approach move see
+    :func:`schedule`."""
     from .solvers.control import TipController
     from .studies import trace as paths
 
@@ -348,7 +350,7 @@ def trace(arm: Arm, points_mm, *, step_mm: float | None = None, share: str | Non
         points = paths.densify(points, inputs.path_step_mm(points, step_mm, "path", "step_mm"))
     with TipController(arm, n_elements=elements) as ctl:
         sharer = _sharer(arm, ctl, share, _floor_N(min_tension_N))
-        return paths.trace(ctl, points, sharer=sharer)
+        return paths.trace(ctl, points, sharer=sharer, keep_results=keep_results)
 
 
 @_takes_petsc_options

@@ -216,3 +216,37 @@ def test_simulate_and_calibrate_files_read_back_as_their_results(results, tmp_pa
     write_calibration_h5(tmp_path / "c.h5", results["CalibrationResult"])
     assert_same(results["SimulationResult"], ep.read(tmp_path / "s.h5"), "simulate --out")
     assert_same(results["CalibrationResult"], ep.read(tmp_path / "c.h5"), "calibrate --h5")
+
+
+@pytest.mark.parametrize("name", ["ControlResult", "TraceResult", "TracedSchedule"])
+def test_saved_control_and_trace_results_carry_their_arm(results, name, tmp_path):
+    """Their files have the arm's config (provenance ``config_json``, as every
+    writer stores it) and ep.read gives the arm back."""
+    from elastica_petsc.io.reader import file_arm, open_h5
+
+    path = results[name].save(tmp_path / f"{name}.h5")
+    with open_h5(path) as fh:
+        assert file_arm(fh) == ep.Arm.paper()
+    assert ep.read(path).arm == ep.Arm.paper()
+
+
+def test_control_and_trace_results_write_vtk(results, tmp_path):
+    """``to_vtk`` as ``control --vtk`` and ``trace --vtk`` write it."""
+    import xml.etree.ElementTree as ET
+
+    (vtu,) = results["ControlResult"].to_vtk(tmp_path / "c")
+    assert vtu.name == "control.vtu"
+    with pytest.raises(ep.InputError, match="keep_results=True"):
+        results["TraceResult"].to_vtk(tmp_path / "t")
+    planned = results["TracedSchedule"]
+    files = planned.path.to_vtk(tmp_path / "t")
+    assert [f.name for f in files[-2:]] == ["trace.pvd", "trace_path.vtu"]
+    assert len(files) == planned.path.n_points + 2
+    piece = ET.parse(files[-1]).getroot().find("UnstructuredGrid/Piece")
+    assert int(piece.get("NumberOfPoints")) == planned.path.n_points
+    files = planned.to_vtk(tmp_path / "s")
+    approach = planned.approach.n_points if planned.approach is not None else 0
+    assert len(files) == approach + planned.path.n_points + 2
+    import dataclasses as dc
+    with pytest.raises(ep.InputError, match="no arm"):
+        dc.replace(results["ControlResult"], arm=None).to_vtk(tmp_path / "x")

@@ -18,8 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.model import Arm
 from ..core.results import Result
 from ..solvers.control import ControlResult, Evaluation, TipController
+from ..solvers.tip_problem import needs_arm
 from ..core.errors import InputError
 
 
@@ -203,6 +205,7 @@ class TraceResult(Result):
     tip_errors_mm: np.ndarray       # (k,)
     seconds: float                  # wall time of the whole trace
     results: tuple[ControlResult, ...] = ()
+    arm: Arm | None = None          # the arm traced (saved as provenance)
 
     @property
     def all_converged(self) -> bool:
@@ -211,6 +214,14 @@ class TraceResult(Result):
     @property
     def n_points(self) -> int:
         return len(self.targets_mm)
+
+    def to_vtk(self, directory, *, times_s=None) -> list[Path]:
+        """One state per point in ``directory`` (``trace.pvd``, time ``times_s`` or
+        the point index) and the path ``trace_path.vtu``, as ``trace --vtk``
+        writes them; needs ``arm`` and the per-point results."""
+        from ..io.vtk import write_trace
+
+        return write_trace(directory, needs_arm(self), self, times_s=times_s)
 
     def to_xarray(self):
         """The traced path as an ``xarray.Dataset`` (xarray optional), dimensions
@@ -339,4 +350,4 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
         converged=np.array([r.converged for r in results]),
         tip_errors_mm=np.array([r.tip_error_mm for r in results]),
         seconds=seconds,
-        results=tuple(results) if keep_results else ())
+        results=tuple(results) if keep_results else (), arm=controller.arm)
