@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import functools
 import inspect
-from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -41,6 +40,7 @@ from .core.errors import InputError
 from .core.fem import Discretisation
 from .core.model import Arm
 from .solvers.equilibrium import Equilibrium, EquilibriumSolver, check_order
+from .solvers.options import call_options
 
 
 @dataclass(frozen=True, repr=False)
@@ -131,45 +131,11 @@ def _arm(arm) -> Arm:
     return arm
 
 
-@contextmanager
-def _petsc_options_in_force(petsc_options):
-    """``petsc_options`` ({name: value}; None values for flags) in PETSc's
-    options database for the ``with`` block only (earlier values restored);
-    InputError for names nothing read during the block."""
-    if not petsc_options:
-        yield
-        return
-    if not hasattr(petsc_options, "items"):
-        raise InputError("petsc_options must be a mapping {name: value}, "
-                         "e.g. {'eq_snes_rtol': 1e-10}")
-    from petsc4py import PETSc
-
-    from .solvers.options import unused_options
-
-    opts = PETSc.Options()
-    names = [str(name).lstrip("-") for name in petsc_options]
-    before = {name: opts.getString(name) for name in names if opts.hasName(name)}
-    for name, value in zip(names, petsc_options.values()):
-        opts.setValue(name, "" if value is None else
-                      str(value).lower() if isinstance(value, bool) else str(value))
-    try:
-        yield
-        unused = unused_options(names)
-    finally:
-        for name in names:
-            opts.delValue(name)
-            if name in before:
-                opts.setValue(name, before[name])
-    if unused:
-        raise InputError(f"PETSc options not used by any solver of this call: "
-                         f"{' '.join(unused)} (check the name and its prefix)")
-
-
 def _takes_petsc_options(study):
     """Give ``study`` the keyword ``petsc_options=`` (see the module docstring)."""
     @functools.wraps(study)
     def with_options(*args, petsc_options=None, **kwargs):
-        with _petsc_options_in_force(petsc_options):
+        with call_options(petsc_options):
             return study(*args, **kwargs)
 
     signature = inspect.signature(study)
