@@ -306,8 +306,9 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
         k; default the sharer's), e.g. ramped along an approach from the straight arm.
     """
     from ..solvers.reach import Reacher
+    from ..solvers.share import WarmStart
 
-    reacher = Reacher(controller)
+    reacher, warm = Reacher(controller), WarmStart()     # the sharer's, point to point
     targets = np.asarray(targets_mm, dtype=float)
     if targets.ndim != 2 or targets.shape[1] != 2 or len(targets) == 0:
         raise PathError(f"targets must have shape (k, 2) in mm, got {targets.shape}")
@@ -328,7 +329,7 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
             res = sharer.follow(x_d / controller.length_mm, previous, reacher, p0=p0,
                                 start=start, start_loading=loading,
                                 floor=None if floors is None else floors[k],
-                                global_search=global_search)
+                                global_search=global_search, warm=warm)
             if res.converged:          # the next point starts from the last shared state
                 previous = Evaluation(res.p, res.equilibrium, res.sensitivity, res.loading)
         results.append(res)
