@@ -627,7 +627,9 @@ def read(path: str | Path):
     """Load a file written by the tool back into its result: the saved type
     itself for files written by :func:`save` (``result.save(path)``) and by
     ``control --out`` (a ``ControlResult``), ``trace --out`` (a
-    ``TracedSchedule``) and ``boundary --out`` (a ``BoundaryResult``); a :class:`State` for ``solve``/``stability`` files
+    ``TracedSchedule``), ``boundary --out`` (a ``BoundaryResult``), ``simulate
+    --out`` (a ``SimulationResult``) and ``calibrate --h5`` (a
+    ``CalibrationResult``); a :class:`State` for ``solve``/``stability`` files
     (the final state), a ``WorkspaceMap`` for workspace maps, otherwise a
     dict of its datasets."""
     from .io.reader import file_kind, open_h5, read_file

@@ -57,3 +57,12 @@ def test_readme_says_what_the_model_covers_on_its_first_screen():
     assert "What the model covers" in first_screen
     for words in ("planar", "straight", "friction", "gravity"):
         assert words in first_screen
+
+
+def test_every_subpackage_is_listed_for_the_wheel():
+    """setuptools ships only the packages pyproject.toml lists: every folder of the
+    package with an ``__init__.py`` must be among them."""
+    listed = set(pyproject()["tool"]["setuptools"]["packages"])
+    found = {".".join(p.parent.relative_to(ROOT).parts)
+             for p in (ROOT / "elastica_petsc").rglob("__init__.py")}
+    assert found - listed == set()
