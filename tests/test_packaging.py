@@ -10,6 +10,8 @@ import tomllib
 import zipfile
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -31,6 +33,7 @@ def test_test_extra_has_what_the_test_script_uses():
     assert " -n auto" in (ROOT / "scripts" / "test.sh").read_text()
 
 
+@pytest.mark.slow
 def test_every_config_is_shipped_in_the_wheel(tmp_path):
     shipped = {p.name: p.read_bytes() for p in (ROOT / "elastica_petsc" / "configs").glob("*.toml")}
     for path in (ROOT / "configs").glob("*.toml"):

@@ -1,6 +1,7 @@
 """Results are the public surface (issue 20): every result type is exported,
 frozen, printed in one line, summarised as a dict, and ``ep.read(x.save(path))``
-equals ``x`` field by field."""
+equals ``x`` field by field.  The tests that build every result (about a
+minute on a loaded host) are marked slow: ``scripts/test.sh --fast`` leaves them out."""
 from __future__ import annotations
 
 import dataclasses
@@ -88,6 +89,7 @@ def assert_same(a, b, where: str = "result") -> None:
         assert a == b, f"{where}: {a!r} != {b!r}"
 
 
+@pytest.mark.slow
 def test_every_result_type_is_exported(results):
     for name in results:
         assert name in ep.__all__ and getattr(ep, name) is type(results[name])
@@ -98,6 +100,7 @@ def test_every_result_type_is_exported(results):
                                   "TracedSchedule", "WorkspaceMap", "SearchResult",
                                   "BoundaryResult", "Sweep", "DesignResult", "AreaDesign",
                                   "SimulationResult", "CalibrationResult"])
+@pytest.mark.slow
 def test_read_of_save_is_the_same_result(results, name, tmp_path):
     result = results[name]
     path = result.save(tmp_path / f"{name}.h5")
@@ -106,6 +109,7 @@ def test_read_of_save_is_the_same_result(results, name, tmp_path):
     assert json.dumps(back.summary()) == json.dumps(result.summary())
 
 
+@pytest.mark.slow
 def test_results_are_frozen_short_and_summarised(results):
     for name, result in results.items():
         field = dataclasses.fields(result)[0].name
@@ -118,12 +122,14 @@ def test_results_are_frozen_short_and_summarised(results):
         json.dumps(summary)                                # JSON-ready
 
 
+@pytest.mark.slow
 def test_print_state_does_not_dump_arrays(results, capsys):
     print(results["State"])
     out = capsys.readouterr().out
     assert out.count("\n") == 1 and "array(" not in out and "[" not in out
 
 
+@pytest.mark.slow
 def test_saved_state_keeps_the_command_line_layout(results, tmp_path):
     """``State.save`` writes the layout of ``solve --out`` (read by the CLI's readers)."""
     from elastica_petsc.io.reader import equilibrium_from_group, open_h5
@@ -135,6 +141,7 @@ def test_saved_state_keeps_the_command_line_layout(results, tmp_path):
     np.testing.assert_allclose(eq.u, state.equilibrium.u, rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_save_refuses_an_existing_file_unless_asked(results, tmp_path):
     path = results["Stability"].save(tmp_path / "s.h5")
     with pytest.raises(ep.InputError):
@@ -155,6 +162,7 @@ def test_error_hierarchy():
     assert issubclass(ContinuationError, ep.SolverError)
 
 
+@pytest.mark.slow
 def test_to_vtk_writes_what_the_cli_writes(results, tmp_path):
     """``State.to_vtk`` (``solve --vtk``) and ``WorkspaceMap.to_vtk`` (``workspace
     --vtk``, from the map's file); a map without a file says how to get one."""
@@ -171,6 +179,7 @@ def test_to_vtk_writes_what_the_cli_writes(results, tmp_path):
     assert int(piece.get("NumberOfPoints")) == len(wmap.status)
 
 
+@pytest.mark.slow
 def test_cli_control_and_trace_files_read_back_as_their_results(tmp_path):
     """``control --out`` and ``trace --out`` files hold the whole result: ep.read
     returns a ControlResult (target, history kept) and a TracedSchedule."""
@@ -192,6 +201,7 @@ def test_cli_control_and_trace_files_read_back_as_their_results(tmp_path):
     assert isinstance(planned, ep.TracedSchedule) and planned.path.all_converged
 
 
+@pytest.mark.slow
 def test_cli_boundary_file_reads_back_as_the_result(tmp_path):
     import subprocess
     import sys
@@ -206,6 +216,7 @@ def test_cli_boundary_file_reads_back_as_the_result(tmp_path):
     assert back.areas_mm2 == direct.areas_mm2
 
 
+@pytest.mark.slow
 def test_simulate_and_calibrate_files_read_back_as_their_results(results, tmp_path):
     """``simulate --out`` and ``calibrate --h5`` files (their writers) hold the whole
     result: ep.read returns a SimulationResult / CalibrationResult, not a dict."""
@@ -219,6 +230,7 @@ def test_simulate_and_calibrate_files_read_back_as_their_results(results, tmp_pa
 
 
 @pytest.mark.parametrize("name", ["ControlResult", "TraceResult", "TracedSchedule"])
+@pytest.mark.slow
 def test_saved_control_and_trace_results_carry_their_arm(results, name, tmp_path):
     """Their files have the arm's config (provenance ``config_json``, as every
     writer stores it) and ep.read gives the arm back."""
@@ -230,6 +242,7 @@ def test_saved_control_and_trace_results_carry_their_arm(results, name, tmp_path
     assert ep.read(path).arm == ep.Arm.paper()
 
 
+@pytest.mark.slow
 def test_control_and_trace_results_write_vtk(results, tmp_path):
     """``to_vtk`` as ``control --vtk`` and ``trace --vtk`` write it."""
     import xml.etree.ElementTree as ET
