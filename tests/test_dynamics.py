@@ -177,6 +177,7 @@ def _cli(*args, cwd=None):
                           text=True, cwd=cwd, timeout=300)
 
 
+@pytest.mark.slow
 def test_cli_free_vibration_writes_file(tmp_path):
     out = tmp_path / "s.h5"
     r = _cli("simulate", "--elements", "30", "--initial-tensions-N", "0", "0.05",
@@ -231,6 +232,7 @@ def test_cli_bad_schedule_and_duration_and_mass(tmp_path):
         assert not out.exists()
 
 
+@pytest.mark.slow
 def test_cable_goes_slack_once_when_paid_out_fast(arm):
     """Length control: tendon 2 holds the arm bent (p = 5), then pays out 0.05 l in 0.3 tau,
     faster than the arm can follow: one slack event (TSEvent on the consistent tension),
