@@ -199,6 +199,7 @@ def test_cli_control_and_trace_files_read_back_as_their_results(tmp_path):
     assert len(control.history_E) == control.iterations + 1
     planned = ep.read(tmp_path / "t.h5")
     assert isinstance(planned, ep.TracedSchedule) and planned.path.all_converged
+    assert control.arm == planned.arm == ep.Arm.paper()          # the config the CLI loaded
 
 
 @pytest.mark.slow
