@@ -23,6 +23,7 @@ Layout of an equilibrium group (``write_equilibrium``)::
     tendons/tensions       (n,)     P l^2/B
     tendons/tensions_N     (n,)     N
     tendons/cable_clear    (n,)     bool    cable segment does not cross the arm
+    guides/...             (P,...)          cables through guides only (io/guides.py)
     solver (attributes)    converged, reason, message, iterations, load_steps,
                            unstable_modes, stable; after a symmetric bifurcation
                            bifurcation_sides, bifurcation_rules and the dataset
@@ -238,6 +239,9 @@ def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
     put(tendons, "tensions_N", arm.tensions_to_N(eq.p), "N", "tensions P_i", ("tendon",))
     put(tendons, "cable_clear", state_cable_clear(eq), "1",
         "the straight cable [x_i, r_i] does not cross the arm (HDF5 boolean)", ("tendon",))
+    from .guides import has_guides, write_guides
+    if has_guides(eq.disc):              # cables through guides (io/guides.py)
+        write_guides(group, arm, eq)
     solver = group.create_group("solver")
     write_attrs(solver, {"converged": bool(eq.converged), "reason": eq.reason,
                          "message": eq.message, "iterations": int(eq.iterations),
@@ -310,6 +314,9 @@ def write_trace(group, arm: Arm, trace, schedule) -> None:
     put(path, "cable_clear", np.array([state_cable_clear(r.equilibrium) for r in results],
                                       dtype=bool).reshape(len(results), -1), "1",
         "per point and tendon: the straight cable does not cross the arm (HDF5 boolean)", PT)
+    from .guides import has_guides, write_trace_guides
+    if results and has_guides(results[0].equilibrium.disc):
+        write_trace_guides(path, arm, [r.equilibrium for r in results])
     ends = write_loading_tree(group, [r.loading for r in results])
     put(path, "loading_node", ends, "1",
         "per point: last vertex of its loading path in /loading (-1: p = 0, -2: unknown)",
