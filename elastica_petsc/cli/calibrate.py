@@ -79,6 +79,10 @@ def check_options(args) -> None:
     check_distinct(paths)
 
 
+# how the library's messages name the options on the command line
+FLAGS = {"vary": "--vary", "bounds": "--bounds", "input": "--input"}
+
+
 def run(args) -> int:
     from ..core.calibration_data import read_calibration_csv
     from ..core.calibration_params import ParameterModel, parse_bounds
@@ -88,11 +92,12 @@ def run(args) -> int:
     from ..studies.calibrate_report import calibrate
 
     arm, disc = common.load_arm(args)
-    data = read_calibration_csv(args.data, arm.n_tendons, args.input, arm.length_mm)
+    data = read_calibration_csv(args.data, arm.n_tendons, args.input, arm.length_mm,
+                                options=FLAGS)
     candidates = (read_calibration_csv(args.candidates, arm.n_tendons, args.input,
-                                       arm.length_mm, measured=False)
+                                       arm.length_mm, measured=False, options=FLAGS)
                   if args.candidates else None)
-    model = ParameterModel(arm, args.vary, parse_bounds(args.bounds))
+    model = ParameterModel(arm, args.vary, parse_bounds(args.bounds, FLAGS), FLAGS)
     CalibrationProblem(model, data, disc.n_elements)          # too few rows: refused here
     check_options(args)
     comm = world()

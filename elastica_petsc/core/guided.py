@@ -454,6 +454,19 @@ class GuidedDiscretisation(Discretisation):
             out[self.n_elements + 2 * a + 2:self.n_elements + 2 * a + 4] = -normal
         return out
 
+    def weight_derivative(self, u: np.ndarray) -> np.ndarray:
+        """dF/dw, (size,), at fixed u and p of the weight scaled by a factor w at w = 1
+        (F is linear in the weight: the angle rows' -(h/2) n_e . G_e terms; a change
+        of B scales q = rho_A g l^3/B and the tip weight by B/B', so dF/dB = -dF/dw / B)."""
+        theta = self.split(u)[0]
+        c, s = self.trig(theta)
+        G = self.element_weight
+        q = 0.5 * self.h * (c * G[:, 1] - s * G[:, 0])
+        out = np.zeros(self.size)
+        out[:self.n_elements] = -q
+        out[:self.n_elements - 1] -= q[1:]
+        return out
+
     def length_gradients(self, y: np.ndarray) -> np.ndarray:
         """dL_i/dz, shape (n, 2P): e_a on chord a of tendon i."""
         grad = self.segments(y)[1]

@@ -33,7 +33,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..core.calibration_data import CalibrationData
-from ..core.calibration_params import ParameterModel
+from ..core.calibration_params import ParameterModel, has_weight
 from ..core.errors import InputError
 from ..solvers.calibration import RowError, RowSolver, RowState
 from ..solvers.lengths import SAME_SHAPE_TOL
@@ -92,6 +92,13 @@ class CalibrationProblem:
             raise CalibrationError(f"{data.n_rows} rows give {n_obs} measured coordinates for "
                                    f"{model.size} parameters: need more coordinates than "
                                    "parameters")
+        if has_weight(model.arm0) and "steps" in set(data.kinds):
+            line = data.lines[list(data.kinds).index("steps")]
+            raise CalibrationError(f"line {line}: motor steps on an arm with weight are not "
+                                   "supported (the steps count from the straight unloaded "
+                                   "arm, and an arm under its weight is not straight); give "
+                                   "the cable lengths (length_K_mm columns)")
+        self.weight_column = has_weight(model.arm0) and "bending_stiffness" in model.index
         self.states: list[RowState | None] = [None] * data.n_rows
         self.orders = list(data.loading)
         self.matched = [order is None for order in data.loading]
@@ -177,6 +184,7 @@ class CalibrationProblem:
             raise CalibrationError(f"the parameters left the valid arms: {err}") from None
         rho_d = model.arm_routes(theta)[1].reshape(-1, model.size)
         n = arm.n_tendons
+        d_weight = -model.column("bending_stiffness")[None, :] / arm.bending_stiffness_Nm2
 
         def row(rs, r):
             mode, drive, d_drive, L = self._drive(theta, r)
@@ -188,8 +196,10 @@ class CalibrationProblem:
             m, A, explicit = model.measure(theta, rs.points_mm(state.u, data.marker_s_mm))
             if not jacobian:
                 return m, None, state.p > 1e-8
-            dq = rs.derivatives(mode, state, L, data.marker_s_mm)
-            dx = dq[:, :, : 2 * n] @ rho_d + dq[:, :, 2 * n:] @ d_drive
+            dq = rs.derivatives(mode, state, L, data.marker_s_mm, weight=self.weight_column)
+            dx = dq[:, :, : 2 * n] @ rho_d + dq[:, :, 2 * n:3 * n] @ d_drive
+            if self.weight_column:        # q ~ 1/B: the weight's factor moves by -dB/B
+                dx += dq[:, :, 3 * n:] @ d_weight
             return m, (np.einsum("ab,kbp->kap", A, dx) + explicit)[self.observed[r]], \
                 state.p > 1e-8
 
