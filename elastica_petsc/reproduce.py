@@ -62,7 +62,14 @@ class Context:
             from .studies.placement import Placement, placement
             paper = Placement(FIG2_TARGET_MM, TRIANGLE_CENTER_MM, CURVE_CENTER_MM, 1.0,
                               FIG8_LENGTHS_MM)
-            self.placement = placement(self.arm, paper, PAPER_P)
+            targets = reached = None
+            ws = self.out / "fig4_workspace.h5"
+            if ws.exists():
+                from .plots.workspace import read_workspace
+                from .studies.workspace import Status
+                data = read_workspace(ws)
+                targets, reached = data["target"], data["status"] == Status.REACHED
+            self.placement = placement(self.arm, paper, PAPER_P, targets, reached)
         return self.placement
 
     @property
@@ -119,10 +126,11 @@ def fig8(ctx: Context) -> None:
     ctx.add("Fig. 8", "load control p = (25.2, 10.8), order 1,2: cable lengths [mm] (state 3)",
             "(96.2, 454.3)", _fmt(L3, 2), _diff(L3, [96.2, 454.3], 2),
             "tensioning tendon 1 first selects state 3 (path dependence)")
-    ctx.add("Fig. 8", "length control L = (147.1, 472.5) mm: tensions of state 1 [P l^2/B]",
+    lengths = _fmt(ctx.place.fig8_lengths_mm)
+    ctx.add("Fig. 8", f"length control L = {lengths} mm: tensions of state 1 [P l^2/B]",
             "(25.2, 10.8)", _fmt(found1.p, 2), _diff(found1.p, PAPER_P, 2),
             "the paper's lengths are rounded to 0.1 mm; dp/dL ~ 0.1-1 per mm")
-    ctx.add("Fig. 8", "length control L = (147.1, 472.5) mm: tensions of state 2 [P l^2/B]",
+    ctx.add("Fig. 8", f"length control L = {lengths} mm: tensions of state 2 [P l^2/B]",
             "(9.7, 12.6)", _fmt(found2.p, 2), _diff(found2.p, [9.7, 12.6], 2),
             f"{len(search.states)} distinct equilibria found from {len(search.starts)} starts "
             "(deflation); not a proof that there are no others")

@@ -7,9 +7,11 @@ cables through guides, weight) they can lie far outside its workspace, and the
 report would compare nothing.  A user arm therefore gets the experiments at
 its own state 1 of Fig. 8: the equilibrium reached by loading p = (25.2, 10.8)
 (non-dimensional, the paper's tensions) tendon 2 first.  Its tip is the Fig. 2
-target and the centre of the Fig. 3 drawings, whose sizes are scaled by
-l / 600 mm; its cable lengths are the Fig. 8 lengths (so state 1 is found
-again under length control, with any other state sharing them).
+target; its cable lengths are the Fig. 8 lengths (so state 1 is found again
+under length control, with any other state sharing them).  The Fig. 3
+drawings are centred at the reached sample of the workspace map (computed
+first) farthest from any sample not reached, scaled by l / 600 mm or less, so
+that the circumcircle keeps within that clearance.
 """
 from __future__ import annotations
 
@@ -39,9 +41,24 @@ def is_paper_arm(arm: Arm) -> bool:
     return dataclasses.replace(arm, elements=paper.elements) == paper
 
 
-def placement(arm: Arm, paper: Placement, tensions) -> Placement:
+def interior_target(targets_mm, reached) -> tuple[np.ndarray, float] | None:
+    """The reached sample of a workspace map farthest from every sample not reached,
+    and that distance (mm): where a drawing fits inside the sampled W_0."""
+    targets_mm, reached = np.asarray(targets_mm, float), np.asarray(reached, bool)
+    if not reached.any() or reached.all():
+        return None
+    inside, outside = targets_mm[reached], targets_mm[~reached]
+    clearance = np.min(np.linalg.norm(inside[:, None] - outside[None], axis=2), axis=1)
+    best = int(np.argmax(clearance))
+    return inside[best], float(clearance[best])
+
+
+def placement(arm: Arm, paper: Placement, tensions, targets_mm=None,
+              reached=None) -> Placement:
     """``paper`` on the paper's arm; else the experiments about the arm's own state 1
-    at the non-dimensional ``tensions`` (module docstring)."""
+    at the non-dimensional ``tensions`` (module docstring), the Fig. 3 drawings at
+    the most interior reached sample of the workspace map (``targets_mm``,
+    ``reached``) if there is one, sized to fit (circumradius 0.9 of its clearance)."""
     if is_paper_arm(arm):
         return paper
     from ..core.fem import Discretisation
@@ -51,10 +68,18 @@ def placement(arm: Arm, paper: Placement, tensions) -> Placement:
         state = solver.solve(np.asarray(tensions, float), order=(2, 1))
     l_mm = arm.length_mm
     tip = state.tip * l_mm
-    centre = (round(float(tip[0]), 1), round(float(tip[1]), 1))
-    return Placement(np.array(centre), centre, centre, l_mm / PAPER_LENGTH_MM,
+    target = (round(float(tip[0]), 1), round(float(tip[1]), 1))
+    centre, size = target, l_mm / PAPER_LENGTH_MM
+    where = f"about the tip {target} mm"
+    inner = None if targets_mm is None else interior_target(targets_mm, reached)
+    if inner is not None:
+        centre = (round(float(inner[0][0]), 1), round(float(inner[0][1]), 1))
+        size = min(size, 0.9 * inner[1] / 80.0)
+        where = (f"at the tip {target} mm (Fig. 2) and the workspace map's most interior "
+                 f"reached sample {centre} mm (Fig. 3)")
+    return Placement(np.array(target), centre, centre, size,
                      np.round(state.cable_lengths * l_mm, 1),
-                     f"a user arm: the experiments are placed about the tip {centre} mm of its "
-                     f"Fig. 8 state 1 (p = {tuple(float(v) for v in tensions)}, tendon 2 first), "
-                     f"drawings scaled by l/600 mm = {l_mm / PAPER_LENGTH_MM:.3g}; the paper's "
-                     "values are those of the paper's arm, for comparison of magnitudes only")
+                     f"a user arm: the experiments are placed {where} of its Fig. 8 state 1 "
+                     f"(p = {tuple(float(v) for v in tensions)}, tendon 2 first), drawings "
+                     f"scaled by {size:.3g}; the paper's values are those of the paper's arm, "
+                     "for comparison of magnitudes only")
