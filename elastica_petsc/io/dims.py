@@ -30,7 +30,10 @@ DIMENSION_TEXT = {"tendon": "tendon number", "component": "vector component (x, 
                   "node": "mesh node index (arc length s = node l / N)",
                   "element": "finite element index", "point": "path point index",
                   "row": "schedule row", "sample": "workspace sample index",
-                  "iteration": "optimiser iteration", "x": "target x", "y": "target y"}
+                  "iteration": "optimiser iteration", "x": "target x", "y": "target y",
+                  "vertex": "polygon vertex", "fold_point": "point where the tip map folds",
+                  "event": "event index", "jump": "jump index",
+                  "singular_value": "singular value index"}
 
 
 def cf_attrs(units: str, description: str) -> dict:
