@@ -155,3 +155,29 @@ def test_library_messages_name_keywords_not_flags(call, message):
     with pytest.raises(InputError) as err:
         call(GUIDED)
     assert message in str(err.value) and "--" not in str(err.value)
+
+
+def test_calibrate_command_on_a_guided_config(tmp_path):
+    """The command end to end on configs/guided3.toml: the fitted TOML keeps the guides,
+    offsets and guide_radius_mm and loads again; the routing point is recovered."""
+    import subprocess
+    import sys
+
+    from elastica_petsc.core.calibration_data import write_calibration_csv
+    rng = np.random.default_rng(1)
+    P = np.column_stack((rng.uniform(1, 9, 8), rng.uniform(0.5, 5, 8)))
+    vary = ["tendon1.route"]
+    truth = ParameterModel(GUIDED, vary).start() + [0.0, -2.0]
+    data = synthesize(GUIDED, vary, truth, command_rows(GUIDED, P, ["tension"] * 4
+                                                        + ["length"] * 4))
+    write_calibration_csv(tmp_path / "d.csv", data, ["SYNTHETIC: guided3, tendon1.route.y - 2"])
+    run = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "calibrate", "--config",
+                          str(ROOT / "configs" / "guided3.toml"), "--elements", str(ELEMENTS),
+                          "--data", "d.csv", "--vary", "tendon1.route", "--folds", "0",
+                          "--out", "fit.toml", "--quiet"], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    fitted = load_config(tmp_path / "fit.toml")
+    assert fitted.tendons[1] == GUIDED.tendons[1] and fitted.guide_radius_mm == 10.0
+    assert fitted.tendons[0].guides == GUIDED.tendons[0].guides
+    np.testing.assert_allclose(fitted.tendons[0].route_mm, truth, atol=1e-5)
