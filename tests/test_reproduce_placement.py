@@ -20,7 +20,14 @@ def test_interior_target_is_the_reached_sample_farthest_from_the_rest():
     reached = np.max(np.abs(targets - 25.0), axis=1) < 20.0          # a 4 x 4 block
     centre, clearance = interior_target(targets, reached)
     assert reached[np.flatnonzero((targets == centre).all(axis=1))[0]]
-    assert clearance == 20.0 and np.all(np.abs(centre - 25.0) <= 5.0)
+    assert clearance == 15.0 and np.all(np.abs(centre - 25.0) <= 5.0)    # 20 less h/2
+    # the edge of the sampled region counts as outside: a block against the reach circle
+    x, y = np.meshgrid(np.arange(0.0, 110.0, 10.0), np.arange(0.0, 110.0, 10.0))
+    targets = np.column_stack((x.ravel(), y.ravel()))
+    centre, clearance = interior_target(targets, np.hypot(x, y).ravel() <= 100.0,
+                                        reach_mm=100.0)
+    assert clearance > 0 and np.linalg.norm(centre) + clearance + 5.0 <= 100.0 + 1e-9
+    assert centre[1] >= clearance + 5.0                        # and from the line y = 0
     assert interior_target(targets, np.zeros(len(targets), bool)) is None
 
 

@@ -41,15 +41,27 @@ def is_paper_arm(arm: Arm) -> bool:
     return dataclasses.replace(arm, elements=paper.elements) == paper
 
 
-def interior_target(targets_mm, reached) -> tuple[np.ndarray, float] | None:
-    """The reached sample of a workspace map farthest from every sample not reached,
-    and that distance (mm): where a drawing fits inside the sampled W_0."""
+def interior_target(targets_mm, reached, reach_mm: float | None = None
+                    ) -> tuple[np.ndarray, float] | None:
+    """The reached sample of a workspace map farthest from every sample not reached
+    and from the edge of the sampled region (the reach circle |x| = ``reach_mm`` and,
+    for a map in y >= 0, the line y = 0), less half a lattice spacing (where the
+    boundary may lie between samples), and that clearance (mm): where a drawing fits
+    inside the sampled W_0."""
     targets_mm, reached = np.asarray(targets_mm, float), np.asarray(reached, bool)
     if not reached.any() or reached.all():
         return None
     inside, outside = targets_mm[reached], targets_mm[~reached]
     clearance = np.min(np.linalg.norm(inside[:, None] - outside[None], axis=2), axis=1)
+    if reach_mm is not None:
+        clearance = np.minimum(clearance, reach_mm - np.linalg.norm(inside, axis=1))
+    if np.min(targets_mm[:, 1]) >= 0.0:
+        clearance = np.minimum(clearance, inside[:, 1])
+    gaps = np.linalg.norm(np.diff(targets_mm, axis=0), axis=1)
+    clearance = clearance - 0.5 * np.min(gaps[gaps > 0]) if np.any(gaps > 0) else clearance
     best = int(np.argmax(clearance))
+    if clearance[best] <= 0.0:
+        return None
     return inside[best], float(clearance[best])
 
 
@@ -71,14 +83,14 @@ def placement(arm: Arm, paper: Placement, tensions, targets_mm=None,
     target = (round(float(tip[0]), 1), round(float(tip[1]), 1))
     centre, size = target, l_mm / PAPER_LENGTH_MM
     where = f"about the tip {target} mm"
-    inner = None if targets_mm is None else interior_target(targets_mm, reached)
+    inner = None if targets_mm is None else interior_target(targets_mm, reached, l_mm)
     if inner is not None:
         centre = (round(float(inner[0][0]), 1), round(float(inner[0][1]), 1))
         size = min(size, 0.9 * inner[1] / 80.0)
         where = (f"at the tip {target} mm (Fig. 2) and the workspace map's most interior "
                  f"reached sample {centre} mm (Fig. 3)")
     return Placement(np.array(target), centre, centre, size,
-                     np.round(state.cable_lengths * l_mm, 1),
+                     state.cable_lengths * l_mm,
                      f"a user arm: the experiments are placed {where} of its Fig. 8 state 1 "
                      f"(p = {tuple(float(v) for v in tensions)}, tendon 2 first), drawings "
                      f"scaled by {size:.3g}; the paper's values are those of the paper's arm, "
