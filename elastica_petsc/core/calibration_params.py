@@ -58,7 +58,8 @@ def said(names: dict | None, key: str, value=None) -> str:
 
 
 GROUPS = ("bending_stiffness", "tendonK.route", "motorK.offset", "motor.spool_radius",
-          "clamp.angle", "clamp.position", "frame.rotation", "frame.offset")
+          "clamp.angle", "clamp.position", "frame.rotation", "frame.offset",
+          "tendonK.attach")
 _INDEXED = re.compile(r"^(tendon|motor)(\d+)\.(route|offset|attach)$")
 
 
@@ -101,8 +102,9 @@ def _group_parameters(group: str, arm: Arm, names=None) -> list[Parameter]:
         raise ParameterError(f"{vary}: unknown parameter (known: {', '.join(GROUPS)})")
     if what == "attach":
         raise ParameterError(f"{vary}: attachment points sit on mesh nodes, so they are not a "
-                             "continuous calibration parameter (compare attachments by a "
-                             "design sweep)")
+                             "continuous parameter of this model; ep.calibrate and the "
+                             "calibrate command search them node by node "
+                             "(studies/calibrate_attach.py)")
     if what == "route":
         x, y = arm.tendons[k - 1].route_mm
         return [Parameter(f"{group}.x", group, "mm", x, 5.0, x - 50.0, x + 50.0),

@@ -189,6 +189,7 @@ class CalibrationResult:
     cross_validation: dict | None
     tip_covariance_mm2: np.ndarray          # (m, 2, 2): predicted tips' covariance
     next_measurements: list | None = None
+    attachments: object = None              # AttachmentSearch (studies/calibrate_attach.py)
 
     @property
     def model(self):
@@ -246,6 +247,7 @@ class CalibrationResult:
                        "failed_trial_points": self.problem.failed_trials,
                        "converged": self.converged},
             "next_measurements": self.next_measurements,
+            **({"attachments": self.attachments.summary()} if self.attachments else {}),
         }
 
 
