@@ -87,6 +87,22 @@ def label(dset, dims, coords: dict | None = None) -> None:
         dset.dims[axis].attach_scale(scale)
 
 
+def put(group, name: str, data, units: str, description: str, dims=None, coords=None):
+    """A dataset with its units (UDUNITS/CF: ``1`` for a non-dimensional one, its
+    meaning in ``long_name``), description and, with ``dims``, one named
+    dimension per axis (io/dims.py; ``coords`` their values)."""
+    data = np.asarray(data)
+    if data.dtype.kind == "U":                  # text: variable-length UTF-8 strings
+        import h5py
+        data = data.astype(object).astype(h5py.string_dtype("utf-8"))
+    dset = group.create_dataset(name, data=data)
+    dset.attrs.update(cf_attrs(units, description))
+    dset.attrs["description"] = description
+    if dims is not None:
+        label(dset, dims, coords)
+    return dset
+
+
 def fields(group) -> dict:
     """{name: values} of a group's datasets, its dimension scales left out."""
     import h5py

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .hdf5 import put
+from .dims import put
 
 DIM = ("cable_point",)
 DIM2 = ("cable_point", "component")

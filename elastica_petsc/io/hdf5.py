@@ -47,6 +47,7 @@ from ..core.config import arm_to_dict
 from ..solvers.equilibrium import Equilibrium
 from ..core.errors import InputError
 from ..core.model import Arm
+from .dims import put  # noqa: F401 - re-exported: every writer's dataset helper
 from .exclusive import OutputLock, replace_file  # noqa: F401 - OutputLock: re-exported
 
 
@@ -190,24 +191,6 @@ def provenance(arm: Arm, kind: str) -> dict:
 def write_attrs(obj, attrs: dict) -> None:
     for key, value in attrs.items():
         obj.attrs[key] = value
-
-
-def put(group, name: str, data, units: str, description: str, dims=None, coords=None):
-    """A dataset with its units (UDUNITS/CF: ``1`` for a non-dimensional one, its
-    meaning in ``long_name``), description and, with ``dims``, one named
-    dimension per axis (io/dims.py; ``coords`` their values)."""
-    from .dims import cf_attrs, label
-
-    data = np.asarray(data)
-    if data.dtype.kind == "U":                  # text: variable-length UTF-8 strings
-        import h5py
-        data = data.astype(object).astype(h5py.string_dtype("utf-8"))
-    dset = group.create_dataset(name, data=data)
-    dset.attrs.update(cf_attrs(units, description))
-    dset.attrs["description"] = description
-    if dims is not None:
-        label(dset, dims, coords)
-    return dset
 
 
 def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
