@@ -129,6 +129,7 @@ def fig8(ctx: Context) -> None:
     lengths = _fmt(ctx.place.fig8_lengths_mm)
     ctx.add("Fig. 8", f"length control L = {lengths} mm: tensions of state 1 [P l^2/B]",
             "(25.2, 10.8)", _fmt(found1.p, 2), _diff(found1.p, PAPER_P, 2),
+            "the lengths of state 1 under load control (a user arm)" if ctx.place.note else
             "the paper's lengths are rounded to 0.1 mm; dp/dL ~ 0.1-1 per mm")
     ctx.add("Fig. 8", f"length control L = {lengths} mm: tensions of state 2 [P l^2/B]",
             "(9.7, 12.6)", _fmt(found2.p, 2), _diff(found2.p, [9.7, 12.6], 2),
@@ -211,7 +212,7 @@ def fig3(ctx: Context) -> None:
     side = np.linalg.norm(vertices[1] - vertices[0])
     warm = tri.iterations[1:]
     ctx.add("Fig. 3a", "triangle side / incircle / circumcircle radius [mm]",
-            "138.56 / 40 / 80", f"{side:.2f} / {radius / 2:g} / {radius:g}", "",
+            "138.56 / 40 / 80", f"{side:.2f} / {radius / 2:.4g} / {radius:.4g}", "",
             f"centred at {place.triangle_center_mm} mm (the paper gives no coordinates)")
     ctx.add("Fig. 3a", "tip error of the computed tensions [mm]", "< 1e-5 (eps = 1e-10 mm^2)",
             f"max {np.max(tri.tip_errors_mm):.1e} over {tri.n_points} points", "",
