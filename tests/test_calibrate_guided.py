@@ -181,3 +181,28 @@ def test_calibrate_command_on_a_guided_config(tmp_path):
     assert fitted.tendons[1] == GUIDED.tendons[1] and fitted.guide_radius_mm == 10.0
     assert fitted.tendons[0].guides == GUIDED.tendons[0].guides
     np.testing.assert_allclose(fitted.tendons[0].route_mm, truth, atol=1e-5)
+
+
+def test_a_theta_evaluated_again_gives_the_same_branch():
+    """The paper's arm in a vertical plane: length row 3 admits two equilibria near
+    these parameters, and a warm start from a trial point's state used to return the
+    other one (38.7 mm away) at the same theta; rows now start from the nearest
+    recent evaluation's states (studies/calibrate.py)."""
+    arm = dataclasses.replace(load_config(ROOT / "configs" / "paper_vertical.toml"), elements=30)
+    vary = ["bending_stiffness", "tendon1.route", "tendon2.route", "frame.rotation"]
+    model = ParameterModel(arm, vary)
+    P = np.array([[6.0, 3.0], [3.0, 7.0], [9.0, 4.0], [5.0, 6.0]])
+    data = synthesize(arm, vary, model.start(), command_rows(
+        arm, P, ["tension", "tension", "length", "length"]), marker_s_mm=(150.0,))
+    problem = CalibrationProblem(model, data)
+    theta = model.start() + 0.1 * model.scales() * np.random.default_rng(5).normal(
+        size=model.size)
+    first = problem.evaluate(theta).residual
+    step = np.zeros(model.size)
+    for j in range(model.size):                     # trial points around theta
+        step[:] = 0.0
+        step[j] = model.scales()[j]
+        for h in (0.2, 0.1):
+            problem.evaluate(theta + h * step, jacobian=False)
+        again = problem.evaluate(theta, jacobian=False).residual
+        assert np.max(np.abs(again - first)) < 1e-6, (model.names[j], np.abs(again - first).max())

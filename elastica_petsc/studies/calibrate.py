@@ -100,6 +100,7 @@ class CalibrationProblem:
                                    "the cable lengths (length_K_mm columns)")
         self.weight_column = has_weight(model.arm0) and "bending_stiffness" in model.index
         self.states: list[RowState | None] = [None] * data.n_rows
+        self.recent: list = []              # (scaled theta, states) of the last evaluations
         self.orders = list(data.loading)
         self.matched = [order is None for order in data.loading]
         self.row_of = np.repeat(np.nonzero(self.observed)[0], 2)
@@ -170,8 +171,25 @@ class CalibrationProblem:
             self.orders[r] = order
             if r % self.ranks == self.rank:
                 self.states[r] = state
+        self.recent = []                  # states of other orders are no warm starts now
         return [("matched: " if m else "given: ") + order_label(o)
                 for m, o in zip(self.matched, self.orders)]
+
+    # A row whose lengths admit several equilibria can come back on another branch when
+    # warm-started from a trial point's state; warm-starting every row from the states of
+    # the nearest recent evaluation (in scaled parameters) returns the same states at a
+    # theta evaluated before (docs/model.md §19.2).
+    RECENT = 8
+
+    def _nearest_states(self, theta) -> list:
+        if not self.recent:
+            return list(self.states)
+        x = (np.asarray(theta, float) - self.model.start()) / self.model.scales()
+        return min(self.recent, key=lambda item: float(np.sum((item[0] - x) ** 2)))[1]
+
+    def _remember(self, theta) -> None:
+        x = (np.asarray(theta, float) - self.model.start()) / self.model.scales()
+        self.recent = (self.recent + [(x, list(self.states))])[-self.RECENT:]
 
     def evaluate(self, theta, jacobian: bool = True) -> Evaluation:
         """Residuals and (optionally) the exact Jacobian at theta."""
@@ -185,10 +203,11 @@ class CalibrationProblem:
         rho_d = model.arm_routes(theta)[1].reshape(-1, model.size)
         n = arm.n_tendons
         d_weight = -model.column("bending_stiffness")[None, :] / arm.bending_stiffness_Nm2
+        warm = self._nearest_states(theta)
 
         def row(rs, r):
             mode, drive, d_drive, L = self._drive(theta, r)
-            state = rs.solve(mode, drive, self.orders[r], warm=self.states[r])
+            state = rs.solve(mode, drive, self.orders[r], warm=warm[r])
             if not state.converged:
                 raise RowError(f"line {data.lines[r]}: equilibrium not reached "
                                f"({state.message})")
@@ -204,6 +223,7 @@ class CalibrationProblem:
                 state.p > 1e-8
 
         rows = self._over_rows(arm, row)
+        self._remember(theta)
         pts_all = np.array([rows[r][0] for r in range(data.n_rows)])
         taut = np.array([rows[r][2] for r in range(data.n_rows)])
         residual = (pts_all - self.measured)[self.observed].ravel()
