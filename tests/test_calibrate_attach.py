@@ -19,7 +19,7 @@ ELEMENTS = 30                                  # h = 20 mm on the paper's 600 mm
 ARM = dataclasses.replace(Arm.paper(), elements=ELEMENTS)
 
 
-def test_search_recovers_an_attachment_two_elements_away():
+def test_search_recovers_an_attachment_two_elements_away(tmp_path):
     truth_arm = with_attachments(ARM, [0], [240.0])          # s_1 = 200 mm in the config
     rng = np.random.default_rng(3)
     P = np.column_stack((rng.uniform(1, 9, 8), rng.uniform(0.5, 5, 8)))
@@ -36,6 +36,11 @@ def test_search_recovers_an_attachment_two_elements_away():
     assert found["sigma"] is not None and 0 < found["sigma"] < 20.0   # below one element
     values = dict(found["profile_mm2"])
     assert values[240.0] < values[220.0] and values[240.0] < values[260.0]
+    import elastica_petsc as ep                    # the saved result keeps the search
+    result.save(tmp_path / "cal.h5")
+    back = ep.read(tmp_path / "cal.h5")
+    assert back.arm.tendons[0].attach_mm == 240.0
+    assert back.summary()["attachments"] == result.summary()["attachments"]
 
 
 def test_attach_names_are_checked():

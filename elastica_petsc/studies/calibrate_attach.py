@@ -186,5 +186,5 @@ def calibrate_with_attachments(arm: Arm, data, vary, *, bounds=None, names=None,
                        progress=progress, **report)
     if search is not None:
         search.residual_variance_mm2 = float(result.report["residual_variance_mm2"])
-        result.attachments = search
+        result = dataclasses.replace(result, attachments=search)
     return result
