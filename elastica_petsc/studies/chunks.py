@@ -143,16 +143,54 @@ class ChunkResults:
         self.chunk_done = np.zeros(len(grid.chunks), bool)
         self.stranded = False            # other ranks still busy after a stop (see run)
         self.write_error = None          # why a checkpoint could not be written (see run)
+        self.unsaved: list[int] = []     # chunks stored since the last checkpoint
+        self.checkpoints: list[tuple[str, int, float]] = []   # (kind, samples written, s)
 
     def store(self, chunk: int, values: dict) -> None:
         index = self.grid.chunks[chunk]
         for name, array in values.items():
             self.data[name][index] = array
         self.chunk_done[chunk] = True
+        self.unsaved.append(chunk)
 
-    def write(self, path: Path, attrs: dict, limits: dict, timing: dict) -> None:
-        """One checkpoint of the whole file (always valid: written aside, renamed)."""
+    def clear_undone(self) -> None:
+        """Empty values for every sample of a chunk not done (a file read back may
+        hold rows of an update that was not committed, io/inplace.py)."""
+        undone = np.ones(self.grid.size, bool)
+        for c in np.flatnonzero(self.chunk_done):
+            undone[self.grid.chunks[c]] = False
+        empty = empty_fields(self.schema, int(undone.sum()))
+        for name, values in self.data.items():
+            values[undone] = empty[name]
+
+    def write(self, path: Path, attrs: dict, limits: dict, timing: dict):
+        """One checkpoint of the whole file (always valid: written aside, renamed);
+        returns its :class:`~elastica_petsc.io.inplace.Layout` for :meth:`update`."""
         raise NotImplementedError
+
+    def extra_rows(self, samples: np.ndarray, limits: dict) -> list:
+        """A study's own in-place rows for ``samples`` beyond ``samples/`` (e.g.
+        masks), as (dataset, index, values)."""
+        return []
+
+    def update(self, layout, chunks: list[int], limits: dict, timing: dict) -> bool:
+        """One checkpoint in place (io/inplace.py): the rows of the samples of
+        ``chunks`` only, then their done flags.  False if the file cannot be
+        updated so (then :meth:`write` it in full)."""
+        from ..io.workspace import UPDATED_TIMING
+
+        chunks = np.asarray(sorted(set(chunks)), np.int64)
+        samples = (np.concatenate([self.grid.chunks[c] for c in chunks]) if len(chunks)
+                   else np.zeros(0, np.int64))
+        rows = [(f"samples/{name}", samples, self.data[name][samples]) for name in self.schema]
+        rows += self.extra_rows(samples, limits)
+        commit = [("grid/chunk_done", chunks, np.ones(len(chunks), bool)),
+                  ("samples/done", samples, np.ones(len(samples), bool))]
+        attrs = {"samples_done": self.samples_done}
+        attrs.update({f"timing/{key}": timing.get(key, 0.0) for key in UPDATED_TIMING})
+        if not layout.covers([name for name, _, _ in rows + commit], attrs):
+            return False
+        return layout.write(rows, commit, attrs)
 
     @property
     def samples_done(self) -> int:
@@ -303,22 +341,33 @@ class _Collector:
         self.checkpoint_seconds = checkpoint_seconds
         self.finished = 1                                  # rank 0 itself, once done
         self.timing = {"ranks": comm.size, "seconds_io": 0.0}
+        self.layout = None             # of the file last written in full (io/inplace.py)
         self.t_start = self.last_write = time.perf_counter()
 
-    def checkpoint(self) -> None:
-        """Write the file; a failed write (full disk) stops the run like a signal:
-        the file keeps its previous checkpoint, the error is reported at the end."""
+    def checkpoint(self, full: bool = False) -> None:
+        """Write the chunks stored since the last checkpoint into the file in place
+        (O(new samples), io/inplace.py), or the whole file (``full``, the first and
+        the last checkpoint of a run, or a file that cannot be updated in place).
+        A failed write (full disk) stops the run like a signal: the file keeps
+        its previous checkpoint, the error is reported at the end."""
         if self.out is None or self.results.write_error is not None:
             return
         t0 = time.perf_counter()
         self.timing["seconds_wall"] = t0 - self.t_start
+        results, new = self.results, len(self.results.unsaved)
         try:
-            self.results.write(self.out, self.attrs, self.limits, self.timing)
+            if (full or self.layout is None
+                    or not results.update(self.layout, results.unsaved, self.limits, self.timing)):
+                self.layout, new = results.write(self.out, self.attrs, self.limits,
+                                                 self.timing), results.grid.size
+                full = True
+            results.unsaved.clear()
         except InputError as err:
-            self.results.write_error = str(err)
+            results.write_error = str(err)
             self.counter.exhaust()
         self.last_write = time.perf_counter()
         self.timing["seconds_io"] += self.last_write - t0
+        results.checkpoints.append(("full" if full else "in place", new, self.last_write - t0))
 
     def store(self, chunk: int, values: dict) -> None:
         self.results.store(chunk, values)
@@ -441,7 +490,7 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
             rank0.drain()
             rank0.checkpoint()                         # before a launcher can kill us
         all_done = rank0.wait_for_ranks(stop)
-        rank0.checkpoint()
+        rank0.checkpoint(full=True)                    # complete, final timing
         bar.close(results.samples_done)
         results.stranded = not all_done
         if not all_done:
