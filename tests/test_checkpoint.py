@@ -10,6 +10,7 @@ it makes one map over the ranks, stopped after STOP_AFTER chunks of rank 1
 """
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
@@ -264,6 +265,54 @@ def test_a_crash_inside_the_writer_leaves_a_resumable_file(phase, reference, tmp
     assert np.all(partial.samples["status"][~partial.done] == 0)
     assert run(make_grid(), out, resume=True).chunk_done.all()
     assert_same_content(reference, out)
+
+
+class SweepSynthetic:
+    """Per-design fields of ``design --sweep`` as functions of the design alone."""
+
+    def __init__(self, stop: chunks.Stop, stop_after: int = 0):
+        self.stop, self.stop_after, self.done = stop, stop_after, 0
+
+    def solve_chunk(self, designs, stop):
+        if self.stop_after and self.done == self.stop_after:
+            self.stop.signalled = True
+            return None
+        self.done += 1
+        a = designs.sum(axis=1)
+        return {"area": a ** 2, "area_converged": a > 30, "cables_clear": a > 20,
+                "det_sign_changes": (a % 3).astype("i4"), "path_misfit": np.sqrt(a),
+                "path_reached": np.full(len(a), -1, "i4"), "error": np.full(len(a), b""),
+                "seconds": np.full(len(a), 0.5)}
+
+
+def sweep(out, stop_after=0, resume=False):
+    """A synthetic 9 x 7 design sweep through the chunk engine (one design per chunk)."""
+    from mpi4py import MPI
+
+    from elastica_petsc.studies.design_sweep import SweepResults
+
+    axes = [{"name": "tendon1.attach", "values": list(range(10, 19))},
+            {"name": "tendon2.route.y", "values": list(range(20, 27))}]
+    points = np.array([[u, v] for u in axes[0]["values"] for v in axes[1]["values"]], float)
+    grid = chunks.Grid("design-sweep", points, tuple(np.array([k]) for k in range(len(points))),
+                       {"axes": axes})
+    attrs = {"mode": "design-sweep", "sampler": "design-sweep",
+             "grid_json": json.dumps({"axes": axes}), "command_line": "test_checkpoint"}
+    stop = chunks.Stop()
+    return chunks.run(grid, SweepSynthetic(stop, stop_after), out, attrs, {},
+                      comm=MPI.COMM_SELF, resume=resume, stop=stop, checkpoint_seconds=0.0,
+                      new_results=lambda: SweepResults(grid))
+
+
+def test_the_design_sweep_is_checkpointed_in_place(tmp_path):
+    """``design --sweep`` goes through the same engine: in-place checkpoints, and an
+    interrupted-and-resumed sweep's file equals the uninterrupted one's."""
+    whole = sweep(tmp_path / "whole.h5")
+    kinds = [kind for kind, _, _ in whole.checkpoints]
+    assert kinds[0] == kinds[-1] == "full" and kinds.count("in place") == len(kinds) - 2 > 50
+    assert not sweep(tmp_path / "resumed.h5", stop_after=20).chunk_done.all()
+    assert sweep(tmp_path / "resumed.h5", resume=True).chunk_done.all()
+    assert_same_content(tmp_path / "whole.h5", tmp_path / "resumed.h5")
 
 
 MPIEXEC = shutil.which("mpiexec")

@@ -15,9 +15,13 @@ slow chunks simply takes fewer; no rank is reserved as a master.
 
 Output: ranks send finished chunks to rank 0 (non-blocking sends, so a
 rank never waits for rank 0 to finish its own chunk), which holds the
-results and writes the whole file aside and renames it into place (a
-checkpoint) every few seconds and at the end.  A chunk is marked done only
-when all its samples are stored, so the file on disk is always valid.
+results and checkpoints them every few seconds: the first and the last
+checkpoint of a run write the whole file aside and rename it into place;
+the others write in place only the rows of the chunks stored since the
+previous checkpoint, then their done flags (io/inplace.py), so their cost
+does not grow with the samples already in the file.  A chunk is marked
+done only when all its rows are on disk, so the file on disk is always a
+valid file that resumes correctly (docs/model.md, "Checkpoints in place").
 
 Stop protocol (SIGINT/SIGTERM to any rank, to mpiexec or to its process
 group; :func:`run`): the stopped rank exhausts the shared chunk counter
@@ -34,14 +38,15 @@ killed outright loses at most the chunks finished since the previous
 checkpoint (the MPI launcher ends the job: Open MPI's mpiexec does; with
 srun use ``--kill-on-bad-exit=1``).  Gathering to one writer instead of
 parallel HDF5 (mpio) was chosen because the data are tiny (a few hundred
-bytes per sample) and an atomic rename is the only way to keep the file
-valid when a process dies mid-write; the measured I/O share is reported in
+bytes per sample), the h5py of Debian 12 is serial, and HDF5 writing its
+own metadata when a process dies mid-write can leave a file that does not
+open: rank 0 writes a file whole (aside, renamed) and afterwards only the
+raw bytes of new rows, never HDF5 metadata; the measured I/O share is reported in
 the file (``timing`` attributes: ``seconds_wall`` and ``seconds_io`` up to
 the start of the last write, which cannot time itself; ``ranks``).
 
 Checkpoint interval: ``checkpoint_seconds``, 2 s by default (0: after every
-chunk, as the interruption tests use; larger on a cluster with big grids,
-where each checkpoint rewrites the whole file).  The command line reads it
+chunk, as the interruption tests use).  The command line reads it
 from the environment variable ``ELASTICA_PETSC_CHECKPOINT_SECONDS``; the
 library reads no environment variable.
 
@@ -141,6 +146,7 @@ class ChunkResults:
         self.schema = schema
         self.data = empty_fields(self.schema, grid.size)
         self.chunk_done = np.zeros(len(grid.chunks), bool)
+        self._chunk_sizes = np.array([len(c) for c in grid.chunks], np.int64)
         self.stranded = False            # other ranks still busy after a stop (see run)
         self.write_error = None          # why a checkpoint could not be written (see run)
         self.unsaved: list[int] = []     # chunks stored since the last checkpoint
@@ -194,7 +200,7 @@ class ChunkResults:
 
     @property
     def samples_done(self) -> int:
-        return int(sum(len(self.grid.chunks[c]) for c in np.flatnonzero(self.chunk_done)))
+        return int(self._chunk_sizes[self.chunk_done].sum())
 
 
 def check_out(out, resume: bool, overwrite: bool) -> Path:
