@@ -27,8 +27,8 @@ from elastica_petsc.studies.workspace.schema import Results
 
 ROOT = Path(__file__).resolve().parents[1]
 SPACING = 10.0
-ATTRS = {"mode": "targets", "sampler": "local", "grid_json": '{"spacing": 10.0}', "n_tendons": 2,
-         "command_line": "test_checkpoint"}
+ATTRS = {"mode": "targets", "sampler": "local", "grid_json": '{"spacing": 10.0}',
+         "n_tendons": 2, "command_line": "test_checkpoint"}
 LIMITS = {"kappa_limit": 1.5, "strain_energy_max": 2.0, "max_tension": 3.0}
 # provenance of each run; object addresses of the dimension scales
 VARYING_ATTRS = ("command_line", "resumed_command_lines", "DIMENSION_LIST", "REFERENCE_LIST")
@@ -55,6 +55,10 @@ class Synthetic:
             self.stop.signalled = True
             return None
         self.done += 1
+        return self.values(points)
+
+    @staticmethod
+    def values(points) -> dict:
         n = len(points)
         a = np.sin(points[:, 0] / 7.0 + points[:, 1] / 13.0)
         pair = np.column_stack([a, 2 * a])
@@ -144,14 +148,13 @@ def test_an_in_place_checkpoint_equals_a_full_write(tmp_path):
     (masks, map cells, samples_done, timing)."""
     grid = make_grid()
     results = Results(grid, 2)
-    sampler = Synthetic(chunks.Stop())
     timing = {"ranks": 1, "seconds_io": 0.25, "seconds_wall": 1.0}
     half = len(grid.chunks) // 2
     for c in range(half):
-        results.store(c, sampler.solve_chunk(grid.points[grid.chunks[c]], None))
+        results.store(c, Synthetic.values(grid.points[grid.chunks[c]]))
     layout = results.write(tmp_path / "a.h5", ATTRS, LIMITS, timing)
     for c in range(half, len(grid.chunks) - 3):
-        results.store(c, sampler.solve_chunk(grid.points[grid.chunks[c]], None))
+        results.store(c, Synthetic.values(grid.points[grid.chunks[c]]))
     timing.update(seconds_io=0.5, seconds_wall=2.0)
     assert results.update(layout, results.unsaved[half:], LIMITS, timing)
     results.write(tmp_path / "b.h5", ATTRS, LIMITS, timing)
@@ -180,10 +183,9 @@ def checkpoint_bytes(done_before: int, path: Path, monkeypatch) -> tuple[list[in
     ``done_before`` chunks of 5 samples (of 120)."""
     grid = make_grid(nx=25, ny=24)
     results = Results(grid, 2)
-    sampler = Synthetic(chunks.Stop())
     new = [116, 117, 118, 119]
     for c in list(range(done_before)) + new:
-        results.store(c, sampler.solve_chunk(grid.points[grid.chunks[c]], None))
+        results.store(c, Synthetic.values(grid.points[grid.chunks[c]]))
         if c == done_before - 1:
             timing = {"ranks": 1, "seconds_io": 0.0, "seconds_wall": 1.0}
             layout = results.write(path, ATTRS, LIMITS, timing)
@@ -267,17 +269,11 @@ def test_a_crash_inside_the_writer_leaves_a_resumable_file(phase, reference, tmp
     assert_same_content(reference, out)
 
 
-class SweepSynthetic:
+class SweepSynthetic(Synthetic):
     """Per-design fields of ``design --sweep`` as functions of the design alone."""
 
-    def __init__(self, stop: chunks.Stop, stop_after: int = 0):
-        self.stop, self.stop_after, self.done = stop, stop_after, 0
-
-    def solve_chunk(self, designs, stop):
-        if self.stop_after and self.done == self.stop_after:
-            self.stop.signalled = True
-            return None
-        self.done += 1
+    @staticmethod
+    def values(designs) -> dict:
         a = designs.sum(axis=1)
         return {"area": a ** 2, "area_converged": a > 30, "cables_clear": a > 20,
                 "det_sign_changes": (a % 3).astype("i4"), "path_misfit": np.sqrt(a),

@@ -360,7 +360,8 @@ class _Collector:
             return
         t0 = time.perf_counter()
         self.timing["seconds_wall"] = t0 - self.t_start
-        results, new = self.results, len(self.results.unsaved)
+        results = self.results
+        new = sum(len(results.grid.chunks[c]) for c in results.unsaved)
         try:
             if (full or self.layout is None
                     or not results.update(self.layout, results.unsaved, self.limits, self.timing)):

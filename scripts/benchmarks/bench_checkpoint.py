@@ -9,13 +9,16 @@ Usage:
   .venv/bin/python scripts/benchmarks/bench_checkpoint.py [--sizes 1e3 1e4 1e5 1e6]
       [--new 1000] [--repeats 7] [--full-repeats 3]
   mpiexec -n 8 --oversubscribe .venv/bin/python scripts/benchmarks/bench_checkpoint.py
-      --engine [--sizes 1e4 1e6] [--new 4800] [--sample-ms 1]
+      --engine [--sizes 1e4 1e5 1e6] [--new 9600] [--sample-ms 10]
 
 The first form times the writers alone (medians; ratios to the smallest size).
 The second runs the chunk engine (studies/chunks.py) over the ranks: a file
 holding all but ``--new`` samples is resumed with a synthetic sampler
 (``--sample-ms`` of sleep per sample) and a checkpoint after every stored
-chunk; it reports the in-place checkpoints' median cost per size.
+chunk (rank 0 checkpoints when it stores a chunk of its own); it reports
+the in-place checkpoints' median cost per size.  The sampling must outlast
+the resumed run's first (full) write, 7 s or more at 1e6 samples, for rank 0
+to make in-place checkpoints at all.
 Prints Markdown tables.
 """
 from __future__ import annotations
@@ -166,8 +169,8 @@ def engine(args) -> None:
             places = [s for kind, _, s in log if kind == "in place"]
             fulls = [s for kind, _, s in log if kind == "full"]
             per = [n for kind, n, _ in log if kind == "in place"]
-            rows.append((size, len(places), statistics.median(places), max(places),
-                         statistics.median(per), fulls, wall))
+            rows.append((size, len(places), statistics.median(places or [np.nan]),
+                         max(places or [np.nan]), statistics.median(per or [0]), fulls, wall))
     if comm.rank == 0:
         import shutil
         shutil.rmtree(tmp)

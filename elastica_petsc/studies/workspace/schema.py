@@ -120,7 +120,8 @@ class Results(ChunkResults):
         return write_results(path, self, attrs, limits, timing)
 
     def extra_rows(self, samples: np.ndarray, limits: dict) -> list:
-        """In-place rows of masks and map cells (:func:`~elastica_petsc.io.workspace.new_map_rows`)."""
+        """In-place rows of masks and map cells
+        (:func:`~elastica_petsc.io.workspace.new_map_rows`)."""
         return new_map_rows(self, samples, limits)
 
     @functools.cached_property
