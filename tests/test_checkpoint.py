@@ -34,12 +34,12 @@ LIMITS = {"kappa_limit": 1.5, "strain_energy_max": 2.0, "max_tension": 3.0}
 VARYING_ATTRS = ("command_line", "resumed_command_lines", "DIMENSION_LIST", "REFERENCE_LIST")
 
 
-def make_grid(nx: int = 23, ny: int = 9, chunk: int = 5) -> chunks.Grid:
-    """A target lattice of nx * ny points, rows cut into chunks."""
+def make_grid(nx: int = 23, ny: int = 9, chunk: int = 5, mode: str = "targets") -> chunks.Grid:
+    """A lattice of nx * ny targets (or tensions), rows cut into chunks."""
     x, y = np.meshgrid(SPACING * np.arange(nx), SPACING * np.arange(ny))
     points = np.column_stack([x.ravel(), y.ravel()])
     rows = [np.arange(j * nx, (j + 1) * nx) for j in range(ny)]
-    return chunks.Grid("targets", points, chunks.rows_to_chunks(rows, chunk),
+    return chunks.Grid(mode, points, chunks.rows_to_chunks(rows, chunk),
                        {"spacing": SPACING})
 
 
@@ -143,23 +143,26 @@ def test_interrupted_and_resumed_equals_uninterrupted(reference, tmp_path):
     assert_same_content(reference, out)
 
 
-def test_an_in_place_checkpoint_equals_a_full_write(tmp_path):
+@pytest.mark.parametrize("mode", ["targets", "tensions"])
+def test_an_in_place_checkpoint_equals_a_full_write(mode, tmp_path):
     """The file updated in place holds what a full write of the same results holds
-    (masks, map cells, samples_done, timing)."""
-    grid = make_grid()
+    (masks, map cells of a target map, samples_done, timing)."""
+    grid = make_grid(mode=mode)
     results = Results(grid, 2)
     timing = {"ranks": 1, "seconds_io": 0.25, "seconds_wall": 1.0}
     half = len(grid.chunks) // 2
     for c in range(half):
         results.store(c, Synthetic.values(grid.points[grid.chunks[c]]))
-    layout = results.write(tmp_path / "a.h5", ATTRS, LIMITS, timing)
+    attrs = dict(ATTRS, mode=mode)
+    layout = results.write(tmp_path / "a.h5", attrs, LIMITS, timing)
     for c in range(half, len(grid.chunks) - 3):
         results.store(c, Synthetic.values(grid.points[grid.chunks[c]]))
     timing.update(seconds_io=0.5, seconds_wall=2.0)
     assert results.update(layout, results.unsaved[half:], LIMITS, timing)
-    results.write(tmp_path / "b.h5", ATTRS, LIMITS, timing)
+    results.write(tmp_path / "b.h5", attrs, LIMITS, timing)
     assert_same_content(tmp_path / "a.h5", tmp_path / "b.h5")
     with h5py.File(tmp_path / "a.h5", "r") as fh:
+        assert ("map" in fh) == (mode == "targets")
         assert fh["timing"].attrs["seconds_wall"] == 2.0
         assert fh["timing"].attrs["seconds_io"] == 0.5
 
