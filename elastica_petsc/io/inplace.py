@@ -147,16 +147,16 @@ class FullWrite:
         if kind is not None:
             return
         datasets = _dataset_offsets(self._buffer)
-        raw = self._buffer.getvalue()
-        attrs = {}
-        for key, (sentinel, _, dtype) in self._marks.items():
-            first = raw.find(sentinel)
-            if first < 0 or raw.find(sentinel, first + 1) >= 0:
-                raise RuntimeError(f"attribute {key}: its value is not stored verbatim once "
-                                   "in the HDF5 image (io/inplace.py needs libver earliest)")
-            attrs[key] = (first, dtype)
         image = self._buffer.getbuffer()
+        attrs = {}
         try:
+            found = _find(image, [sentinel for sentinel, _, _ in self._marks.values()])
+            for key, (sentinel, _, dtype) in self._marks.items():
+                if len(found[sentinel]) != 1:
+                    raise RuntimeError(f"attribute {key}: its value is not stored verbatim "
+                                       "once in the HDF5 image (io/inplace.py needs HDF5's "
+                                       "default file format, libver earliest)")
+                attrs[key] = (found[sentinel][0], dtype)
             for key, (offset, dtype) in attrs.items():
                 image[offset:offset + 8] = np.asarray(self._marks[key][1], dtype).tobytes()
             replace_file(self.path, image)
@@ -167,6 +167,20 @@ class FullWrite:
         finally:
             image.release()
         self.layout = Layout(self.path, datasets, attrs)
+
+
+def _find(image: memoryview, patterns, block: int = 1 << 26) -> dict[bytes, list[int]]:
+    """Offsets of each of ``patterns`` (of 8 bytes) in ``image``, in one pass by
+    blocks (no copy of the whole image)."""
+    found = {pattern: set() for pattern in patterns}
+    for start in range(0, len(image), block):
+        piece = bytes(image[start:start + block + 7])
+        for pattern, offsets in found.items():
+            at = piece.find(pattern)
+            while at >= 0:
+                offsets.add(start + at)
+                at = piece.find(pattern, at + 1)
+    return {pattern: sorted(offsets) for pattern, offsets in found.items()}
 
 
 def _dataset_offsets(buffer: io.BytesIO) -> dict:
