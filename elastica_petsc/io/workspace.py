@@ -179,7 +179,7 @@ def write_timing(full, group, timing: dict) -> None:
     """The ``timing`` attributes, the wall and I/O times updatable in place."""
     from .hdf5 import write_attrs
 
-    write_attrs(group, timing)
+    write_attrs(group, {k: v for k, v in timing.items() if k not in UPDATED_TIMING})
     for key in UPDATED_TIMING:
         full.mark(group, key, timing.get(key, 0.0), "f8")
 
