@@ -223,14 +223,16 @@ def test_a_checkpoint_writes_only_the_new_rows(tmp_path, monkeypatch):
     assert sum(many) < size_many * 20 / 600          # 20 of the 600 samples
 
 
-@pytest.mark.parametrize("phase", ["rows", "commit", "full"])
+@pytest.mark.parametrize("phase", ["rows", "derived", "commit", "full"])
 def test_a_crash_inside_the_writer_leaves_a_resumable_file(phase, reference, tmp_path,
                                                            monkeypatch):
     """An error raised inside a checkpoint (as if the process died there) leaves a
     valid file whose done flags hold only stored chunks; resuming it gives the
-    uninterrupted run's file.  ``rows``: while writing new rows; ``commit``: while
-    writing the done flags; ``full``: inside the final full write, after the
-    in-place checkpoints have stored every chunk."""
+    uninterrupted run's file.  ``rows``: while writing the new rows; ``derived``:
+    while writing their masks (their status, written after, still says not
+    computed); ``commit``: while writing the chunk flags, after their status;
+    ``full``: inside the final full write, after the in-place checkpoints have
+    stored every chunk."""
     out = tmp_path / "ws.h5"
     calls = {"n": 0}
     if phase == "full":
@@ -247,9 +249,9 @@ def test_a_crash_inside_the_writer_leaves_a_resumable_file(phase, reference, tmp
 
         def put(self, fd, name, index, values):
             calls["n"] += 1
-            crash = (name == "grid/chunk_done" if phase == "commit"   # after the rows
-                     else name == "masks/W0" and calls["n"] > 100)    # after samples/
-            crash = crash and calls["n"] > 100               # a few checkpoints in
+            first = {"rows": "samples/kappa_max", "derived": "masks/W0",
+                     "commit": "grid/chunk_done"}[phase]
+            crash = name == first and calls["n"] > 100       # a few checkpoints in
             if crash:
                 raise RuntimeError("crash")
             real_put(self, fd, name, index, values)
@@ -261,8 +263,15 @@ def test_a_crash_inside_the_writer_leaves_a_resumable_file(phase, reference, tmp
     from elastica_petsc.studies.workspace.driver import read_map
 
     with h5py.File(out, "r") as fh:                 # rows of the chunks not committed
-        written = (fh["samples/status"][()] > 0) & ~fh["samples/done"][()]
+        done, status = fh["samples/done"][()], fh["samples/status"][()]
+        written = ~done & np.isfinite(fh["samples/tip"][()]).all(axis=1)
+        marked = ~done & (status > 0)
+        values = {name: fh["samples"][name][()] for name in ("tip", "lambda_min", "tensions")}
     assert written.any() == (phase != "full")
+    # a sample whose status says computed has all its fields written, committed or not
+    assert marked.any() == (phase == "commit")
+    for name, value in values.items():
+        assert np.isfinite(value[marked]).all(), name
     partial = read_map(out)                          # ... are read back empty
     assert 0 < partial.samples_done < partial.samples_total or phase == "full"
     assert partial.complete == (phase == "full")     # full: every chunk stored already

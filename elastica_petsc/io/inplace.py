@@ -10,10 +10,11 @@ checkpoint (:meth:`Layout.write`) overwrites, with plain ``pwrite`` calls,
 only the rows of the samples finished since: no HDF5 metadata (object headers,
 B-trees, superblock) is ever touched again, so the file stays a valid HDF5
 file whatever moment a process dies at.  Order of one update: the new rows
-(data), ``fsync``; then the commit (per-chunk done flags, one byte each,
-and the counters), ``fsync``.  A chunk flagged done therefore has all its rows
-on disk; rows of chunks not flagged may hold anything and are emptied when the
-file is read back (``ChunkResults.clear_undone``).  Cost: proportional to the
+(data), ``fsync``; then the commit (derived rows, the field that marks a
+sample computed, per-chunk done flags of one byte each, the counters),
+``fsync`` (``ChunkResults.update``).  A chunk flagged done therefore has all
+its rows on disk; rows of chunks not flagged may hold anything and are emptied
+when the file is read back (``ChunkResults.clear_undone``).  Cost: proportional to the
 new rows (contiguous runs of rows are one ``pwrite`` each), independent of the
 rows already in the file (BENCHMARKS.md, "Checkpoints O(new samples)").
 """

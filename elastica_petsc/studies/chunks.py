@@ -179,19 +179,25 @@ class ChunkResults:
         masks), as (dataset, index, values)."""
         return []
 
+    MARKER = None      # the field that says a sample was computed (e.g. "status")
+
     def update(self, layout, chunks: list[int], limits: dict, timing: dict) -> bool:
         """One checkpoint in place (io/inplace.py): the rows of the samples of
-        ``chunks`` only, then their done flags.  False if the file cannot be
-        updated so (then :meth:`write` it in full)."""
+        ``chunks`` only, then (the commit) their derived rows (:meth:`extra_rows`),
+        their :attr:`MARKER` field and their done flags.  False if the file
+        cannot be updated so (then :meth:`write` it in full)."""
         from ..io.workspace import UPDATED_TIMING
 
         chunks = np.asarray(sorted(set(chunks)), np.int64)
         samples = (np.concatenate([self.grid.chunks[c] for c in chunks]) if len(chunks)
                    else np.zeros(0, np.int64))
-        rows = [(f"samples/{name}", samples, self.data[name][samples]) for name in self.schema]
-        rows += self.extra_rows(samples, limits)
-        commit = [("grid/chunk_done", chunks, np.ones(len(chunks), bool)),
-                  ("samples/done", samples, np.ones(len(samples), bool))]
+        rows = [(f"samples/{name}", samples, self.data[name][samples]) for name in self.schema
+                if name != self.MARKER]
+        commit = self.extra_rows(samples, limits)
+        if self.MARKER is not None:
+            commit.append((f"samples/{self.MARKER}", samples, self.data[self.MARKER][samples]))
+        commit += [("grid/chunk_done", chunks, np.ones(len(chunks), bool)),
+                   ("samples/done", samples, np.ones(len(samples), bool))]
         attrs = {"samples_done": self.samples_done}
         attrs.update({f"timing/{key}": timing.get(key, 0.0) for key in UPDATED_TIMING})
         if not layout.covers([name for name, _, _ in rows + commit], attrs):

@@ -112,6 +112,8 @@ class Results(ChunkResults):
     """All samples' fields of a workspace map in memory (rank 0), with per-chunk
     done flags; its file is :func:`~elastica_petsc.io.workspace.write_results`'s."""
 
+    MARKER = "status"     # NOT_COMPUTED (0) until every other field is on disk
+
     def __init__(self, grid: Grid, n_tendons: int):
         super().__init__(grid, fields(n_tendons))
 
