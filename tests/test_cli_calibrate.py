@@ -47,6 +47,7 @@ def data_csv(tmp_path_factory):
     return path, truth
 
 
+@pytest.mark.slow
 def test_calibrate_writes_loadable_toml_h5_plot_json(data_csv, tmp_path):
     path, truth = data_csv
     out, h5, png = tmp_path / "fit.toml", tmp_path / "fit.h5", tmp_path / "fit.png"
@@ -69,6 +70,7 @@ def test_calibrate_writes_loadable_toml_h5_plot_json(data_csv, tmp_path):
     assert png.stat().st_size > 10_000
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="needs mpiexec")
 def test_rows_over_two_ranks_give_the_same_fit(data_csv, tmp_path):
     path, _ = data_csv

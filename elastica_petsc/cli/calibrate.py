@@ -122,7 +122,7 @@ def finish(args, result, root: bool = True) -> int:
     from ..io.calibration import write_calibration_h5, write_fitted_toml
 
     summary = result.summary()
-    summary["ranks"] = result.problem.ranks
+    summary["ranks"] = result.ranks
     converged = summary["converged"] = summary["solver"]["converged"]
     if not root:
         return 0 if converged else 1

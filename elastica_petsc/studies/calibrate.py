@@ -61,7 +61,7 @@ def order_label(order) -> str:
     return "proportional" if order is None else "order " + ",".join(map(str, order))
 
 
-@dataclass
+@dataclass(frozen=True)
 class Evaluation:
     """Residuals [mm] (M,), Jacobian [mm per parameter unit] (M, P) or None,
     predicted points (m, 1 + k, 2) [mm], and per row the taut cables."""
@@ -307,7 +307,7 @@ def huber_weights(problem: CalibrationProblem, residual, delta_mm: float | None)
     return rows[problem.row_of], rows
 
 
-@dataclass
+@dataclass(frozen=True)
 class Fit:
     """The fitted parameters and what the fit did."""
 

@@ -1,0 +1,32 @@
+"""Calibration of an arm's parameters to measured states (docs/model.md §14)."""
+from __future__ import annotations
+
+from ..core.model import Arm
+from .arguments import takes_petsc_options as _takes_petsc_options, mesh as _mesh
+
+
+@_takes_petsc_options
+def calibrate(arm: Arm, data, vary, *, bounds=None, input: str | None = None,
+              huber_mm: float | None = None, folds: int = 5, candidates=None,
+              method: str = "brgn", elements: int | None = None):
+    """Fit the parameters named in ``vary`` (``bending_stiffness``,
+    ``tendonK.route``, ``motorK.offset``, ``motor.spool_radius``, ``clamp.angle``,
+    ``clamp.position``, ``frame.rotation``, ``frame.offset``) to measured states
+    ``data`` (a CSV path or a :class:`CalibrationData`); ``bounds``:
+    {scalar name: (lo, hi)}; ``method``: "brgn" (exact Jacobian) or "pounders"
+    (derivative-free check).  Returns a CalibrationResult: ``.arm`` the fitted
+    arm, ``.parameters()`` values with standard deviations, ``.summary()``
+    (docs/model.md §14)."""
+    from ..core.calibration_data import CalibrationData, read_calibration_csv
+    from ..core.calibration_params import ParameterModel
+    from ..studies.calibrate_report import calibrate as run_calibration
+
+    if not isinstance(data, CalibrationData):
+        data = read_calibration_csv(data, arm.n_tendons, input, arm.length_mm)
+    if candidates is not None and not isinstance(candidates, CalibrationData):
+        candidates = read_calibration_csv(candidates, arm.n_tendons, input, arm.length_mm,
+                                          measured=False)
+    model = ParameterModel(arm, vary, bounds)
+    return run_calibration(model, data, elements=_mesh(arm, elements).n_elements,
+                           huber_mm=huber_mm, folds=folds, candidates=candidates,
+                           method=method)
