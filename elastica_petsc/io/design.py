@@ -44,8 +44,9 @@ def write_config(path, arm, header_lines=(), overwrite: bool = False) -> Path:
     return path
 
 
-def write_sweep(path, results, attrs: dict, timing: dict) -> None:
-    """One checkpoint of ``design --sweep`` (written aside, renamed into place)::
+def write_sweep(path, results, attrs: dict, timing: dict):
+    """One checkpoint of ``design --sweep`` written in full (aside, renamed into
+    place; returns its :class:`~.inplace.Layout` for in-place checkpoints)::
 
         grid/points      (D, k)  mm   the designs (one row each; axes in grid/names)
         grid/names       (k,)         the swept parameters, e.g. tendon2.route.y
@@ -60,13 +61,16 @@ def write_sweep(path, results, attrs: dict, timing: dict) -> None:
 
     import numpy as np
 
-    from .hdf5 import atomic_h5, put, write_attrs
+    from .hdf5 import put, write_attrs
+    from .inplace import FullWrite
+    from .workspace import write_timing
 
     grid = results.grid
-    with atomic_h5(path, overwrite=True) as fh:
+    with FullWrite(path) as full:
+        fh = full.file
         write_attrs(fh, attrs)
         fh.attrs["complete"] = bool(results.chunk_done.all())
-        fh.attrs["samples_done"] = results.samples_done
+        full.mark(fh, "samples_done", results.samples_done, "i8")
         fh.attrs["samples_total"] = grid.size
         g = fh.create_group("grid")
         axes = json.loads(attrs["grid_json"])["axes"]
@@ -87,4 +91,5 @@ def write_sweep(path, results, attrs: dict, timing: dict) -> None:
         put(samples, "done", done, "1", "design evaluated and stored", ("design",), coords)
         for name, (_, _, units, description) in results.schema.items():
             put(samples, name, results.data[name], units, description, ("design",), coords)
-        write_attrs(fh.create_group("timing"), timing)
+        write_timing(full, fh.create_group("timing"), timing)
+    return full.layout
