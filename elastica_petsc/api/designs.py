@@ -17,21 +17,24 @@ def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
            reach_mm: float = 100.0, margin: float = 1.1, elements: int | None = None,
            progress=None):
     """Routing points that make every point of a path reachable with P >= 0
-    (TAO BLMVM on the exact gradient; ``vary``: ``"tendonK.route"`` names).
+    (TAO BLMVM on the exact gradient; ``vary``: ``"tendonK.route"`` names, and
+    guide offsets ``"tendonK.offset"``/``"tendonK.guideJ.offset"``, mm).
     Returns a ``DesignResult``: ``arm_after`` is the designed arm,
     ``misfit_before``/``misfit_after`` the path's reachability, ``history``.
     ``progress`` (True: a bar, or a callable ``progress(traces, note)``)
     reports each path trace (one per objective evaluation)."""
     from ..studies.design import design_for_path, parse_vary
+    from ..studies.design_offsets import split_offset_names
 
     elements = _mesh(arm, elements).n_elements
-    tendons = parse_vary(list(vary), arm.n_tendons)
+    names, offsets = split_offset_names(list(vary), arm)
+    tendons = parse_vary(names, arm.n_tendons) if names or not offsets else []
     points = _points(points_mm, arm)
     inputs.design_points(points, "points_mm")
     inputs.design_options(DESIGN_NAMES, reach_mm=reach_mm, margin=margin)
     with _progress(progress, "design", "path traces") as bar:
         return design_for_path(arm, tendons, points, elements=elements,
-                               reach_mm=reach_mm, margin=margin, progress=bar)
+                               reach_mm=reach_mm, margin=margin, progress=bar, offsets=offsets)
 
 
 DESIGN_NAMES = {k: k for k in ("iterations", "reach_mm", "clearance_mm", "margin",

@@ -139,14 +139,22 @@ def segment_profile(disc, u, s_index: int) -> tuple[np.ndarray, np.ndarray]:
     return X @ t, X[:, 0] * t[1] - X[:, 1] * t[0]
 
 
-def _check_arm(disc) -> int:
+def scenario_problem(disc) -> str | None:
+    """Why the Fig. 7 scenario does not apply to the arm of ``disc`` (None: it does)."""
     if disc.n_tendons != 2:
-        raise InputError(f"the Fig. 7 scenario needs an arm with two tendons, got {disc.n_tendons}")
+        return f"the Fig. 7 scenario needs an arm with two tendons, got {disc.n_tendons}"
     m1, m2 = disc.attach_nodes
     if not m1 < m2:
-        raise InputError("the Fig. 7 scenario needs tendon 1 attached closer to the clamp than "
-                         "tendon 2 (s_1 < s_2)")
-    return m1
+        return ("the Fig. 7 scenario needs tendon 1 attached closer to the clamp than "
+                "tendon 2 (s_1 < s_2)")
+    return None
+
+
+def _check_arm(disc) -> int:
+    problem = scenario_problem(disc)
+    if problem is not None:
+        raise InputError(problem)
+    return disc.attach_nodes[0]
 
 
 def _length_mm(length_solver: LengthSolver) -> float:

@@ -200,6 +200,7 @@ class CalibrationResult(Result):
     next_measurements: list | None = None
     failed_trials: int = 0                  # trial points with a row out of reach
     ranks: int = 1                          # MPI ranks the rows were dealt to
+    attachments: object = None              # AttachmentSearch (studies/calibrate_attach.py)
 
     @cached_property
     def model(self) -> ParameterModel:
@@ -257,6 +258,7 @@ class CalibrationResult(Result):
                        "failed_trial_points": self.failed_trials,
                        "converged": self.converged},
             "next_measurements": self.next_measurements,
+            **({"attachments": self.attachments.summary()} if self.attachments else {}),
         }
 
 
