@@ -1,4 +1,4 @@
-"""Builds the compiled kernels of core/fem.py (docs/model.md §19); everything
+"""Builds the compiled kernels of core/fem.py (docs/model.md §20); everything
 else is declared in pyproject.toml.  Needs a C compiler and Python's headers
 (Debian: gcc, python3-dev, in scripts/system-packages-dev.txt)."""
 from setuptools import Extension, setup

@@ -1,4 +1,4 @@
-"""The compiled kernels of core/fem.py (docs/model.md §19) beyond what test_fem.py checks.
+"""The compiled kernels of core/fem.py (docs/model.md §20) beyond what test_fem.py checks.
 
 - node positions: a circular arc (theta linear in s) against its closed form,
   error O(h^2) (the midpoint rule of Eq. (2));

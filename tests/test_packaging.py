@@ -53,7 +53,7 @@ def test_every_config_is_shipped_in_the_wheel(tmp_path):
         assert f"elastica_petsc/configs/{name}" in names
     assert any(n.endswith("dist-info/LICENSE") for n in names)
     assert "elastica_petsc/schema/output.schema.json" in names     # docs/json.md
-    # the compiled kernels (docs/model.md §19), built from their C source
+    # the compiled kernels (docs/model.md §20), built from their C source
     assert any(n.startswith("elastica_petsc/core/fem_kernels") and n.endswith(".so")
                for n in names)
 

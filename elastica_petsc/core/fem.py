@@ -36,7 +36,7 @@ columns; eliminating y (Schur complement) gives back K exactly.  With the
 theta unknowns first, LU in the natural order fills only the border.
 
 The residual, the Jacobian values, dF/dp, the band, the attachment gradients
-and the stability values are compiled (``fem_kernels.c``, docs/model.md §19);
+and the stability values are compiled (``fem_kernels.c``, docs/model.md §20);
 the methods here convert their arguments and hold the pattern data.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-/* Compiled kernels of the P1 elastica of core/fem.py (docs/model.md §2, §19).
+/* Compiled kernels of the P1 elastica of core/fem.py (docs/model.md §2, §20).
  *
  * Non-dimensional (l = 1, B = 1).  The state is the bordered vector
  * u = (theta_1..theta_N, y_1..y_n) with theta_0 = 0; tendon i is attached at
@@ -651,7 +651,7 @@ static PyMethodDef methods[] = {
 
 static struct PyModuleDef module = {
     PyModuleDef_HEAD_INIT, "fem_kernels",
-    "Compiled kernels of the P1 elastica (core/fem.py, docs/model.md §19).", -1, methods,
+    "Compiled kernels of the P1 elastica (core/fem.py, docs/model.md §20).", -1, methods,
 };
 
 PyMODINIT_FUNC PyInit_fem_kernels(void) { return PyModule_Create(&module); }

@@ -8,7 +8,7 @@ additivity In(H) = In(K) + (0, n, 0), so one LDL^T of H in the natural order
 load control an equilibrium is stable iff that count is zero (energy
 criterion, docs/model.md §2).  The factorisation is the compiled
 :func:`~elastica_petsc.core.fem.ldlt_negatives` (the pivots of PETSc's Cholesky on
-SBAIJ storage in the natural order, without a PETSc matrix: docs/model.md §19).
+SBAIJ storage in the natural order, without a PETSc matrix: docs/model.md §20).
 """
 from __future__ import annotations
 
