@@ -41,10 +41,10 @@ def test_every_config_is_shipped_in_the_wheel(tmp_path):
             f"configs/{path.name} differs from elastica_petsc/configs/{path.name}"
     src = tmp_path / "src"          # a copy: building in the worktree would leave build/ there
     src.mkdir()
-    for name in ("pyproject.toml", "README.md", "LICENSE"):
+    for name in ("pyproject.toml", "setup.py", "README.md", "LICENSE"):
         shutil.copy(ROOT / name, src / name)
     shutil.copytree(ROOT / "elastica_petsc", src / "elastica_petsc",
-                    ignore=shutil.ignore_patterns("__pycache__"))
+                    ignore=shutil.ignore_patterns("__pycache__", "*.so"))
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
                     "-q", "-w", str(tmp_path / "dist"), str(src)], check=True)
     wheel, = (tmp_path / "dist").glob("*.whl")
@@ -53,6 +53,9 @@ def test_every_config_is_shipped_in_the_wheel(tmp_path):
         assert f"elastica_petsc/configs/{name}" in names
     assert any(n.endswith("dist-info/LICENSE") for n in names)
     assert "elastica_petsc/schema/output.schema.json" in names     # docs/json.md
+    # the compiled kernels (docs/model.md §20), built from their C source
+    assert any(n.startswith("elastica_petsc/core/fem_kernels") and n.endswith(".so")
+               for n in names)
 
 
 def test_readme_says_what_the_model_covers_on_its_first_screen():

@@ -78,6 +78,7 @@ GATOL = 1e-7                 # ALMM gradient tolerance of the scaled problem (f 
 KKT_TOL = 1e-9               # newton: relative KKT residual at convergence
 MAX_BACKTRACKS = 12          # newton: merit line-search halvings per iteration
 INFEASIBLE_GAIN = 1e-3       # newton: relative tip-error gain below which it is SHARE_INFEASIBLE
+TIP_NOISE = 16 * np.finfo(float).eps   # round-off of a tip coordinate (units of l, |x| ~ 1)
 STALL_ITS, STALL_GAIN = 5, 0.1   # newton: SHARE_STALLED if the tip error (still > 10x the
 #                                  tolerance) has not dropped by 10 % over 5 iterations
 
@@ -348,10 +349,12 @@ class TensionSharer:
 
     def _merit_search(self, cur: _Point, qp, nu: float, call: _Call) -> _Point | None:
         """Backtracking on f + nu |c|_1 along the QP step, with a second-order
-        correction of the tip error after a rejected full step (Maratos)."""
+        correction of the tip error after a rejected full step (Maratos).  The
+        tip error's round-off (TIP_NOISE per coordinate, times nu) is allowed: at
+        a tip error of ~1e-15 l the last steps' f decrease is of that size too."""
         d = qp.d
         slope = float(cur.g @ d) - nu * float(np.abs(cur.c).sum())
-        m0 = cur.merit(nu)
+        m0 = cur.merit(nu) + nu * TIP_NOISE * len(cur.c)
         alpha = 1.0
         for k in range(MAX_BACKTRACKS):
             new = self._eval(self._clip(cur, cur.ev.p + alpha * d, call.floor), cur, call)
