@@ -65,6 +65,16 @@ def distance_to_edges(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
     return out
 
 
+def polyline_distance(line: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Distance from each point to the nearest segment of the open polyline
+    ``line`` (k, 2), all segments at once."""
+    a, ab = line[:-1], np.diff(line, axis=0)
+    denom = np.maximum(np.einsum("kc,kc->k", ab, ab), 1e-300)
+    t = np.clip(((points[:, None, :] - a[None]) * ab[None]).sum(-1) / denom, 0.0, 1.0)
+    near = a[None] + t[..., None] * ab[None]
+    return np.linalg.norm(points[:, None, :] - near, axis=-1).min(axis=1)
+
+
 def clip_half_plane(poly: np.ndarray, y_min: float = 0.0) -> np.ndarray:
     """The part of a closed polygon with y >= y_min (Sutherland-Hodgman, one edge)."""
     out = []

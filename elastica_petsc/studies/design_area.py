@@ -44,7 +44,7 @@ from ..core.clearance import state_cable_clear
 from ..core.fem import Discretisation
 from ..core.geometry import triangles_union_area
 from ..core.model import Arm
-from .traced_area import TracedArea, traced_area
+from .traced_area import TracedArea, WarmStart, traced_area
 
 
 def infeasibility(area: TracedArea, force_scale_N: float) -> dict:
@@ -220,24 +220,29 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
     t0 = time.perf_counter()
     elements = Discretisation.from_arm(arm, elements).n_elements
     history, best, first, seen = [], {}, [], {}
+    warm = WarmStart()                  # each design starts from the last one's states
 
     def evaluate(candidate):
         key = tuple((t.attach_mm, *t.route_mm) for t in candidate.tendons)
         if key in seen:                          # TAO's first call is the start, evaluated
             return seen[key]
-        a = seen[key] = traced_area(candidate, tendons, p_max, elements=elements)
+        # the start in full (its report); later designs stop at a failed check
+        a = seen[key] = traced_area(candidate, tendons, p_max, elements=elements, warm=warm,
+                                    skip_infeasible=bool(first))
         if not first:
             first.append(a)
         history.append({"attach_mm": [t.attach_mm for t in candidate.tendons],
                         "routes_mm": [list(t.route_mm) for t in candidate.tendons],
-                        "area_mm2": a.area_mm2, "gradient": a.gradient.tolist(),
+                        "area_mm2": a.area_mm2 if a.traced else None,
+                        "gradient": a.gradient.tolist() if a.traced else None,
                         "feasible": a.feasible, "converged": a.converged,
                         "cables_clear": a.cables_clear, "det_sign_changes": a.det_sign_changes})
         if a.feasible and (not best or a.area_mm2 > best["area"].area_mm2):
             best.update(area=a, arm=candidate)
         if progress is not None:
             progress(len(history), f"area {a.area_mm2:.0f} mm^2"
-                     + ("" if a.feasible else " (rejected: infeasible)"))
+                     + ("" if a.feasible else " (rejected: infeasible)") if a.traced else
+                     "rejected: a cable crosses the arm or a node is not solved")
         return a
 
     designed, reason, iterations = arm, "", 0
