@@ -94,44 +94,59 @@ def _triangles(tips: np.ndarray, good: np.ndarray) -> np.ndarray:
 def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells: int = 20,
                    lattice_mm: float = 0.25) -> Resampled:
     """Re-sample the workspace of ``arm`` within 0 <= p_i <= ``p_max``: forward
-    solves on a (cells + 1)^2 tension lattice (``workspace --mode tensions``:
-    quasi-static loading from the straight arm, continued along rows), the
-    union of the images of the cells whose corners are stable (lambda_min > 0)
-    equilibria, its area counted on a lattice of ``lattice_mm``.  The error is
-    |A(s) - A(2s)| (the same map on every other lattice line; it bounds the
-    chords' error whenever halving s at least halves it, and Richardson's
-    s^2 estimate, a third of it, was too small on coarse grids) plus
-    perimeter x lattice spacing (a bound on the counting's).  Measured on the
-    paper's arm (60 elements, P_max = 10 N): A = 60917, 58914 mm^2 at 16, 32
-    cells against 58472 mm^2 for the box loop's shoelace at 48 nodes per edge
-    (the objective before issue 21)."""
-    from mpi4py import MPI
+    solves on a (cells + 1)^2 tension lattice (:func:`tension_sweep`:
+    quasi-static loading from the straight arm, continued along the rows),
+    the union of the images of the cells whose corners are stable
+    (no negative eigenvalue of K, Eq. (20)) equilibria, its area counted on
+    a lattice of ``lattice_mm``.  The error is |A(s) - A(2s)| (the same map
+    on every other lattice line; it bounds the chords' error whenever
+    halving s at least halves it, and Richardson's s^2 estimate, a third of
+    it, was too small on coarse grids) plus perimeter x lattice spacing (a
+    bound on the counting's).  Measured on the paper's arm (60 elements,
+    P_max = 10 N): A = 60917, 58914 mm^2 at 16, 32 cells against 58472 mm^2
+    for the box loop's shoelace at 48 nodes per edge (the objective before
+    issue 21)."""
+    import time
 
-    from .workspace import Status, run_map
-
+    t0 = time.perf_counter()
     disc = Discretisation.from_arm(arm, elements)
-    spacing = p_max / cells
-    ws = run_map(arm, disc, mode="tensions", tension_spacing=spacing, tension_max=p_max,
-                 comm=MPI.COMM_SELF, progress=False)
-    s = ws.samples
-    index = np.rint(np.asarray(ws.points) / spacing).astype(int)
-    n = cells + 1
-    tips = np.full((n, n, 2), np.nan)
-    good = np.zeros((n, n), bool)
-    reached = s["status"] == Status.REACHED
-    with np.errstate(invalid="ignore"):
-        stable = reached & (s["lambda_min"] > 0)
-    tips[index[:, 0], index[:, 1]] = s["tip"]
-    good[index[:, 0], index[:, 1]] = stable
-    fine = triangles_union_area(_triangles(tips, good), lattice_mm)
-    coarse = triangles_union_area(_triangles(tips[::2, ::2], good[::2, ::2]), lattice_mm)
+    tips, reached, stable, clear = tension_sweep(disc, p_max, cells)
+    tips = tips * arm.length_mm
+    fine = triangles_union_area(_triangles(tips, stable), lattice_mm)
+    coarse = triangles_union_area(_triangles(tips[::2, ::2], stable[::2, ::2]), lattice_mm)
     edge = np.concatenate([tips[:, 0], tips[-1, 1:], tips[-2::-1, -1], tips[0, -2:0:-1]])
     perimeter = float(np.nansum(np.linalg.norm(np.diff(edge, axis=0), axis=1)))
-    seconds = float(np.nansum(s["seconds_control"]) + np.nansum(s["seconds_eigen"]))
-    return Resampled(fine, abs(fine - coarse) + perimeter * lattice_mm, len(s["status"]),
-                     int(reached.sum()), int(stable.sum()),
-                     int(np.all(s["cable_clear"], axis=1)[reached].sum()), seconds,
-                     np.asarray(s["tip"])[stable])
+    return Resampled(fine, abs(fine - coarse) + perimeter * lattice_mm, reached.size,
+                     int(reached.sum()), int(stable.sum()), int((clear & reached).sum()),
+                     time.perf_counter() - t0, tips[stable])
+
+
+def tension_sweep(disc: Discretisation, p_max: float, cells: int):
+    """Forward solves on the lattice p = (i, j) p_max/cells, i, j = 0..cells:
+    one quasi-static loading path from the straight arm through every node,
+    serpentine along the rows (each node from the last one reached; ``workspace
+    --mode tensions`` restarts from the straight arm every 24 samples and
+    computes lambda_min with SLEPc: the same areas on the paper's arm and
+    its optimum, at a third of the cost), stability from the path's inertia
+    counts (Sylvester, Eq. (20)).  Returns tips (units of l),
+    reached, stable and cables-clear masks, each on the (cells + 1)^2 lattice."""
+    from ..solvers.equilibrium import EquilibriumSolver
+
+    n, spacing = cells + 1, p_max / cells
+    tips = np.full((n, n, 2), np.nan)
+    reached, stable, clear = (np.zeros((n, n), bool) for _ in range(3))
+    previous = None
+    with EquilibriumSolver(disc) as solver:
+        for i in range(n):
+            for j in (range(n) if i % 2 == 0 else range(n - 1, -1, -1)):
+                eq = solver.solve(np.array([i * spacing, j * spacing]), start=previous)
+                if not eq.converged:
+                    continue
+                previous = eq
+                tips[i, j], reached[i, j] = eq.tip, True
+                stable[i, j] = eq.unstable_modes == 0
+                clear[i, j] = bool(np.all(state_cable_clear(eq)))
+    return tips, reached, stable, clear
 
 
 # --- the optimiser -----------------------------------------------------------------------------

@@ -29,8 +29,7 @@ def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, tendons,
                    length_mm: float) -> np.ndarray:
     """d|A|/d(r_i x, r_i y) for each tendon i in ``tendons`` [mm^2 per mm]."""
     grads = []
-    for i in tendons:
-        velocity = walker.route_velocities(region, start_rows, i)     # (nodes, 2, 2), l per l
+    for velocity in walker.route_velocities(region, start_rows, tendons):  # (nodes, 2, 2)
         poly, dense_velocity = loop_polygon(region, length_mm, node_values=velocity)
         grads.append(union_area_gradient(poly, dense_velocity))          # mm^2 per mm
     return np.concatenate(grads)

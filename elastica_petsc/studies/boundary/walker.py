@@ -272,16 +272,17 @@ class Walker:
         return RegionBoundary(name, curves, closed, message)
 
 
-    def route_velocities(self, region: RegionBoundary, start_rows, tendon: int) -> np.ndarray:
+    def route_velocities(self, region: RegionBoundary, start_rows, tendons) -> list[np.ndarray]:
         """d x_t/d r_i (units of l per unit of l) at every node of the loop, in the
-        order of :meth:`RegionBoundary.nodes`, shape (nodes, 2 tip, 2 route).
+        order of :meth:`RegionBoundary.nodes`, shape (nodes, 2 tip, 2 route),
+        for each tendon i of ``tendons`` (one factorisation per node).
 
         Corners (the ends of each curve, and the start, where ``start_rows``
         are active) move with both of their constraints; a node inside a curve
         slides orthogonally (metric D) to the curve's tangent.  Only the normal
         component of the tip motion matters for the area
         (:func:`~elastica_petsc.core.geometry.union_area_gradient`)."""
-        mf, out = self.tr.mf, []
+        mf, out = self.tr.mf, [[] for _ in tendons]
         for k, curve in enumerate(region.curves):
             for j, pt in enumerate(curve.points):
                 if j == 0:
@@ -293,9 +294,10 @@ class Walker:
                 for row in rows:
                     if row is self.fold:
                         self.fold.update(pt.w)
-                dw = self.tr.route_velocity(pt.w, rows, tendon)
-                out.append(np.column_stack([mf.tip_velocity(pt.w, dw[:, c]) for c in range(2)]))
-        return np.array(out)
+                for dest, dw in zip(out, self.tr.route_velocities(pt.w, rows, tendons)):
+                    dest.append(np.column_stack([mf.tip_velocity(pt.w, dw[:, c])
+                                                 for c in range(2)]))
+        return [np.array(v) for v in out]
 
 
 def _find_on(curves, name: str, start, metric: np.ndarray, tol: float = 0.1):
