@@ -1,7 +1,7 @@
 """Benchmark: `boundary` (workspace boundary by continuation, issue 13) against
 an earlier revision, interleaved, median of repeats.
 
-    python scripts/benchmarks/bench_boundary.py [--repeats 5] [--before 2b03bce] [--map MAP.h5]
+    python scripts/benchmarks/bench_boundary.py [--repeats 5] [--before main] [--map MAP.h5]
 
 Each measurement is a fresh process that traces once to warm up (imports,
 PETSc start-up) and then times a second trace_boundary of the paper's arm
@@ -73,7 +73,7 @@ def map_counts(path: str) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--before", default="2b03bce", help="earlier revision (git)")
+    ap.add_argument("--before", default="main", help="earlier revision (git)")
     ap.add_argument("--map", help="a workspace file (targets) to compare solve counts with")
     args = ap.parse_args()
     print(f"load average: {os.getloadavg()}")
