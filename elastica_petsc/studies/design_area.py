@@ -27,9 +27,10 @@ the paper's arm, the gradient 15 % off).
 tip-map test (det(d x_t/d p)) must keep one sign (``det_sign_changes``
 reports a fold reaching the boundary); interior folds, unstable states and
 states off the quasi-static branch are what the independent re-sampling
-(:func:`resampled_area`) catches: a forward tension-grid map (``workspace
---mode tensions``) over B, its cells' images as triangles, and the area of
-their union counted on a fine lattice.  Where the map folds, the union is
+(:func:`resampled_area`) catches: forward solves on a tension lattice over
+B (:func:`tension_sweep`, the states ``workspace --mode tensions`` finds),
+its cells' images as triangles, and the area of their union counted on a
+fine lattice.  Where the map folds, the union is
 smaller than A; so the optimiser's gain is claimed only if the re-sampled
 areas before and after differ by more than their errors.
 """

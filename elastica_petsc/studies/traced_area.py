@@ -21,6 +21,10 @@ curved inner edge with straight chords: on the paper's arm at 10 N it gave
 finite differences of ``boundary``; the traced loop agrees with ``boundary``
 by construction and its gradient with finite differences of ``boundary``
 to 2 % (within 1.3 % on the paper's arm; tests/test_traced_area.py, docs/model.md §17.3).
+
+For an optimiser (issue 25, docs/model.md "Boundary and design at speed") the
+clearance check runs first, each node warm-started from the previous design's
+state there (:class:`WarmStart`), and a design that fails it is not traced.
 """
 from __future__ import annotations
 

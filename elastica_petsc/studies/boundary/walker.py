@@ -242,13 +242,13 @@ class Walker:
                 curve.points.append(b)
                 pt = b
                 continue
-            if active is self.fold:
-                active.update(pt.w)
-            for hit in hits or ([end] if end is not None else []):
-                w = self._locate(pt, b, active, hit)
-                if w is not None:
-                    return self._end(curve, hit, self.tr.point(w, pt.t, pt.det_sign, 0))
-            return None
+            break
+        if active is self.fold:                  # bordering vectors at the last node taken
+            active.update(pt.w)
+        for hit in hits or ([end] if end is not None and last else []):
+            w = self._locate(pt, b, active, hit)
+            if w is not None:
+                return self._end(curve, hit, self.tr.point(w, pt.t, pt.det_sign, 0))
         return None
 
     def walk(self, name: str, w0: np.ndarray, first, previous, max_corners: int = 16):
