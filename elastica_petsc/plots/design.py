@@ -40,6 +40,11 @@ def plot_area_design(result, path) -> None:
     if bad:                              # at the loop area each rejected design had
         hx.plot(*np.array(bad).T, "x", color="tab:red",
                 label="rejected: loop not solved or a cable across the arm")
+    untraced = [k + 1 for k, h in enumerate(result.history) if h["area_mm2"] is None]
+    if untraced:                         # no loop area: marked on the axis
+        hx.plot(untraced, np.zeros(len(untraced)), "|", ms=12, color="tab:red",
+                transform=hx.get_xaxis_transform(), clip_on=False,
+                label="rejected by the clearance check (not traced)")
     hx.set_xlabel("evaluation")
     hx.set_ylabel("loop area [mm^2]")
     hx.legend(fontsize=7)
