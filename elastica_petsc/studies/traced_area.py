@@ -72,10 +72,11 @@ class TracedArea:
 
 @dataclass
 class WarmStart:
-    """What the last evaluated design leaves to the next one (an optimiser's
+    """What the evaluated designs leave to the next one (an optimiser's
     designs follow each other closely): the check's states at the box's
-    nodes, (K, size) with NaN rows where a node was not solved, each the
-    Newton guess of the same node for the next design (:func:`_clearance`)."""
+    nodes, (K, size), each from the last design that solved the node (NaN
+    rows: none did), the Newton guess of the same node for the next design
+    (:func:`_clearance`)."""
 
     check: np.ndarray | None = None
 
@@ -161,8 +162,9 @@ def _clearance(disc: Discretisation, tensions: np.ndarray, warm: WarmStart | Non
             previous = eq
             if stop_at_failure and not (solved[k] and clear[k].all()):
                 break
-    if warm is not None:
-        warm.check = states
+    if warm is not None:                  # a node not solved keeps its older state
+        keep = np.isnan(states[:, 0]) & (guesses is not None and guesses.shape == states.shape)
+        warm.check = np.where(keep[:, None], guesses, states) if keep.any() else states
     return solved, clear
 
 
