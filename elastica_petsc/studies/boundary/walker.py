@@ -101,8 +101,15 @@ class Walker:
         return w
 
     def _events(self, a, b, active):
-        """Constraints that became active between a and b (stability loss: fold)."""
-        hits = [c for c in self.constraints if c is not active and c.margin(b.w) < 0]
+        """Constraints that became active between a and b (stability loss: fold),
+        the one crossed first (linearly interpolated margins) first: the corner
+        is located with the first of them that converges, and a constraint
+        crossed later lies beyond that corner (before issue 25 they came in
+        list order: on configs/aluminium.toml a step that crossed the curvature
+        limit and then P1 = P_crit cornered on P1 = P_crit)."""
+        crossed = [(c.margin(a.w), c.margin(b.w), c) for c in self.constraints if c is not active]
+        crossed = [(max(ma, 0.0) / (max(ma, 0.0) - mb), c) for ma, mb, c in crossed if mb < 0]
+        hits = [c for _, c in sorted(crossed, key=lambda fc: fc[0])]
         if b.unstable_modes > 0 and a.unstable_modes == 0 and active is not self.fold:
             hits.append(self.fold)
         return hits
