@@ -101,13 +101,21 @@ def test_rejected_design_is_not_traced():
     boundary is not traced; evaluated in full it is infeasible too."""
     arm = with_routes(load_config(), [1], [26.1, 3.0])
     full = traced_area(arm, [0, 1], P_MAX, elements=ELEMENTS)
-    quick = traced_area(arm, [0, 1], P_MAX, elements=ELEMENTS, warm=WarmStart(),
-                        skip_infeasible=True)
+    warm = WarmStart()
+    quick = traced_area(arm, [0, 1], P_MAX, elements=ELEMENTS, warm=warm, skip_infeasible=True)
     assert not full.feasible and not quick.feasible and not quick.traced
     assert np.isnan(quick.area_mm2)
     stop = int(np.argmin(quick.node_converged & quick.node_clear.all(axis=1)))
     assert not (full.node_converged[stop] and full.node_clear[stop].all())
     assert quick.node_converged[:stop].all() and not quick.node_converged[stop + 1:].any()
+    assert np.array_equal(np.flatnonzero(quick.node_checked), np.arange(stop + 1))
+    seen = quick.node_checked
+    assert np.array_equal(quick.node_converged[seen], full.node_converged[seen])
+    assert np.array_equal(quick.node_clear[seen], full.node_clear[seen])
+    # the next design checks the node that stopped this one first, and stops there
+    again = traced_area(with_routes(arm, [1], [26.1, 2.5]), [0, 1], P_MAX, elements=ELEMENTS,
+                        warm=warm, skip_infeasible=True)
+    assert np.flatnonzero(again.node_checked).tolist() == [stop] and not again.feasible
 
 
 def test_resampling_by_one_loading_path_equals_the_map():

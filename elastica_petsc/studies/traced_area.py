@@ -54,16 +54,23 @@ class TracedArea:
     node_clear: np.ndarray      # (K, n) cable i clear of the arm at the node (core/clearance.py)
     traced: bool = True         # False: the check failed first, the boundary was not traced
     #                             (area and gradient NaN, ``skip_infeasible``)
+    node_checked: np.ndarray | None = None   # (K,) nodes the check reached (None: all)
+
+    @property
+    def _checked(self) -> np.ndarray:
+        return (np.ones(len(self.node_converged), bool) if self.node_checked is None
+                else self.node_checked)
 
     @property
     def converged(self) -> bool:
-        """The walk closed (or was not needed) and every node of the check was solved."""
-        return (self.closed or not self.traced) and bool(self.node_converged.all())
+        """The walk closed (or was not needed) and every node checked was solved."""
+        return ((self.closed or not self.traced)
+                and bool(self.node_converged[self._checked].all()))
 
     @property
     def cables_clear(self) -> bool:
-        """No cable crosses the arm at any node."""
-        return bool(self.node_clear.all())
+        """No cable crosses the arm at any node checked."""
+        return bool(self.node_clear[self._checked].all())
 
     @property
     def feasible(self) -> bool:
@@ -79,6 +86,7 @@ class WarmStart:
     (:func:`_clearance`)."""
 
     check: np.ndarray | None = None
+    failed: int | None = None     # the node at which the last check that stopped did
 
 
 def limited(arm: Arm, p_max: float) -> Arm:
@@ -102,10 +110,10 @@ def traced_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
     arm = limited(arm, p_max)
     disc = Discretisation.from_arm(arm, elements)
     tensions = box_loop(p_max, CHECK_NODES_PER_EDGE)
-    solved, clear = _clearance(disc, tensions, warm, stop_at_failure=skip_infeasible)
+    solved, clear, checked = _clearance(disc, tensions, warm, stop_at_failure=skip_infeasible)
     if skip_infeasible and not (solved.all() and clear.all()):
         return TracedArea(np.nan, np.full(2 * len(tendons), np.nan), np.zeros((0, 2)), 0, False,
-                          tensions, solved, clear, traced=False)
+                          tensions, solved, clear, traced=False, node_checked=checked)
     traced = trace_boundary(arm, disc, restricted=False, tip_folds=False,
                             route_gradients=tuple(tendons))
     region = traced.regions["W0"]
@@ -130,42 +138,67 @@ def box_loop(p_max: float, nodes_per_edge: int) -> np.ndarray:
 
 
 def _clearance(disc: Discretisation, tensions: np.ndarray, warm: WarmStart | None = None, *,
-               stop_at_failure: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """(solved (K,), clear (K, n)): the states along the loop of tension nodes,
-    each solved from the previous one (a quasi-static loading path), and
-    whether every cable clears the arm there (core/clearance.py).  The traced
-    loop's nodes are adaptive and may step over a short crossing; these fixed
-    nodes are the feasibility check of the designs (issue 26's messages).
+               stop_at_failure: bool = False):
+    """(solved (K,), clear (K, n), checked (K,)): the states along the loop of
+    tension nodes, each solved from the previous one (a quasi-static loading
+    path), and whether every cable clears the arm there (core/clearance.py).
+    The traced loop's nodes are adaptive and may step over a short crossing;
+    these fixed nodes are the feasibility check of the designs (issue 26's
+    messages).
 
-    With ``warm`` states of a previous design, a node is first solved by
-    Newton at its tensions from that design's state there
-    (:func:`_warm_state`); only if that fails is it reached along the
-    loading path.  ``stop_at_failure``: nodes after the first unsolved node
-    or crossing cable are left unsolved (False)."""
+    With ``warm`` states of earlier designs, a node is first solved by Newton
+    at its tensions from the last state found there (:func:`_warm_state`);
+    only if that fails is it reached along the loading path.
+    ``stop_at_failure``: the check stops at the first unsolved node or
+    crossing cable (later nodes unchecked, False), and the node where the
+    last design's check stopped is tried first, from its warm state alone
+    (the same result it gets in turn)."""
     from ..solvers.equilibrium import EquilibriumSolver
 
     K = len(tensions)
     solved, clear = np.zeros(K, bool), np.zeros((K, disc.n_tendons), bool)
+    checked = np.zeros(K, bool)
     guesses = warm.check if warm is not None and warm.check is not None else None
+    if guesses is not None and guesses.shape != (K, disc.size):
+        guesses = None
     states = np.full((K, disc.size), np.nan)
-    previous = None
+    found = {}
+
+    def record(k, eq) -> bool:
+        found[k], checked[k] = eq, True
+        solved[k], clear[k] = bool(eq.converged), state_cable_clear(eq)
+        if eq.converged:
+            states[k] = eq.u
+        return bool(solved[k] and clear[k].all())
+
     with EquilibriumSolver(disc) as solver:
+        first = warm.failed if stop_at_failure and warm is not None else None
+        if first is not None and guesses is not None and np.isfinite(guesses[first, 0]):
+            eq = _warm_state(solver, guesses[first], tensions[first])
+            if eq is not None and not record(first, eq):
+                return _keep(warm, guesses, states, solved, clear, checked, first)
         for k, p in enumerate(tensions):
-            eq = None
-            if guesses is not None and guesses.shape == states.shape and np.isfinite(guesses[k, 0]):
+            eq = found.get(k)
+            if eq is None and guesses is not None and np.isfinite(guesses[k, 0]):
                 eq = _warm_state(solver, guesses[k], p)
             if eq is None:
-                eq = solver.solve(p, start=previous)
-            solved[k], clear[k] = bool(eq.converged), state_cable_clear(eq)
-            if eq.converged:
-                states[k] = eq.u
-            previous = eq
-            if stop_at_failure and not (solved[k] and clear[k].all()):
-                break
-    if warm is not None:                  # a node not solved keeps its older state
-        keep = np.isnan(states[:, 0]) & (guesses is not None and guesses.shape == states.shape)
-        warm.check = np.where(keep[:, None], guesses, states) if keep.any() else states
-    return solved, clear
+                eq = solver.solve(p, start=found.get(k - 1))
+            if not record(k, eq) and stop_at_failure:
+                return _keep(warm, guesses, states, solved, clear, checked, k)
+    return _keep(warm, guesses, states, solved, clear, checked, None)
+
+
+def _keep(warm, guesses, states, solved, clear, checked, failed):
+    """Leave this design's states (a node not solved keeps its older one) and
+    the node where its check stopped (else the last one that stopped a check)
+    in ``warm``; (solved, clear, checked)."""
+    if warm is not None:
+        keep = np.isnan(states[:, 0])
+        if guesses is not None and keep.any():
+            states = np.where(keep[:, None], guesses, states)
+        warm.check = states
+        warm.failed = warm.failed if failed is None else failed
+    return solved, clear, checked
 
 
 def _warm_state(solver, guess: np.ndarray, p: np.ndarray):
