@@ -108,3 +108,37 @@ def test_environment_variables_are_read_by_the_command_line_only():
     readers = {str(p.relative_to(package)) for p in package.rglob("*.py")
                if "os.environ" in p.read_text() or "getenv" in p.read_text()}
     assert {r for r in readers if not r.startswith("cli/")} <= allowed
+
+
+def test_petsc_options_of_a_call_reach_its_solver_and_are_removed_afterwards(monkeypatch):
+    """One mechanism (solvers/options.py): a call's options are in PETSc's database
+    while its solvers run (over an earlier value, which comes back afterwards)
+    and nowhere after it; the solver reads them (looser Newton tolerances: fewer
+    iterations than the same solve without them)."""
+    from petsc4py import PETSc
+
+    import elastica_petsc.solvers.equilibrium as equilibrium
+
+    arm = ep.Arm.paper()
+    plain = ep.solve(arm, tensions_N=[14.0, 6.0], elements=30).equilibrium
+    opts = PETSc.Options()
+    opts["eq_snes_stol"] = "1e-30"                        # set before the call (a user's)
+    before = opts.getAll()
+    seen = {}
+    original = equilibrium.solve_equilibrium
+
+    def spy(*args, **kwargs):
+        seen.update(opts.getAll())
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(equilibrium, "solve_equilibrium", spy)
+    try:
+        loose = ep.solve(arm, tensions_N=[14.0, 6.0], elements=30,
+                         petsc_options={"eq_snes_atol": 1e-3, "-eq_snes_stol": 1e-8,
+                                        "eq": {"snes_rtol": 1e-3}}).equilibrium
+        assert opts.getAll() == before                    # removed, the earlier value back
+    finally:
+        opts.delValue("eq_snes_stol")
+    assert seen["eq_snes_atol"] == "0.001" and seen["eq_snes_stol"] == "1e-08"
+    assert seen["eq_snes_rtol"] == "0.001"
+    assert loose.converged and loose.iterations < plain.iterations

@@ -10,6 +10,8 @@ import tomllib
 import zipfile
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -31,6 +33,7 @@ def test_test_extra_has_what_the_test_script_uses():
     assert " -n auto" in (ROOT / "scripts" / "test.sh").read_text()
 
 
+@pytest.mark.slow
 def test_every_config_is_shipped_in_the_wheel(tmp_path):
     shipped = {p.name: p.read_bytes() for p in (ROOT / "elastica_petsc" / "configs").glob("*.toml")}
     for path in (ROOT / "configs").glob("*.toml"):
@@ -57,3 +60,12 @@ def test_readme_says_what_the_model_covers_on_its_first_screen():
     assert "What the model covers" in first_screen
     for words in ("planar", "straight", "friction", "gravity"):
         assert words in first_screen
+
+
+def test_every_subpackage_is_listed_for_the_wheel():
+    """setuptools ships only the packages pyproject.toml lists: every folder of the
+    package with an ``__init__.py`` must be among them."""
+    listed = set(pyproject()["tool"]["setuptools"]["packages"])
+    found = {".".join(p.parent.relative_to(ROOT).parts)
+             for p in (ROOT / "elastica_petsc").rglob("__init__.py")}
+    assert found - listed == set()
