@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.geometry import clip_half_plane, distance_to_edges, inside_polygon, union_area
+from ...core.geometry import (clip_half_plane, distance_to_edges, inside_polygon,
+                              polyline_distance, union_area)
 from .result import BoundaryResult
 
 
@@ -97,3 +98,36 @@ def compare_map(result: BoundaryResult, targets_mm: np.ndarray, status: np.ndarr
     return compare_with_samples(result.polygons_mm["W0"][0], targets_mm, status, spacing_mm,
                                 inside=inside, distance=distance, region=region,
                                 area_mm2=result.area_mm2)
+
+
+def curves_distance_mm(a: list, b: list) -> float:
+    """The Hausdorff distance (mm) between two sets of open polylines (mm):
+    the farthest any point of one lies from the other's segments."""
+    def one_way(src, dst):
+        pts = np.vstack(src)
+        return float(np.max(np.min([polyline_distance(line, pts) for line in dst], axis=0)))
+
+    return max(one_way(a, b), one_way(b, a))
+
+
+def compare_traces(result: BoundaryResult, reference: BoundaryResult) -> dict:
+    """A trace against a finer one of the same arm (``trace_boundary(...,
+    refine=k)``): per region the relative area difference and the Hausdorff
+    distance (mm) between the loops' images, and between the tip-map fold
+    curves' images (the curves the proof of docs/model.md §9.1 walls off)."""
+    out = {}
+    for name, polys in result.polygons_mm.items():
+        ref = reference.polygons_mm[name][0]
+        closed = [np.vstack((p, p[:1])) for p in (polys[0], ref)]
+        out[name] = {"area_mm2": result.areas_mm2[name],
+                     "reference_area_mm2": reference.areas_mm2[name],
+                     "relative_area_difference": abs(result.areas_mm2[name]
+                                                     - reference.areas_mm2[name])
+                     / reference.areas_mm2[name],
+                     "hausdorff_mm": curves_distance_mm(closed[:1], closed[1:])}
+    if result.fold_polylines_mm and reference.fold_polylines_mm:
+        out["fold_curves"] = {"count": (len(result.fold_polylines_mm),
+                                        len(reference.fold_polylines_mm)),
+                              "hausdorff_mm": curves_distance_mm(result.fold_polylines_mm,
+                                                                 reference.fold_polylines_mm)}
+    return out
