@@ -63,7 +63,11 @@ class TipNewton:
     def solve(self, target: np.ndarray, start, tol: float | None = None):
         """(equilibrium, sensitivity) with the tip within ``tol`` (default
         ``self.tol``) of ``target`` (units of l) by Newton steps from ``start`` =
-        (equilibrium, sensitivity), or None where a step is refused (module doc)."""
+        (equilibrium, sensitivity), or None where a step is refused (module doc).
+        The sensitivity returned is that of the state where the last Newton step
+        started (within one quadratically small step of the state returned): it
+        serves only as the predictor of the next target, and saves one
+        factorisation per target."""
         eq, sens = start
         tol = self.tol if tol is None else tol
         N = self.disc.n_elements
@@ -87,6 +91,8 @@ class TipNewton:
             eq = Equilibrium(self.disc, p, u, True, reason, its, 1)
             if np.min(eq.cable_lengths) < COLLAPSE_LENGTH:
                 return None
+            if np.linalg.norm(np.asarray(target, float) - eq.tip) < tol:
+                return eq, sens            # S of the step before: a predictor for the next
             try:
                 sens = self.sens.compute(eq)
             except SensitivityError:
