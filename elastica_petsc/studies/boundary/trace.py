@@ -193,9 +193,10 @@ def boundary_proof(arm: Arm, disc: Discretisation | None = None,
     ('', nan)); arms with other than two tendons give no evidence ('')."""
     disc = Discretisation.from_arm(arm) if disc is None else disc
 
+    traces = _PROCESS_TRACES if cache is None else cache
+
     def outside(target: np.ndarray, trace: bool = True) -> tuple[str, float]:
-        if disc.n_tendons != 2 or not (trace or
-                                       (_PROCESS_TRACES if cache is None else cache).holds(arm, disc)):
+        if disc.n_tendons != 2 or not (trace or traces.holds(arm, disc)):
             return "", float("nan")
         evidence, dist = traced_w0(arm, disc, cache).outside(np.asarray(target, float) * arm.length_mm)
         return evidence, dist / arm.length_mm
