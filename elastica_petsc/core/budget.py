@@ -35,15 +35,14 @@ class TimeBudget:
     """``max_seconds`` of wall-clock time from construction (None: unlimited).
 
     :meth:`expired` is a query; :meth:`check` raises :class:`TimeLimitReached`
-    the first time it finds the budget spent (later checks return quietly, so
-    that the search can wrap up, e.g. polish the states it already holds)."""
+    whenever it finds the budget spent (a search that must wrap up, e.g.
+    polish the states it already holds, stops asking)."""
 
     def __init__(self, max_seconds: float | None = None, clock=time.monotonic):
         self.max_seconds = check_max_seconds(max_seconds)
         self._clock = clock
         self._t0 = clock()
         self.reached = False          # True once the budget was found spent
-        self._raised = False          # check() raises once only
 
     @property
     def elapsed_s(self) -> float:
@@ -60,10 +59,9 @@ class TimeBudget:
         return self.reached
 
     def check(self, what: str = "") -> None:
-        """Raise :class:`TimeLimitReached` the first time the budget is found spent."""
-        if self._raised or not self.expired():
+        """Raise :class:`TimeLimitReached` if the budget is spent."""
+        if not self.expired():
             return
-        self._raised = True
         raise TimeLimitReached(f"{TIME_LIMIT}: stopped after {self.elapsed_s:.3g} s "
                                f"(budget {self.max_seconds:g} s)" + (f" at {what}" if what else ""))
 

@@ -18,6 +18,7 @@ import itertools
 
 import numpy as np
 
+from ..core.budget import TimeBudget
 from ..core.deflation import Deflation
 from ..core.errors import InputError
 from ..solvers.equilibrium import Equilibrium, EquilibriumSolver, check_tensions
@@ -41,7 +42,8 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
                       effort: int = 1, levels=None, deflation_rounds: int | None = None,
                       passes: int = 2, steps: int | None = None,
                       tol: float = SAME_SHAPE_TOL, curves: bool | None = None,
-                      p_max: float = DEFAULT_P_MAX, progress=None) -> SearchResult:
+                      p_max: float = DEFAULT_P_MAX, progress=None,
+                      budget: TimeBudget | None = None) -> SearchResult:
     """Distinct equilibria with cable lengths ``lengths`` (units of l) and
     tensions 0 <= p_i <= ``p_max``.
 
@@ -70,11 +72,14 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
     returned is what these methods reached, never a claim that no other
     equilibrium exists.  ``progress(steps, note)``, if given, is called after
     every search step (a continuation point or an attempt from a start; the
-    number of steps is not known in advance).
+    number of steps is not known in advance).  ``budget`` (a
+    :class:`~elastica_petsc.core.budget.TimeBudget`): once spent, the search
+    stops at its next step and returns the states found so far, with
+    ``stopped`` saying so (outcome TIME_LIMIT: the list may be incomplete).
     """
     L = check_lengths(lengths, solver.disc.n_tendons)
     disc = solver.disc
-    found = Collector(tol, progress)
+    found = Collector(tol, progress, budget)
     deflation = Deflation(disc.h)
     curves = disc.n_tendons == 2 if curves is None else bool(curves)
     if curves and disc.n_tendons != 2:
@@ -108,9 +113,9 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
     eq_solver = EquilibriumSolver(disc) if own else eq_solver
 
     def rest():
-        return phased_search(found, search_phases(effort, levels, steps, deflation_rounds), starts,
-                              lambda lv: tension_starts(eq_solver, levels=lv), continue_paths,
-                              multistart)
+        return phased_search(found, search_phases(effort, levels, steps, deflation_rounds),
+                             starts, lambda lv: tension_starts(eq_solver, levels=lv),
+                             continue_paths, multistart)
 
     try:
         search = None
@@ -119,7 +124,7 @@ def length_equilibria(solver: LengthSolver, lengths, starts=None, *,
                 disc, L, "length", p_max, effort, found,
                 lambda u, p, label: solver.solve(L, (u, p), label=label), rest)
         else:
-            used = rest()
+            used = found.attempt(rest) or []
     finally:
         if own:
             eq_solver.destroy()
@@ -177,7 +182,8 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
                deflation_rounds: int | None = None, passes: int = 2, steps: int | None = None,
                tol: float = SAME_SHAPE_TOL, prefix: str = "defl_",
                length_mm: float | None = None, curves: bool | None = None,
-               p_max: float = DEFAULT_P_MAX, progress=None) -> SearchResult:
+               p_max: float = DEFAULT_P_MAX, progress=None,
+               budget: TimeBudget | None = None) -> SearchResult:
     """Distinct load-controlled equilibria at fixed tensions ``p``.
 
     (0) Loading paths from the straight arm: proportional and every order
@@ -201,12 +207,13 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
     lengths are its own cable chords, with ``unstable_modes`` (load control)
     and ``length_unstable_modes`` (the same state held at its cable
     lengths).  After (1)-(2) the curves through every state they added.  Not
-    a proof of completeness.  ``progress``: as for :func:`length_equilibria`.
+    a proof of completeness.  ``progress``, ``budget``: as for
+    :func:`length_equilibria`.
     """
     disc = eq_solver.disc
     p = check_tensions(p, disc.n_tendons)
     n = disc.n_tendons
-    found = Collector(tol, progress)
+    found = Collector(tol, progress, budget)
     deflation = Deflation(disc.h)
     solves = LoadSolves(eq_solver, prefix, length_mm)
 
@@ -232,26 +239,29 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
                 break
 
     def rest():
-        return phased_search(found, search_phases(effort, levels, steps, deflation_rounds), starts,
-                              lambda lv: tension_starts(eq_solver, levels=lv), continue_paths,
-                              multistart)
+        return phased_search(found, search_phases(effort, levels, steps, deflation_rounds),
+                             starts, lambda lv: tension_starts(eq_solver, levels=lv),
+                             continue_paths, multistart)
 
     curves = n == 2 if curves is None else bool(curves)
     if curves and n != 2:
         raise InputError("the curve search needs exactly two tendons")
-    search = None
-    try:
+    def straight_paths() -> None:
         for order in [None] + list(itertools.permutations(range(1, n + 1))):
             how = "proportional" if order is None else "order " + ",".join(map(str, order))
             for eq, side in loading_paths(eq_solver, p, order=order):
                 label = f"straight arm, {how}{side}"
                 found.offer(solves.examined(eq, label), label, "loading path")
-        if curves:
+
+    search, used = None, []
+    try:
+        found.attempt(straight_paths)
+        if curves and not found.stopped:
             search, used = with_curves(
                 disc, p, "load", max(p_max, float(np.max(p))), effort, found,
                 lambda u, q, label: solves.solve(p, (u, p), label=label), rest)
         else:
-            used = rest()
+            used = found.attempt(rest) or []
     finally:
         solves.destroy()
     return found.result("load", p, used, curves=search)
@@ -260,14 +270,15 @@ def equilibria(eq_solver: EquilibriumSolver, p, starts=None, *, effort: int = 1,
 # --- one call each, from an arm (for the command line and the Python API) -------------
 def search_lengths(arm, lengths_mm, *, elements: int | None = None, effort: int = 1,
                    levels=None, deflation_rounds: int | None = None,
-                   steps: int | None = None, progress=None) -> SearchResult:
+                   steps: int | None = None, progress=None,
+                   max_seconds: float | None = None) -> SearchResult:
     """Every equilibrium this search finds with the cable lengths ``lengths_mm``
     (mm, one per tendon) under length control (Sec. 4.6, Eq. (23)) and
     tensions 0 <= P_i <= the motor limit P_crit of Eq. (22) (p <= 200 without
     one, :func:`search_box`): :func:`length_equilibria` on ``arm``
     (``elements``: mesh, default the arm's).  States are non-dimensional
     (``*_mm`` properties in mm).  ``progress(steps, note)``: see
-    :func:`length_equilibria`."""
+    :func:`length_equilibria`; ``max_seconds``: its time budget (None: none)."""
     from ..core.fem import Discretisation
 
     disc = Discretisation.from_arm(arm, elements)
@@ -276,22 +287,25 @@ def search_lengths(arm, lengths_mm, *, elements: int | None = None, effort: int 
             EquilibriumSolver(disc) as eq_solver:
         return length_equilibria(solver, L, eq_solver=eq_solver, effort=effort, levels=levels,
                                  deflation_rounds=deflation_rounds, steps=steps,
-                                 p_max=search_box(arm), progress=progress)
+                                 p_max=search_box(arm), progress=progress,
+                                 budget=TimeBudget(max_seconds))
 
 
 def search_tensions(arm, p, *, elements: int | None = None, effort: int = 1, levels=None,
-                    deflation_rounds: int | None = None, progress=None) -> SearchResult:
+                    deflation_rounds: int | None = None, progress=None,
+                    max_seconds: float | None = None) -> SearchResult:
     """Every equilibrium this search finds at the tensions ``p`` (non-dimensional,
     p = P l^2/B; ``arm.tensions_from_N`` converts newtons) under load control
-    (Eq. (9)): :func:`equilibria` on ``arm``.  ``progress(steps, note)``: see
-    :func:`length_equilibria`."""
+    (Eq. (9)): :func:`equilibria` on ``arm``.  ``progress(steps, note)``,
+    ``max_seconds``: see :func:`search_lengths`."""
     from ..core.fem import Discretisation
 
     disc = Discretisation.from_arm(arm, elements)
     with EquilibriumSolver(disc) as eq_solver:
         return equilibria(eq_solver, p, effort=effort, levels=levels,
                           deflation_rounds=deflation_rounds, length_mm=arm.length_mm,
-                          p_max=search_box(arm), progress=progress)
+                          p_max=search_box(arm), progress=progress,
+                          budget=TimeBudget(max_seconds))
 
 
 # --- length continuation with a global search at its critical points ------------------

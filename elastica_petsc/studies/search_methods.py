@@ -6,10 +6,12 @@ effort (:func:`phased_search`) and the curve search around them
 (:func:`with_curves`).  Non-dimensional (lengths / l, p = P l^2 / B)."""
 from __future__ import annotations
 
+import contextlib
 import itertools
 
 import numpy as np
 
+from ..core.budget import TimeBudget, TimeLimitReached
 from ..core.deflation import Deflation
 from ..solvers.equilibrium import Equilibrium, EquilibriumSolver, check_order, loading_path
 from ..solvers.lengths import same_shape
@@ -98,10 +100,16 @@ class Collector:
     every attempt: (start, method, outcome) with outcome "new k", "again k"
     (k: 1-based state number) or PETSc's reason of the failure.  ``progress``
     (optional) is called as ``progress(steps, note)`` after every search step
-    (:meth:`step`: a continuation point or an attempt from a start)."""
+    (:meth:`step`: a continuation point or an attempt from a start).
 
-    def __init__(self, tol: float, progress=None):
+    ``budget`` (a :class:`~elastica_petsc.core.budget.TimeBudget`): once it is
+    spent, every step raises TimeLimitReached; :meth:`attempt` runs a phase
+    and turns that into ``stopped`` (the note kept in the result), and
+    :meth:`wrapping_up` lets the search polish what it holds without asking."""
+
+    def __init__(self, tol: float, progress=None, budget: TimeBudget | None = None):
         self.tol, self.progress, self.steps = tol, progress, 0
+        self.budget, self.stopped, self._wrapping = budget, "", False
         self.found: list[list] = []          # [state, start, method, hits]
         self.log: list[tuple[str, str, str]] = []
         self.attempts = self.failures = self.duplicates = 0
@@ -110,24 +118,51 @@ class Collector:
         self.steps += 1
         if self.progress is not None:
             self.progress(self.steps, f"{len(self.found)} found; {what}")
+        if self.budget is not None and not self._wrapping:
+            self.budget.check(what)
+
+    def attempt(self, phase):
+        """``phase()``, or None if the time budget stops it (``stopped`` says
+        where); a phase is not started once the search is stopped."""
+        if self.stopped:
+            return None
+        try:
+            return phase()
+        except TimeLimitReached as stop:
+            self.stopped = str(stop)
+            return None
+
+    @contextlib.contextmanager
+    def wrapping_up(self):
+        """Context: steps inside do not ask the budget (polishing found states)."""
+        self._wrapping = True
+        try:
+            yield
+        finally:
+            self._wrapping = False
 
     def offer(self, state, start: str, method: str) -> bool:
+        """Record an attempt's state; True if it is new.  The step (and the
+        budget's question) comes after the state is kept."""
         self.attempts += 1
-        self.step(f"{method} from {start}")
+        new = False
         if state is None or not state.converged:
             self.failures += 1
             self.log.append((start, method, "failed" if state is None else
                              f"failed ({state.reason})"))
-            return False
-        for k, entry in enumerate(self.found, 1):
-            if same_shape(entry[0], state, self.tol):
-                entry[3] += 1
-                self.duplicates += 1
-                self.log.append((start, method, f"again {k}"))
-                return False
-        self.found.append([state, start, method, 1])
-        self.log.append((start, method, f"new {len(self.found)}"))
-        return True
+        else:
+            for k, entry in enumerate(self.found, 1):
+                if same_shape(entry[0], state, self.tol):
+                    entry[3] += 1
+                    self.duplicates += 1
+                    self.log.append((start, method, f"again {k}"))
+                    break
+            else:
+                self.found.append([state, start, method, 1])
+                self.log.append((start, method, f"new {len(self.found)}"))
+                new = True
+        self.step(f"{method} from {start}")
+        return new
 
     def result(self, control, target, starts, curves=None) -> SearchResult:
         """The search's result; its starts are ``starts`` and every other start
@@ -151,7 +186,7 @@ class Collector:
                        key=lambda f: f.number)
         return SearchResult(control, np.asarray(target, float), tuple(found), tuple(starts),
                             self.attempts, self.failures, self.duplicates, tuple(self.log),
-                            coverage)
+                            coverage, stopped=self.stopped)
 
 
 def homotopy_paths(start, end, steps: int, orders="all") -> list[tuple[str, np.ndarray]]:
@@ -288,21 +323,29 @@ def with_curves(disc, target, control: str, p_max: float, effort: int,
     around the other methods ``rest()``: first the curves from the straight
     arm and through every equilibrium they meet, then ``rest()``, then the
     curves through every state ``rest`` added.  Returns (the CurveSearch,
-    what ``rest`` returned)."""
+    what ``rest`` returned, [] if it did not run).  Each part runs under
+    ``found``'s time budget (:meth:`Collector.attempt`); the crossings found
+    before a stop are still polished and offered."""
     from .preimage import CurveSearch, SearchTracer
 
     with SearchTracer(disc) as tracer:
         search = CurveSearch(tracer, target, control=control, p_max=p_max,
                              directions=DEFAULT_DIRECTIONS * int(effort),
-                             on_curve=lambda label: found.step(f"curve {label}")).run()
-        offer_crossings(search, found, polish, 0)
+                             on_curve=lambda label: found.step(f"curve {label}"))
+        found.attempt(search.run)
+        with found.wrapping_up():
+            offer_crossings(search, found, polish, 0)
         before = len(found.found)
-        out = rest()
+        out = found.attempt(rest) or []
         start = len(search.states)
-        for state, label, method, _ in found.found[before:]:
-            w = np.concatenate((state.u, state.p))
-            # only states on the lines through the target (a slack cable's chord is short)
-            if np.all(state.p <= p_max) and np.allclose(search.quantity(w), target, atol=1e-8):
-                search.add(w, f"{label} ({method})")
-        offer_crossings(search.close(), found, polish, start)
+        if not found.stopped:
+            for state, label, method, _ in found.found[before:]:
+                w = np.concatenate((state.u, state.p))
+                # only states on the lines through the target (a slack cable's chord is short)
+                if np.all(state.p <= p_max) and np.allclose(search.quantity(w), target,
+                                                            atol=1e-8):
+                    search.add(w, f"{label} ({method})")
+            found.attempt(search.close)
+        with found.wrapping_up():
+            offer_crossings(search, found, polish, start)
     return search, out

@@ -8,9 +8,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core.budget import TIME_LIMIT
 from ..core.errors import InputError
 from ..core.results import Result
 from ..solvers.equilibrium import Equilibrium
+
+
+SEARCH_FINISHED = "SEARCH_FINISHED"      # outcome of a search that ran every phase
 
 
 @dataclass(frozen=True)
@@ -110,9 +114,16 @@ class SearchResult(Result):
     duplicates: int               # converged attempts that re-found a known state
     log: tuple = ()               # (start, method, outcome) per attempt
     curves: dict = field(default_factory=dict)   # the curve search's coverage ({}: none)
+    stopped: str = ""             # why the time budget stopped it ('' : it ran every phase)
 
     def __len__(self) -> int:
         return len(self.states)
+
+    @property
+    def outcome(self) -> str:
+        """SEARCH_FINISHED (every phase ran) or TIME_LIMIT (stopped by its
+        budget: the states found so far, the list may be incomplete)."""
+        return TIME_LIMIT if self.stopped else SEARCH_FINISHED
 
     @property
     def last_new_attempt(self) -> int:
@@ -174,6 +185,9 @@ class SearchResult(Result):
                  + f" from {len(self.starts)} starts ({self.attempts} attempts, "
                  f"{self.failures} failed, {self.duplicates} re-found a known state); "
                  "a list, not a proof that there are no others"]
+        if self.stopped:
+            lines.append(f"  {self.stopped}: the states found so far; the list may be "
+                         "incomplete (the search did not finish)")
         if self.curves:
             lines.append("  " + self.curve_method())
         for f in self.states:
