@@ -28,7 +28,7 @@ from .length_stability import (LENGTH_BIFURCATION_TOL, LengthInertia, constraine
 from .length_system import TAUT_TOL, AugmentedSystem
 from .options import SolverOptions
 
-__all__ = ["DEFLATION_OPTIONS", "LENGTH_BIFURCATION_TOL", "MAX_SNAP_SEARCHES", "SAME_SHAPE_TOL",
+__all__ = ["DEFLATED_DIVERGENCE_FACTOR", "DEFLATION_OPTIONS", "LENGTH_BIFURCATION_TOL", "MAX_SNAP_SEARCHES", "SAME_SHAPE_TOL",
            "TAUT_TOL", "AugmentedSystem", "LengthEquilibrium", "LengthInertia", "LengthSolver",
            "check_lengths", "constrained_mode", "instability_kind", "same_shape"]
 
@@ -39,6 +39,9 @@ SAME_SHAPE_TOL = 1e-4
 # PETSc options (under the solver's prefix) for deflated solves, unless the
 # user sets them: the secant ("l2") line search explores beyond the start's basin.
 DEFLATION_OPTIONS = {"snes_linesearch_type": "l2"}
+# A deflated solve whose residual norm grows past this factor times its best is
+# given up (length_system.DivergenceStop, measured there): a search's failures cost less.
+DEFLATED_DIVERGENCE_FACTOR = 50.0
 
 
 # --- results -----------------------------------------------------------------------------
@@ -161,7 +164,8 @@ class LengthSolver:
         # of the start far more often than backtracking (measured on Fig. 8)
         self.deflated_system = AugmentedSystem(disc, "length", self.prefix + "defl_",
                                                petsc_options={**DEFLATION_OPTIONS, **deflated},
-                                               comm=comm)
+                                               comm=comm,
+                                               divergence_factor=DEFLATED_DIVERGENCE_FACTOR)
         self.inertia = LengthInertia(disc, comm=comm, options_prefix=self.prefix + "inertia_")
         self.load_inertia = InertiaCounter(disc, comm=comm,
                                            options_prefix=self.prefix + "load_inertia_")

@@ -22,7 +22,8 @@ from ..core.budget import TimeBudget
 from ..core.deflation import Deflation
 from ..core.errors import InputError
 from ..solvers.equilibrium import Equilibrium, EquilibriumSolver, check_tensions
-from ..solvers.lengths import (DEFLATION_OPTIONS, SAME_SHAPE_TOL, AugmentedSystem,
+from ..solvers.lengths import (DEFLATED_DIVERGENCE_FACTOR, DEFLATION_OPTIONS, SAME_SHAPE_TOL,
+                               AugmentedSystem,
                                LengthEquilibrium, LengthInertia, LengthSolver, check_lengths)
 from .search_methods import (Collector, deflated_continuation, deflation_of, homotopy_paths,
                              loading_paths, phased_search, search_phases, tension_starts,
@@ -142,7 +143,8 @@ class LoadSolves:
                  length_mm: float | None = None):
         self.eq_solver, self.disc, self.length_mm = eq_solver, eq_solver.disc, length_mm
         self.system = AugmentedSystem(self.disc, "load", prefix, Deflation(self.disc.h),
-                                      petsc_options=DEFLATION_OPTIONS)
+                                      petsc_options=DEFLATION_OPTIONS,
+                                      divergence_factor=DEFLATED_DIVERGENCE_FACTOR)
         self.length_inertia = LengthInertia(self.disc)
 
     def examined(self, eq: Equilibrium | None, label: str = ""):
