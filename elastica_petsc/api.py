@@ -266,9 +266,9 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
     orders, a homotopy in target space) unless ``global_search=False``;
     ``reachable`` is True, False only with evidence about the whole
     (``evidence``: ``BEYOND_REACH``, |x_d| > l; ``OUTSIDE_BOUNDARY``, outside
-    the traced boundary of W_0, docs/model.md §9, traced once per arm in the
-    process when the search is exhausted), or None when the strategies are
-    exhausted without proof.
+    the traced boundary of W_0 or in a hole of it, docs/model.md §9, traced
+    once per arm in the process when the local solve first fails), or None
+    when the strategies are exhausted without proof.
     ``cables``: ``"prefer"``/``"require"``/``"ignore"`` states whose cables
     cross the arm.  With n >= 3 tendons, ``share="min-norm"``/``"min-energy"``
     and ``min_tension_N`` choose among the tension sets that reach the target.
