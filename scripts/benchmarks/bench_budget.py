@@ -69,28 +69,30 @@ def main() -> None:
     ap.add_argument("--cases", nargs="+", default=list(CASES), choices=CASES)
     args = ap.parse_args()
     print(f"load average: {os.getloadavg()}")
+    print("| case | revision | wall s (median) | cpu s (median) | found |")
+    print("|---|---|---|---|---|", flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         roots = {"before": extract(args.before, tmp), "after": HERE}
-        rows = {}
         for case in args.cases:
             runs = {"before": [], "after": []}
             for _ in range(args.repeats):
                 for label, root in roots.items():           # interleaved
                     runs[label].append(measure(root, case, args.elements))
-            rows[case] = runs
+            report(case, runs)
     print(f"load average after: {os.getloadavg()}")
-    print("| case | revision | wall s (median) | cpu s (median) | found |")
-    print("|---|---|---|---|---|")
-    for case, runs in rows.items():
-        med = {k: {q: statistics.median(r[q] for r in v) for q in ("wall", "cpu")}
-               for k, v in runs.items()}
-        for label in ("before", "after"):
-            found = runs[label][-1]["found"]
-            same = all(r["found"] == found for r in runs[label])
-            print(f"| {case} | {label} | {med[label]['wall']:.3f} | {med[label]['cpu']:.3f} | "
-                  f"{found}{'' if same else ' (varied)'} |")
-        print(f"| {case} | ratio before/after | {med['before']['wall'] / med['after']['wall']:.2f}"
-              f" | {med['before']['cpu'] / med['after']['cpu']:.2f} | |")
+
+
+def report(case: str, runs: dict) -> None:
+    """Rows of one case: medians per revision, what was found, the ratios."""
+    med = {k: {q: statistics.median(r[q] for r in v) for q in ("wall", "cpu")}
+           for k, v in runs.items()}
+    for label in ("before", "after"):
+        found = runs[label][-1]["found"]
+        same = all(r["found"] == found for r in runs[label])
+        print(f"| {case} | {label} | {med[label]['wall']:.3f} | {med[label]['cpu']:.3f} | "
+              f"{found}{'' if same else ' (varied)'} |")
+    print(f"| {case} | ratio before/after | {med['before']['wall'] / med['after']['wall']:.2f}"
+          f" | {med['before']['cpu'] / med['after']['cpu']:.2f} | |", flush=True)
 
 
 if __name__ == "__main__":
