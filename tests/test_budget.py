@@ -114,3 +114,17 @@ def test_hole_target_is_answered_by_the_proof_without_the_search(arm):
         assert res.reachable is False and res.reason == OUTSIDE_BOUNDARY
         assert res.strategy == "boundary proof" and "hole" in res.evidence
     assert reacher.steps - steps_cold == 1        # warm: the proof alone, before the local solve
+
+
+def test_a_reached_target_costs_no_trace_and_keeps_its_result(arm):
+    """Before the boundary is traced the local solve runs cut short (the probe);
+    a target it reaches (Fig. 2) has the full local solve's result, and no
+    boundary is traced for it."""
+    cache = TraceCache()
+    with TipController(arm, n_elements=ELEMENTS) as ctl:
+        reacher = Reacher(ctl, boundary=boundary_proof(arm, ctl.disc, cache))
+        target = np.array([535.8, 222.6]) / arm.length_mm
+        probed = reacher.reach(target)
+        full = ctl.solve(target)
+    assert probed.converged and not cache.holds(arm, ctl.disc)
+    assert probed.iterations == full.iterations and np.array_equal(probed.p, full.p)

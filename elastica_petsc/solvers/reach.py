@@ -386,10 +386,11 @@ class Reacher:
         if cables not in CABLE_POLICIES:
             raise ValueError(f"cables must be one of {CABLE_POLICIES}, got {cables!r}")
         target = np.asarray(target, dtype=float).ravel()
-        evidence, reason = beyond_reach(target), BEYOND_REACH
+        evidence, reason, traced = beyond_reach(target), BEYOND_REACH, True
         if not evidence and global_search and self.boundary is not None:
             self.step("boundary proof from the boundary already traced", check=False)
-            evidence, reason = self.boundary(target, trace=False)[0], OUTSIDE_BOUNDARY
+            evidence, distance = self.boundary(target, trace=False)
+            reason, traced = OUTSIDE_BOUNDARY, not math.isnan(distance)
         if evidence:                 # the closest tip from a short local solve
             first = self._solve(target, p0=p0, start=start, start_loading=start_loading,
                                 max_failures=3, max_it=self.local_its,
@@ -400,6 +401,13 @@ class Reacher:
                                        strategy="boundary proof" if reason == OUTSIDE_BOUNDARY
                                        else first.strategy)
         self.step("local tip control", check=False)
+        if not traced:                   # a short local solve before tracing the boundary
+            probe = self._probe(target, p0, start, start_loading)
+            if probe is not None and probe.converged:
+                return self._clear(target, probe, cables)
+            proven = None if probe is None else self._outside(target, probe)
+            if proven is not None and proven.reachable is False:
+                return proven
         first = self._first(target, p0, start, start_loading)
         if first.converged:
             return self._clear(target, first, cables)
@@ -430,6 +438,19 @@ class Reacher:
                 res = dataclasses.replace(res, strategy=f"{kind} from {s.label}")
                 return self._clear(target, res, cables)
         return self._closest(target, tried)
+
+    def _probe(self, target, p0, start, start_loading) -> ControlResult | None:
+        """The local solve cut short (``local_its`` iterations, 3 failures,
+        stopped when E stalls: ``CLOSEST_STALL``), before the boundary is
+        traced: a target it reaches has exactly the full solve's result (the
+        same iterations, none of the limits met); one it does not reach is
+        asked of the boundary before the full local solve runs.  None if the
+        start fails."""
+        try:
+            return self._solve(target, p0=p0, start=start, start_loading=start_loading,
+                               max_failures=3, max_it=self.local_its, stall=CLOSEST_STALL)
+        except StartFailed:
+            return None
 
     def _first(self, target, p0, start, start_loading) -> ControlResult:
         """The local solve from the given start; a start at which no equilibrium
