@@ -32,8 +32,9 @@ Verdicts (``ControlResult.reachable``):
   here: ``|x_d| > l`` (``BEYOND_REACH``): the arm is inextensible, so
   |x_t| = |int_0^l t ds| <= l (Eq. (2)) for every state.  With a
   ``boundary`` (a callable, e.g. :func:`elastica_petsc.studies.boundary.boundary_proof`),
-  as soon as the local solve has failed and before any global strategy
-  (proof first): ``OUTSIDE_BOUNDARY``, the target lies in the unbounded
+  before any global strategy (proof first: before the local solve when the
+  boundary is traced already, else after a short local solve, the probe,
+  has failed): ``OUTSIDE_BOUNDARY``, the target lies in the unbounded
   component of the plane minus the traced boundary curves of W_0, or in a
   hole of W_0 (faces and tip-map folds, docs/model.md §9), with its distance
   to them; the result is then the local solve's closest tip.
@@ -277,8 +278,9 @@ class Reacher:
         units of l) -> (evidence, distance in units of l), evidence '' unless
         the target is proven outside W_0 (``OUTSIDE_BOUNDARY``); with
         ``trace=False`` it may answer only from a boundary already traced
-        (:func:`~elastica_petsc.studies.boundary.boundary_proof`).  Asked
-        once the local solve has failed, before the global search.
+        (:func:`~elastica_petsc.studies.boundary.boundary_proof`; distance
+        nan: not traced).  Asked before the local solve (``trace=False``),
+        and after a failed probe (:meth:`_probe`) when it was not traced.
     budget : None, or a :class:`~elastica_petsc.core.budget.TimeBudget`:
         once spent, the search stops at its next step and returns the
         closest tip so far with reason ``TIME_LIMIT`` (the first local solve
@@ -332,7 +334,6 @@ class Reacher:
     def homotopy(self, target: np.ndarray, start: Start) -> ControlResult | None:
         """Move the target from ``start``'s tip to ``target`` in warm-started
         steps; the last converged sub-result (its target may fall short)."""
-        ctl = self.controller
         tip0 = start.equilibrium.tip.copy()
         d = target - tip0
         dist = float(np.linalg.norm(d))
