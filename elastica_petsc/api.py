@@ -437,17 +437,22 @@ def frequencies(state: State, *, control: str = "load", modes: int = 3):
 
 
 @_takes_petsc_options
-def lengths(arm: Arm, lengths_mm, *, elements: int | None = None):
+def lengths(arm: Arm, lengths_mm, *, elements: int | None = None,
+            max_seconds: float | None = None):
     """Length control (Sec. 4.6, Eq. (23)): the equilibrium, with its tensions,
     that prescribed cable lengths (mm) impose (slack cables carry no tension),
     reached from the straight arm by length continuation; a
     ``LengthEquilibrium``.  Every equilibrium at these lengths:
-    :func:`length_equilibria`."""
+    :func:`length_equilibria`.  ``max_seconds``: a time budget; once spent the
+    continuation stops at its next step (``converged`` False, ``reason``
+    ``"TIME_LIMIT"``, the state it had reached)."""
+    from .core.budget import check_max_seconds
     from .studies.search import follow_lengths
 
     disc = _mesh(arm, elements)
     lengths_mm = inputs.cable_lengths_mm(arm, lengths_mm, "lengths_mm")
-    return follow_lengths(arm, lengths_mm, elements=disc.n_elements)
+    return follow_lengths(arm, lengths_mm, elements=disc.n_elements,
+                          max_seconds=check_max_seconds(max_seconds))
 
 
 @_takes_petsc_options

@@ -128,3 +128,9 @@ def test_a_reached_target_costs_no_trace_and_keeps_its_result(arm):
         full = ctl.solve(target)
     assert probed.converged and not cache.holds(arm, ctl.disc)
     assert probed.iterations == full.iterations and np.array_equal(probed.p, full.p)
+
+
+def test_length_continuation_stops_and_says_so(arm):
+    state = ep.lengths(arm, (147.1, 472.5), elements=30, max_seconds=TINY)
+    assert not state.converged and state.reason == TIME_LIMIT
+    assert "time budget" in state.message

@@ -208,10 +208,6 @@ def run(args) -> int:
     from ..core.inputs import cable_lengths_mm
     L_mm = cable_lengths_mm(arm, args.lengths, "--lengths")
     settings = check_search_options(args)
-    if settings["max_seconds"] is not None and not args.all:
-        from ..core.errors import InputError
-        raise InputError("--max-seconds limits the search of --all; without --all one "
-                         "continuation from the straight arm runs")
     common.check_outputs(args)
     data = {"control": "length", "lengths_mm": rounded(L_mm), "elements": disc.n_elements}
     if args.all:
@@ -224,7 +220,8 @@ def run(args) -> int:
         data["search"] = search_summary(result, settings)
         data["note"] = NOT_COMPLETE
     else:
-        state = follow_lengths(arm, L_mm, elements=disc.n_elements)
+        state = follow_lengths(arm, L_mm, elements=disc.n_elements,
+                               max_seconds=settings["max_seconds"])
         states = [state] if state.converged else []
         data["equilibria"] = [state_summary(arm, s, "length") for s in states]
         data["search"] = {
@@ -243,6 +240,8 @@ def run(args) -> int:
                         "for them; the list is not proven complete.")
         if not state.converged:
             data["message"] = state.message
+        if state.reason == "TIME_LIMIT":
+            data["search"].update(outcome="TIME_LIMIT", stopped=state.message)
     title = ("Equilibria found at L = (" + ", ".join(f"{v:g}" for v in L_mm)
              + ") mm (length control)")
     return finish(args, arm, data, states, "length_equilibria", title)

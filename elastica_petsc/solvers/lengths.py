@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.budget import TIME_LIMIT
 from ..core.deflation import Deflation
 from ..core.errors import InputError
 from ..core.fem import Discretisation
@@ -239,7 +240,7 @@ class LengthSolver:
     # --- continuation in the cable lengths -------------------------------------------------
     def follow(self, lengths, start=None, *, keep_stable: bool = True,
                min_fraction: float = 1e-4, label: str = "",
-               post_critical=None) -> LengthEquilibrium:
+               post_critical=None, budget=None) -> LengthEquilibrium:
         """Continuation from ``start`` (an equilibrium; its own cable chords are
         the initial lengths, or for a slack cable of a LengthEquilibrium its
         prescribed length) to ``lengths`` (units of l) along the straight
@@ -263,7 +264,10 @@ class LengthSolver:
         ``jump_tol`` (at most :data:`MAX_SNAP_SEARCHES` searches per path).  If no stable state is found the result has
         ``converged=False`` and a message that says it was not found (not that
         none exists).  Without ``keep_stable`` unstable states are followed
-        like stable ones (used by searches).
+        like stable ones (used by searches).  ``budget`` (a
+        :class:`~elastica_petsc.core.budget.TimeBudget`): once spent, the path
+        stops before its next step: ``converged=False``, reason TIME_LIMIT, the
+        last state reached and its lengths.
         """
         L_end = check_lengths(lengths, self.disc.n_tendons)
         u, p = self._start(start)
@@ -288,6 +292,9 @@ class LengthSolver:
             return L_start + t * (L_end - L_start)
 
         while lam < 1.0:
+            if budget is not None and budget.expired():
+                return self._stopped(z, where(lam), L_end, its_total, steps, jumps,
+                                     instabilities, kinds, label)
             step = min(dlam, 1.0 - lam)
             pred = z if z_prev is None else z + (z - z_prev) * (step / dlam_prev)
             pred[sys.ip:sys.imu] = np.maximum(pred[sys.ip:sys.imu], 0.0)
@@ -337,6 +344,16 @@ class LengthSolver:
                                 instabilities=instabilities, kinds=kinds, label=label)
         return self._result(z, L_end, its_total, reason, True, steps=steps, jumps=jumps,
                             instabilities=instabilities, kinds=kinds, label=label)
+
+    def _stopped(self, z, lengths, L_end, its, steps, jumps, instabilities, kinds,
+                 label) -> LengthEquilibrium:
+        """The state a continuation reached when its time budget was spent:
+        not converged, reason TIME_LIMIT, at the lengths it had reached."""
+        msg = (f"{TIME_LIMIT}: the length continuation stopped by its time budget at L/l = ("
+               + ", ".join(f"{v:.6g}" for v in lengths) + ") on the way to ("
+               + ", ".join(f"{v:.6g}" for v in L_end) + ")")
+        return self._result(z, lengths, its, TIME_LIMIT, False, steps=steps, message=msg,
+                            jumps=jumps, instabilities=instabilities, kinds=kinds, label=label)
 
     def _post_critical(self, base, where, lam: float, step: float, full: float) -> list:
         """Stable states past a critical point of a continuation: the state

@@ -334,13 +334,16 @@ def snap_targets(solver: LengthSolver, p_max: float = DEFAULT_P_MAX):
     return targets
 
 
-def follow_lengths(arm, lengths_mm, *, elements: int | None = None):
+def follow_lengths(arm, lengths_mm, *, elements: int | None = None,
+                   max_seconds: float | None = None):
     """The equilibrium with cable lengths ``lengths_mm`` (mm) reached from the
     straight arm by length continuation (Sec. 4.6; :meth:`LengthSolver.follow`:
     a stable path, snaps and buckling recorded).  With two tendons, where the
     buckling mode finds no stable state past a critical point, the arm snaps
     to the nearest stable state the curve search finds there
-    (:func:`snap_targets`, tensions up to the motor limit of Eq. (22))."""
+    (:func:`snap_targets`, tensions up to the motor limit of Eq. (22)).
+    ``max_seconds``: a time budget (:meth:`LengthSolver.follow`'s ``budget``)."""
+    budget = TimeBudget(max_seconds)
     with LengthSolver.from_arm(arm, elements) as solver:
         post = snap_targets(solver, search_box(arm)) if solver.disc.n_tendons == 2 else None
-        return solver.follow(solver.to_l(lengths_mm), post_critical=post)
+        return solver.follow(solver.to_l(lengths_mm), post_critical=post, budget=budget)
