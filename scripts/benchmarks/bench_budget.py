@@ -17,8 +17,10 @@ load average is printed before and after.
 from __future__ import annotations
 
 import argparse
+import glob
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -61,6 +63,17 @@ def measure(root: str, case: str, elements: int) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def with_kernels(root: str) -> str:
+    """The compiled kernels of this tree (core/fem_kernels*.so, built by
+    scripts/setup.sh) copied into an extracted revision that has the same C
+    source but no build; a revision without kernels ignores them."""
+    core = os.path.join(root, "elastica_petsc", "core")
+    if os.path.exists(os.path.join(core, "fem_kernels.c")):
+        for built in glob.glob(os.path.join(HERE, "elastica_petsc", "core", "fem_kernels*.so")):
+            shutil.copy(built, core)
+    return root
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=3)
@@ -72,7 +85,7 @@ def main() -> None:
     print("| case | revision | wall s (median) | cpu s (median) | found |")
     print("|---|---|---|---|---|", flush=True)
     with tempfile.TemporaryDirectory() as tmp:
-        roots = {"before": extract(args.before, tmp), "after": HERE}
+        roots = {"before": with_kernels(extract(args.before, tmp)), "after": HERE}
         for case in args.cases:
             runs = {"before": [], "after": []}
             for _ in range(args.repeats):
