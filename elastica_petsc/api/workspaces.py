@@ -40,7 +40,7 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
     below P_min, proven; docs/model.md §9.3).  ``sampler`` (mode targets):
     "boundary-fill" (the default: classes from the traced boundary of W_0,
     Newton sweeps on the tip, the global search for what they miss; two
-    tendons), "global-search" or "local" (docs/model.md §21)."""
+    tendons), "global-search" or "local" (docs/model.md §22)."""
     from ..io.hdf5 import H5_SUFFIXES, check_output_path
     from ..studies.workspace import run_map
 
