@@ -469,6 +469,74 @@ class StabilitySolver:
                          iterations=self.eps.getIterationNumber(),
                          reason=reason_name(eps_reasons(), reason))
 
+    # --- the smallest eigenvalue alone, by Sylvester bisection --------------------------------
+    def smallest(self, u, p) -> tuple[float, float]:
+        """(lambda_min, raw_min) of :meth:`solve` without SLEPc: the smallest
+        eigenvalue of (K, M) and of (K, I) at the state ``u``, tensions ``p``, each
+        by bisection on the Sylvester inertia of K - sigma M (docs/model.md
+        "Fast maps"): the compiled LDL^T of the bordered H(sigma) =
+        [[T - sigma M, W], [W^T, -I]] counts the eigenvalues below sigma in O(N)
+        (:class:`InertiaCounter`), so the bracket [lower, upper] always holds
+        lambda_min; it is halved to a relative width ``bisection_rtol`` (the
+        rounding of the counts: ~eps ||K||).  Deterministic, no eigenvectors,
+        no asymmetry estimate (K is symmetric by construction).  ``raw_min`` is
+        NaN with ``mass="paper"`` (it is h lambda_min then, as in :meth:`solve`)."""
+        disc = self.disc
+        u = np.asarray(u, float)
+        p = np.asarray(p, float)
+        theta, y = disc.split(u)
+        _, d = disc.cables(y)
+        band = disc.band(theta, d, p)
+        W = disc.stiffness_border(theta, y, p)
+        values = disc.stability_values(u, p)
+        lam = self._bisect(band, W, values, self.m)
+        raw = disc.h * lam if self.mass == "paper" else \
+            self._bisect(band, W, values, np.ones(disc.n_elements))
+        return lam, raw
+
+    bisection_rtol = 1e-13
+
+    def _bisect(self, band, W, values, weights) -> float:
+        """Smallest eigenvalue of (T + W^T W, diag(weights)) by inertia bisection
+        (:meth:`smallest`)."""
+        N = self.disc.n_elements
+        diag = self._diagonal_slots()
+        s = 1.0 / np.sqrt(weights)
+        radius = np.append(0.0, np.abs(band[1:, 0]) * s[1:] * s[:-1]) + \
+            np.append(np.abs(band[:-1, 2]) * s[:-1] * s[1:], 0.0)
+        scaled_diag = band[:, 1] * s * s
+        scale = float(np.max(np.abs(scaled_diag) + radius)) + float(np.sum(W * W) / weights.min())
+        lower = float(np.min(scaled_diag - radius)) - 1e-12 * scale   # Gershgorin of T <= K
+        # Rayleigh quotients (upper bounds): unit vectors, and the unloaded arm's first mode
+        k_diag = band[:, 1] + np.sum(W * W, axis=0)
+        mode = np.sin(0.5 * np.pi * np.arange(1, N + 1) / N)
+        k_mode = band[:, 1] * mode + W.T @ (W @ mode)
+        k_mode[1:] += band[1:, 0] * mode[:-1]
+        k_mode[:-1] += band[:-1, 2] * mode[1:]
+        upper = min(float(np.min(k_diag / weights)),
+                    float(mode @ k_mode / (mode @ (weights * mode)))) + 1e-12 * scale
+        shifted = values.copy()
+        border = self.disc.stability_border
+        while upper - lower > self.bisection_rtol * max(abs(lower), abs(upper)) + 1e-16 * scale:
+            sigma = 0.5 * (lower + upper)
+            shifted[diag] = values[diag] - sigma * weights
+            if self.inertia.count(shifted, border) > 0:
+                upper = sigma
+            else:
+                lower = sigma
+        return 0.5 * (lower + upper)
+
+    def _diagonal_slots(self) -> np.ndarray:
+        """Positions of T's diagonal in the values of :attr:`Discretisation.stability_pattern`
+        (each upper-triangle row starts at its diagonal)."""
+        if getattr(self, "_diag", None) is None:
+            indptr, indices, _ = self.disc.stability_pattern
+            slots = np.asarray(indptr[:self.disc.n_elements], np.int64)
+            if not np.array_equal(indices[slots], np.arange(self.disc.n_elements)):
+                raise ValueError("the stability pattern's rows do not start at the diagonal")
+            self._diag = slots
+        return self._diag
+
     # --- eigenfrequencies --------------------------------------------------------------------
     def _constrained_matrix(self, u, p, control: str) -> sp.csr_matrix:
         """Bordered Jacobian, plus for length control one constraint row and
