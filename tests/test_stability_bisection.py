@@ -72,7 +72,7 @@ def test_bisection_bracket_is_the_inertia(states):
         for u, p in found:
             lam, _ = solver.smallest(u, p)
             values = disc.stability_values(u, p)
-            slots = solver._diagonal_slots()
+            slots = solver._bisection_pattern()[1]
             for sigma, expected in ((lam - 1e-6 * abs(lam), 0), (lam + 1e-6 * abs(lam), 1)):
                 shifted = values.copy()
                 shifted[slots] -= sigma * solver.m
