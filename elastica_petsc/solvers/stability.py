@@ -97,6 +97,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.linalg import lapack
 from petsc4py import PETSc
 from slepc4py import SLEPc
 
@@ -268,6 +269,50 @@ def _real_eigenpairs(eps, A, n_theta: int, wanted: int):
     vals = np.array(vals)
     order = np.argsort(vals.real, kind="stable")
     return vals.real[order], float(np.max(np.abs(vals.imag))), np.array(modes)[order]
+
+
+def _tridiagonal_apply(band: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """T x for the band (N, 3) = (lower, diag, upper) of :meth:`Discretisation.band`."""
+    y = band[:, 1] * x
+    y[1:] += band[1:, 0] * x[:-1]
+    y[:-1] += band[:-1, 2] * x[1:]
+    return y
+
+
+def _rayleigh(band, W, weights, x) -> float:
+    """x^T K x / x^T M x for K = T + W^T W, M = diag(weights): >= lambda_min."""
+    return float(x @ (_tridiagonal_apply(band, x) + W.T @ (W @ x)) / (x @ (weights * x)))
+
+
+def _inverse_iteration(band, W, weights, sigma: float, x: np.ndarray, rtol: float,
+                       max_steps: int = 12) -> float | None:
+    """The Rayleigh quotient of inverse iteration x <- (K - sigma M)^{-1} M x for
+    K = T + W^T W (Woodbury: (T - sigma M) by LAPACK's pivoted tridiagonal LU,
+    then the n x n capacitance I + W (T - sigma M)^{-1} W^T), until it changes
+    by less than ``rtol``; None if a factor is singular or it does not settle.
+    With sigma below lambda_min it converges to lambda_min (the caller checks)."""
+    dl, d, du, du2, ipiv, info = lapack.dgttrf(band[1:, 0], band[:, 1] - sigma * weights,
+                                                band[:-1, 2])
+    if info != 0:
+        return None
+    Y, info = lapack.dgttrs(dl, d, du, du2, ipiv, np.ascontiguousarray(W.T))
+    capacitance = np.eye(W.shape[0]) + W @ Y
+    if info != 0 or not np.all(np.isfinite(capacitance)):
+        return None
+    rho = None
+    for _ in range(max_steps):
+        y, info = lapack.dgttrs(dl, d, du, du2, ipiv, weights * x)
+        try:
+            x = y - Y @ np.linalg.solve(capacitance, W @ y)
+        except np.linalg.LinAlgError:
+            return None
+        x /= np.max(np.abs(x))
+        previous, rho = rho, _rayleigh(band, W, weights, x)
+        if not np.isfinite(rho):
+            return None
+        if previous is not None and abs(rho - previous) <= rtol * abs(rho):
+            return rho
+    return None
 
 
 class _ShellOperator:
@@ -494,11 +539,18 @@ class StabilitySolver:
             self._bisect(band, W, values, np.ones(disc.n_elements))
         return lam, raw
 
-    bisection_rtol = 1e-11        # relative width of the final bracket (SLEPc's to 1e-8: tests)
+    bisection_rtol = 1e-11        # relative width of a bracket from bisection alone
+    coarse_rtol = 0.1             # bisection's bracket before inverse iteration
+    rayleigh_rtol = 1e-10         # inverse iteration stops when the quotient settles so
+                                  # (its rounding: ~eps ||K|| / lambda_min ~ 1e-12 here)
 
     def _bisect(self, band, W, values, weights) -> float:
-        """Smallest eigenvalue of (T + W^T W, diag(weights)) by inertia bisection
-        (:meth:`smallest`)."""
+        """Smallest eigenvalue of (K = T + W^T W, diag(weights)) (:meth:`smallest`):
+        inertia bisection from the bounds Gershgorin(T) <= lambda_min <= Rayleigh
+        quotients to a relative width ``coarse_rtol``; then inverse iteration
+        shifted at the bracket's lower end (:meth:`_inverse_iteration`), whose
+        Rayleigh quotient rho >= lambda_min is kept if the inertia proves
+        lambda_min >= rho (1 - bisection_rtol); else bisection to ``bisection_rtol``."""
         N = self.disc.n_elements
         csr, diag = self._bisection_pattern()
         s = 1.0 / np.sqrt(weights)
@@ -507,28 +559,32 @@ class StabilitySolver:
         scaled_diag = band[:, 1] * s * s
         scale = float(np.max(np.abs(scaled_diag) + radius)) + float(np.sum(W * W) / weights.min())
         lower = float(np.min(scaled_diag - radius)) - 1e-12 * scale   # Gershgorin of T <= K
-        # Rayleigh quotients (upper bounds): unit vectors, and the unloaded arm's first mode
-        k_diag = band[:, 1] + np.sum(W * W, axis=0)
-        mode = np.sin(0.5 * np.pi * np.arange(1, N + 1) / N)
-        k_mode = band[:, 1] * mode + W.T @ (W @ mode)
-        k_mode[1:] += band[1:, 0] * mode[:-1]
-        k_mode[:-1] += band[:-1, 2] * mode[1:]
-        upper = min(float(np.min(k_diag / weights)),
-                    float(mode @ k_mode / (mode @ (weights * mode)))) + 1e-12 * scale
+        mode = np.sin(0.5 * np.pi * np.arange(1, N + 1) / N)           # the unloaded first mode
+        upper = min(float(np.min((band[:, 1] + np.sum(W * W, axis=0)) / weights)),
+                    _rayleigh(band, W, weights, mode)) + 1e-12 * scale
         shifted = np.array(values, float)
         on_diag = shifted[diag].copy()
-        buf = np.empty(N)
         border = self.disc.stability_border
-        while upper - lower > self.bisection_rtol * max(abs(lower), abs(upper)) + 1e-16 * scale:
-            sigma = 0.5 * (lower + upper)
-            np.multiply(weights, -sigma, out=buf)
-            np.add(buf, on_diag, out=buf)
-            shifted[diag] = buf
-            negative = ldlt_negatives(csr, shifted, N)       # None: singular, sigma = lambda
-            if negative is None or negative > border:
-                upper = sigma
-            else:
-                lower = sigma
+
+        def below(sigma: float) -> bool:     # lambda_min < sigma (or = : singular)
+            shifted[diag] = on_diag - sigma * weights
+            negative = ldlt_negatives(csr, shifted, N)
+            return negative is None or negative > border
+
+        def bisect(lower, upper, rtol):
+            while upper - lower > rtol * max(abs(lower), abs(upper)) + 1e-16 * scale:
+                sigma = 0.5 * (lower + upper)
+                lower, upper = (lower, sigma) if below(sigma) else (sigma, upper)
+            return lower, upper
+
+        lower, upper = bisect(lower, upper, self.coarse_rtol)
+        rho = _inverse_iteration(band, W, weights, lower, mode, self.rayleigh_rtol)
+        if rho is not None and lower <= rho <= upper:
+            proven = rho - self.bisection_rtol * abs(rho) - 1e-16 * scale
+            if not below(proven):
+                return rho
+            upper = rho
+        lower, upper = bisect(lower, upper, self.bisection_rtol)
         return 0.5 * (lower + upper)
 
     def _bisection_pattern(self):
