@@ -86,3 +86,16 @@ def test_unloaded_arm_is_pi2_over_4():
         lam, raw = solver.smallest(disc.straight(), np.zeros(2))
     assert lam == pytest.approx(np.pi ** 2 / 4, rel=1e-4)
     assert raw == pytest.approx(np.pi ** 2 / 4 * disc.h, rel=2e-2)
+
+
+def test_bisection_alone_when_inverse_iteration_fails(states, monkeypatch):
+    """Without the inverse iteration (a singular factor, no settling), bisection
+    alone gives the same values."""
+    import elastica_petsc.solvers.stability as stability
+
+    disc, found = states
+    with StabilitySolver(disc, nev=1) as solver:
+        expected = [solver.smallest(u, p) for u, p in found]
+        monkeypatch.setattr(stability, "_inverse_iteration", lambda *args, **kw: None)
+        for (u, p), (lam, raw) in zip(found, expected):
+            assert solver.smallest(u, p) == pytest.approx((lam, raw), rel=1e-10)
