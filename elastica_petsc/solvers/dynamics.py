@@ -116,6 +116,9 @@ class DynamicsSolver:
     ``adaptive``: TSAdapt ``basic`` with tolerances ``rtol``/``atol`` on the
     angles (rad) and angular velocities, first step ``dt0``; otherwise fixed
     steps ``dt0`` (tau).  ``radius``: rho_inf of the alpha method;
+    ``lag_jacobian``: the PC (principal Jacobian and its banded LU) is
+    refreshed every this many Newton iterations, across steps
+    (``-snes_lag_jacobian_persists``; a new TS after an event starts fresh);
     ``max_steps``: cap on accepted steps.  ``comm``, ``options_prefix``
     (``sim_``), ``petsc_options``: the contract of :mod:`.options`.
     """
@@ -123,10 +126,12 @@ class DynamicsSolver:
     def __init__(self, disc: Discretisation, inertia: Inertia, *, rtol: float = 1e-6,
                  atol: float = 1e-8, radius: float = 1.0, dt0: float = 1e-3,
                  adaptive: bool = True, contact_tol: float = 1e-6, max_steps: int = 10**7,
+                 lag_jacobian: int = 10,
                  comm=None, options_prefix: str = "sim_", petsc_options=None):
         self.options = SolverOptions(options_prefix, petsc_options, {
             "ts_alpha_radius": radius, "ts_adapt_type": "basic" if adaptive else "none",
-            "snes_linesearch_type": "basic"})
+            "snes_linesearch_type": "basic", "snes_lag_jacobian": lag_jacobian,
+            "snes_lag_jacobian_persists": True})
         self.comm = check_comm(comm)
         self.adaptive = adaptive
         self.disc, self.inertia = disc, inertia
