@@ -303,17 +303,26 @@ class DynamicsSolver:
             ts.setTimeStep(dt0)
             ts.setMaxSteps(self.max_steps)
             ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
-        else:       # equal steps that end on t_end (no round-off sliver of a last step)
+        elif (self.modes == FORCE).all():   # equal steps ending on t_end (no sliver)
             count = max(1, math.ceil((t_end - t0) / dt0 - 1e-9))
             ts.setTimeStep((t_end - t0) / count)
             ts.setMaxTime(t_end + 0.5 * (t_end - t0) / count)
             ts.setMaxSteps(count)
             ts.setExactFinalTime(PETSc.TS.ExactFinalTime.STEPOVER)
+        else:       # steps dt0 with events: TSAdapt basic that never rejects (no error
+            ts.setTimeStep(dt0)      # control) grows the steps TSEvent shortened back to dt0
+            ts.setMaxTime(t_end)
+            ts.setMaxSteps(self.max_steps)
+            ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
+            self.options.update({"ts_adapt_type": "basic", "ts_adapt_dt_max": self.dt0})
         ts.setMaxSNESFailures(-1)
         ts.setMaxStepRejections(-1)
         atol, rtol = U.duplicate(), U.duplicate()
-        atol.setArray(np.concatenate((np.full(self.N, self.atol), np.full(self.n, EXCLUDED))))
-        rtol.setArray(np.concatenate((np.full(self.N, self.rtol), np.zeros(self.n))))
+        no_control = not self.adaptive
+        atol.setArray(np.concatenate((np.full(self.N, EXCLUDED if no_control else self.atol),
+                                      np.full(self.n, EXCLUDED))))
+        rtol.setArray(np.concatenate((np.full(self.N, 0.0 if no_control else self.rtol),
+                                      np.zeros(self.n))))
         ts.setTolerances(rtol=rtol, atol=atol)
         snes = ts.getSNES()
         snes.setType("newtonls")
@@ -334,6 +343,9 @@ class DynamicsSolver:
                 self._fired = [int(i) for i in events_fired]
 
             ts.setEventHandler([-1] * self.n, [True] * self.n, events, post)
+            # PETSc's default value tolerance (1e-6) is contact_tol itself: a gap at 0
+            # just after a separation would count as a zero and TSEvent would creep on
+            ts.setEventTolerances(vtol=[1e-3 * self.contact_tol] * self.n)
         self.options.label(F, J, U, V)
         self.options.apply(ts)
         return ts, (U, V, F, J, atol, rtol)
@@ -378,7 +390,7 @@ class DynamicsSolver:
                 for obj in objs:
                     obj.destroy()
             if reason != PETSc.TS.ConvergedReason.CONVERGED_EVENT:
-                traj.completed = reason > 0
+                traj.completed = reason > 0 and t >= t_end * (1 - 1e-12)
                 traj.reason = _reason(reason)
                 return traj
             U0, V0 = U, V
