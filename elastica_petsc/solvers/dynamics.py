@@ -374,7 +374,8 @@ class DynamicsSolver:
             ts, objs = self._make_ts(t, t_end, U0, V0, self._monitor(traj, on_step), dt)
             try:
                 try:
-                    ts.solve(objs[0])
+                    with np.errstate(all="ignore"):     # a diverged step is reported below
+                        ts.solve(objs[0])
                     reason = ts.getConvergedReason()
                 except (np.linalg.LinAlgError, PETSc.Error) as err:   # a singular step
                     traj.completed, traj.reason = False, f"DIVERGED: {str(err).splitlines()[0]}"
