@@ -3,24 +3,37 @@
 #   mkdir -p results
 #   docker run --rm --user "$(id -u):$(id -g)" -v "$PWD/results:/results" elastica-petsc
 # The image is set up by the same script as a Debian 12 machine (scripts/setup.sh
-# --runtime: the run-time packages of scripts/system-packages.txt, no compilers).
+# --runtime: the run-time packages of scripts/system-packages.txt).  Two stages: the
+# first also installs the compiler (--build, scripts/system-packages-build.txt) and
+# builds the project with its compiled kernels; the image copies the built project
+# onto the run-time packages alone, so it holds no compiler.
 #
 # Base: debian:12.11 (bookworm), pinned by the digest of its multi-arch index
-# (tag debian:12.11; to move to a newer point release, change both together).
+# (tag debian:12.11; to move to a newer point release, change all three together).
 FROM debian:12.11@sha256:b6507e340c43553136f5078284c8c68d86ec8262b1724dde73c325e8d3dcdeba
 WORKDIR /opt/elastica_petsc
-# 1. Debian packages: this layer is rebuilt only when the package list or the set-up
-#    script changes, not when the project's sources or README do.
-COPY scripts/setup.sh scripts/system-packages.txt scripts/system-packages-dev.txt scripts/
+# 1. Debian packages: this layer is rebuilt only when the package lists or the set-up
+#    script change, not when the project's sources or README do.
+COPY scripts/setup.sh scripts/system-packages.txt scripts/system-packages-dev.txt scripts/system-packages-build.txt scripts/
 RUN bash scripts/setup.sh --runtime --system-only
-# 2. The project: the only layer rebuilt after an edit to it.
-COPY pyproject.toml README.md LICENSE ./
+# 2. The build stage: the compiler, then the project (the only layers an edit
+#    rebuilds), its kernels compiled by the editable install.
+COPY pyproject.toml setup.py README.md LICENSE ./
 COPY configs/ configs/
 COPY elastica_petsc/ elastica_petsc/
 COPY scripts/container-entry.sh scripts/
-RUN bash scripts/setup.sh --runtime \
+RUN bash scripts/setup.sh --runtime --build \
     && .venv/bin/python -m compileall -q elastica_petsc \
-    && useradd --uid 1000 --user-group --no-create-home --shell /usr/sbin/nologin elastica
+    && rm -rf build
+
+# 3. The image: the same run-time packages (the cached layer of step 1), the built
+#    project (venv, sources, compiled kernels) from the build stage, no compiler.
+FROM debian:12.11@sha256:b6507e340c43553136f5078284c8c68d86ec8262b1724dde73c325e8d3dcdeba
+WORKDIR /opt/elastica_petsc
+COPY scripts/setup.sh scripts/system-packages.txt scripts/system-packages-dev.txt scripts/system-packages-build.txt scripts/
+RUN bash scripts/setup.sh --runtime --system-only
+COPY --from=0 /opt/elastica_petsc /opt/elastica_petsc
+RUN useradd --uid 1000 --user-group --no-create-home --shell /usr/sbin/nologin elastica
 # Any user (docker run --user "$(id -u):$(id -g)") can write matplotlib's cache and a home.
 ENV MPLCONFIGDIR=/tmp/matplotlib HOME=/tmp OMPI_MCA_rmaps_base_oversubscribe=1
 USER 1000:1000

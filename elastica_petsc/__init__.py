@@ -55,6 +55,7 @@ _EXPORTS = {
     "SearchResult": ".studies.search", "WorkspaceMap": ".studies.workspace",
     "BoundaryResult": ".studies.boundary", "DesignResult": ".studies.design",
     "AreaDesign": ".studies.design_area", "Sweep": ".studies.design_sweep",
+    "SimulationResult": ".studies.simulate", "CalibrationResult": ".studies.calibrate_report",
     # solver classes, for loops
     "EquilibriumSolver": ".solvers.equilibrium",
     "TipController": ".solvers.control", "LengthSolver": ".solvers.lengths",

@@ -53,6 +53,24 @@ class Context:
     seconds: dict = field(default_factory=dict)
     command: str = "elastica-petsc reproduce"
     checkpoint_seconds: float | None = None        # None: the library's default
+    placement: object = None                       # studies/placement.py: where experiments go
+
+    @property
+    def place(self):
+        """The experiments' targets on this arm (the paper's on the paper's arm)."""
+        if self.placement is None:
+            from .studies.placement import Placement, placement
+            paper = Placement(FIG2_TARGET_MM, TRIANGLE_CENTER_MM, CURVE_CENTER_MM, 1.0,
+                              FIG8_LENGTHS_MM)
+            targets = reached = None
+            ws = self.out / "fig4_workspace.h5"
+            if ws.exists():
+                from .plots.workspace import read_workspace
+                from .studies.workspace import Status
+                data = read_workspace(ws)
+                targets, reached = data["target"], data["status"] == Status.REACHED
+            self.placement = placement(self.arm, paper, PAPER_P, targets, reached)
+        return self.placement
 
     @property
     def trace_step_mm(self) -> float:
@@ -60,7 +78,8 @@ class Context:
 
     @property
     def spacing_mm(self) -> float:
-        return 50.0 if self.quick else FULL_SPACING_MM
+        """The paper's spacing, scaled with the arm's length (a user arm: l/600 mm)."""
+        return (50.0 if self.quick else FULL_SPACING_MM) * self.arm.length_mm / 600.0
 
     def path(self, name: str, figure: str) -> Path:
         self.files.setdefault(figure, []).append(name)
@@ -95,7 +114,8 @@ def fig8(ctx: Context) -> None:
         proportional = eqs.solve(PAPER_P)
         state3 = eqs.solve(PAPER_P, order=(1, 2))
         with Progress(None, "Fig. 8 search", unit="search steps") as bar:
-            search = length_equilibria(ls, FIG8_LENGTHS_MM / l_mm, eq_solver=eqs, progress=bar)
+            search = length_equilibria(ls, ctx.place.fig8_lengths_mm / l_mm, eq_solver=eqs,
+                                       progress=bar)
         found1 = search.closest(p=PAPER_P).state
         found2 = search.closest(p=[9.7, 12.6]).state
     L1, L3 = state1.cable_lengths * l_mm, state3.cable_lengths * l_mm
@@ -106,10 +126,12 @@ def fig8(ctx: Context) -> None:
     ctx.add("Fig. 8", "load control p = (25.2, 10.8), order 1,2: cable lengths [mm] (state 3)",
             "(96.2, 454.3)", _fmt(L3, 2), _diff(L3, [96.2, 454.3], 2),
             "tensioning tendon 1 first selects state 3 (path dependence)")
-    ctx.add("Fig. 8", "length control L = (147.1, 472.5) mm: tensions of state 1 [P l^2/B]",
+    lengths = _fmt(ctx.place.fig8_lengths_mm)
+    ctx.add("Fig. 8", f"length control L = {lengths} mm: tensions of state 1 [P l^2/B]",
             "(25.2, 10.8)", _fmt(found1.p, 2), _diff(found1.p, PAPER_P, 2),
+            "the lengths of state 1 under load control (a user arm)" if ctx.place.note else
             "the paper's lengths are rounded to 0.1 mm; dp/dL ~ 0.1-1 per mm")
-    ctx.add("Fig. 8", "length control L = (147.1, 472.5) mm: tensions of state 2 [P l^2/B]",
+    ctx.add("Fig. 8", f"length control L = {lengths} mm: tensions of state 2 [P l^2/B]",
             "(9.7, 12.6)", _fmt(found2.p, 2), _diff(found2.p, [9.7, 12.6], 2),
             f"{len(search.states)} distinct equilibria found from {len(search.starts)} starts "
             "(deflation); not a proof that there are no others")
@@ -121,7 +143,7 @@ def fig8(ctx: Context) -> None:
                       (found2, "state 2: p = " + _fmt(found2.p) + ", L = "
                        + _fmt(found2.cable_lengths * l_mm)),
                       (state3, "state 3: p = (25.2, 10.8), L = " + _fmt(L3))],
-                ctx.path("fig8.png", "Fig. 8"), circles_mm=FIG8_LENGTHS_MM,
+                ctx.path("fig8.png", "Fig. 8"), circles_mm=ctx.place.fig8_lengths_mm,
                 title="Fig. 8: states 1, 2 share cable lengths (attachments on the dashed "
                       "circles); states 1, 3 share tensions")
 
@@ -135,10 +157,11 @@ def fig2(ctx: Context) -> None:
     results = {}
     for method in ("gd", "blmvm"):
         with TipController(ctx.arm, method=method) as controller:
-            results[method] = controller.solve_mm(FIG2_TARGET_MM, p0=np.zeros(2))
+            results[method] = controller.solve_mm(ctx.place.fig2_target_mm, p0=np.zeros(2))
     gd, blmvm = results["gd"], results["blmvm"]
     monotone = bool(np.all(np.diff(gd.history_E) < 0))
-    ctx.add("Fig. 2", "target (535.8, 222.6) mm from P = 0: gradient-descent iterations",
+    ctx.add("Fig. 2", f"target {_fmt(ctx.place.fig2_target_mm)} mm from P = 0: "
+            "gradient-descent iterations",
             "over a dozen", str(gd.iterations), "",
             f"tip error {gd.tip_error_mm:.1e} mm; our TAO BLMVM needs {blmvm.iterations} "
             f"(tip error {blmvm.tip_error_mm:.1e} mm)")
@@ -182,13 +205,15 @@ def fig3(ctx: Context) -> None:
     from .studies.trace import convoluted_curve, paper_triangle, triangle_vertices
     from .plots.control import plot_curvature, plot_sensitivities, plot_tensions_lengths
 
-    tri = _trace(ctx, "fig3a", paper_triangle(TRIANGLE_CENTER_MM), "Fig. 3a")
-    vertices = triangle_vertices(TRIANGLE_CENTER_MM)
+    place = ctx.place
+    radius = 80.0 * place.size
+    tri = _trace(ctx, "fig3a", paper_triangle(place.triangle_center_mm, radius), "Fig. 3a")
+    vertices = triangle_vertices(place.triangle_center_mm, radius)
     side = np.linalg.norm(vertices[1] - vertices[0])
     warm = tri.iterations[1:]
     ctx.add("Fig. 3a", "triangle side / incircle / circumcircle radius [mm]",
-            "138.56 / 40 / 80", f"{side:.2f} / 40 / 80", "",
-            f"centred at {TRIANGLE_CENTER_MM} mm (the paper gives no coordinates)")
+            "138.56 / 40 / 80", f"{side:.2f} / {radius / 2:.4g} / {radius:.4g}", "",
+            f"centred at {place.triangle_center_mm} mm (the paper gives no coordinates)")
     ctx.add("Fig. 3a", "tip error of the computed tensions [mm]", "< 1e-5 (eps = 1e-10 mm^2)",
             f"max {np.max(tri.tip_errors_mm):.1e} over {tri.n_points} points", "",
             f"all {int(np.sum(tri.converged))} of {tri.n_points} targets reached "
@@ -210,7 +235,8 @@ def fig3(ctx: Context) -> None:
     ratio = np.median(np.linalg.norm(sens[:, 1], axis=1) / np.linalg.norm(sens[:, 0], axis=1))
     ctx.add("Fig. 6b", "tip sensitivity to cable 2 / to cable 1", "roughly 10",
             f"{ratio:.1f} (median along the path)")
-    curve = _trace(ctx, "fig3b", convoluted_curve(CURVE_CENTER_MM), "Fig. 3b")
+    curve = _trace(ctx, "fig3b", convoluted_curve(place.curve_center_mm, 170.0 * place.size,
+                                                  35.0 * place.size), "Fig. 3b")
     ctx.add("Fig. 3b", "convoluted curve traced, max tip error [mm]", "< 2 mm (experiment)",
             f"{np.max(curve.tip_errors_mm):.1e} ({curve.n_points} points)", "",
             "our own meander (paths.convoluted_curve): the paper does not list its points; "
@@ -307,8 +333,15 @@ def fig7(ctx: Context) -> None:
     from .core.fem import Discretisation
     from .solvers.lengths import LengthSolver
 
-    with EquilibriumSolver(Discretisation.from_arm(ctx.arm)) as eqs, \
-            LengthSolver.from_arm(ctx.arm) as ls:
+    from .studies.buckling import scenario_problem
+
+    disc = Discretisation.from_arm(ctx.arm)
+    problem = scenario_problem(disc)
+    if problem is not None:              # a user arm: say so in the report, go on
+        ctx.add("Fig. 7", "shortening L_2 buckles the straight segment (length control)",
+                "a few mm", "not run", "", f"not applicable to this arm: {problem}")
+        return
+    with EquilibriumSolver(disc) as eqs, LengthSolver.from_arm(ctx.arm) as ls:
         result = fig7_scenario(eqs, ls)
     ctx.add("Fig. 7", "shortening L_2 buckles the straight segment (length control)",
             "a few mm", f"{result.dL2_cr_mm:.2f} mm", "",
@@ -349,6 +382,7 @@ def write_report(ctx: Context, command: str) -> Path:
              + ", ".join(f"{k} {v:.1f}" for k, v in ctx.seconds.items()), "",
              "Paper values are read from the text of the paper (docs/model.md §6). Differences are "
              "ours minus the paper's.", "",
+             *([f"**Note:** {ctx.place.note}.", ""] if ctx.place.note else []),
              "| figure | item | paper | ours | difference | comment |",
              "|---|---|---|---|---|---|"]
     for r in ctx.rows:

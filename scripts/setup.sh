@@ -2,23 +2,27 @@
 # Set up elastica_petsc on Debian 12: system packages, a virtual environment
 # from the system Python (which holds Debian's MPI builds of petsc4py, slepc4py,
 # mpi4py and h5py) and the package itself.  Idempotent: a second run only
-# checks.  Usage: bash scripts/setup.sh [--runtime] [--system-only]
+# checks.  Usage: bash scripts/setup.sh [--runtime [--build]] [--system-only]
 #   --runtime      only the run-time packages (scripts/system-packages.txt), as the container
+#   --build        with --runtime: also the compiler of the kernels
+#                  (scripts/system-packages-build.txt), as the container's build stage
 #   --system-only  stop after the Debian packages (the container's first, cached layer)
 # Prints the venv path at the end.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 venv="${ELASTICA_VENV:-$here/.venv}"
-runtime=0; system_only=0
+runtime=0; system_only=0; build=0
 for arg in "$@"; do
   case "$arg" in
     --runtime) runtime=1 ;;
     --system-only) system_only=1 ;;
+    --build) build=1 ;;
     *) echo "setup: unknown option $arg" >&2; exit 2 ;;
   esac
 done
 lists=("$here/scripts/system-packages.txt")
 ((runtime)) || lists+=("$here/scripts/system-packages-dev.txt")
+((runtime && !build)) || lists+=("$here/scripts/system-packages-build.txt")
 mapfile -t packages < <(cat "${lists[@]}" | grep -v '^\s*#' | grep -v '^\s*$')
 
 missing=(); sudo_cmd=""; [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
@@ -45,15 +49,28 @@ if [ ! -x "$venv/bin/python" ]; then
   echo "setup: creating virtual environment $venv (system site packages)" >&2
   /usr/bin/python3 -m venv --system-site-packages "$venv"
 fi
-# --no-deps --no-build-isolation: never let pip fetch numpy/h5py/mpi4py/petsc4py wheels
-if ! "$venv/bin/python" -c "import elastica_petsc" 2>/dev/null \
-   || [ "$here/pyproject.toml" -nt "$venv/.elastica-installed" ]; then
-  echo "setup: installing elastica_petsc (editable) into $venv" >&2
-  "$venv/bin/python" -m pip install -q --no-deps --no-build-isolation -e "$here"
+# --no-deps --no-build-isolation: never let pip fetch numpy/h5py/mpi4py/petsc4py wheels.
+# The install compiles the kernels (elastica_petsc/core/fem_kernels.c, setup.py) in
+# place; it runs again when the C source or the build files change.
+kernels="$here/elastica_petsc/core/fem_kernels.c"
+built="$(compgen -G "$here/elastica_petsc/core/fem_kernels*.so" | head -n 1 || true)"
+if ! "$venv/bin/python" -c "import elastica_petsc.core.fem" 2>/dev/null \
+   || [ "$here/pyproject.toml" -nt "$venv/.elastica-installed" ] \
+   || [ "$here/setup.py" -nt "$venv/.elastica-installed" ] \
+   || [ -z "$built" ] || [ "$kernels" -nt "$built" ]; then
+  echo "setup: installing elastica_petsc (editable, compiling its kernels) into $venv" >&2
+  if ! "$venv/bin/python" -m pip install -q --no-deps --no-build-isolation -e "$here"; then
+    echo "setup: error: installing elastica_petsc failed; if the compiler output above" \
+         "ends in an error, the compiled kernels need gcc and python3-dev" \
+         "(scripts/system-packages-build.txt: run this script without --runtime, or" \
+         "apt-get install gcc python3-dev)" >&2
+    exit 1
+  fi
   touch "$venv/.elastica-installed"
 fi
 "$venv/bin/python" - <<'PY'
 import mpi4py, petsc4py, slepc4py, h5py, numpy
+import elastica_petsc.core.fem      # the compiled kernels load (a clear ImportError if not)
 assert numpy.__file__.startswith("/usr/"), f"numpy shadowed by {numpy.__file__}"
 assert petsc4py.__file__.startswith("/usr/"), f"petsc4py shadowed by {petsc4py.__file__}"
 PY

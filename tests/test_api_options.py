@@ -37,11 +37,14 @@ def test_the_library_prints_nothing_unless_asked(tmp_path):
 
 @pytest.mark.slow
 def test_progress_true_reports_on_stderr(tmp_path):
+    # a log (stderr not a terminal) says nothing of a run shorter than its log_seconds
+    # (ui/progress.py): set to 0 so that the test does not depend on the machine's speed
     script = ("import elastica_petsc as ep\n"
-              "ep.workspace(ep.Arm.paper(), spacing_mm=200, elements=30, progress=True)\n")
-    env = dict(os.environ, ELASTICA_PETSC_PROGRESS_DELAY_S="0")
+              "from elastica_petsc.ui import progress\n"
+              "progress.configure(log_seconds=0)\n"
+              "ep.workspace(ep.Arm.paper(), spacing_mm=100, elements=30, progress=True)\n")
     done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True,
-                          text=True, timeout=300, env=env)
+                          text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert done.stdout == "" and "workspace" in done.stderr
 
@@ -108,3 +111,37 @@ def test_environment_variables_are_read_by_the_command_line_only():
     readers = {str(p.relative_to(package)) for p in package.rglob("*.py")
                if "os.environ" in p.read_text() or "getenv" in p.read_text()}
     assert {r for r in readers if not r.startswith("cli/")} <= allowed
+
+
+def test_petsc_options_of_a_call_reach_its_solver_and_are_removed_afterwards(monkeypatch):
+    """One mechanism (solvers/options.py): a call's options are in PETSc's database
+    while its solvers run (over an earlier value, which comes back afterwards)
+    and nowhere after it; the solver reads them (looser Newton tolerances: fewer
+    iterations than the same solve without them)."""
+    from petsc4py import PETSc
+
+    import elastica_petsc.solvers.equilibrium as equilibrium
+
+    arm = ep.Arm.paper()
+    plain = ep.solve(arm, tensions_N=[14.0, 6.0], elements=30).equilibrium
+    opts = PETSc.Options()
+    opts["eq_snes_stol"] = "1e-30"                        # set before the call (a user's)
+    before = opts.getAll()
+    seen = {}
+    original = equilibrium.solve_equilibrium
+
+    def spy(*args, **kwargs):
+        seen.update(opts.getAll())
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(equilibrium, "solve_equilibrium", spy)
+    try:
+        loose = ep.solve(arm, tensions_N=[14.0, 6.0], elements=30,
+                         petsc_options={"eq_snes_atol": 1e-3, "-eq_snes_stol": 1e-8,
+                                        "eq": {"snes_rtol": 1e-3}}).equilibrium
+        assert opts.getAll() == before                    # removed, the earlier value back
+    finally:
+        opts.delValue("eq_snes_stol")
+    assert seen["eq_snes_atol"] == "0.001" and seen["eq_snes_stol"] == "1e-08"
+    assert seen["eq_snes_rtol"] == "0.001"
+    assert loose.converged and loose.iterations < plain.iterations

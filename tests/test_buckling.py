@@ -45,6 +45,7 @@ def result(solvers):
     return fig7(*solvers)
 
 
+@pytest.mark.slow
 def test_fig7_result_on_the_paper_arm(result):
     """The numbers of test_lengths.py's Fig. 7 tests, from the one call."""
     r = result
@@ -93,6 +94,7 @@ def test_fig7_result_on_the_paper_arm(result):
     assert r.seconds < 30.0
 
 
+@pytest.mark.slow
 def test_summary_and_report(arm, result):
     data = result.summary(arm)
     json.dumps(data)
@@ -103,6 +105,7 @@ def test_summary_and_report(arm, result):
     assert "p1* = " in text and "post-buckling" in text and "Sec. 4.6" in text
 
 
+@pytest.mark.slow
 def test_segment_profile_matches_geometry(result):
     disc = result.critical.disc
     m1 = disc.attach_nodes[0]
@@ -121,6 +124,7 @@ def test_clamped_column_limits():
     assert math.tan(ka) == pytest.approx(-(1.0 - 2.0 / 3.0) * ka / (2.0 / 3.0), rel=1e-9)
 
 
+@pytest.mark.slow
 def test_coarse_mesh_extends_the_family_past_the_crossing(arm):
     """With shortenings that stop before the crossing, the family is extended
     (here 1.6 mm lies within 0.01 mm of the crossing, where Newton on the
@@ -148,6 +152,7 @@ def test_bad_input(arm):
             critical_configuration(eqs, bracket=(5.0, 10.0))
 
 
+@pytest.mark.slow
 def test_plot_fig7(arm, result, tmp_path):
     png = tmp_path / "fig7.png"
     plot_fig7(arm, result, png)

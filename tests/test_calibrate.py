@@ -104,6 +104,7 @@ def test_parameter_jacobian_taylor_every_kind():
             assert_order_two(rem)
 
 
+@pytest.mark.slow
 def test_synthetic_recovery_noise_free():
     """40 rows of the perturbed paper arm, no noise: recovered to 1e-6 relative."""
     model = ParameterModel(ARM, VARY)
@@ -114,6 +115,7 @@ def test_synthetic_recovery_noise_free():
     assert np.max(np.abs(result.theta - truth) / scale) < 1e-6, (result.theta, truth)
 
 
+@pytest.mark.slow
 def test_synthetic_noise_within_three_sigma():
     model = ParameterModel(ARM, VARY)
     truth = perturbed_truth(model)
@@ -128,6 +130,7 @@ def test_synthetic_noise_within_three_sigma():
     assert report["remaining_step_sigma"] < 1e-3
 
 
+@pytest.mark.slow
 def test_coverage_small():
     """A small honest version of the coverage study (scripts/studies/calibration_coverage.py:
     50 draws): over 4 noise draws the 95 % intervals of 7 parameters contain

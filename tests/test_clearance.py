@@ -70,6 +70,7 @@ def test_paper_state_3_cable_2_crosses_the_arm():
     assert 10.0 < x_cross < 14.0 and abs(s3.x[crossed[0], 1] * 600.0) < 1.0
 
 
+@pytest.mark.slow
 def test_solve_reports_cable_clear_in_json_text_and_hdf5(tmp_path):
     out = tmp_path / "s3.h5"
     run = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "solve", "--tensions",

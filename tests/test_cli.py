@@ -113,6 +113,7 @@ def test_petsc_options_reach_the_solver():
     assert "SNES Function norm" in run.stdout
 
 
+@pytest.mark.slow
 def test_hdf5_round_trip_units_and_provenance(tmp_path):
     out, png = tmp_path / "state3.h5", tmp_path / "state3.png"
     run = cli("solve", "--tensions", 25.2, 10.8, "--order", "1,2", "--json", "--out", out,

@@ -59,6 +59,7 @@ def test_solve_switches_onto_a_stable_buckled_branch(config, side, sign):
         assert "took the left branch" in text
 
 
+@pytest.mark.slow
 def test_equilibria_lists_the_straight_arm_and_both_buckled_states(config):
     run = cli("equilibria", "--config", config, "--tensions", 18.6, "--json", "--quiet")
     assert run.returncode == 0, run.stderr

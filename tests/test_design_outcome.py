@@ -8,6 +8,8 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 # an asymmetric user arm whose tendon 1, routed along the arm at (300, 15) mm,
 # crosses the arm on the edge of the 10 N tension box
 CROSSING_ARM = """
@@ -33,6 +35,7 @@ def design(tmp_path, *extra):
                           cwd=tmp_path, capture_output=True, text=True, timeout=300)
 
 
+@pytest.mark.slow
 def test_infeasible_start_says_what_fails_and_writes_nothing(tmp_path):
     run = design(tmp_path)
     assert run.returncode == 1, run.stderr

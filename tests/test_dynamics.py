@@ -115,6 +115,7 @@ def _free_vibration(disc, theta_eq, p, control="load", periods=2.0):
     return math.pi / np.mean(np.diff(c)), omega, tr
 
 
+@pytest.mark.slow
 def test_free_vibration_unloaded_matches_slepc_and_euler_bernoulli(arm):
     disc = Discretisation.from_arm(arm, 30)
     measured, slepc, tr = _free_vibration(disc, np.zeros(31), np.zeros(2))
@@ -124,6 +125,7 @@ def test_free_vibration_unloaded_matches_slepc_and_euler_bernoulli(arm):
     assert abs(measured / EB_BETA1**2 - 1) < 5e-4
 
 
+@pytest.mark.slow
 def test_free_vibration_about_loaded_equilibrium(arm):
     disc = Discretisation.from_arm(arm, 30)
     eq = solve_equilibrium(disc, np.array([3.0, 6.0]))
@@ -132,6 +134,7 @@ def test_free_vibration_about_loaded_equilibrium(arm):
     assert abs(slepc / EB_BETA1**2 - 1) > 1e-2          # the load changes the frequency
 
 
+@pytest.mark.slow
 def test_energy_conserved_without_damping(arm):
     """No damping, rho_inf = 1 (the implicit midpoint member of generalized-alpha), fixed
     steps of a 200th of the first period: kinetic + strain energy over 10 periods of a
@@ -147,6 +150,7 @@ def test_energy_conserved_without_damping(arm):
     assert tr.completed and np.max(np.abs(E - E[0])) / E[0] < 1e-6
 
 
+@pytest.mark.slow
 def test_damping_ratio_of_first_mode(arm):
     """Rayleigh damping set by zeta_1: the log decrement of the free vibration."""
     disc = Discretisation.from_arm(arm, 24)
@@ -173,6 +177,7 @@ def _cli(*args, cwd=None):
                           text=True, cwd=cwd, timeout=300)
 
 
+@pytest.mark.slow
 def test_cli_free_vibration_writes_file(tmp_path):
     out = tmp_path / "s.h5"
     r = _cli("simulate", "--elements", "30", "--initial-tensions-N", "0", "0.05",
@@ -207,6 +212,7 @@ def test_cli_bad_history(tmp_path, case):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_cli_bad_schedule_and_duration_and_mass(tmp_path):
     out = tmp_path / "o.h5"
     sched = tmp_path / "s.csv"
@@ -226,6 +232,7 @@ def test_cli_bad_schedule_and_duration_and_mass(tmp_path):
         assert not out.exists()
 
 
+@pytest.mark.slow
 def test_cable_goes_slack_once_when_paid_out_fast(arm):
     """Length control: tendon 2 holds the arm bent (p = 5), then pays out 0.05 l in 0.3 tau,
     faster than the arm can follow: one slack event (TSEvent on the consistent tension),

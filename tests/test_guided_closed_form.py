@@ -32,7 +32,7 @@ def guided_column(n_guides: int, elements: int) -> Arm:
     s = j l / n and offset d to the tip, offset d."""
     d_mm = 1000.0 * OFFSET
     guides = tuple(Guide(1000.0 * j / n_guides, d_mm) for j in range(1, n_guides))
-    return Arm(length_mm=1000.0, bending_stiffness_Nm2=1.0, width_mm=2 * d_mm, elements=elements,
+    return Arm(length_mm=1000.0, bending_stiffness_Nm2=1.0, guide_radius_mm=d_mm, elements=elements,
                tendons=(Tendon(1000.0, (0.0, d_mm), attach_offset_mm=d_mm, guides=guides),))
 
 

@@ -17,7 +17,7 @@ from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.io.design import config_toml
 
 ROOT = Path(__file__).resolve().parents[1]
-ARM = "[arm]\nlength_mm = 300\nbending_stiffness_Nm2 = 0.05\nelements = 120\nwidth_mm = 20\n"
+ARM = "[arm]\nlength_mm = 300\nbending_stiffness_Nm2 = 0.05\nelements = 120\nguide_radius_mm = 10\n"
 TENDON = "[[tendon]]\nroute_mm = [0, 8]\nattach_mm = 300\nattach_offset_mm = 8\n"
 
 
@@ -56,7 +56,7 @@ BAD = [
     (ARM + TENDON + "guides = [{s_mm = 300.0, offset_mm = 8.0}]\n",
      "tendon[1].guides[1] and tendon[1].attach are at one point"),
     (ARM + TENDON + "guides = [{s_mm = 100.0, offset_mm = 12.0}]\n",
-     "offset 12 mm is larger than half the arm's width"),
+     "offset 12 mm is larger than arm.guide_radius_mm = 10 mm"),
     (ARM + TENDON + "guides = [{s_mm = 101.0}]\n", "guide 1 at s = 101 mm is not on a node"),
     (ARM + TENDON + "guides = [{s_mm = 100.0, colour = 1}]\n", "guides[1].colour: unknown key"),
     (ARM + "gravity_m_s2 = [0.0, -9.81]\n" + TENDON, "gravity needs a mass"),
@@ -97,5 +97,41 @@ def test_sweep_axis_offset_moves_guides_and_end_point():
     assert t.attach_offset_mm == -5.0 and all(g.offset_mm == -5.0 for g in t.guides)
     assert [g.s_mm for g in t.guides] == [g.s_mm for g in arm.tendons[1].guides]
     assert moved.tendons[0] == arm.tendons[0]
-    with pytest.raises(InputError, match="larger than half the arm's width"):
+    with pytest.raises(InputError, match="larger than arm.guide_radius_mm = 10 mm"):
         design_arm(arm, [axis], [-11.0])
+
+
+OLD_ARM = ARM.replace("guide_radius_mm = 10", "width_mm = 20")
+
+
+def test_width_as_guide_extent_still_works_with_a_warning_naming_the_new_key(tmp_path):
+    """arm.width_mm without arm.guide_radius_mm still bounds the offsets by width/2
+    (the old meaning), with a deprecation warning that names guide_radius_mm."""
+    from elastica_petsc.core.errors import InputDeprecation
+    path = tmp_path / "arm.toml"
+    path.write_text(OLD_ARM + TENDON)
+    with pytest.warns(InputDeprecation, match="add guide_radius_mm = 10 to \\[arm\\]"):
+        arm = load_config(path)
+    assert arm.guide_radius_mm is None
+    path.write_text(OLD_ARM + TENDON + "guides = [{s_mm = 100.0, offset_mm = 12.0}]\n")
+    with pytest.raises(InputError, match="larger than half the arm's width .*guide_radius_mm"):
+        load_config(path)
+    run = cli("solve", "--config", path, "--tensions", 1)
+    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1, run.stderr
+    path.write_text(OLD_ARM + TENDON)
+    run = cli("solve", "--config", path, "--tensions", 1, "--elements", 12)
+    assert run.returncode == 0, run.stderr
+    assert "elastica-petsc: warning: arm.width_mm = 20 bounds the guide offsets" in run.stderr
+    assert "Traceback" not in run.stderr and "FutureWarning" not in run.stderr
+
+
+def test_guide_radius_is_independent_of_the_strip_width(tmp_path):
+    """With guide_radius_mm, width_mm is the strip's width only: no warning, and a disk
+    wider than the strip is allowed."""
+    import warnings
+    path = tmp_path / "arm.toml"
+    path.write_text(ARM + "width_mm = 4\n" + TENDON)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        arm = load_config(path)
+    assert arm.guide_radius_mm == 10.0 and arm.width_mm == 4.0

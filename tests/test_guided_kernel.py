@@ -30,7 +30,8 @@ def guided_arm(elements=12, gravity=(0.0, -9.81), tip_mass_kg=0.05) -> Arm:
     t2 = Tendon(400.0, (-50.0, -20.0), attach_offset_mm=-10.0,
                 guides=(Guide(200.0, -18.0), Guide(550.0, -5.0)))
     return Arm(length_mm=600.0, bending_stiffness_Nm2=0.2, tendons=(t1, t2), elements=elements,
-               mass_per_length_kg_m=0.144, gravity_m_s2=gravity, tip_mass_kg=tip_mass_kg)
+               mass_per_length_kg_m=0.144, gravity_m_s2=gravity, tip_mass_kg=tip_mass_kg,
+               guide_radius_mm=20.0)
 
 
 def states(disc, seed, count=2):

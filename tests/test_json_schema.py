@@ -83,12 +83,14 @@ def outputs(tmp_path_factory):
 
 
 @pytest.mark.parametrize("name", [name for name, _, _ in RUNS])
+@pytest.mark.slow
 def test_json_output_matches_the_schema(outputs, name):
     data = outputs[name]
     assert data["schema_version"] == 1
     assert errors(data, SCHEMA, SCHEMA) == []
 
 
+@pytest.mark.slow
 def test_every_command_with_json_is_covered(outputs):
     from elastica_petsc.cli import COMMANDS
 
@@ -97,6 +99,7 @@ def test_every_command_with_json_is_covered(outputs):
     assert set(SCHEMA["$defs"]) == with_json | {"error"}
 
 
+@pytest.mark.slow
 def test_the_checker_rejects_what_the_schema_forbids(outputs):
     """The validation can fail: a missing field, a wrong type, a status in words."""
     solve = dict(outputs["solve"])
@@ -108,6 +111,7 @@ def test_the_checker_rejects_what_the_schema_forbids(outputs):
     assert errors(dict(outputs["usage-error"], error="oops"), SCHEMA, SCHEMA)
 
 
+@pytest.mark.slow
 def test_error_objects_and_workspace_fields(outputs):
     assert outputs["usage-error"]["error"] == "USAGE_ERROR"
     assert outputs["input-error"]["error"] == "INPUT_ERROR"

@@ -74,6 +74,7 @@ def test_elements_auto_is_the_nearest_count_with_attachments_on_nodes():
     assert nearest_element_count(quarter, 180) == 180
 
 
+@pytest.mark.slow
 def test_cli_elements_auto(tmp_path):
     path = config(tmp_path, "bending_stiffness_Nm2 = 0.2\nelements = 100\n")
     cmd = [sys.executable, "-m", "elastica_petsc.cli", "solve", "--config", str(path),

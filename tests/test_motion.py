@@ -101,6 +101,7 @@ def rates(q, t):
     return r, np.diff(r_padded, axis=0) / (0.5 * (d_padded[:-1] + d_padded[1:]))[:, None]
 
 
+@pytest.mark.slow
 def test_schedule_from_csv_stays_within_motor_limits(written):
     arm, plan, path, _ = written
     q, tips, t, labels = read(path, arm.motor)
@@ -168,6 +169,7 @@ def test_step_table_counts_and_spacing(written):
         assert np.diff(events[:, 0])[same].min() >= (1 - 1e-9) / V[i]
 
 
+@pytest.mark.slow
 def test_schedule_command_checks_and_retimes(written, tmp_path):
     """``elastica-petsc schedule`` on the same path timed by tip speed alone:
     it lists the rows a motor cannot play (exit 1); re-timed, none (exit 0)."""

@@ -10,6 +10,8 @@ import tomllib
 import zipfile
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -31,6 +33,7 @@ def test_test_extra_has_what_the_test_script_uses():
     assert " -n auto" in (ROOT / "scripts" / "test.sh").read_text()
 
 
+@pytest.mark.slow
 def test_every_config_is_shipped_in_the_wheel(tmp_path):
     shipped = {p.name: p.read_bytes() for p in (ROOT / "elastica_petsc" / "configs").glob("*.toml")}
     for path in (ROOT / "configs").glob("*.toml"):
@@ -38,10 +41,10 @@ def test_every_config_is_shipped_in_the_wheel(tmp_path):
             f"configs/{path.name} differs from elastica_petsc/configs/{path.name}"
     src = tmp_path / "src"          # a copy: building in the worktree would leave build/ there
     src.mkdir()
-    for name in ("pyproject.toml", "README.md", "LICENSE"):
+    for name in ("pyproject.toml", "setup.py", "README.md", "LICENSE"):
         shutil.copy(ROOT / name, src / name)
     shutil.copytree(ROOT / "elastica_petsc", src / "elastica_petsc",
-                    ignore=shutil.ignore_patterns("__pycache__"))
+                    ignore=shutil.ignore_patterns("__pycache__", "*.so"))
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
                     "-q", "-w", str(tmp_path / "dist"), str(src)], check=True)
     wheel, = (tmp_path / "dist").glob("*.whl")
@@ -50,6 +53,9 @@ def test_every_config_is_shipped_in_the_wheel(tmp_path):
         assert f"elastica_petsc/configs/{name}" in names
     assert any(n.endswith("dist-info/LICENSE") for n in names)
     assert "elastica_petsc/schema/output.schema.json" in names     # docs/json.md
+    # the compiled kernels (docs/model.md §20), built from their C source
+    assert any(n.startswith("elastica_petsc/core/fem_kernels") and n.endswith(".so")
+               for n in names)
 
 
 def test_readme_says_what_the_model_covers_on_its_first_screen():
@@ -57,3 +63,12 @@ def test_readme_says_what_the_model_covers_on_its_first_screen():
     assert "What the model covers" in first_screen
     for words in ("planar", "straight", "friction", "gravity"):
         assert words in first_screen
+
+
+def test_every_subpackage_is_listed_for_the_wheel():
+    """setuptools ships only the packages pyproject.toml lists: every folder of the
+    package with an ``__init__.py`` must be among them."""
+    listed = set(pyproject()["tool"]["setuptools"]["packages"])
+    found = {".".join(p.parent.relative_to(ROOT).parts)
+             for p in (ROOT / "elastica_petsc").rglob("__init__.py")}
+    assert found - listed == set()

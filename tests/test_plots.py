@@ -46,6 +46,7 @@ def test_trace_gif(traced, tmp_path):
     assert both[0].caption.startswith("approach 1/6") and both[6].caption.startswith("point 1/6")
 
 
+@pytest.mark.slow
 def test_trace_gif_timed_to_the_schedule(traced, tmp_path):
     """Frames at constant playback intervals show the row the motors are at then;
     the GIF's frame durations add up to the schedule's duration (real time) or
@@ -70,6 +71,7 @@ def test_trace_gif_timed_to_the_schedule(traced, tmp_path):
         assert abs(total_ms - 1000 * (4.0 * slow + 0.5)) <= count
 
 
+@pytest.mark.slow
 def test_control_gif_from_the_command_line(tmp_path):
     """`control --animate`: one frame per optimiser iterate (Fig. 2 as a movie)."""
     out = tmp_path / "c.gif"

@@ -1,6 +1,7 @@
 """Results are the public surface (issue 20): every result type is exported,
 frozen, printed in one line, summarised as a dict, and ``ep.read(x.save(path))``
-equals ``x`` field by field."""
+equals ``x`` field by field.  The tests that build every result (about a
+minute on a loaded host) are marked slow: ``scripts/test.sh --fast`` leaves them out."""
 from __future__ import annotations
 
 import dataclasses
@@ -37,7 +38,24 @@ def results():
         "DesignResult": ep.design(arm, [[500, 250], [480, 260]], elements=ELEMENTS),
         "AreaDesign": ep.design_area(arm, iterations=1, resample_cells=None,
                                      elements=ELEMENTS),
+        "SimulationResult": ep.simulate(arm, initial_tensions_N=[0.0, 0.05],
+                                        tensions_N=[0.0, 0.0], duration_s=0.05,
+                                        elements=ELEMENTS),
+        "CalibrationResult": ep.calibrate(arm, calibration_data(arm), ["tendon1.route"],
+                                          folds=2, elements=ELEMENTS),
     }
+
+
+def calibration_data(arm):
+    """Six synthetic rows of the paper arm with tendon 1's routing point moved 3 mm."""
+    from elastica_petsc.core.calibration_params import ParameterModel
+    from elastica_petsc.studies.calibration_synthetic import command_rows, synthesize
+
+    arm = dataclasses.replace(arm, elements=ELEMENTS)
+    P = np.column_stack((np.linspace(1, 9, 6), np.linspace(5, 0.5, 6)))
+    truth = ParameterModel(arm, ["tendon1.route"]).start() + [3.0, -2.0]
+    return synthesize(arm, ["tendon1.route"], truth, command_rows(arm, P, "tension"),
+                      noise_mm=0.2, seed=1, marker_s_mm=(300.0,))
 
 
 def assert_same(a, b, where: str = "result") -> None:
@@ -71,6 +89,7 @@ def assert_same(a, b, where: str = "result") -> None:
         assert a == b, f"{where}: {a!r} != {b!r}"
 
 
+@pytest.mark.slow
 def test_every_result_type_is_exported(results):
     for name in results:
         assert name in ep.__all__ and getattr(ep, name) is type(results[name])
@@ -79,7 +98,9 @@ def test_every_result_type_is_exported(results):
 @pytest.mark.parametrize("name", ["State", "Equilibrium", "ControlResult", "Stability",
                                   "Frequencies", "LengthEquilibrium", "TraceResult",
                                   "TracedSchedule", "WorkspaceMap", "SearchResult",
-                                  "BoundaryResult", "Sweep", "DesignResult", "AreaDesign"])
+                                  "BoundaryResult", "Sweep", "DesignResult", "AreaDesign",
+                                  "SimulationResult", "CalibrationResult"])
+@pytest.mark.slow
 def test_read_of_save_is_the_same_result(results, name, tmp_path):
     result = results[name]
     path = result.save(tmp_path / f"{name}.h5")
@@ -88,6 +109,7 @@ def test_read_of_save_is_the_same_result(results, name, tmp_path):
     assert json.dumps(back.summary()) == json.dumps(result.summary())
 
 
+@pytest.mark.slow
 def test_results_are_frozen_short_and_summarised(results):
     for name, result in results.items():
         field = dataclasses.fields(result)[0].name
@@ -100,12 +122,14 @@ def test_results_are_frozen_short_and_summarised(results):
         json.dumps(summary)                                # JSON-ready
 
 
+@pytest.mark.slow
 def test_print_state_does_not_dump_arrays(results, capsys):
     print(results["State"])
     out = capsys.readouterr().out
     assert out.count("\n") == 1 and "array(" not in out and "[" not in out
 
 
+@pytest.mark.slow
 def test_saved_state_keeps_the_command_line_layout(results, tmp_path):
     """``State.save`` writes the layout of ``solve --out`` (read by the CLI's readers)."""
     from elastica_petsc.io.reader import equilibrium_from_group, open_h5
@@ -117,6 +141,7 @@ def test_saved_state_keeps_the_command_line_layout(results, tmp_path):
     np.testing.assert_allclose(eq.u, state.equilibrium.u, rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_save_refuses_an_existing_file_unless_asked(results, tmp_path):
     path = results["Stability"].save(tmp_path / "s.h5")
     with pytest.raises(ep.InputError):
@@ -137,6 +162,7 @@ def test_error_hierarchy():
     assert issubclass(ContinuationError, ep.SolverError)
 
 
+@pytest.mark.slow
 def test_to_vtk_writes_what_the_cli_writes(results, tmp_path):
     """``State.to_vtk`` (``solve --vtk``) and ``WorkspaceMap.to_vtk`` (``workspace
     --vtk``, from the map's file); a map without a file says how to get one."""
@@ -153,6 +179,7 @@ def test_to_vtk_writes_what_the_cli_writes(results, tmp_path):
     assert int(piece.get("NumberOfPoints")) == len(wmap.status)
 
 
+@pytest.mark.slow
 def test_cli_control_and_trace_files_read_back_as_their_results(tmp_path):
     """``control --out`` and ``trace --out`` files hold the whole result: ep.read
     returns a ControlResult (target, history kept) and a TracedSchedule."""
@@ -172,8 +199,10 @@ def test_cli_control_and_trace_files_read_back_as_their_results(tmp_path):
     assert len(control.history_E) == control.iterations + 1
     planned = ep.read(tmp_path / "t.h5")
     assert isinstance(planned, ep.TracedSchedule) and planned.path.all_converged
+    assert control.arm == planned.arm == ep.Arm.paper()          # the config the CLI loaded
 
 
+@pytest.mark.slow
 def test_cli_boundary_file_reads_back_as_the_result(tmp_path):
     import subprocess
     import sys
@@ -186,3 +215,52 @@ def test_cli_boundary_file_reads_back_as_the_result(tmp_path):
     assert isinstance(back, ep.BoundaryResult)
     np.testing.assert_array_equal(back.polygons_mm["W0"][0], direct.polygons_mm["W0"][0])
     assert back.areas_mm2 == direct.areas_mm2
+
+
+@pytest.mark.slow
+def test_simulate_and_calibrate_files_read_back_as_their_results(results, tmp_path):
+    """``simulate --out`` and ``calibrate --h5`` files (their writers) hold the whole
+    result: ep.read returns a SimulationResult / CalibrationResult, not a dict."""
+    from elastica_petsc.io.calibration import write_calibration_h5
+    from elastica_petsc.io.simulation import write_simulation
+
+    write_simulation(tmp_path / "s.h5", False, results["SimulationResult"])
+    write_calibration_h5(tmp_path / "c.h5", results["CalibrationResult"])
+    assert_same(results["SimulationResult"], ep.read(tmp_path / "s.h5"), "simulate --out")
+    assert_same(results["CalibrationResult"], ep.read(tmp_path / "c.h5"), "calibrate --h5")
+
+
+@pytest.mark.parametrize("name", ["ControlResult", "TraceResult", "TracedSchedule"])
+@pytest.mark.slow
+def test_saved_control_and_trace_results_carry_their_arm(results, name, tmp_path):
+    """Their files have the arm's config (provenance ``config_json``, as every
+    writer stores it) and ep.read gives the arm back."""
+    from elastica_petsc.io.reader import file_arm, open_h5
+
+    path = results[name].save(tmp_path / f"{name}.h5")
+    with open_h5(path) as fh:
+        assert file_arm(fh) == ep.Arm.paper()
+    assert ep.read(path).arm == ep.Arm.paper()
+
+
+@pytest.mark.slow
+def test_control_and_trace_results_write_vtk(results, tmp_path):
+    """``to_vtk`` as ``control --vtk`` and ``trace --vtk`` write it."""
+    import xml.etree.ElementTree as ET
+
+    (vtu,) = results["ControlResult"].to_vtk(tmp_path / "c")
+    assert vtu.name == "control.vtu"
+    with pytest.raises(ep.InputError, match="keep_results=True"):
+        results["TraceResult"].to_vtk(tmp_path / "t")
+    planned = results["TracedSchedule"]
+    files = planned.path.to_vtk(tmp_path / "t")
+    assert [f.name for f in files[-2:]] == ["trace.pvd", "trace_path.vtu"]
+    assert len(files) == planned.path.n_points + 2
+    piece = ET.parse(files[-1]).getroot().find("UnstructuredGrid/Piece")
+    assert int(piece.get("NumberOfPoints")) == planned.path.n_points
+    files = planned.to_vtk(tmp_path / "s")
+    approach = planned.approach.n_points if planned.approach is not None else 0
+    assert len(files) == approach + planned.path.n_points + 2
+    import dataclasses as dc
+    with pytest.raises(ep.InputError, match="no arm"):
+        dc.replace(results["ControlResult"], arm=None).to_vtk(tmp_path / "x")

@@ -190,3 +190,27 @@ def test_length_solver_gives_each_part_its_options(disc):
         assert solver.deflated_system.snes.getTolerances()[3] == 9
         assert solver.deflated_system.options.options == {"snes_linesearch_type": "l2",
                                                           "snes_max_it": 9}
+
+
+def test_sharer_keeps_no_warm_start_between_paths():
+    """The SQP's warm start (W, multipliers, active set) lives in the trace, not
+    on the sharer: the sharer's attributes are the same objects after a path,
+    and the same path traced twice gives bitwise the same tensions."""
+    from pathlib import Path
+
+    from elastica_petsc.core.model import load_config
+    from elastica_petsc.studies import trace as paths
+
+    arm = load_config(Path(__file__).resolve().parents[1] / "configs" / "three_tendon.toml")
+    pts = paths.circle((450.0, 290.0), 40.0, 8)[:4]
+    with TipController(arm, n_elements=30) as ctl:
+        sharer = TensionSharer(ctl, "min-energy")
+        before = dict(vars(sharer))
+        first = paths.trace(ctl, pts, sharer=sharer)
+        assert {k: id(v) for k, v in vars(sharer).items()} == \
+            {k: id(v) for k, v in before.items()}
+        ctl.forget()
+        second = paths.trace(ctl, pts, sharer=sharer)
+    assert first.all_converged
+    np.testing.assert_array_equal(first.p, second.p)
+    np.testing.assert_array_equal(first.iterations, second.iterations)

@@ -24,6 +24,7 @@ def boundary_area(arm) -> float:
     return trace_boundary(arm, Discretisation.from_arm(arm, ELEMENTS)).areas_mm2["W0"]
 
 
+@pytest.mark.slow
 def test_area_is_the_boundarys_and_its_gradient_agrees_with_finite_differences():
     arm = load_config()
     a = traced_area(arm, [0, 1], P_MAX, elements=ELEMENTS)

@@ -46,6 +46,7 @@ def run_cli(tmp_path, *args):
     assert run.returncode == 0, run.stderr
 
 
+@pytest.mark.slow
 def test_workspace_file_opens_as_named_y_x_grids_with_cf_units(tmp_path):
     run_cli(tmp_path, "workspace", "--spacing", "100", "--box", "300", "500", "100", "300",
             "--out", "w.h5")
@@ -70,6 +71,7 @@ def test_workspace_file_opens_as_named_y_x_grids_with_cf_units(tmp_path):
         np.testing.assert_array_equal(ds["tensions_N"].sel(x=x, y=y).values, P)
 
 
+@pytest.mark.slow
 def test_trace_file_opens_with_point_and_tendon_dimensions(tmp_path):
     run_cli(tmp_path, "trace", "--shape", "line", "--center", "420", "200", "--end", "440",
             "220", "--step", "10", "--speed-mm-s", "5", "--out", "t.h5")
@@ -84,6 +86,7 @@ def test_trace_file_opens_with_point_and_tendon_dimensions(tmp_path):
     assert sched["time"].attrs["units"] == "s" and sched["revolutions"].attrs["units"] == "1"
 
 
+@pytest.mark.slow
 def test_results_to_xarray_as_in_the_files(tmp_path):
     """``to_xarray()`` of a traced path and of a workspace map: the same dimension
     names, values and CF units as the files."""

@@ -135,8 +135,28 @@ def warn_unused(petsc_options: list[str]) -> None:
               "(misspelt, or not for this command?)", file=sys.stderr)
 
 
+def _show_deprecations() -> None:
+    """Deprecated input (core/errors.py InputDeprecation) as one line on stderr."""
+    import warnings
+
+    from ..core.errors import InputDeprecation
+
+    shown = warnings.showwarning
+    if getattr(shown, "elastica_petsc", False):          # installed by an earlier main()
+        return
+
+    def show(message, category, *args, **kwargs):
+        if issubclass(category, InputDeprecation):
+            print(f"elastica-petsc: warning: {message}", file=sys.stderr)
+        else:
+            shown(message, category, *args, **kwargs)
+    show.elastica_petsc = True
+    warnings.showwarning = show
+
+
 def _main(argv: list[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    _show_deprecations()
     _ARGV[:] = argv
     parser = build_parser()
     args, rest = parser.parse_known_args(argv)

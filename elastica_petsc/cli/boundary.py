@@ -41,7 +41,7 @@ def run(args) -> int:
     summary = boundary_summary(result)
     if samples is not None:
         summary["agreement"] = compare_map(result, samples["target"], samples["status"],
-                                           samples["spacing"])
+                                           samples["spacing"], samples.get("region"))
         if "restricted" in result.polygons_mm:
             summary["agreement_restricted"] = compare_restricted(
                 result.polygons_mm["restricted"][0], samples["target"], samples["masks"],
@@ -113,10 +113,13 @@ def _format(s: dict) -> str:
             f"  vs sampled map: {a['reached_outside']} of {a['reached']} reached samples "
             f"outside by more than one spacing; {a['needs_negative_inside']} of "
             f"{a['needs_negative']} needing a negative tension inside by more than one spacing")
-        if "area_y_ge_0_mm2" in a:
-            lines.append(f"  area in y >= 0: {a['area_y_ge_0_mm2']:.0f} mm^2; sample count "
+        if "area_in_region_mm2" in a:
+            lines.append(f"  area in the map's region ({a['compared_region']}): "
+                         f"{a['area_in_region_mm2']:.0f} mm^2; sample count "
                          f"estimate {a['sample_area_mm2']:.0f} "
                          f"+- {a['sampling_error_mm2']:.0f} mm^2")
+        else:
+            lines.append("  areas not compared: the map's region (a box) cuts W_0")
     if "agreement_restricted" in s:
         r = s["agreement_restricted"]
         lines.append(

@@ -79,29 +79,37 @@ def check_options(args) -> None:
     check_distinct(paths)
 
 
+# how the library's messages name the options on the command line
+FLAGS = {"vary": "--vary", "bounds": "--bounds", "input": "--input"}
+
+
 def run(args) -> int:
     from ..core.calibration_data import read_calibration_csv
     from ..core.calibration_params import ParameterModel, parse_bounds
     from ..ui.progress import Progress
     from ..solvers.calibration import RowError
     from ..studies.calibrate import CalibrationProblem
-    from ..studies.calibrate_report import calibrate
+    from ..studies.calibrate_attach import calibrate_with_attachments, split_attach_names
 
     arm, disc = common.load_arm(args)
-    data = read_calibration_csv(args.data, arm.n_tendons, args.input, arm.length_mm)
+    data = read_calibration_csv(args.data, arm.n_tendons, args.input, arm.length_mm,
+                                options=FLAGS)
     candidates = (read_calibration_csv(args.candidates, arm.n_tendons, args.input,
-                                       arm.length_mm, measured=False)
+                                       arm.length_mm, measured=False, options=FLAGS)
                   if args.candidates else None)
-    model = ParameterModel(arm, args.vary, parse_bounds(args.bounds))
+    bounds = parse_bounds(args.bounds, FLAGS)
+    continuous, _ = split_attach_names(args.vary, arm, FLAGS)   # tendonK.attach: searched
+    model = ParameterModel(arm, continuous, bounds, FLAGS)
     CalibrationProblem(model, data, disc.n_elements)          # too few rows: refused here
     check_options(args)
     comm = world()
     root = comm is None or comm.rank == 0
     with Progress(None, "calibrate", unit="stages") as bar:
         try:
-            result = calibrate(model, data, elements=disc.n_elements, huber_mm=args.huber,
-                               folds=args.folds, candidates=candidates, next_count=args.next,
-                               progress=bar, comm=comm, method=args.method)
+            result = calibrate_with_attachments(
+                arm, data, args.vary, bounds=bounds, names=FLAGS, elements=disc.n_elements,
+                huber_mm=args.huber, folds=args.folds, candidates=candidates,
+                next_count=args.next, progress=bar, comm=comm, method=args.method)
         except RowError as err:
             bar.close()
             if root:
@@ -122,7 +130,7 @@ def finish(args, result, root: bool = True) -> int:
     from ..io.calibration import write_calibration_h5, write_fitted_toml
 
     summary = result.summary()
-    summary["ranks"] = result.problem.ranks
+    summary["ranks"] = result.ranks
     converged = summary["converged"] = summary["solver"]["converged"]
     if not root:
         return 0 if converged else 1
@@ -145,6 +153,10 @@ def print_summary(s: dict) -> None:
     for p in s["parameters"]:
         sd = "undetermined" if p["sigma"] is None else f"+- {p['sigma']:.4g}"
         print(f"  {p['name']:20s} = {p['value']:.6g} {sd} {p['unit']} (start {p['start']:.6g})")
+    for a in s.get("attachments") or ():
+        sd = "undetermined" if a["sigma"] is None else f"+- {a['sigma']:.3g}"
+        print(f"  {a['name']:20s} = {a['value']:.6g} {sd} mm (node search, resolution "
+              f"{a['resolution_mm']:.3g} mm; {len(a['profile_mm2'])} nodes tried)")
     if s["undetermined_combinations"]:
         print("The data cannot determine:")
         for words in s["undetermined_combinations"]:

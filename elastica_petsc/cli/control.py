@@ -145,8 +145,7 @@ def run(args) -> int:
         from ..plots.control import plot_descent
         plot_descent(arm, result, args.plot)
     if args.vtk:
-        from ..io.vtk import write_states
-        write_states(args.vtk, arm, [result.equilibrium], name="control")
+        result.to_vtk(args.vtk)
     if result.converged:
         return 0
     print(f"elastica-petsc: {unreachable_message(summary)}", file=sys.stderr)

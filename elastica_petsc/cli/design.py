@@ -28,7 +28,10 @@ def add_parser(sub) -> None:
                     "the straight arm by quasi-static loading with all P_i >= 0.")
     parser.add_argument("--vary", nargs="+", metavar="tendonK.route",
                         help="design variables of the optimiser, e.g. tendon1.route "
-                             "tendon2.route (and, for --objective area, tendon1.attach)")
+                             "tendon2.route (and, for --objective area, tendon1.attach; for "
+                             "--objective path, guide offsets in mm: tendonK.offset, every "
+                             "guide and the end of tendon K at one offset, or "
+                             "tendonK.guideJ.offset)")
     parser.add_argument("--objective", metavar="area|path:CSV",
                         help="area, or path:FILE.csv (targets x_mm,y_mm) to be made reachable")
     parser.add_argument("--sweep", nargs="+", metavar="AXIS=START:STOP:STEP",
@@ -152,13 +155,16 @@ def _run_path(args) -> int:
     from ..studies.design import design_for_path, parse_vary
 
     targets = _path_targets(args.objective)
+    from ..studies.design_offsets import split_offset_names
+
     arm, disc = common.load_arm(args)
-    tendons = parse_vary(args.vary, disc.n_tendons)
+    names, offsets = split_offset_names(args.vary, arm)       # guide offsets (issue 24)
+    tendons = parse_vary(names, disc.n_tendons) if names or not offsets else []
     with Progress(None, "design", unit="path traces") as bar:
         result = design_for_path(arm, tendons, targets, elements=disc.n_elements,
                                  reach_mm=args.reach, clearance_mm=args.clearance,
                                  margin=args.margin, max_iterations=args.iterations,
-                                 progress=bar)
+                                 progress=bar, offsets=offsets)
     from ..io.summaries import path_design_summary
 
     summary = path_design_summary(result, disc.n_elements)
@@ -352,4 +358,7 @@ def _lines(s: dict) -> list[str]:
              f"on the path: {s['smallest_tension_after_N']:.3f} N"]
     for k, (a, b) in enumerate(zip(s["routes_before_mm"], s["routes_after_mm"]), start=1):
         lines.append(f"  r_{k}: ({a[0]:.2f}, {a[1]:.2f}) -> ({b[0]:.2f}, {b[1]:.2f}) mm")
+    for name, a, b in zip(s.get("offset_variables", ()), s.get("offsets_before_mm", ()),
+                          s.get("offsets_after_mm", ())):
+        lines.append(f"  {name}: {a:.2f} -> {b:.2f} mm")
     return lines

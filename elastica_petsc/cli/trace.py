@@ -200,10 +200,7 @@ def write_outputs(args, arm, disc, planned) -> None:
         from ..plots.control import plot_trace_figures
         plot_trace_figures(arm, result, args.plot)
     if args.vtk:
-        from ..io.vtk import write_trace as write_vtk
-        rows = schedule.path_rows()
-        write_vtk(args.vtk, arm, result, times_s=schedule.time_s[rows],
-                  approach=planned.approach, approach_times_s=schedule.time_s[:rows[0]])
+        planned.to_vtk(args.vtk)
     if args.animate:
         from ..plots.animate import animate_trace
         animate_trace(arm, result, args.animate, approach=planned.approach,

@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .calibration_params import said
 from .errors import InputError
 
 KINDS = ("tension", "length", "steps")
@@ -178,10 +179,11 @@ def _header(names, n_tendons: int) -> tuple[dict, list[float]]:
 
 def read_calibration_csv(path, n_tendons: int, kind: str | None = None,
                          arm_length_mm: float | None = None,
-                         measured: bool = True) -> CalibrationData:
+                         measured: bool = True, options: dict | None = None) -> CalibrationData:
     """Parse and validate a calibration CSV (module docstring) for an arm of
     ``n_tendons`` tendons; ``kind`` reads only that input group.  With
-    ``measured=False`` (candidate commands) the tip columns may be missing or empty."""
+    ``measured=False`` (candidate commands) the tip columns may be missing or empty;
+    ``options``: how messages name the options (core/calibration_params.py ``said``)."""
     path = Path(path)
     if kind is not None and kind not in KINDS:
         raise DataError(f"input kind must be one of {', '.join(KINDS)}, got {kind!r}")
@@ -202,10 +204,11 @@ def read_calibration_csv(path, n_tendons: int, kind: str | None = None,
             c for c in ("tip_x_mm", "tip_y_mm") if c not in names], n_tendons)
         if kind is not None:
             if kind not in groups:
-                raise DataError(f"--input {kind}: the file has no "
+                raise DataError(f"{said(options, 'input', kind)}: the file has no "
                                 f"{INPUT_COLUMNS[kind].format('K')} columns")
             groups = (kind,)
-        rows = _rows(table[1:], names, groups, marker_s, n_tendons, arm_length_mm, measured)
+        rows = _rows(table[1:], names, groups, marker_s, n_tendons, arm_length_mm, measured,
+                     options)
     except DataError as err:
         raise DataError(f"{path}: {err}") from None
     if not rows[0]:
@@ -217,7 +220,8 @@ def read_calibration_csv(path, n_tendons: int, kind: str | None = None,
                            tuple(loading), tuple(lines), str(path))
 
 
-def _rows(body, names, groups, marker_s, n_tendons, arm_length_mm, measured=True):
+def _rows(body, names, groups, marker_s, n_tendons, arm_length_mm, measured=True,
+          options=None):
     col = {c: j for j, c in enumerate(names)}
     kinds, inputs, tips, marks, loading, lines = [], [], [], [], [], []
     for number, raw in body:
@@ -228,7 +232,7 @@ def _rows(body, names, groups, marker_s, n_tendons, arm_length_mm, measured=True
             cells[col[INPUT_COLUMNS[g].format(i)]] for i in range(1, n_tendons + 1))]
         if len(filled) != 1:
             what = "no input" if not filled else "inputs of several kinds (" + \
-                ", ".join(filled) + "; choose one with --input)"
+                ", ".join(filled) + f"; choose one with {said(options, 'input')})"
             raise DataError(f"line {number}: {what}")
         kind = filled[0]
         values = []

@@ -27,8 +27,10 @@ SCHEMA: dict[str, dict[str, tuple[type | tuple, object, str]]] = {
         "density_kg_m3": (float, None, "density rho [kg/m^3]: mass per length rho w h"),
         "elements": (int, 180, "number of P1 elements"),
         "thickness_mm": (float, 3.0, "thickness h [mm], for the strain limit Eq. (19)"),
-        "width_mm": (float, 40.0, "width w [mm], for B and mass from the material; "
-                     "guide offsets lie within +-w/2"),
+        "width_mm": (float, 40.0, "strip width w [mm], for B and mass from the material"),
+        "guide_radius_mm": (float, None, "largest offset of a guide or cable end from the "
+                            "centreline [mm] (the spacer disks' radius); unset: width_mm/2, "
+                            "deprecated"),
         "mass_per_length_kg_m": (float, None,
                                  "mass per length [kg/m], for eigenfrequencies and weight"),
         "gravity_m_s2": (list, None, "gravity [gx, gy] [m/s^2], clamp frame, arm along +x"),

@@ -31,3 +31,8 @@ class InputError(ElasticaError, ValueError):
 
 class SolverError(ElasticaError, RuntimeError):
     """A numerical method that could not be carried out (not merely "not converged")."""
+
+
+class InputDeprecation(FutureWarning):
+    """Input that still works but is deprecated; the message names what to write
+    instead (the command line prints it as ``elastica-petsc: warning: ...``)."""

@@ -1,4 +1,4 @@
-"""Pure-numpy kernels of the P1 finite-element elastica (no PETSc here).
+"""Kernels of the P1 finite-element elastica (compiled in fem_kernels.c; no PETSc here).
 
 Non-dimensional throughout (docs/model.md §3): l = 1, B = 1, tensions p.
 
@@ -34,6 +34,10 @@ carried as extra unknowns, u = (theta_1..theta_N, y_1, ..., y_n), with
 Its Jacobian is tridiagonal in the theta block with 2n dense border rows and
 columns; eliminating y (Schur complement) gives back K exactly.  With the
 theta unknowns first, LU in the natural order fills only the border.
+
+The residual, the Jacobian values, dF/dp, the band, the attachment gradients
+and the stability values are compiled (``fem_kernels.c``, docs/model.md §20);
+the methods here convert their arguments and hold the pattern data.
 """
 from __future__ import annotations
 
@@ -45,6 +49,33 @@ import numpy as np
 
 from .errors import InputError
 from .model import Arm
+
+try:
+    from . import fem_kernels
+except ImportError as err:      # a source tree whose extension was never built
+    raise ImportError(
+        "elastica_petsc's compiled kernels (elastica_petsc/core/fem_kernels.c) are not built: "
+        "run `bash scripts/setup.sh` (it needs gcc and python3-dev) or `python -m pip install "
+        f"--no-deps --no-build-isolation -e .` in the source tree ({err})") from err
+
+
+def ldlt_negatives(pattern, values: np.ndarray, n_angles: int) -> int | None:
+    """Negative pivots of the LDL^T, natural order and no pivoting (the inertia of
+    PETSc's Cholesky on SBAIJ storage), of the symmetric bordered matrix whose upper
+    triangle is the CSR ``pattern`` (indptr, indices: int32) with entries ``values``:
+    a tridiagonal block of ``n_angles`` rows, then dense border rows and columns
+    (:meth:`Discretisation.bordered_pattern`; compiled, O(N nb^2)).  None at a zero
+    pivot (|d| <= 100 eps, PETSc's default): the matrix is numerically singular."""
+    count = fem_kernels.inertia(pattern[0], pattern[1], _floats(values), int(n_angles))
+    if count == -2:
+        raise ValueError("not a bordered tridiagonal pattern: rows of the angle block may "
+                         "reach only the next angle and the border")
+    return None if count < 0 else count
+
+
+def _floats(a) -> np.ndarray:
+    """``a`` as a C-contiguous float64 array (no copy when it already is one)."""
+    return np.ascontiguousarray(a, dtype=float)
 
 
 class DiscretisationError(InputError):
@@ -160,15 +191,15 @@ class Discretisation:
     def straight(self) -> np.ndarray:
         """The undeformed arm as a bordered state vector."""
         theta = np.zeros(self.n_elements + 1)
-        return self.join(theta, self.node_positions(theta)[list(self.attach_nodes)])
+        return self.join(theta, self.node_positions(theta)[self.attach_index])
 
     def consistent_state(self, theta: np.ndarray) -> np.ndarray:
         """Bordered state with y_i = X_i(theta) exactly."""
-        return self.join(theta, self.node_positions(theta)[list(self.attach_nodes)])
+        return self.join(theta, self.node_positions(theta)[self.attach_index])
 
     def attachment_points(self, theta: np.ndarray) -> np.ndarray:
         """Where each cable ends, (n, 2)."""
-        return self.node_positions(theta)[list(self.attach_nodes)]
+        return self.node_positions(theta)[self.attach_index]
 
     def cable_lengths_of(self, theta: np.ndarray) -> np.ndarray:
         """L_i = |r_i - x_i| of the state ``theta`` (Eq. (3))."""
@@ -181,10 +212,11 @@ class Discretisation:
         return 0.5 * (theta[:-1] + theta[1:])
 
     def node_positions(self, theta: np.ndarray) -> np.ndarray:
-        """x_k at every node, shape (N+1, 2) (Eq. (2), midpoint rule)."""
-        phi = self.element_angles(theta)
-        steps = self.h * np.column_stack((np.cos(phi), np.sin(phi)))
-        return np.vstack((np.zeros((1, 2)), np.cumsum(steps, axis=0)))
+        """x_k at every node, shape (N+1, 2): x_0 = 0, x_{k+1} = x_k + h t_k (Eq. (2),
+        midpoint rule; compiled)."""
+        out = np.empty((self.n_elements + 1, 2))
+        fem_kernels.positions(_floats(theta[1:]), out)
+        return out
 
     def trig(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """cos phi_e and sin phi_e of the element angles (shared by the kernels)."""
@@ -192,14 +224,33 @@ class Discretisation:
         return np.cos(phi), np.sin(phi)
 
     def attachment_gradients(self, theta: np.ndarray, cs=None) -> np.ndarray:
-        """g[i, k-1] = d X_i / d theta_k, shape (n, N, 2); ``cs``: :meth:`trig`
-        of theta if already known."""
-        c, s = self.trig(theta) if cs is None else cs
-        half_normals = 0.5 * self.h * np.column_stack((-s, c))
-        per_element = self._support_matrix[:, :, None] * half_normals[None]   # (n, N, 2)
-        g = per_element.copy()                     # element k-1 = left of node k
-        g[:, :-1] += per_element[:, 1:]           # element k   = right of node k
+        """g[i, k-1] = d X_i / d theta_k, shape (n, N, 2): (h/2) n_e of the elements
+        k-1 and k left of m_i (compiled; ``cs``, :meth:`trig` of theta, is
+        accepted for the subclasses' interface and recomputed)."""
+        g = np.empty((self.n_tendons, self.n_elements, 2))
+        fem_kernels.gradients(_floats(theta[1:]), self.attach_index, g)
         return g
+
+    @cached_property
+    def attach_index(self) -> np.ndarray:
+        """The attachment nodes m_i as int64, for the compiled kernels."""
+        return np.asarray(self.attach_nodes, dtype=np.int64)
+
+    @cached_property
+    def _routes(self) -> np.ndarray:
+        """The routing points as a contiguous float64 (n, 2) array."""
+        return _floats(self.routes)
+
+    def position_derivative(self, theta: np.ndarray, dstate: np.ndarray, nodes) -> np.ndarray:
+        """d x_m / dq at the nodes ``nodes`` (0..N) for each row of ``dstate``
+        ((k, >= N): variations of theta_1..theta_N first), shape (k, len(nodes), 2):
+        d x_m = sum_{e < m} h n_e (dtheta_e + dtheta_{e+1}) / 2, Eq. (2) differentiated
+        (Eq. (13) at the tip, m = N; compiled)."""
+        dstate = _floats(dstate).reshape(len(dstate), -1)
+        nodes = np.ascontiguousarray(nodes, dtype=np.int64)
+        out = np.empty((len(dstate), len(nodes), 2))
+        fem_kernels.position_derivative(_floats(theta[1:]), dstate, nodes, out)
+        return out
 
     @cached_property
     def _support_matrix(self) -> np.ndarray:
@@ -225,7 +276,7 @@ class Discretisation:
 
     def potential(self, theta: np.ndarray, p, tip_moment: float = 0.0) -> float:
         """Discrete total potential Pi(theta) (docs/model.md §2)."""
-        x = self.node_positions(theta)[list(self.attach_nodes)]
+        x = self.node_positions(theta)[self.attach_index]
         lengths = np.linalg.norm(self.routes - x, axis=1)
         return self.strain_energy(theta) + float(np.dot(p, lengths)) - tip_moment * theta[-1]
 
@@ -233,7 +284,7 @@ class Discretisation:
     def cables(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Cable lengths L_i = |r_i - y_i| and unit directions d_i (Eq. (3))."""
         chord = self.routes - y
-        lengths = np.linalg.norm(chord, axis=1)
+        lengths = np.hypot(chord[:, 0], chord[:, 1])
         return lengths, chord / lengths[:, None]
 
     def shortest_segments(self, y: np.ndarray) -> np.ndarray:
@@ -268,19 +319,14 @@ class Discretisation:
 
     def residual(self, u: np.ndarray, p, tip_moment: float = 0.0,
                  terms: Terms | None = None) -> np.ndarray:
-        """F(u) of the bordered system (Eq. (9) with the midpoint rule, plus y - X(theta));
-        ``terms``: :meth:`terms` of (u, p) if already known."""
-        theta, y, _, _, c, s, _, force = self.terms(u, p) if terms is None else terms
-        # (h/2) t_e x F on each element: the load integral of Eq. (9), midpoint rule
-        q = 0.5 * self.h * (c * force[:, 1] - s * force[:, 0])
-        jump = np.diff(theta)                                   # h * theta' per element
-        f_theta = (jump - np.append(jump[1:], 0.0)) / self.h    # int theta' dtheta' ds
-        f_theta -= q
-        f_theta[:-1] -= q[1:]
-        f_theta[-1] -= tip_moment
-        support = self._support_matrix
-        x_attach = self.h * np.column_stack((support @ c, support @ s))   # Eq. (2) at s_i
-        return np.concatenate((f_theta, (y - x_attach).ravel()))
+        """F(u) of the bordered system (Eq. (9) with the midpoint rule, plus y - X(theta)):
+        F_theta_k = (2 theta_k - theta_{k-1} - theta_{k+1}) / h - (h/2) (t_e x F_e) on the
+        elements e = k-1, k (compiled; ``terms`` is accepted for the subclasses'
+        interface and recomputed)."""
+        out = np.empty(self.size)
+        fem_kernels.residual(_floats(u), _floats(p), self._routes, self.attach_index,
+                          float(tip_moment), out)
+        return out
 
     def bordered_pattern(self, supports, upper: bool = False, starts=None):
         """CSR structure of a tridiagonal N x N block bordered by one column and
@@ -340,54 +386,56 @@ class Discretisation:
     def band(self, theta, d, p, terms: Terms | None = None) -> np.ndarray:
         """Tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper);
         ``terms``: :meth:`terms` of the state if already known."""
-        N, h = self.n_elements, self.h
+        # the stiffness of theta'^2/2 plus d/dtheta of -(h/2) t_e x F on element e:
+        # (h/4) t_e.F on its two nodes (compiled)
         if terms is None:
             c, s = self.trig(theta)
-            force = self.tendon_sums(p[:, None] * d)
+            force = self.tendon_sums(np.asarray(p, float)[:, None] * d)
         else:
             c, s, force = terms.c, terms.s, terms.force
-        # d/dtheta of -(h/2) t_e x F on element e: (h/4) t_e.F on its two nodes
-        w = 0.25 * h * (c * force[:, 0] + s * force[:, 1])
-        band = np.empty((N, 3))
-        band[:, 0], band[:, 2] = -1.0 / h, -1.0 / h
-        band[:, 1] = 2.0 / h
-        band[-1, 1] = 1.0 / h                                  # free end theta'(l) = 0
-        band[:, 1] += w + np.append(w[1:], 0.0)
-        band[:-1, 2] += w[1:]
-        band[1:, 0] += w[1:]
+        band = np.empty((self.n_elements, 3))
+        fem_kernels.band(_floats(c), _floats(s), _floats(force), band)
         return band
 
     def jacobian_values(self, u: np.ndarray, p, terms: Terms | None = None,
                         g=None) -> np.ndarray:
-        """Entries of dF/du in the order of :attr:`pattern` (consistent tangent);
-        ``terms``, ``g``: :meth:`terms` and :meth:`attachment_gradients` if known."""
-        N, n = self.n_elements, self.n_tendons
-        t = self.terms(u, p) if terms is None else terms
-        theta, lengths, d, p = t.theta, t.lengths, t.d, t.p
-        g = self.attachment_gradients(theta, (t.c, t.s)) if g is None else g   # (n, N, 2)
-        # dF_theta/dy_i = p_i/L_i (I - d d^T) g = p_i/L_i (d_perp . g) d_perp   (Eq. (17))
-        d_perp = np.column_stack((-d[:, 1], d[:, 0]))
-        lever = (p / lengths)[:, None] * self.transverse_gradients(g, d)
-        border = (lever[:, :, None] * d_perp[:, None, :]).transpose(1, 0, 2).reshape(N, 2 * n)
-        yrows = -g.transpose(0, 2, 1).reshape(2 * n, N)        # dF_y/dtheta = -dX/dtheta
-        source = np.concatenate((self.band(theta, d, p, t).ravel(), border.ravel(),
-                                 yrows.ravel(), np.ones(2 * n)))
-        return source[self.pattern[2]]
+        """Entries of dF/du in the order of :attr:`pattern` (consistent tangent): the
+        band T, dF_theta/dy_i = p_i/L_i (d_i^perp . g_i) d_i^perp (Eq. (17)),
+        dF_y/dtheta = -dX/dtheta and the identity (compiled; ``terms`` and ``g`` are
+        accepted for the subclasses' interface and recomputed)."""
+        out = np.empty(len(self._pattern_src))
+        fem_kernels.jacobian(_floats(u), _floats(p), self._routes, self.attach_index,
+                          self._pattern_src, out)
+        return out
+
+    @cached_property
+    def _pattern_src(self) -> np.ndarray:
+        return np.ascontiguousarray(self.pattern[2], dtype=np.int64)
+
+    @cached_property
+    def _stability_src(self) -> np.ndarray:
+        return np.ascontiguousarray(self.stability_pattern[2], dtype=np.int64)
 
     def stability_values(self, u: np.ndarray, p) -> np.ndarray:
         """Upper-triangle entries of H = [[T, W], [W^T, -I]] (:attr:`stability_pattern`).
 
         W[:, i] = sqrt(p_i / L_i) dX_i/dtheta^T d_i^perp, so that the Schur
         complement T + W W^T is the consistent tangent K (docs/model.md §2) and, by
-        Haynsworth's inertia additivity, In(K) = In(H) - (0, n, 0).
+        Haynsworth's inertia additivity, In(K) = In(H) - (0, n, 0)
+        (compiled; a tension p_i <= 0 gives a zero column).
         """
-        p = np.asarray(p, float)
-        theta, y = self.split(u)
-        w = self.stiffness_border(theta, y, p)
-        source = np.concatenate((self.band(theta, self.cables(y)[1], p).ravel(), w.T.ravel(),
-                                 w.ravel(),
-                                 -np.ones(self.n_tendons)))
-        return source[self.stability_pattern[2]]
+        out = np.empty(len(self._stability_src))
+        fem_kernels.stability(_floats(u), _floats(p), self._routes, self.attach_index,
+                           self._stability_src, out)
+        return out
+
+    def stiffness_border(self, theta: np.ndarray, y: np.ndarray, p) -> np.ndarray:
+        """W, shape (n, N): W[i] = sqrt(p_i / L_i) (dX_i/dtheta)^T d_i^perp, so that
+        K = T + W^T W (docs/model.md §2); a tension p_i <= 0 gives a zero row (compiled)."""
+        out = np.empty((self.n_tendons, self.n_elements))
+        fem_kernels.stiffness(_floats(self.join(theta, y)), _floats(p), self._routes,
+                              self.attach_index, out)
+        return out
 
     @staticmethod
     def transverse_gradients(g: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -396,30 +444,17 @@ class Discretisation:
         turns cable i (Eq. (17))."""
         return g[..., 0] * (-d[:, 1:2]) + g[..., 1] * d[:, :1]
 
-    def stiffness_border(self, theta: np.ndarray, y: np.ndarray, p) -> np.ndarray:
-        """W, shape (n, N): W[i] = sqrt(p_i / L_i) (dX_i/dtheta)^T d_i^perp, so that
-        K = T + W^T W (docs/model.md §2); a tension p_i <= 0 gives a zero row."""
-        lengths, d = self.cables(y)
-        weights = np.sqrt(np.maximum(np.asarray(p, float), 0.0) / lengths)
-        return weights[:, None] * self.transverse_gradients(self.attachment_gradients(theta), d)
-
     def load_derivative(self, u: np.ndarray, g=None, d=None) -> np.ndarray:
-        """dF/dp, shape (n, size): row i is dF/dp_i (right-hand sides of Eq. (14));
-        ``g``, ``d``: :meth:`attachment_gradients` and cable directions if known."""
-        if g is None or d is None:
-            theta, y = self.split(u)
-            d = self.cables(y)[1]
-            g = self.attachment_gradients(theta)
-        out = np.zeros((self.n_tendons, self.size))
-        out[:, : self.n_elements] = -(g[..., 0] * d[:, :1] + g[..., 1] * d[:, 1:])
+        """dF/dp, shape (n, size): row i is dF/dp_i = -(dX_i/dtheta)^T d_i on the
+        angles, zero on the border (right-hand sides of Eq. (14); compiled, ``g`` and
+        ``d`` are accepted for the subclasses' interface and recomputed)."""
+        out = np.empty((self.n_tendons, self.size))
+        fem_kernels.load_derivative(_floats(u), self._routes, self.attach_index, out)
         return out
 
     def linearisation(self, u: np.ndarray, p, residual: bool = True) -> tuple:
         """F (:meth:`residual`), the entries of dF/du (:meth:`jacobian_values`) and
-        dF/dp (:meth:`load_derivative`) at (u, p) in one pass: the element
-        angles' cosines and sines and the attachment gradients are shared.
-        With ``residual=False`` only (dF/du, dF/dp)."""
-        t = self.terms(u, p)
-        g = self.attachment_gradients(t.theta, (t.c, t.s))
-        out = (self.jacobian_values(u, p, t, g), self.load_derivative(u, g, t.d))
-        return ((self.residual(u, p, terms=t),) + out) if residual else out
+        dF/dp (:meth:`load_derivative`) at (u, p).  With ``residual=False`` only
+        (dF/du, dF/dp)."""
+        out = (self.jacobian_values(u, p), self.load_derivative(u))
+        return ((self.residual(u, p),) + out) if residual else out

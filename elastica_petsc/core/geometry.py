@@ -65,6 +65,21 @@ def distance_to_edges(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
     return out
 
 
+def polyline_distance(line: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Distance from each point to the nearest segment of the open polyline
+    ``line`` (k, 2)."""
+    return segments_distance(line[:-1], line[1:], points)
+
+
+def segments_distance(a: np.ndarray, b: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Distance from each point to the nearest of the segments a_k b_k, all at once."""
+    ab = b - a
+    denom = np.maximum(np.einsum("kc,kc->k", ab, ab), 1e-300)
+    t = np.clip(((points[:, None, :] - a[None]) * ab[None]).sum(-1) / denom, 0.0, 1.0)
+    near = a[None] + t[..., None] * ab[None]
+    return np.linalg.norm(points[:, None, :] - near, axis=-1).min(axis=1)
+
+
 def clip_half_plane(poly: np.ndarray, y_min: float = 0.0) -> np.ndarray:
     """The part of a closed polygon with y >= y_min (Sutherland-Hodgman, one edge)."""
     out = []

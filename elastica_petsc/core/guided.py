@@ -253,6 +253,23 @@ class GuidedDiscretisation(Discretisation):
     def cable_lengths_of(self, theta: np.ndarray) -> np.ndarray:
         return self.cables(self.chords(self.point_positions(theta)))[0]
 
+    def point_table(self, theta: np.ndarray, p) -> dict:
+        """Per arm point a (guides, then the end point, tendon by tendon), units of
+        l: ``tendon`` (0-based), ``is_end``, ``s``, ``offset``, ``position`` X_a (P, 2),
+        ``segment_length`` (from a back to its predecessor), ``wrap_angle`` (the
+        angle the cable turns through at a guide, atan2(|e_a x e_a+1|, e_a . e_a+1);
+        NaN at a cable's end) and ``force`` f_a = p (e_a - e_{a+1}) on the arm
+        (units of B/l^2; docs/model.md §11)."""
+        t = self._terms(self.consistent_state(theta), p)
+        nxt = np.roll(t.e, -1, axis=0)
+        wrap = np.arctan2(np.abs(t.e[:, 0] * nxt[:, 1] - t.e[:, 1] * nxt[:, 0]),
+                          np.sum(t.e * nxt, axis=1))
+        wrap[self.last_point] = np.nan
+        return {"tendon": self.point_tendon.copy(), "is_end": self.last_point.copy(),
+                "s": np.asarray(self.point_nodes) * self.h, "offset": self.point_offsets.copy(),
+                "position": self.point_positions(theta), "segment_length": t.seg_len,
+                "wrap_angle": wrap, "force": t.point_force}
+
     def potential(self, theta: np.ndarray, p, tip_moment: float = 0.0) -> float:
         """Pi of docs/model.md §11 (weight: trapezoid nodal masses, tip mass at the tip)."""
         lengths = self.cable_lengths_of(theta)
@@ -435,6 +452,19 @@ class GuidedDiscretisation(Discretisation):
         out[self.n_elements + 2 * a:self.n_elements + 2 * a + 2] = normal
         if not self.last_point[a]:
             out[self.n_elements + 2 * a + 2:self.n_elements + 2 * a + 4] = -normal
+        return out
+
+    def weight_derivative(self, u: np.ndarray) -> np.ndarray:
+        """dF/dw, (size,), at fixed u and p of the weight scaled by a factor w at w = 1
+        (F is linear in the weight: the angle rows' -(h/2) n_e . G_e terms; a change
+        of B scales q = rho_A g l^3/B and the tip weight by B/B', so dF/dB = -dF/dw / B)."""
+        theta = self.split(u)[0]
+        c, s = self.trig(theta)
+        G = self.element_weight
+        q = 0.5 * self.h * (c * G[:, 1] - s * G[:, 0])
+        out = np.zeros(self.size)
+        out[:self.n_elements] = -q
+        out[:self.n_elements - 1] -= q[1:]
         return out
 
     def length_gradients(self, y: np.ndarray) -> np.ndarray:

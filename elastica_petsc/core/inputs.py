@@ -1,4 +1,4 @@
-"""Checks of user input shared by the library (api.py) and the command line.
+"""Checks of user input shared by the library (api/) and the command line.
 
 Every check takes the name the user typed (``"lengths_mm"`` in the library,
 ``"--lengths"`` on the command line) and reports in the user's units, with

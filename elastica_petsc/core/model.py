@@ -88,6 +88,7 @@ class Arm:
     elements: int = 180
     thickness_mm: float = 3.0
     width_mm: float = 40.0
+    guide_radius_mm: float | None = None     # offsets lie within +-this (None: width_mm/2)
     mass_per_length_kg_m: float | None = None
     youngs_modulus_Pa: float | None = None   # the material, when B came from it
     density_kg_m3: float | None = None       # the material, when the mass came from it
@@ -197,7 +198,8 @@ def validate(arm: Arm) -> None:
     positive("arm.bending_stiffness_Nm2", arm.bending_stiffness_Nm2)
     positive("arm.thickness_mm", arm.thickness_mm)
     positive("arm.width_mm", arm.width_mm)
-    for key in ("mass_per_length_kg_m", "youngs_modulus_Pa", "density_kg_m3"):
+    for key in ("mass_per_length_kg_m", "youngs_modulus_Pa", "density_kg_m3",
+                "guide_radius_mm"):
         if getattr(arm, key) is not None:
             positive(f"arm.{key}", getattr(arm, key))
     if not isinstance(arm.elements, int) or isinstance(arm.elements, bool) or arm.elements < 2:
@@ -251,6 +253,7 @@ def validate(arm: Arm) -> None:
         raise ModelError(str(err)) from None
     positive("limits.failure_strain", arm.limits.failure_strain)
     positive("limits.strain_energy_max_SE0", arm.limits.strain_energy_max_SE0)
+    _warn_guide_extent(arm)
 
 
 def _finite(value) -> bool:
@@ -292,12 +295,42 @@ def _validate_path(arm: Arm, tendon: Tendon, key: str) -> None:
         if not 0.0 < s_mm <= arm.length_mm * (1 + 1e-12):
             raise ModelError(f"{where}: s = {s_mm:g} mm lies outside the arm "
                              f"(need 0 < s <= l = {arm.length_mm:g} mm)")
-        if abs(offset_mm) > 0.5 * arm.width_mm:
-            raise ModelError(f"{where}: offset {offset_mm:g} mm is larger than half the arm's "
-                             f"width (arm.width_mm = {arm.width_mm:g} mm)")
+        if abs(offset_mm) > guide_radius_mm(arm):
+            raise ModelError(f"{where}: offset {offset_mm:g} mm is larger than "
+                             + _guide_extent_text(arm))
     for j, (s0, d0, w0) in enumerate(points):
         for s1, d1, w1 in points[j + 1:]:
             _distinct(arm, (s0, d0, w0), (s1, d1, w1))
+
+
+def guide_radius_mm(arm: Arm) -> float:
+    """The largest offset of a guide or cable end from the centreline (mm):
+    ``arm.guide_radius_mm``, or half of ``arm.width_mm`` where it is unset (the
+    old meaning of width_mm, deprecated: :func:`_warn_guide_extent`)."""
+    return 0.5 * arm.width_mm if arm.guide_radius_mm is None else arm.guide_radius_mm
+
+
+def _guide_extent_text(arm: Arm) -> str:
+    if arm.guide_radius_mm is not None:
+        return f"arm.guide_radius_mm = {arm.guide_radius_mm:g} mm"
+    return (f"half the arm's width (arm.width_mm = {arm.width_mm:g} mm; give "
+            "arm.guide_radius_mm for the guides' extent)")
+
+
+def _warn_guide_extent(arm: Arm) -> None:
+    """A valid arm with offset guides or ends but no guide_radius_mm: warn once."""
+    import warnings
+    from .errors import InputDeprecation
+
+    if arm.guide_radius_mm is not None or not (
+            any(g.offset_mm for t in arm.tendons for g in t.guides)
+            or any(t.attach_offset_mm for t in arm.tendons)):
+        return
+    warnings.warn(InputDeprecation(
+        f"arm.width_mm = {arm.width_mm:g} bounds the guide offsets only because "
+        f"arm.guide_radius_mm is not given; this use of width_mm is deprecated: add "
+        f"guide_radius_mm = {0.5 * arm.width_mm:g} to [arm] (width_mm is the strip's width)"),
+        stacklevel=2)
 
 
 def _distinct(arm: Arm, a, b) -> None:

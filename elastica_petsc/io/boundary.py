@@ -42,6 +42,10 @@ def write_boundary(path, result, overwrite: bool = False) -> None:
         encode(fh, RESULT_GROUP, result)
 
 
+# the continuation nodes' dimension (io/dims.py): not the mesh's nodes
+NODE = {"node": (None, "1", "continuation node of the boundary's curves")}
+
+
 def write_boundary_layout(fh, result) -> None:
     """The layout of the module docstring into the open file ``fh``."""
     arm = result.arm
@@ -56,20 +60,26 @@ def write_boundary_layout(fh, result) -> None:
         group.attrs["message"] = region.message
         group.attrs["area_mm2"] = result.areas_mm2[name]
         put(group, "polygon", result.polygons_mm[name][0], "mm",
-            "closed polygon of the region's boundary; inside = nonzero winding number")
+            "closed polygon of the region's boundary; inside = nonzero winding number",
+            ("vertex", "component"))
         nodes = region.nodes()
         sub = group.create_group("nodes")
-        put(sub, "tip", nodes["tip"] * l_mm, "mm", "continuation nodes around the loop")
-        put(sub, "tensions", nodes["p"], "P l^2/B", "tensions p_i at the nodes")
-        put(sub, "tensions_N", arm.tensions_to_N(nodes["p"]), "N", "tensions P_i")
-        put(sub, "curve", nodes["curve"], "1", "index of the curve of each node")
+        put(sub, "tip", nodes["tip"] * l_mm, "mm", "continuation nodes around the loop",
+            ("node", "component"), NODE)
+        put(sub, "tensions", nodes["p"], "P l^2/B", "tensions p_i at the nodes",
+            ("node", "tendon"), NODE)
+        put(sub, "tensions_N", arm.tensions_to_N(nodes["p"]), "N", "tensions P_i",
+            ("node", "tendon"), NODE)
+        put(sub, "curve", nodes["curve"], "1", "index of the curve of each node", ("node",),
+            NODE)
         curves = group.create_group("curves")
         curves.attrs["names_json"] = jsontext.dumps([c.constraint for c in region.curves])
         curves.attrs["ends_json"] = jsontext.dumps([c.end for c in region.curves])
     if "W0" in fh:
         _write_folds(fh["W0"], result)
-    put(fh, "tip_folds", result.tip_folds_mm, "mm",
-        "points of the W0 loop where det(d x_t/d p) changes sign (tip-map folds)")
+    put(fh, "tip_folds", np.reshape(result.tip_folds_mm, (-1, 2)), "mm",
+        "points of the W0 loop where det(d x_t/d p) changes sign (tip-map folds)",
+        ("fold_point", "component"))
 
 
 def _write_folds(group, result) -> None:
@@ -81,9 +91,10 @@ def _write_folds(group, result) -> None:
     folds = group.create_group("folds")
     for k, (curve, line) in enumerate(zip(result.fold_curves, result.fold_polylines_mm)):
         sub = folds.create_group(str(k))
-        put(sub, "tip", line, "mm", "tip image of a fold curve of the tip map (Hermite-densified)")
+        put(sub, "tip", line, "mm", "tip image of a fold curve of the tip map (Hermite-densified)",
+            ("vertex", "component"))
         put(sub, "tensions", np.array([pt.w[-2:] for pt in curve.points]), "P l^2/B",
-            "tensions at the fold curve's continuation nodes")
+            "tensions at the fold curve's continuation nodes", ("node", "tendon"), NODE)
         sub.attrs["end"] = curve.end
         sub.attrs["end_constraint"] = curve.end_constraint or ""
 

@@ -10,6 +10,7 @@ measurement frame, is in its header comments) and an HDF5 file::
         error_mm (m,), weight (m,), taut (m, n), tip_covariance_mm2 (m, 2, 2),
         cv_error_mm (m,)
     root attributes: provenance (io/hdf5.py), summary_json
+    result/   the whole CalibrationResult (io/records.py; ``elastica_petsc.read`` returns it)
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ import numpy as np
 from ..core import jsontext
 from .design import write_config
 from .hdf5 import atomic_h5, provenance, put, write_attrs
+from .records import RESULT_GROUP, encode
 
 
 def _fmt(value, sigma) -> str:
@@ -28,11 +30,11 @@ def _fmt(value, sigma) -> str:
 
 def toml_header(result) -> list[str]:
     """Comment lines: what was fitted, to which data, and how well."""
-    data = result.problem.data
+    data = result.data
     rms = result.stats["rms_mm"]
     lines = [f"Calibrated by elastica-petsc calibrate from {data.source or 'data'} "
              f"({data.n_rows} rows): RMS point error {rms:.4g} mm.",
-             f"Fitted on {result.problem.elements or result.arm.elements} elements; routes are in "
+             f"Fitted on {result.elements or result.arm.elements} elements; routes are in "
              "the arm's own frame (clamp at the origin along +x).",
              "Fitted parameters (value +- one standard deviation):"]
     for p in result.parameters():
@@ -48,38 +50,60 @@ def write_fitted_toml(path, result, overwrite: bool = False):
 
 
 def write_calibration_h5(path, result, overwrite: bool = False) -> None:
-    """The HDF5 layout of the module docstring."""
-    rows = result.problem.data
-    params = result.parameters()
-    summary = result.summary()
+    """The HDF5 file of the module docstring: provenance, :func:`calibration_layout`
+    and the whole result under ``/result``."""
     with atomic_h5(path, overwrite) as fh:
         write_attrs(fh, provenance(result.arm, "calibration"))
-        fh.attrs["summary_json"] = jsontext.dumps(summary)
-        g = fh.create_group("parameters")
-        put(g, "names", np.array([p["name"].encode() for p in params]), "", "parameters")
-        put(g, "units", np.array([p["unit"].encode() for p in params]), "", "their units")
-        for key in ("start", "value", "lower", "upper"):
-            put(g, key, np.array([p[key] for p in params], float), "see units", key)
-        put(g, "sigma", np.array([math.nan if p["sigma"] is None else p["sigma"]
-                                  for p in params]), "see units",
-            "standard deviation (NaN: not determined by the data)")
-        put(g, "covariance", result.report["covariance"], "units_i units_j",
-            "Gauss-Newton covariance scaled by the residual variance")
-        put(g, "correlation", result.report["correlation"], "1", "correlation matrix")
-        put(g, "singular_values", result.report["singular_values"], "mm per scale",
-            "singular values of the Jacobian with columns scaled by each parameter's scale")
-        r = fh.create_group("rows")
-        put(r, "line", np.array(rows.lines), "1", "line of the row in the data file")
-        put(r, "kind", np.array([k.encode() for k in rows.kinds]), "", "input kind")
-        put(r, "inputs", rows.inputs, "N | mm | steps", "tensions, lengths or steps")
-        put(r, "measured_mm", rows.points_mm(), "mm", "tip then markers (NaN: not measured)")
-        put(r, "predicted_mm", result.fit.evaluation.points_mm, "mm", "fitted model's points")
-        put(r, "error_mm", result.stats["per_row_mm"], "mm", "largest point error of the row")
-        put(r, "weight", result.fit.row_weights, "1", "Huber weight (1: not down-weighted)")
-        put(r, "taut", result.fit.evaluation.taut, "1", "cable carries tension")
-        put(r, "tip_covariance_mm2", result.tip_covariance_mm2, "mm^2",
-            "covariance of the predicted tip from the parameters' covariance")
-        cv = result.cross_validation
-        if cv is not None and "per_row_mm" in cv:
-            put(r, "cv_error_mm", cv["per_row_mm"], "mm",
-                "error of the row predicted by the fit without its fold")
+        calibration_layout(fh, result)
+        encode(fh, RESULT_GROUP, result)
+
+
+def calibration_layout(fh, result) -> None:
+    """The groups ``parameters``, ``rows`` and ``summary_json`` in the open file ``fh``
+    (named dimensions: parameter, row, tendon, measured_point, component)."""
+    rows = result.data
+    params = result.parameters()
+    fh.attrs["summary_json"] = jsontext.dumps(result.summary())
+    g = fh.create_group("parameters")
+    names = np.array([p["name"] for p in params], dtype=str)
+    PAR = ("parameter",)
+    coords = {"parameter": (names, "1", "calibration parameter"),
+              "parameter_j": (names, "1", "calibration parameter (second index)")}
+    put(g, "names", names, "1", "parameters", PAR, coords)
+    put(g, "units", np.array([p["unit"] for p in params], dtype=str), "1", "their units",
+        PAR, coords)
+    for key in ("start", "value", "lower", "upper"):
+        put(g, key, np.array([p[key] for p in params], float), "see units", key, PAR, coords)
+    put(g, "sigma", np.array([math.nan if p["sigma"] is None else p["sigma"]
+                              for p in params]), "see units",
+        "standard deviation (NaN: not determined by the data)", PAR, coords)
+    put(g, "covariance", result.report["covariance"], "units_i units_j",
+        "Gauss-Newton covariance scaled by the residual variance", PAR + ("parameter_j",),
+        coords)
+    put(g, "correlation", result.report["correlation"], "1", "correlation matrix",
+        PAR + ("parameter_j",), coords)
+    put(g, "singular_values", result.report["singular_values"], "mm per scale",
+        "singular values of the Jacobian with columns scaled by each parameter's scale",
+        ("singular_value",))
+    r = fh.create_group("rows")
+    R, RT = ("row",), ("row", "tendon")
+    RP = ("row", "measured_point", "component")
+    points = {"measured_point": (None, "1", "measured point: 0 the tip, then the markers")}
+    put(r, "line", np.array(rows.lines), "1", "line of the row in the data file", R)
+    put(r, "kind", np.array(rows.kinds, dtype=str), "1", "input kind", R)
+    put(r, "inputs", rows.inputs, "N | mm | steps", "tensions, lengths or steps", RT)
+    put(r, "measured_mm", rows.points_mm(), "mm", "tip then markers (NaN: not measured)",
+        RP, points)
+    put(r, "predicted_mm", result.fit.evaluation.points_mm, "mm", "fitted model's points",
+        RP, points)
+    put(r, "error_mm", result.stats["per_row_mm"], "mm", "largest point error of the row", R)
+    put(r, "weight", result.fit.row_weights, "1", "Huber weight (1: not down-weighted)", R)
+    put(r, "taut", result.fit.evaluation.taut, "1", "cable carries tension", RT)
+    put(r, "tip_covariance_mm2", result.tip_covariance_mm2, "mm^2",
+        "covariance of the predicted tip from the parameters' covariance",
+        ("row", "component", "component_j"), {"component_j": (list("xy"), "1",
+                                                               "vector component (x, y)")})
+    cv = result.cross_validation
+    if cv is not None and "per_row_mm" in cv:
+        put(r, "cv_error_mm", cv["per_row_mm"], "mm",
+            "error of the row predicted by the fit without its fold", R)

@@ -44,8 +44,9 @@ def write_config(path, arm, header_lines=(), overwrite: bool = False) -> Path:
     return path
 
 
-def write_sweep(path, results, attrs: dict, timing: dict) -> None:
-    """One checkpoint of ``design --sweep`` (written aside, renamed into place)::
+def write_sweep(path, results, attrs: dict, timing: dict):
+    """One checkpoint of ``design --sweep`` written in full (aside, renamed into
+    place; returns its :class:`~.inplace.Layout` for in-place checkpoints)::
 
         grid/points      (D, k)  mm   the designs (one row each; axes in grid/names)
         grid/names       (k,)         the swept parameters, e.g. tendon2.route.y
@@ -60,26 +61,35 @@ def write_sweep(path, results, attrs: dict, timing: dict) -> None:
 
     import numpy as np
 
-    from .hdf5 import atomic_h5, put, write_attrs
+    from .hdf5 import put, write_attrs
+    from .inplace import FullWrite
+    from .workspace import write_timing
 
     grid = results.grid
-    with atomic_h5(path, overwrite=True) as fh:
+    with FullWrite(path) as full:
+        fh = full.file
         write_attrs(fh, attrs)
         fh.attrs["complete"] = bool(results.chunk_done.all())
-        fh.attrs["samples_done"] = results.samples_done
+        full.mark(fh, "samples_done", results.samples_done, "i8")
         fh.attrs["samples_total"] = grid.size
         g = fh.create_group("grid")
         axes = json.loads(attrs["grid_json"])["axes"]
-        put(g, "points", grid.points, "mm", "the designs, one per row (columns: grid/names)")
-        put(g, "names", np.array([a["name"].encode() for a in axes]), "", "swept parameters")
+        names = np.array([a["name"] for a in axes], dtype=str)
+        coords = {"axis": (names, "1", "swept parameter"),
+                  "design": (None, "1", "design index (a row of grid/points)")}
+        put(g, "points", grid.points, "mm", "the designs, one per row (columns: grid/names)",
+            ("design", "axis"), coords)
+        put(g, "names", names, "1", "swept parameters", ("axis",), coords)
         for j, a in enumerate(axes):
-            put(g, f"axis_{j}", np.array(a["values"]), "mm", f"values of {a['name']}")
-        put(g, "chunk_done", results.chunk_done, "1", "design evaluated and stored")
+            put(g, f"axis_{j}", np.array(a["values"]), "mm", f"values of {a['name']}",
+                (f"value_{j}",), {f"value_{j}": (None, "1", f"index along {a['name']}")})
+        put(g, "chunk_done", results.chunk_done, "1", "design evaluated and stored", ("chunk",))
         samples = fh.create_group("samples")
         done = np.zeros(grid.size, bool)
         for c in np.flatnonzero(results.chunk_done):
             done[grid.chunks[c]] = True
-        put(samples, "done", done, "1", "design evaluated and stored")
+        put(samples, "done", done, "1", "design evaluated and stored", ("design",), coords)
         for name, (_, _, units, description) in results.schema.items():
-            put(samples, name, results.data[name], units, description)
-        write_attrs(fh.create_group("timing"), timing)
+            put(samples, name, results.data[name], units, description, ("design",), coords)
+        write_timing(full, fh.create_group("timing"), timing)
+    return full.layout

@@ -30,7 +30,10 @@ DIMENSION_TEXT = {"tendon": "tendon number", "component": "vector component (x, 
                   "node": "mesh node index (arc length s = node l / N)",
                   "element": "finite element index", "point": "path point index",
                   "row": "schedule row", "sample": "workspace sample index",
-                  "iteration": "optimiser iteration", "x": "target x", "y": "target y"}
+                  "iteration": "optimiser iteration", "x": "target x", "y": "target y",
+                  "vertex": "polygon vertex", "fold_point": "point where the tip map folds",
+                  "event": "event index", "jump": "jump index",
+                  "singular_value": "singular value index"}
 
 
 def cf_attrs(units: str, description: str) -> dict:
@@ -82,6 +85,22 @@ def label(dset, dims, coords: dict | None = None) -> None:
         values, units, long_name = spec if isinstance(spec, tuple) else (spec, None, None)
         scale = dimension(dset.parent, name, dset.shape[axis], values, units, long_name)
         dset.dims[axis].attach_scale(scale)
+
+
+def put(group, name: str, data, units: str, description: str, dims=None, coords=None):
+    """A dataset with its units (UDUNITS/CF: ``1`` for a non-dimensional one, its
+    meaning in ``long_name``), description and, with ``dims``, one named
+    dimension per axis (io/dims.py; ``coords`` their values)."""
+    data = np.asarray(data)
+    if data.dtype.kind == "U":                  # text: variable-length UTF-8 strings
+        import h5py
+        data = data.astype(object).astype(h5py.string_dtype("utf-8"))
+    dset = group.create_dataset(name, data=data)
+    dset.attrs.update(cf_attrs(units, description))
+    dset.attrs["description"] = description
+    if dims is not None:
+        label(dset, dims, coords)
+    return dset
 
 
 def fields(group) -> dict:

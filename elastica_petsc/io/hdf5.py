@@ -23,6 +23,7 @@ Layout of an equilibrium group (``write_equilibrium``)::
     tendons/tensions       (n,)     P l^2/B
     tendons/tensions_N     (n,)     N
     tendons/cable_clear    (n,)     bool    cable segment does not cross the arm
+    guides/...             (P,...)          cables through guides only (io/guides.py)
     solver (attributes)    converged, reason, message, iterations, load_steps,
                            unstable_modes, stable; after a symmetric bifurcation
                            bifurcation_sides, bifurcation_rules and the dataset
@@ -46,6 +47,7 @@ from ..core.config import arm_to_dict
 from ..solvers.equilibrium import Equilibrium
 from ..core.errors import InputError
 from ..core.model import Arm
+from .dims import put  # noqa: F401 - re-exported: every writer's dataset helper
 from .exclusive import OutputLock, replace_file  # noqa: F401 - OutputLock: re-exported
 
 
@@ -191,24 +193,6 @@ def write_attrs(obj, attrs: dict) -> None:
         obj.attrs[key] = value
 
 
-def put(group, name: str, data, units: str, description: str, dims=None, coords=None):
-    """A dataset with its units (UDUNITS/CF: ``1`` for a non-dimensional one, its
-    meaning in ``long_name``), description and, with ``dims``, one named
-    dimension per axis (io/dims.py; ``coords`` their values)."""
-    from .dims import cf_attrs, label
-
-    data = np.asarray(data)
-    if data.dtype.kind == "U":                  # text: variable-length UTF-8 strings
-        import h5py
-        data = data.astype(object).astype(h5py.string_dtype("utf-8"))
-    dset = group.create_dataset(name, data=data)
-    dset.attrs.update(cf_attrs(units, description))
-    dset.attrs["description"] = description
-    if dims is not None:
-        label(dset, dims, coords)
-    return dset
-
-
 def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
     """One solved state under ``group`` (layout in the module docstring)."""
     l_mm = arm.length_mm
@@ -238,6 +222,9 @@ def write_equilibrium(group, arm: Arm, eq: Equilibrium) -> None:
     put(tendons, "tensions_N", arm.tensions_to_N(eq.p), "N", "tensions P_i", ("tendon",))
     put(tendons, "cable_clear", state_cable_clear(eq), "1",
         "the straight cable [x_i, r_i] does not cross the arm (HDF5 boolean)", ("tendon",))
+    from .guides import has_guides, write_guides
+    if has_guides(eq.disc):              # cables through guides (io/guides.py)
+        write_guides(group, arm, eq)
     solver = group.create_group("solver")
     write_attrs(solver, {"converged": bool(eq.converged), "reason": eq.reason,
                          "message": eq.message, "iterations": int(eq.iterations),
@@ -310,6 +297,9 @@ def write_trace(group, arm: Arm, trace, schedule) -> None:
     put(path, "cable_clear", np.array([state_cable_clear(r.equilibrium) for r in results],
                                       dtype=bool).reshape(len(results), -1), "1",
         "per point and tendon: the straight cable does not cross the arm (HDF5 boolean)", PT)
+    from .guides import has_guides, write_trace_guides
+    if results and has_guides(results[0].equilibrium.disc):
+        write_trace_guides(path, arm, [r.equilibrium for r in results])
     ends = write_loading_tree(group, [r.loading for r in results])
     put(path, "loading_node", ends, "1",
         "per point: last vertex of its loading path in /loading (-1: p = 0, -2: unknown)",

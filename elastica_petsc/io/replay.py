@@ -79,37 +79,43 @@ def write_replay(path, overwrite: bool, arm, trace: dict, result) -> None:
                          "start_method": result.start_method,
                          "max_tip_error_mm": float(result.max_tip_error_mm)})
         g = fh.create_group("planned")
-        put(g, "cable_lengths", trace["cable_lengths"], "mm", "planned cable lengths L_i")
-        put(g, "tip", trace["tip"], "mm", "planned tip (load-controlled trace)")
+        PT, P2 = ("point", "tendon"), ("point", "component")      # named dims (io/dims.py)
+        put(g, "cable_lengths", trace["cable_lengths"], "mm", "planned cable lengths L_i", PT)
+        put(g, "tip", trace["tip"], "mm", "planned tip (load-controlled trace)", P2)
         if trace["tensions"] is not None:
-            put(g, "tensions", trace["tensions"], "P l^2/B", "planned tensions p_i")
+            put(g, "tensions", trace["tensions"], "P l^2/B", "planned tensions p_i", PT)
         r = fh.create_group("replay")
-        put(r, "index", [q.index for q in pts], "1", "point of the planned path")
+        R = ("point",)
+        put(r, "index", [q.index for q in pts], "1", "point of the planned path", R)
         put(r, "tip", np.array([q.state.tip_mm for q in pts]).reshape(-1, 2), "mm",
-            "replayed tip under length control")
-        put(r, "tip_error", [q.tip_error_mm for q in pts], "mm", "|replayed - planned tip|")
+            "replayed tip under length control", P2)
+        put(r, "tip_error", [q.tip_error_mm for q in pts], "mm", "|replayed - planned tip|", R)
         put(r, "shape_error", [np.nan if q.shape_error is None else q.shape_error for q in pts],
-            "rad", "max |theta - planned theta| (NaN: no planned shape)")
-        put(r, "on_branch", [q.on_branch for q in pts], "1", "on the planned branch")
-        put(r, "jumped", [q.jumped for q in pts], "1", "snap/buckling on the way to the point")
+            "rad", "max |theta - planned theta| (NaN: no planned shape)", R)
+        put(r, "on_branch", [q.on_branch for q in pts], "1", "on the planned branch", R)
+        put(r, "jumped", [q.jumped for q in pts], "1", "snap/buckling on the way to the point",
+            R)
         put(r, "stable", [q.state.converged and q.stable for q in pts], "1",
-            "stable under length control")
+            "stable under length control", R)
         put(r, "converged", [q.state.converged for q in pts], "1", "length-controlled solve "
-                                                                    "converged")
+                                                                    "converged", R)
         P = np.array([q.state.p for q in pts]).reshape(-1, n)
-        put(r, "tensions", P, "P l^2/B", "replayed tensions p_i")
-        put(r, "tensions_N", arm.tensions_to_N(P), "N", "replayed tensions P_i")
-        put(r, "theta", np.array([q.state.theta for q in pts]), "rad", "replayed nodal angles")
+        put(r, "tensions", P, "P l^2/B", "replayed tensions p_i", PT)
+        put(r, "tensions_N", arm.tensions_to_N(P), "N", "replayed tensions P_i", PT)
+        put(r, "theta", np.array([q.state.theta for q in pts]).reshape(len(pts), -1), "rad",
+            "replayed nodal angles", ("point", "node"))
         j = fh.create_group("jumps")
         jumps = result.jumps
-        put(j, "before_point", [k for k, _ in jumps], "1", "point reached after the jump")
+        put(j, "before_point", [k for k, _ in jumps], "1", "point reached after the jump",
+            ("jump",))
         put(j, "lengths", np.array([L for _, L in jumps]).reshape(-1, n), "mm",
-            "cable lengths at which the arm jumped")
+            "cable lengths at which the arm jumped", ("jump", "tendon"))
         g = fh.create_group("instabilities")
         events = result.instabilities
+        E = ("event",)
         put(g, "before_point", [k for k, _, _ in events], "1",
-            "point reached after the loss of stability")
+            "point reached after the loss of stability", E)
         put(g, "lengths", np.array([L for _, L, _ in events]).reshape(-1, n), "mm",
-            "cable lengths at which the followed branch lost stability")
-        put(g, "kind", np.array([kind.encode() for _, _, kind in events], dtype="S16"), "1",
-            "bifurcation (buckling, switched to a stable branch) or limit point (snap)")
+            "cable lengths at which the followed branch lost stability", ("event", "tendon"))
+        put(g, "kind", np.array([kind for _, _, kind in events], dtype=str), "1",
+            "bifurcation (buckling, switched to a stable branch) or limit point (snap)", E)

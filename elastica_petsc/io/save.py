@@ -12,6 +12,8 @@ from ..solvers.equilibrium import Equilibrium
 from .hdf5 import (atomic_h5, provenance, put, write_attrs, write_control, write_equilibrium,
                    write_loading, write_trace)
 from .boundary import write_boundary_layout
+from .calibration import calibration_layout
+from .simulation import simulation_layout
 from .records import RESULT_GROUP, encode
 
 
@@ -80,7 +82,9 @@ def _boundary_layout(fh, result) -> None:
 
 # the command line's layout per result type (by class name: io sits below the api layer)
 LAYOUTS = {"State": ("equilibrium", _state_layout),
-           "BoundaryResult": ("boundary", _boundary_layout)}
+           "BoundaryResult": ("boundary", _boundary_layout),
+           "SimulationResult": ("simulation", simulation_layout),
+           "CalibrationResult": ("calibration", calibration_layout)}
 
 
 def result_arm(result):

@@ -83,7 +83,18 @@ def path_design_summary(result, elements: int | None = None) -> dict:
         "routes_after_mm": [list(t.route_mm) for t in result.arm_after.tendons],
         "iterations": result.iterations, "evaluations": result.evaluations,
         "seconds": result.seconds, "tao_reason": result.reason,
+        **_offset_summary(result),
     }
+
+
+def _offset_summary(result) -> dict:
+    """Guide offsets varied by a path design (studies/design_offsets.py), mm."""
+    offsets = getattr(result, "offsets", None)
+    if not offsets:
+        return {}
+    return {"offset_variables": [v.name for v in offsets],
+            "offsets_before_mm": [v.value_mm(result.arm_before) for v in offsets],
+            "offsets_after_mm": [v.value_mm(result.arm_after) for v in offsets]}
 
 
 def area_summary(r, elements: int | None = None) -> dict:

@@ -207,7 +207,8 @@ def write_trace(directory, arm, trace, *, name: str = "trace", times_s=None,
         if part is None:
             continue
         if not part.results:
-            raise InputError("exporting a trace needs its per-point states (keep_results=True)")
+            raise InputError("exporting a trace needs its per-point states: trace with "
+                             "keep_results=True (ep.trace) or use ep.schedule")
         t = np.arange(part.n_points, dtype=float) if times is None else np.asarray(times, float)
         digits = max(4, len(str(part.n_points - 1)))
         written = [write_state(directory / f"{stem}_{k:0{digits}d}.vtu", arm, r.equilibrium)

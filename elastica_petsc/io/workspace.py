@@ -60,6 +60,7 @@ def read_samples(fh, results) -> None:
         if name in OPTIONAL_FIELDS and name not in fh["samples"]:
             continue
         results.data[name][...] = fh["samples"][name][()]
+    results.clear_undone()          # rows of chunks not done may hold an unfinished update
 
 
 def lattice_index(grid) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -115,16 +116,19 @@ def write_map_grids(group, results, index, axes, limits: dict, descriptions: dic
             ("y", "x") + sample_dims(name, shape_k), coords)
 
 
-def write_results(path: Path, results, attrs: dict, limits: dict, timing: dict) -> None:
+def write_results(path: Path, results, attrs: dict, limits: dict, timing: dict):
     """Write the whole file of a workspace map's ``results``
     (:class:`~elastica_petsc.studies.workspace.schema.Results`) aside and rename
-    it into place (always valid)."""
-    from .hdf5 import atomic_h5, put, write_attrs
+    it into place (always valid); returns its :class:`~.inplace.Layout`, with
+    which later checkpoints write only new rows (:func:`new_map_rows`)."""
+    from .hdf5 import put, write_attrs
+    from .inplace import FullWrite
 
-    with atomic_h5(path, overwrite=True) as fh:
+    with FullWrite(path) as full:
+        fh = full.file
         write_attrs(fh, attrs)
         fh.attrs["complete"] = bool(results.chunk_done.all())
-        fh.attrs["samples_done"] = results.samples_done
+        full.mark(fh, "samples_done", results.samples_done, "i8")
         fh.attrs["samples_total"] = results.grid.size
         targets = results.grid.mode == "targets"
         coordinate = "component" if targets else "tendon"      # of a sample point
@@ -167,7 +171,34 @@ def write_results(path: Path, results, attrs: dict, limits: dict, timing: dict) 
         write_attrs(masks, {k: v for k, v in limits.items() if v is not None})
         if targets:
             write_map_grids(fh.create_group("map"), results, index, axes, limits, descriptions)
-        write_attrs(fh.create_group("timing"), timing)
+        write_timing(full, fh.create_group("timing"), timing)
+    return full.layout
+
+
+def write_timing(full, group, timing: dict) -> None:
+    """The ``timing`` attributes, the wall and I/O times updatable in place."""
+    from .hdf5 import write_attrs
+
+    write_attrs(group, {k: v for k, v in timing.items() if k not in UPDATED_TIMING})
+    for key in UPDATED_TIMING:
+        full.mark(group, key, timing.get(key, 0.0), "f8")
+
+
+UPDATED_TIMING = ("seconds_wall", "seconds_io")     # rewritten at every checkpoint
+
+
+def new_map_rows(results, samples: np.ndarray, limits: dict) -> list:
+    """The rows a checkpoint writes in place for ``samples`` besides their
+    ``samples/`` fields: their masks (``masks/``) and, on a target lattice, their
+    cells of ``map/`` (:func:`write_map_grids`), as (dataset, index, values)."""
+    masks = results.masks(limits, samples)
+    rows = [(f"masks/{name}", samples, mask) for name, mask in masks.items()]
+    if results.grid.mode == "targets":
+        index = results.lattice[0][samples]
+        cell = (index[:, 1], index[:, 0])
+        rows += [(f"map/{name}", cell, mask) for name, mask in masks.items()]
+        rows += [(f"map/{name}", cell, results.data[name][samples]) for name in MAP_FIELDS]
+    return rows
 
 
 def read_results(path: Path, attrs: dict, results):

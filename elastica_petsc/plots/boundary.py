@@ -22,7 +22,12 @@ def plot_boundary(data: dict, path, *, arm_length_mm: float, routes_mm: np.ndarr
         a = np.linspace(0, 2 * np.pi, 400)
         ax.plot(arm_length_mm * np.cos(a), arm_length_mm * np.sin(a), "k--", lw=0.8,
                 label=f"rigid link of length l = {arm_length_mm:g} mm")
-        ax.plot(routes_mm[:, 0], routes_mm[:, 1], "k^", ms=6, ls="none", label="routing points")
+        ax.plot(routes_mm[:, 0], routes_mm[:, 1], "k^", ms=6, ls="none", zorder=10,
+                label="routing points r_" + ", r_".join(str(i) for i in
+                                                        range(1, len(routes_mm) + 1)))
+        for i, r in enumerate(routes_mm, start=1):          # drawn over the curves, named
+            ax.annotate(f"r_{i}", r, xytext=(5, -3), textcoords="offset points", fontsize=9,
+                        zorder=10)
     if "W0" in data["regions"]:
         shade_w0(ax, data["regions"]["W0"], arm_length_mm / 300)     # holes (around r_1) white
     if "W0" in data["regions"] and samples is None:
@@ -43,7 +48,7 @@ def plot_boundary(data: dict, path, *, arm_length_mm: float, routes_mm: np.ndarr
     if len(folds):
         ax.plot(folds[:, 0], folds[:, 1], "D", color="tab:orange", ms=5, zorder=9,
                 label="where they meet the loop")
-    ax.plot(0, 0, "ks", ms=6)
+    ax.plot(0, 0, "ks", ms=6, zorder=10, label="clamp")
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")

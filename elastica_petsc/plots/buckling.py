@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..studies.buckling import Fig7Result, PAPER, segment_profile
+from ..studies.buckling import segment_profile
+from ..studies.buckling_result import PAPER, Fig7Result
 from .common import draw_arm, draw_setting, figure, finish_geometry, legend_below, save
 
 

@@ -19,7 +19,7 @@ def ellipse(cov, centre, points: int = 60) -> np.ndarray:
 
 
 def plot_calibration(result, path) -> None:
-    data = result.problem.data
+    data = result.data
     measured = data.tips_mm
     predicted = result.fit.evaluation.points_mm[:, 0]
     errors = np.linalg.norm(predicted - measured, axis=1)

@@ -35,10 +35,16 @@ def plot_area_design(result, path) -> None:
     ax.legend(fontsize=7, loc="lower left")
     ok = [h["area_mm2"] if h["feasible"] else np.nan for h in result.history]
     hx.plot(np.arange(1, len(ok) + 1), ok, "o", ms=3, color="tab:blue", label="feasible")
-    bad = [(k + 1, h["area_mm2"]) for k, h in enumerate(result.history) if not h["feasible"]]
+    bad = [(k + 1, h["area_mm2"]) for k, h in enumerate(result.history)
+           if not h["feasible"] and h["area_mm2"] is not None]     # None: rejected untraced
     if bad:                              # at the loop area each rejected design had
         hx.plot(*np.array(bad).T, "x", color="tab:red",
                 label="rejected: loop not solved or a cable across the arm")
+    untraced = [k + 1 for k, h in enumerate(result.history) if h["area_mm2"] is None]
+    if untraced:                         # no loop area: marked on the axis
+        hx.plot(untraced, np.zeros(len(untraced)), "|", ms=12, color="tab:red",
+                transform=hx.get_xaxis_transform(), clip_on=False,
+                label="rejected by the clearance check (not traced)")
     hx.set_xlabel("evaluation")
     hx.set_ylabel("loop area [mm^2]")
     hx.legend(fontsize=7)

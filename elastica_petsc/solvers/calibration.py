@@ -173,9 +173,12 @@ class RowSolver:
             out.append(nodes[e] + frac * normals[e][:, None] * dphi[e][None, :])
         return np.array(out) * self.l_mm
 
-    def derivatives(self, kind: str, state: RowState, L=None, marker_s_mm=()) -> np.ndarray:
+    def derivatives(self, kind: str, state: RowState, L=None, marker_s_mm=(),
+                    weight: bool = False) -> np.ndarray:
         """d points [mm] / d q, (1 + k, 2, 3n): q = (rho [mm] (2n, x and y per
-        tendon), drive (n): p for tension rows, L [mm] for length rows)."""
+        tendon), drive (n): p for tension rows, L [mm] for length rows); with
+        ``weight`` one more column, the arm's weight scaled by a factor w at w = 1
+        (:meth:`GuidedDiscretisation.weight_derivative`)."""
         disc, n, N = self.disc, self.disc.n_tendons, self.disc.n_elements
         sys = self.len.system if kind != "tension" else self.load_system
         sys.deflation = Deflation(disc.h)
@@ -188,6 +191,10 @@ class RowSolver:
             lo, hi = sys.indptr[r], sys.indptr[r + 1]
             values[lo:hi] = np.where(sys.indices[lo:hi] == r, 1.0, 0.0)
         rhs = self._rhs(kind, sys, state, slack)
+        if weight:
+            column = np.zeros((sys.size, 1))
+            column[:disc.size, 0] = disc.weight_derivative(state.u)
+            rhs = np.hstack((rhs, column))
         self.A.setValuesCSR(sys.indptr, sys.indices, values)
         self.A.assemble()
         self.ksp.setOperators(self.A)
@@ -205,22 +212,32 @@ class RowSolver:
         out = self.point_derivatives(state.u, dz[:N], marker_s_mm)
         out[:, :, : 2 * n] /= self.l_mm                  # per mm of route (rho in units of l)
         if kind != "tension":
-            out[:, :, 2 * n:] /= self.l_mm               # per mm of cable
+            out[:, :, 2 * n:3 * n] /= self.l_mm          # per mm of cable
         return out
 
     def _rhs(self, kind, sys: AugmentedSystem, state: RowState, slack) -> np.ndarray:
-        """dG/dq (size, 3n) at fixed z (module docstring), q in units of l and p."""
+        """dG/dq (size, 3n) at fixed z (module docstring), q in units of l and p.
+        Cables through guides (docs/model.md §11.7): rho_i enters only the first
+        chord's equation, dF/drho_i = -I there, and a cable's length is the sum of
+        its chords, so g_i does not involve rho_i."""
         disc, n, N = self.disc, self.disc.n_tendons, self.disc.n_elements
-        theta, y = disc.split(state.u)
-        lengths, d = disc.cables(y)
-        g = disc.attachment_gradients(theta)
-        lever = (np.asarray(state.p) / lengths)[:, None] * disc.transverse_gradients(g, d)
-        d_perp = np.column_stack((-d[:, 1], d[:, 0]))
         out = np.zeros((sys.size, 3 * n))
+        taut = [kind != "tension" and i not in slack for i in range(n)]
+        if disc.has_paths:
+            for i in range(n):
+                out[:disc.size, 2 * i:2 * i + 2] = disc.route_derivative(state.u, state.p, i)
+        else:
+            theta, y = disc.split(state.u)
+            lengths, d = disc.cables(y)
+            g = disc.attachment_gradients(theta)
+            lever = (np.asarray(state.p) / lengths)[:, None] * disc.transverse_gradients(g, d)
+            d_perp = np.column_stack((-d[:, 1], d[:, 0]))
+            for i in range(n):
+                out[:N, 2 * i:2 * i + 2] = -lever[i][:, None] * d_perp[i][None, :]
+                if taut[i]:
+                    out[sys.ip + i, 2 * i:2 * i + 2] = -d[i]
         for i in range(n):
-            out[:N, 2 * i:2 * i + 2] = -lever[i][:, None] * d_perp[i][None, :]
-            if kind != "tension" and i not in slack:
-                out[sys.ip + i, 2 * i:2 * i + 2] = -d[i]
+            if taut[i]:
                 out[sys.ip + i, 2 * n + i] = 1.0
             elif kind == "tension":
                 out[sys.ip + i, 2 * n + i] = -1.0

@@ -81,19 +81,20 @@ class Equilibrium(Result):
     def tip(self) -> np.ndarray:
         return self.x[-1]
 
-    @property
+    @cached_property
     def attachments(self) -> np.ndarray:
         """Where each cable ends (its offset included, docs/model.md §11)."""
         if self.disc.has_paths:
             return self.disc.attachment_points(self.theta)
-        return self.x[list(self.disc.attach_nodes)]
+        return self.x[self.disc.attach_index]
 
     @cached_property
     def cable_lengths(self) -> np.ndarray:
         """L_i = |r_i - x_i| in units of l (through the guides: the whole path)."""
         if self.disc.has_paths:
             return self.disc.cable_lengths_of(self.theta)
-        return np.linalg.norm(self.disc.routes - self.attachments, axis=1)
+        chord = self.disc.routes - self.attachments
+        return np.hypot(chord[:, 0], chord[:, 1])
 
     @property
     def directions(self) -> np.ndarray:
@@ -185,9 +186,11 @@ def check_tensions(p, n_tendons: int) -> np.ndarray:
     p = np.asarray(p, dtype=float).ravel()
     if p.size != n_tendons:
         raise InputError(f"expected {n_tendons} tensions (one per tendon), got {p.size}")
-    if not np.all(np.isfinite(p)):
+    if (p >= 0).all() and np.isfinite(p).all():           # the common case, checked fast
+        return p
+    if not np.isfinite(p).all():
         raise InputError("tensions must be finite numbers")
-    if np.any(p < 0):
+    if (p < 0).any():
         i = int(np.argmax(p < 0)) + 1
         raise InputError(f"tension of tendon {i} is negative ({p[i - 1]:g}): a cable cannot push")
     return p
@@ -228,11 +231,11 @@ class EquilibriumSolver:
         self.tip_moment = tip_moment
         self._p = np.zeros(disc.n_tendons)
         indptr, indices, _ = disc.pattern
-        self._csr = (indptr, indices)
-        u0 = disc.straight()
-        self.J = PETSc.Mat().createAIJ(
-            size=(disc.size, disc.size), csr=(indptr, indices, disc.jacobian_values(u0, self._p)),
-            comm=comm)
+        # J keeps these arrays (no copy): the Jacobian callback writes its entries
+        # in place and assembles, with no MatSetValues
+        self._values = disc.jacobian_values(disc.straight(), self._p)
+        self.J = PETSc.Mat().createAIJWithArrays(
+            (disc.size, disc.size), (indptr, indices, self._values), comm=comm)
         self.x = PETSc.Vec().createSeq(disc.size, comm=comm)
         self.f = self.x.duplicate()
         snes = PETSc.SNES().create(comm)
@@ -260,8 +263,8 @@ class EquilibriumSolver:
         F.setArray(self.disc.residual(X.getArray(readonly=True), self._p, self.tip_moment))
 
     def _form_jacobian(self, snes, X, J, P) -> None:
-        P.setValuesCSR(*self._csr, self.disc.jacobian_values(X.getArray(readonly=True), self._p))
-        P.assemble()
+        self._values[:] = self.disc.jacobian_values(X.getArray(readonly=True), self._p)
+        P.assemble()                    # P is self.J: its entries are self._values
 
     # --- one Newton solve -----------------------------------------------------
     def newton(self, u0: np.ndarray, p) -> tuple[np.ndarray, int, str]:
@@ -348,7 +351,7 @@ class EquilibriumSolver:
                 min_fraction: float = 1e-5):
         """Continuation from the equilibrium ``u`` at ``pa`` to tensions ``pb``
         (``tangent``: du/dp at ``pa`` for the first predictor, else a secant)."""
-        span = float(np.max(np.abs(pb - pa))) if len(pa) else 0.0
+        span = float(np.abs(pb - pa).max()) if len(pa) else 0.0
         full = 1.0 if span <= self.max_step else self.max_step / span
         dlam, lam, iterations, steps = full, 0.0, 0, 0
         u_prev, dlam_prev = None, None
@@ -371,7 +374,7 @@ class EquilibriumSolver:
                 # a branch jump only makes sense along a path: with fixed tensions
                 # (span 0) this is a plain Newton solve
                 jumped = span > 0 and \
-                    np.max(np.abs(u_new[:n_angles] - predictor[:n_angles])) > self.jump_tol
+                    np.abs(u_new[:n_angles] - predictor[:n_angles]).max() > self.jump_tol
                 modes = self.inertia.negative_eigenvalues(u_new, target)
                 if keep_stable and modes > 0:
                     reason = "UNSTABLE_STATE"
@@ -384,7 +387,7 @@ class EquilibriumSolver:
                     else:
                         u_prev, dlam_prev = u, step
                     u, lam, steps, path.modes = u_new, lam + step, steps + 1, modes
-                    if np.min(self.disc.shortest_segments(self.disc.split(u)[1])) < \
+                    if self.disc.shortest_segments(u[n_angles:].reshape(-1, 2)).min() < \
                             COLLAPSE_LENGTH:
                         # a cable collapsed onto its routing point: no load beyond
                         return u, pa + lam * (pb - pa), iterations, steps, CABLE_COLLAPSE, False

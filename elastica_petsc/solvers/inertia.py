@@ -3,18 +3,18 @@
 K = T + W W^T (tridiagonal plus rank n, docs/model.md §2) is the Schur complement of
 the symmetric bordered matrix H = [[T, W], [W^T, -I]] (see
 :meth:`Discretisation.stability_values`).  By Haynsworth's inertia
-additivity In(H) = In(K) + (0, n, 0), so one sparse LDL^T of H (PETSc's
-Cholesky on SBAIJ storage, natural order: fill only in the border) counts
-the negative eigenvalues of K in O(N).  Under load control an equilibrium is
-stable iff that count is zero (energy criterion, docs/model.md §2).
+additivity In(H) = In(K) + (0, n, 0), so one LDL^T of H in the natural order
+(fill only in the border) counts the negative eigenvalues of K in O(N).  Under
+load control an equilibrium is stable iff that count is zero (energy
+criterion, docs/model.md §2).  The factorisation is the compiled
+:func:`~elastica_petsc.core.fem.ldlt_negatives` (the pivots of PETSc's Cholesky on
+SBAIJ storage in the natural order, without a PETSc matrix: docs/model.md §20).
 """
 from __future__ import annotations
 
 import numpy as np
-from petsc4py import PETSc
 
-from ..core.fem import Discretisation
-from .linalg import bordered_ldlt
+from ..core.fem import Discretisation, ldlt_negatives
 from .options import SolverOptions, check_comm
 
 
@@ -22,39 +22,32 @@ class BorderedInertia:
     """Sylvester inertia of a symmetric bordered matrix (tridiagonal block and
     dense borders, upper-triangle CSR ``pattern``) by one LDL^T in the natural
     order; subclasses give the entries and how many negative eigenvalues the
-    border itself contributes (Haynsworth).  The contract of :mod:`.options`:
-    ``comm`` (one process), ``options_prefix`` (of the matrix and its LDL^T
-    PC, e.g. ``-eq_inertia_pc_factor_mat_solver_type``), ``petsc_options``."""
+    border itself contributes (Haynsworth); they set ``disc`` (whose
+    ``n_elements`` angle rows come first) before calling this constructor.  It owns no PETSc object; the
+    contract of :mod:`.options` is checked (``comm``: one process, a legal
+    ``options_prefix``) and ``petsc_options`` must be empty: the compiled
+    factorisation has no options."""
 
     def __init__(self, pattern, size: int, values: np.ndarray, *, comm=None,
                  options_prefix: str = "inertia_", petsc_options=None):
         self.options = SolverOptions(options_prefix, petsc_options)
-        comm = check_comm(comm)
-        indptr, indices = pattern[0], pattern[1]
-        self._csr = (indptr, indices)
-        self.H = PETSc.Mat().createSBAIJ(size=(size, size), bsize=1, comm=comm,
-                                         csr=(indptr, indices, values))
-        self.pc = bordered_ldlt(self.H)
-        self.options.label(self.H, self.pc)
-        self.options.apply(self.pc)
+        check_comm(comm)
+        if self.options.options:
+            raise ValueError(f"the inertia count ({options_prefix}) takes no PETSc options")
+        self._csr = (np.ascontiguousarray(pattern[0], np.int32),
+                     np.ascontiguousarray(pattern[1], np.int32))
+        self._angles = self.disc.n_elements         # the tridiagonal block's rows
+        ldlt_negatives(self._csr, values, self._angles)        # refuses another pattern
 
     def count(self, values: np.ndarray, border_negatives: int) -> int:
         """Negative plus zero eigenvalues of the matrix with entries ``values``,
         less ``border_negatives``; 1 if the factorisation meets a zero pivot
         (numerically singular: marginal at best)."""
-        self.H.setValuesCSR(*self._csr, values)
-        self.H.assemble()
-        self.pc.setOperators(self.H)
-        try:
-            self.pc.setUp()
-        except PETSc.Error:
-            return 1
-        negative, zero, _ = self.pc.getFactorMatrix().getInertia()
-        return negative + zero - border_negatives
+        negative = ldlt_negatives(self._csr, values, self._angles)
+        return 1 if negative is None else negative - border_negatives
 
     def destroy(self) -> None:
-        self.pc.destroy()
-        self.H.destroy()
+        """Nothing to free (kept for the callers' solver contract)."""
 
 
 class InertiaCounter(BorderedInertia):

@@ -19,6 +19,8 @@ given after the first solve (in the database, or by
 :meth:`SolverOptions.update`) are applied at the next solve
 (:meth:`SolverOptions.refresh`).
 
+* :func:`call_options` — the ``petsc_options=`` of one library call
+  (``elastica_petsc.api``): the same push and removal, over the database.
 * :func:`unused_options` — options in PETSc's database that no solver read
   (like ``-options_left``).  petsc4py 3.18 has no binding for
   ``PetscOptionsUsed``; it is called through ctypes on the PETSc library this
@@ -78,18 +80,46 @@ def flatten_options(options: Mapping | None, parent: str = "") -> dict:
 
 
 @contextmanager
-def pushed_options(prefix: str, options: Mapping | None):
-    """``options`` (flat, keys without ``prefix``) in PETSc's database under
-    ``prefix`` for the duration, except those the user has set (they win)."""
+def pushed_options(prefix: str, options: Mapping | None, *, override: bool = False):
+    """``options`` (flat, keys without ``prefix``; None for a flag) in PETSc's
+    database under ``prefix`` for the duration, then removed.  Names already
+    in the database are left alone (the user's win: a class's defaults), or
+    with ``override`` replaced and their earlier values restored afterwards
+    (the options of one library call).  Yields the names pushed."""
     opts = PETSc.Options()
-    pushed = [prefix + key for key in (options or {}) if not opts.hasName(prefix + key)]
+    names = [prefix + key for key in (options or {})]
+    before = {name: opts.getString(name) for name in names if opts.hasName(name)}
+    pushed = names if override else [name for name in names if name not in before]
     for name in pushed:
         opts[name] = options[name[len(prefix):]]
     try:
-        yield
+        yield pushed
     finally:
         for name in pushed:
             opts.delValue(name)
+            if name in before:
+                opts[name] = before[name]
+
+
+@contextmanager
+def call_options(petsc_options: Mapping | None):
+    """The ``petsc_options=`` of one library call (names with or without their
+    leading '-', nested dicts flattened) in force for the ``with`` block only,
+    over whatever the database held (restored afterwards); InputError for
+    names that nothing read during the block (when that check is available,
+    :func:`unused_options`)."""
+    if not petsc_options:
+        yield
+        return
+    if not isinstance(petsc_options, Mapping):
+        raise InputError("petsc_options must be a mapping {name: value}, "
+                         "e.g. {'eq_snes_rtol': 1e-10}")
+    with pushed_options("", flatten_options(petsc_options), override=True) as names:
+        yield
+        unused = unused_options(names)
+    if unused:
+        raise InputError(f"PETSc options not used by any solver of this call: "
+                         f"{' '.join(unused)} (check the name and its prefix)")
 
 
 def options_under(prefix: str) -> dict:

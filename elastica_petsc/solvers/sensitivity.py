@@ -92,11 +92,10 @@ class SensitivitySolver:
         self.comm = comm = check_comm(comm)
         self.disc = disc
         indptr, indices, _ = disc.pattern
-        self._csr = (indptr, indices)
-        u0 = disc.straight()
-        self.J = PETSc.Mat().createAIJ(
-            size=(disc.size, disc.size), comm=comm,
-            csr=(indptr, indices, disc.jacobian_values(u0, np.zeros(disc.n_tendons))))
+        # J keeps these arrays (no copy): new entries are written in place, then assembled
+        self._values = disc.jacobian_values(disc.straight(), np.zeros(disc.n_tendons))
+        self.J = PETSc.Mat().createAIJWithArrays((disc.size, disc.size),
+                                                 (indptr, indices, self._values), comm=comm)
         self.rhs = PETSc.Vec().createSeq(disc.size, comm=comm)
         self.sol = self.rhs.duplicate()
         ksp = PETSc.KSP().create(comm)
@@ -105,8 +104,12 @@ class SensitivitySolver:
         use_bordered_lu(ksp)
         self.options.apply(ksp)
         self.ksp = ksp
-        # midpoint weights: element e gets (alpha_e + alpha_{e+1}) / 2
-        self._h = disc.h
+        # the nodes whose motion is reported: each cable's end, then the tip
+        if disc.has_paths:
+            self._ends = np.asarray(disc.path_starts[1:]) - 1
+            self._nodes = np.append(np.asarray(disc.point_nodes)[self._ends], disc.n_elements)
+        else:
+            self._nodes = np.append(disc.attach_nodes, disc.n_elements)
 
     @classmethod
     def for_solver(cls, solver: EquilibriumSolver, **kw) -> "SensitivitySolver":
@@ -120,9 +123,7 @@ class SensitivitySolver:
             raise SensitivityError(
                 "sensitivities need a converged equilibrium: " + (eq.message or eq.reason))
         u, p = eq.u, np.asarray(eq.p, float)
-        self.J.setValuesCSR(*self._csr, disc.jacobian_values(u, p))
-        self.J.assemble()
-        self.ksp.setOperators(self.J)
+        self._assemble(u, p)
         try:
             self.ksp.setUp()
         except PETSc.Error as err:
@@ -146,23 +147,16 @@ class SensitivitySolver:
         alpha[:, 1:] = du[:, :N]
         border = du[:, N:].reshape(n, -1, 2)
         theta = eq.theta
-        phi = disc.element_angles(theta)
-        normals = np.column_stack((-np.sin(phi), np.cos(phi)))          # n_e, (N, 2)
-        dphi = 0.5 * (alpha[:, :-1] + alpha[:, 1:])                     # (n, N)
-        steps = self._h * dphi[:, :, None] * normals[None]              # (n, N, 2)
-        cumulative = np.cumsum(steps, axis=1)                           # d x_{k+1} / dp_i
-        tip = cumulative[:, -1]                                         # Eq. (13)
+        moved = disc.position_derivative(theta, du, self._nodes)        # (n, n + 1, 2)
+        tip, attach = moved[:, -1], moved[:, :-1]                       # Eq. (13)
         if disc.has_paths:       # dL_j/dp_i = grad_theta L_j . alpha_i (docs/model.md §11)
-            ends = np.asarray(disc.path_starts[1:]) - 1
-            m = np.asarray(disc.point_nodes)[ends]
-            turn = disc.point_offsets[ends] * alpha[:, m]                 # delta dtheta_m
-            attach = cumulative[:, m - 1] - turn[..., None] * np.column_stack(
+            m = self._nodes[:-1]
+            turn = disc.point_offsets[self._ends] * alpha[:, m]           # delta dtheta_m
+            attach = attach - turn[..., None] * np.column_stack(
                 (np.cos(theta[m]), np.sin(theta[m])))[None]              # end points (n, n, 2)
             dL = du[:, :N] @ dFdp[:, :N].T
         else:
-            attach = cumulative[:, np.asarray(disc.attach_nodes) - 1]   # (n, n, 2)
-            d = eq.directions                                           # (n, 2)
-            dL = -np.einsum("ijc,jc->ij", attach, d)
+            dL = -(attach * eq.directions[None]).sum(axis=2)            # -d_j . dx_j/dp_i
         return Sensitivity(p=p.copy(), alpha=alpha, tip=tip, attachments=attach,
                            attachments_border=border, cable_lengths=dL)
 
@@ -171,20 +165,20 @@ class SensitivitySolver:
         dF/dq (size,) is given (a routing point's coordinate, a guide's offset:
         docs/model.md §11.7): J du/dq = -dF/dq, then Eq. (13)."""
         disc = self.disc
-        self.J.setValuesCSR(*self._csr, disc.jacobian_values(eq.u, np.asarray(eq.p, float)))
-        self.J.assemble()
-        self.ksp.setOperators(self.J)
+        self._assemble(eq.u, np.asarray(eq.p, float))
         self.rhs.setArray(-np.asarray(dFdq, float))
         self.ksp.solve(self.rhs, self.sol)
         if self.ksp.getConvergedReason() < 0:
             raise SensitivityError(f"design sensitivity solve failed, KSP reason "
                                    f"{self.ksp.getConvergedReason()}")
         du = self.sol.getArray(readonly=True).copy()
-        dtheta = np.concatenate(([0.0], du[: disc.n_elements]))
-        phi = disc.element_angles(eq.theta)
-        dphi = disc.element_angles(dtheta)
-        dtip = self._h * np.array([np.sum(-np.sin(phi) * dphi), np.sum(np.cos(phi) * dphi)])
-        return du, dtip
+        return du, disc.position_derivative(eq.theta, du[None], [disc.n_elements])[0, 0]
+
+    def _assemble(self, u: np.ndarray, p: np.ndarray) -> None:
+        """The tangent J = dF/du at (u, p), in place, as the operator of the KSP."""
+        self._values[:] = self.disc.jacobian_values(u, p)
+        self.J.assemble()
+        self.ksp.setOperators(self.J)
 
     def destroy(self) -> None:
         for obj in (self.ksp, self.J, self.rhs, self.sol):

@@ -78,6 +78,7 @@ GATOL = 1e-7                 # ALMM gradient tolerance of the scaled problem (f 
 KKT_TOL = 1e-9               # newton: relative KKT residual at convergence
 MAX_BACKTRACKS = 12          # newton: merit line-search halvings per iteration
 INFEASIBLE_GAIN = 1e-3       # newton: relative tip-error gain below which it is SHARE_INFEASIBLE
+TIP_NOISE = 16 * np.finfo(float).eps   # round-off of a tip coordinate (units of l, |x| ~ 1)
 STALL_ITS, STALL_GAIN = 5, 0.1   # newton: SHARE_STALLED if the tip error (still > 10x the
 #                                  tolerance) has not dropped by 10 % over 5 iterations
 
@@ -155,6 +156,32 @@ def _bfgs(W: np.ndarray, s: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 @dataclasses.dataclass
+class WarmStart:
+    """What the SQP hands from one point of a path to the next (module doc,
+    ``newton``): the quasi-Newton matrix W, the multipliers and the active
+    set.  One per path (:func:`elastica_petsc.studies.trace.trace` makes it),
+    never kept on the sharer; None fields: a cold start."""
+
+    W: np.ndarray | None = None
+    lam: np.ndarray | None = None
+    active: np.ndarray | None = None
+
+    def clear(self) -> None:
+        self.W = self.lam = self.active = None
+
+
+@dataclasses.dataclass
+class _Call:
+    """One sharing solve's own state: its target (units of l) and floor, the
+    equilibrium solves so far and (ALMM) the last state evaluated."""
+
+    target: np.ndarray
+    floor: float
+    evals: int = 0
+    current: Evaluation | None = None
+
+
+@dataclasses.dataclass
 class _Point:
     """One SQP iterate: the evaluation, f, grad f, tip error c, |c|."""
 
@@ -206,36 +233,37 @@ class TensionSharer:
         self.controller, self.share, self.min_tension = controller, share, float(min_tension)
         self.method, self.max_it, self.trust, self.kkt_tol = method, int(max_it), trust, kkt_tol
         self.max_evaluations = int(max_evaluations)
-        self._evals = 0
-        self._current: Evaluation | None = None
-        self.reset()
 
     def reset(self) -> None:
-        """Forget the warm start (quasi-Newton matrix, multipliers, active set)."""
-        self._W = self._lam = self._active = None
+        """Nothing to forget: the sharer keeps no per-solve state (each
+        :meth:`track` starts cold unless given a path's :class:`WarmStart`).
+        Kept for callers written when it did (studies/workspace/samplers.py)."""
 
     # --- public --------------------------------------------------------------------
-    def solve(self, reached: ControlResult, floor: float | None = None) -> ControlResult:
-        """The shared tensions at ``reached.target``, from a state on it (``control``)."""
+    def solve(self, reached: ControlResult, floor: float | None = None,
+              warm: WarmStart | None = None) -> ControlResult:
+        """The shared tensions at ``reached.target``, from a state on it (``control``),
+        from a cold start; ``warm`` (a path's) is cleared, then filled by this solve."""
         if self.method == "almm":
             return self._almm(reached)
-        self.reset()
+        if warm is not None:
+            warm.clear()
         start = Evaluation(reached.p.copy(), reached.equilibrium, reached.sensitivity,
                            reached.loading)
-        res = self.track(reached.target, start, floor)
+        res = self.track(reached.target, start, floor, warm)
         return dataclasses.replace(res, strategy=f"{reached.strategy}; shared {self.share}")
 
     def follow(self, target, previous: Evaluation | None, reacher, *, p0=None, start=None,
                start_loading=None, floor: float | None = None,
-               global_search: bool = True) -> ControlResult:
+               global_search: bool = True, warm: WarmStart | None = None) -> ControlResult:
         """One point of a path (units of l): from the previous point's shared state
-        (``previous``), :meth:`track` to ``target``; if that fails, or with no
+        (``previous``) and the path's ``warm`` start, :meth:`track` to ``target``; if that fails, or with no
         previous point (then from ``p0``/``start``), reach the target first
         (``reacher``: :class:`~elastica_petsc.solvers.reach.Reacher`) and share from there."""
         target = np.asarray(target, float)
         if previous is not None:
             if self.method == "newton":
-                res = self.track(target, previous, floor)
+                res = self.track(target, previous, floor, warm)
                 if res.converged:
                     return res
             p0, start, start_loading = previous.p, previous.equilibrium, previous.loading
@@ -245,33 +273,36 @@ class TensionSharer:
                                 global_search=global_search and self.controller.n <= 3)
         if not reached.converged:
             return reached
-        return self.solve(reached, floor)
+        return self.solve(reached, floor, warm)
 
-    def track(self, target, start: Evaluation, floor: float | None = None) -> ControlResult:
+    def track(self, target, start: Evaluation, floor: float | None = None,
+              warm: WarmStart | None = None) -> ControlResult:
         """SQP (module doc) from ``start`` to the shared tensions at ``target``
-        (units of l), warm-started by the last call's W, multipliers and active set."""
+        (units of l), warm-started by ``warm`` (the previous point's W,
+        multipliers and active set, updated here; None: a cold start)."""
         ctl = self.controller
-        target = np.asarray(target, float)
-        floor = self.min_tension if floor is None else float(floor)
+        call = _Call(np.asarray(target, float),
+                     self.min_tension if floor is None else float(floor))
+        warm = WarmStart() if warm is None else warm
+        floor = call.floor
         upper = np.inf if ctl.upper is None else ctl.upper
         tol_c = 0.1 * np.sqrt(2.0 * ctl.eps)
-        self._evals = 0
-        cur = self._point(start, target)
+        cur = self._point(start, call.target)
         if np.any(start.p < floor):                # onto the floor first (the tip moves)
-            raised = self._eval(np.maximum(start.p, floor), cur, target)
+            raised = self._eval(np.maximum(start.p, floor), cur, call)
             if raised is None:
-                return self._result(target, cur, SHARE_STALLED, 0, [cur], floor, np.inf)
+                return self._result(call, cur, SHARE_STALLED, 0, [cur], np.inf)
             cur = raised
-        W = self._W if self._W is not None else _hessian_f(self.share, start)
-        lam = np.zeros(2) if self._lam is None else self._lam
-        guess, nu, reason, hist, kkt = self._active, 0.0, SHARE_MAX_ITERATIONS, [cur], np.inf
+        W = warm.W if warm.W is not None else _hessian_f(self.share, start)
+        lam = np.zeros(2) if warm.lam is None else warm.lam
+        guess, nu, reason, hist, kkt = warm.active, 0.0, SHARE_MAX_ITERATIONS, [cur], np.inf
         for it in range(self.max_it + 1):
             kkt = kkt_residual(self.share, cur.ev, floor, upper=ctl.upper)
             if (np.linalg.norm(cur.c) <= tol_c and np.min(cur.ev.p) >= floor - 1e-12
                     and kkt <= self.kkt_tol):
                 reason = TARGET_REACHED
                 break
-            if it == self.max_it or self._evals >= self.max_evaluations:
+            if it == self.max_it or call.evals >= self.max_evaluations:
                 break
             errors = [float(np.linalg.norm(h.c)) for h in hist[-STALL_ITS - 1:]]
             if (len(errors) > STALL_ITS and errors[-1] > 10.0 * tol_c
@@ -283,11 +314,11 @@ class TensionSharer:
             hi = np.maximum(np.minimum(upper - cur.ev.p, radius), lo)
             qp = solve_box_qp(W, cur.g, cur.S, cur.c, lo, hi, guess)
             if qp is None:                          # restoration: bring the tip closer
-                new, reason = self._restore(cur, lo, hi, target, floor)
+                new, reason = self._restore(cur, lo, hi, call)
             else:
                 lam, guess = qp.lam, qp.active
                 nu = max(nu, 2.0 * float(np.max(np.abs(lam))))
-                new, reason = self._merit_search(cur, qp, nu, target, floor), reason
+                new, reason = self._merit_search(cur, qp, nu, call), reason
             if new is None:
                 reason = SHARE_LINE_SEARCH_FAILURE if qp is not None else reason
                 break
@@ -295,36 +326,38 @@ class TensionSharer:
             W = _bfgs(W, new.ev.p - cur.ev.p, y)
             cur = new
             hist.append(cur)
-        self._W, self._lam, self._active = W, lam, guess
+        warm.W, warm.lam, warm.active = W, lam, guess
         if reason != TARGET_REACHED:                  # report the closest tip found
             cur = min(hist, key=lambda h: float(np.linalg.norm(h.c)))
-        return self._result(target, cur, reason, len(hist) - 1, hist, floor, kkt)
+        return self._result(call, cur, reason, len(hist) - 1, hist, kkt)
 
     # --- newton internals ---------------------------------------------------------
     def _point(self, ev: Evaluation, target: np.ndarray) -> _Point:
         f, g = objective(self.share, ev)
         return _Point(ev, f, g, ev.equilibrium.tip - target)
 
-    def _eval(self, p: np.ndarray, origin: _Point, target: np.ndarray) -> _Point | None:
-        self._evals += 1
+    def _eval(self, p: np.ndarray, origin: _Point, call: _Call) -> _Point | None:
+        call.evals += 1
         ev = self.controller.evaluate(np.maximum(p, 0.0), start=origin.ev.equilibrium,
                                       start_loading=origin.ev.loading,
                                       tangent=origin.ev.sensitivity.state_derivative)
-        return None if ev is None else self._point(ev, target)
+        return None if ev is None else self._point(ev, call.target)
 
     def _clip(self, cur: _Point, p: np.ndarray, floor: float) -> np.ndarray:
         upper = np.inf if self.controller.upper is None else self.controller.upper
         return np.clip(p, np.minimum(floor, cur.ev.p), np.maximum(upper, cur.ev.p))
 
-    def _merit_search(self, cur: _Point, qp, nu: float, target, floor) -> _Point | None:
+    def _merit_search(self, cur: _Point, qp, nu: float, call: _Call) -> _Point | None:
         """Backtracking on f + nu |c|_1 along the QP step, with a second-order
-        correction of the tip error after a rejected full step (Maratos)."""
+        correction of the tip error after a rejected full step (Maratos).  The
+        tip error's round-off (TIP_NOISE per coordinate, times nu) is allowed: at
+        a tip error of ~1e-15 l the last steps' f decrease is of that size too."""
         d = qp.d
         slope = float(cur.g @ d) - nu * float(np.abs(cur.c).sum())
-        m0 = cur.merit(nu)
+        m0 = cur.merit(nu) + nu * TIP_NOISE * len(cur.c)
         alpha = 1.0
         for k in range(MAX_BACKTRACKS):
-            new = self._eval(self._clip(cur, cur.ev.p + alpha * d, floor), cur, target)
+            new = self._eval(self._clip(cur, cur.ev.p + alpha * d, call.floor), cur, call)
             if new is not None and new.merit(nu) <= m0 + 1e-4 * alpha * slope:
                 return new
             if k == 0 and new is not None:
@@ -332,13 +365,13 @@ class TensionSharer:
                 e = np.zeros_like(d)
                 S = cur.S[free]
                 e[free] = -S @ np.linalg.lstsq(S.T @ S, new.c, rcond=None)[0]
-                soc = self._eval(self._clip(cur, cur.ev.p + d + e, floor), cur, target)
+                soc = self._eval(self._clip(cur, cur.ev.p + d + e, call.floor), cur, call)
                 if soc is not None and soc.merit(nu) <= m0 + 1e-4 * slope:
                     return soc
             alpha *= 0.5 if new is not None else 0.1
         return None
 
-    def _restore(self, cur: _Point, lo, hi, target, floor):
+    def _restore(self, cur: _Point, lo, hi, call: _Call):
         """The QP is infeasible: a bounded least-squares step towards the target
         (:func:`closest_in_box`); (None, SHARE_INFEASIBLE) when it no longer
         brings the tip closer."""
@@ -348,16 +381,16 @@ class TensionSharer:
             return None, SHARE_INFEASIBLE
         alpha = 1.0
         for _ in range(MAX_BACKTRACKS):
-            new = self._eval(self._clip(cur, cur.ev.p + alpha * d, floor), cur, target)
+            new = self._eval(self._clip(cur, cur.ev.p + alpha * d, call.floor), cur, call)
             if new is not None and np.linalg.norm(new.c) <= c0 - 1e-4 * alpha * (c0 - resid):
                 return new, SHARE_MAX_ITERATIONS
             alpha *= 0.5 if new is not None else 0.1
         return None, SHARE_LINE_SEARCH_FAILURE
 
-    def _result(self, target, cur: _Point, reason: str, its: int, hist: list, floor: float,
+    def _result(self, call: _Call, cur: _Point, reason: str, its: int, hist: list,
                 kkt: float) -> ControlResult:
         """A ControlResult of the shared state (``converged``: reached and shared)."""
-        ctl = self.controller
+        ctl, target, floor = self.controller, call.target, call.floor
         ev, mm = cur.ev, ctl.length_mm
         E = 0.5 * float(cur.c @ cur.c)
         err_mm = float(np.linalg.norm(cur.c)) * mm
@@ -376,7 +409,7 @@ class TensionSharer:
                        f"may be reachable with P >= {floor_N:g} N on another branch")
         else:
             message = (f"tension sharing ({self.share}) stopped ({reason}) after {its} "
-                       f"iterations and {self._evals} equilibrium solves with the tip "
+                       f"iterations and {call.evals} equilibrium solves with the tip "
                        f"{err_mm:.3g} mm from the target and KKT residual {kkt:.1e}")
         tol = 1e-9
         upper = np.inf if ctl.upper is None else ctl.upper
@@ -386,7 +419,7 @@ class TensionSharer:
             converged=reason == TARGET_REACHED and E < ctl.eps, reachable=True if (
                 E < ctl.eps and taut) else None, reason=reason, tao_reason="none (SQP)",
             message=message, method=f"share {self.share} ({self.method})", iterations=its,
-            evaluations=self._evals, failed_evaluations=0, target=np.asarray(target).copy(),
+            evaluations=call.evals, failed_evaluations=0, target=np.asarray(target).copy(),
             p=ev.p.copy(), tip=ev.equilibrium.tip.copy(), tip_error=err_mm / mm, E=E,
             eps=ctl.eps, equilibrium=ev.equilibrium, sensitivity=ev.sensitivity,
             cable_lengths=ev.equilibrium.cable_lengths.copy(),
@@ -397,25 +430,23 @@ class TensionSharer:
             strategy=f"shared {self.share}")
 
     # --- almm ----------------------------------------------------------------------
-    def _almm_eval(self, p: np.ndarray) -> Evaluation | None:
-        cur = self._current
-        if cur is not None and np.array_equal(cur.p, p):
+    def _almm_eval(self, p: np.ndarray, call: _Call) -> Evaluation | None:
+        cur = call.current
+        if np.array_equal(cur.p, p):
             return cur
-        self._evals += 1
+        call.evals += 1
         ev = self.controller.evaluate(np.maximum(p, 0.0), start=cur.equilibrium,
                                       start_loading=cur.loading)
         if ev is not None:
-            self._current = ev
+            call.current = ev
         return ev
 
     def _almm(self, reached: ControlResult) -> ControlResult:
         """TAO ALMM from the reached state, then a tip-control polish (module doc)."""
-        ctl = self.controller
-        self._current = Evaluation(reached.p.copy(), reached.equilibrium, reached.sensitivity,
-                                   reached.loading)
-        target = reached.target
-        self._evals = 0
-        tao, vecs = self._create(ctl.n, target)
+        ctl, target = self.controller, reached.target
+        call = _Call(target, self.min_tension, current=Evaluation(
+            reached.p.copy(), reached.equilibrium, reached.sensitivity, reached.loading))
+        tao, vecs = self._create(ctl.n, call)
         try:
             vecs[0].setArray(np.maximum(reached.p, self.min_tension))
             tao.solve(vecs[0])
@@ -425,10 +456,10 @@ class TensionSharer:
         finally:
             for obj in (tao, *vecs):
                 obj.destroy()
-        ev = self._almm_eval(p) or self._current
+        ev = self._almm_eval(p, call) or call.current
         res = ctl.solve(target, p0=ev.p, start=ev.equilibrium, start_loading=ev.loading)
         res = dataclasses.replace(res, iterations=its + res.iterations,
-                                  evaluations=self._evals + res.evaluations)
+                                  evaluations=call.evals + res.evaluations)
         if not res.converged or np.min(res.p) < self.min_tension - 1e-9:
             return dataclasses.replace(
                 res, converged=False, reachable=None, reason=SHARE_FAILED,
@@ -436,7 +467,7 @@ class TensionSharer:
                         f"end on the target with p >= {self.min_tension:g}: {res.message}")
         return dataclasses.replace(res, strategy=f"{reached.strategy}; shared {self.share}")
 
-    def _create(self, n: int, target: np.ndarray):
+    def _create(self, n: int, call: _Call):
         x = PETSc.Vec().createSeq(n, comm=self.comm)
         lb, ub = x.duplicate(), x.duplicate()
         lb.set(self.min_tension)
@@ -447,24 +478,24 @@ class TensionSharer:
 
         # scaling: f / f_0 (f_0 at the reached state) and the tip error in units of
         # CONSTRAINT_SCALE (1e-3 l), so that multipliers and penalties are O(1)
-        f_scale = max(abs(objective(self.share, self._current)[0]), 1e-12)
-        c_scale = CONSTRAINT_SCALE
+        f_scale = max(abs(objective(self.share, call.current)[0]), 1e-12)
+        c_scale, target = CONSTRAINT_SCALE, call.target
 
         def fg(tao, X, G):
-            ev = self._almm_eval(X.getArray(readonly=True).copy())
+            ev = self._almm_eval(X.getArray(readonly=True).copy(), call)
             if ev is None:                    # no equilibrium: steer back
-                G.setArray(X.getArray(readonly=True) - self._current.p)
+                G.setArray(X.getArray(readonly=True) - call.current.p)
                 return 1e6
             f, g = objective(self.share, ev)
             G.setArray(g / f_scale)
             return f / f_scale
 
         def con(tao, X, C):
-            ev = self._almm_eval(X.getArray(readonly=True).copy()) or self._current
+            ev = self._almm_eval(X.getArray(readonly=True).copy(), call) or call.current
             C.setArray((ev.equilibrium.tip - target) / c_scale)
 
         def jac(tao, X, A, P):
-            ev = self._almm_eval(X.getArray(readonly=True).copy()) or self._current
+            ev = self._almm_eval(X.getArray(readonly=True).copy(), call) or call.current
             A.setValues(range(2), range(n), ev.sensitivity.tip.T.ravel() / c_scale)
             A.assemble()
 

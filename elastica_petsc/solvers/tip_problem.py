@@ -44,6 +44,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..core.loading import Loading
+from ..core.model import Arm
 from ..core.results import Result
 from .equilibrium import COLLAPSE_LENGTH, Equilibrium
 from .sensitivity import Sensitivity
@@ -119,6 +120,7 @@ class ControlResult(Result):
     evidence: str = ""              # why reachable is False (or what the search tried)
     strategy: str = "local"         # what reached the target: local, homotopy, seed, ...
     local_reason: str = ""          # with SEARCH_EXHAUSTED: how the closest local solve ended
+    arm: Arm | None = None          # the arm (ep.control's results; saved as provenance)
 
     @property
     def gradient(self) -> np.ndarray:
@@ -144,6 +146,23 @@ class ControlResult(Result):
     @property
     def cable_lengths_mm(self) -> np.ndarray:
         return self.cable_lengths * self.length_mm
+
+    def to_vtk(self, directory) -> list:
+        """The state reached as ParaView files in ``directory``, as ``control --vtk``
+        writes them (``control.vtu``: arm and cables, mm, N); needs ``arm``."""
+        import elastica_petsc             # the public State (io sits above this layer)
+
+        return elastica_petsc.State(needs_arm(self), self.equilibrium).to_vtk(
+            directory, name="control")
+
+
+def needs_arm(result) -> Arm:
+    """``result.arm``, or InputError for a result made without one."""
+    if result.arm is None:
+        from ..core.errors import InputError
+        raise InputError(f"this {type(result).__name__} has no arm: results of ep.control "
+                         "and ep.trace carry one")
+    return result.arm
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..core.calibration_data import CalibrationData
-from ..core.calibration_params import ParameterModel
+from ..core.calibration_params import ParameterModel, has_weight
 from ..core.errors import InputError
 from ..solvers.calibration import RowError, RowSolver, RowState
 from ..solvers.lengths import SAME_SHAPE_TOL
@@ -61,7 +61,7 @@ def order_label(order) -> str:
     return "proportional" if order is None else "order " + ",".join(map(str, order))
 
 
-@dataclass
+@dataclass(frozen=True)
 class Evaluation:
     """Residuals [mm] (M,), Jacobian [mm per parameter unit] (M, P) or None,
     predicted points (m, 1 + k, 2) [mm], and per row the taut cables."""
@@ -92,7 +92,15 @@ class CalibrationProblem:
             raise CalibrationError(f"{data.n_rows} rows give {n_obs} measured coordinates for "
                                    f"{model.size} parameters: need more coordinates than "
                                    "parameters")
+        if has_weight(model.arm0) and "steps" in set(data.kinds):
+            line = data.lines[list(data.kinds).index("steps")]
+            raise CalibrationError(f"line {line}: motor steps on an arm with weight are not "
+                                   "supported (the steps count from the straight unloaded "
+                                   "arm, and an arm under its weight is not straight); give "
+                                   "the cable lengths (length_K_mm columns)")
+        self.weight_column = has_weight(model.arm0) and "bending_stiffness" in model.index
         self.states: list[RowState | None] = [None] * data.n_rows
+        self.recent: list = []              # (scaled theta, states) of the last evaluations
         self.orders = list(data.loading)
         self.matched = [order is None for order in data.loading]
         self.row_of = np.repeat(np.nonzero(self.observed)[0], 2)
@@ -163,8 +171,25 @@ class CalibrationProblem:
             self.orders[r] = order
             if r % self.ranks == self.rank:
                 self.states[r] = state
+        self.recent = []                  # states of other orders are no warm starts now
         return [("matched: " if m else "given: ") + order_label(o)
                 for m, o in zip(self.matched, self.orders)]
+
+    # A row whose lengths admit several equilibria can come back on another branch when
+    # warm-started from a trial point's state; warm-starting every row from the states of
+    # the nearest recent evaluation (in scaled parameters) returns the same states at a
+    # theta evaluated before (docs/model.md §19.2).
+    RECENT = 8
+
+    def _nearest_states(self, theta) -> list:
+        if not self.recent:
+            return list(self.states)
+        x = (np.asarray(theta, float) - self.model.start()) / self.model.scales()
+        return min(self.recent, key=lambda item: float(np.sum((item[0] - x) ** 2)))[1]
+
+    def _remember(self, theta) -> None:
+        x = (np.asarray(theta, float) - self.model.start()) / self.model.scales()
+        self.recent = (self.recent + [(x, list(self.states))])[-self.RECENT:]
 
     def evaluate(self, theta, jacobian: bool = True) -> Evaluation:
         """Residuals and (optionally) the exact Jacobian at theta."""
@@ -177,10 +202,12 @@ class CalibrationProblem:
             raise CalibrationError(f"the parameters left the valid arms: {err}") from None
         rho_d = model.arm_routes(theta)[1].reshape(-1, model.size)
         n = arm.n_tendons
+        d_weight = -model.column("bending_stiffness")[None, :] / arm.bending_stiffness_Nm2
+        warm = self._nearest_states(theta)
 
         def row(rs, r):
             mode, drive, d_drive, L = self._drive(theta, r)
-            state = rs.solve(mode, drive, self.orders[r], warm=self.states[r])
+            state = rs.solve(mode, drive, self.orders[r], warm=warm[r])
             if not state.converged:
                 raise RowError(f"line {data.lines[r]}: equilibrium not reached "
                                f"({state.message})")
@@ -188,12 +215,15 @@ class CalibrationProblem:
             m, A, explicit = model.measure(theta, rs.points_mm(state.u, data.marker_s_mm))
             if not jacobian:
                 return m, None, state.p > 1e-8
-            dq = rs.derivatives(mode, state, L, data.marker_s_mm)
-            dx = dq[:, :, : 2 * n] @ rho_d + dq[:, :, 2 * n:] @ d_drive
+            dq = rs.derivatives(mode, state, L, data.marker_s_mm, weight=self.weight_column)
+            dx = dq[:, :, : 2 * n] @ rho_d + dq[:, :, 2 * n:3 * n] @ d_drive
+            if self.weight_column:        # q ~ 1/B: the weight's factor moves by -dB/B
+                dx += dq[:, :, 3 * n:] @ d_weight
             return m, (np.einsum("ab,kbp->kap", A, dx) + explicit)[self.observed[r]], \
                 state.p > 1e-8
 
         rows = self._over_rows(arm, row)
+        self._remember(theta)
         pts_all = np.array([rows[r][0] for r in range(data.n_rows)])
         taut = np.array([rows[r][2] for r in range(data.n_rows)])
         residual = (pts_all - self.measured)[self.observed].ravel()
@@ -307,7 +337,7 @@ def huber_weights(problem: CalibrationProblem, residual, delta_mm: float | None)
     return rows[problem.row_of], rows
 
 
-@dataclass
+@dataclass(frozen=True)
 class Fit:
     """The fitted parameters and what the fit did."""
 

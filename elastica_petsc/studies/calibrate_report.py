@@ -21,10 +21,14 @@ adding c is log det(F + J_c^T J_c / s^2) - log det F, F = J_w^T J_w / s^2
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from ..core.calibration_data import CalibrationData
+from ..core.calibration_params import ParameterModel
+from ..core.model import Arm
+from ..core.results import Result
 from .calibrate import CalibrationProblem, Fit, fit
 
 RANK_TOL = 1e-6
@@ -178,21 +182,29 @@ def next_measurements(problem: CalibrationProblem, result: Fit, report: dict,
     return out
 
 
-@dataclass
-class CalibrationResult:
-    """Everything a calibration produced (mm, N, N m^2, degrees)."""
+@dataclass(frozen=True, repr=False)
+class CalibrationResult(Result):
+    """Everything a calibration produced (mm, N, N m^2, degrees); ``save(path)``
+    writes ``calibrate --h5``'s layout and ``elastica_petsc.read`` returns it."""
 
-    problem: CalibrationProblem
+    start_arm: Arm                          # the arm the parameters start from
+    vary: tuple                             # the varied groups (ParameterModel)
+    bounds: dict                            # {parameter: (lower, upper)}, physical units
+    data: CalibrationData
+    elements: int | None
     fit: Fit
     report: dict
     stats: dict
     cross_validation: dict | None
     tip_covariance_mm2: np.ndarray          # (m, 2, 2): predicted tips' covariance
     next_measurements: list | None = None
+    failed_trials: int = 0                  # trial points with a row out of reach
+    ranks: int = 1                          # MPI ranks the rows were dealt to
+    attachments: object = None              # AttachmentSearch (studies/calibrate_attach.py)
 
-    @property
-    def model(self):
-        return self.problem.model
+    @cached_property
+    def model(self) -> ParameterModel:
+        return ParameterModel(self.start_arm, self.vary, self.bounds)
 
     @property
     def arm(self):
@@ -218,7 +230,7 @@ class CalibrationResult:
         """JSON-ready summary."""
         rep, cv = self.report, self.cross_validation
         corr = np.where(np.isfinite(rep["correlation"]), rep["correlation"], np.nan)
-        data = self.problem.data
+        data = self.data
         return {
             "parameters": self.parameters(),
             "correlation": [[None if not np.isfinite(c) else round(float(c), 6) for c in row]
@@ -243,9 +255,10 @@ class CalibrationResult:
                        "evaluations": self.fit.evaluations, "seconds": self.fit.seconds,
                        "remaining_step_sigma": rep["remaining_step_sigma"],
                        "remaining_step_scaled": rep["remaining_step_scaled"],
-                       "failed_trial_points": self.problem.failed_trials,
+                       "failed_trial_points": self.failed_trials,
                        "converged": self.converged},
             "next_measurements": self.next_measurements,
+            **({"attachments": self.attachments.summary()} if self.attachments else {}),
         }
 
 
@@ -278,4 +291,7 @@ def calibrate(model, data: CalibrationData, *, elements: int | None = None,
     cv = cross_validate(problem, result, folds, huber_mm, progress) if folds >= 2 else None
     nxt = (next_measurements(problem, result, report, candidates, next_count)
            if candidates is not None else None)
-    return CalibrationResult(problem, result, report, stats, cv, tips, nxt)
+    return CalibrationResult(model.arm0, tuple(model.groups),
+                             {p.name: (p.lower, p.upper) for p in model.params}, data,
+                             elements, result, report, stats, cv, tips, nxt,
+                             problem.failed_trials, problem.ranks)

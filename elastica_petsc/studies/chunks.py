@@ -15,9 +15,13 @@ slow chunks simply takes fewer; no rank is reserved as a master.
 
 Output: ranks send finished chunks to rank 0 (non-blocking sends, so a
 rank never waits for rank 0 to finish its own chunk), which holds the
-results and writes the whole file aside and renames it into place (a
-checkpoint) every few seconds and at the end.  A chunk is marked done only
-when all its samples are stored, so the file on disk is always valid.
+results and checkpoints them every few seconds: the first and the last
+checkpoint of a run write the whole file aside and rename it into place;
+the others write in place only the rows of the chunks stored since the
+previous checkpoint, then their done flags (io/inplace.py), so their cost
+does not grow with the samples already in the file.  A chunk is marked
+done only when all its rows are on disk, so the file on disk is always a
+valid file that resumes correctly (docs/model.md, "Checkpoints in place").
 
 Stop protocol (SIGINT/SIGTERM to any rank, to mpiexec or to its process
 group; :func:`run`): the stopped rank exhausts the shared chunk counter
@@ -34,14 +38,15 @@ killed outright loses at most the chunks finished since the previous
 checkpoint (the MPI launcher ends the job: Open MPI's mpiexec does; with
 srun use ``--kill-on-bad-exit=1``).  Gathering to one writer instead of
 parallel HDF5 (mpio) was chosen because the data are tiny (a few hundred
-bytes per sample) and an atomic rename is the only way to keep the file
-valid when a process dies mid-write; the measured I/O share is reported in
+bytes per sample), the h5py of Debian 12 is serial, and HDF5 writing its
+own metadata when a process dies mid-write can leave a file that does not
+open: rank 0 writes a file whole (aside, renamed) and afterwards only the
+raw bytes of new rows, never HDF5 metadata; the measured I/O share is reported in
 the file (``timing`` attributes: ``seconds_wall`` and ``seconds_io`` up to
 the start of the last write, which cannot time itself; ``ranks``).
 
 Checkpoint interval: ``checkpoint_seconds``, 2 s by default (0: after every
-chunk, as the interruption tests use; larger on a cluster with big grids,
-where each checkpoint rewrites the whole file).  The command line reads it
+chunk, as the interruption tests use).  The command line reads it
 from the environment variable ``ELASTICA_PETSC_CHECKPOINT_SECONDS``; the
 library reads no environment variable.
 
@@ -141,22 +146,67 @@ class ChunkResults:
         self.schema = schema
         self.data = empty_fields(self.schema, grid.size)
         self.chunk_done = np.zeros(len(grid.chunks), bool)
+        self._chunk_sizes = np.array([len(c) for c in grid.chunks], np.int64)
         self.stranded = False            # other ranks still busy after a stop (see run)
         self.write_error = None          # why a checkpoint could not be written (see run)
+        self.unsaved: list[int] = []     # chunks stored since the last checkpoint
+        self.checkpoints: list[tuple[str, int, float]] = []   # (kind, samples written, s)
 
     def store(self, chunk: int, values: dict) -> None:
         index = self.grid.chunks[chunk]
         for name, array in values.items():
             self.data[name][index] = array
         self.chunk_done[chunk] = True
+        self.unsaved.append(chunk)
 
-    def write(self, path: Path, attrs: dict, limits: dict, timing: dict) -> None:
-        """One checkpoint of the whole file (always valid: written aside, renamed)."""
+    def clear_undone(self) -> None:
+        """Empty values for every sample of a chunk not done (a file read back may
+        hold rows of an update that was not committed, io/inplace.py)."""
+        undone = np.ones(self.grid.size, bool)
+        for c in np.flatnonzero(self.chunk_done):
+            undone[self.grid.chunks[c]] = False
+        empty = empty_fields(self.schema, int(undone.sum()))
+        for name, values in self.data.items():
+            values[undone] = empty[name]
+
+    def write(self, path: Path, attrs: dict, limits: dict, timing: dict):
+        """One checkpoint of the whole file (always valid: written aside, renamed);
+        returns its :class:`~elastica_petsc.io.inplace.Layout` for :meth:`update`."""
         raise NotImplementedError
+
+    def extra_rows(self, samples: np.ndarray, limits: dict) -> list:
+        """A study's own in-place rows for ``samples`` beyond ``samples/`` (e.g.
+        masks), as (dataset, index, values)."""
+        return []
+
+    MARKER = None      # the field that says a sample was computed (e.g. "status")
+
+    def update(self, layout, chunks: list[int], limits: dict, timing: dict) -> bool:
+        """One checkpoint in place (io/inplace.py): the rows of the samples of
+        ``chunks`` only, then (the commit) their derived rows (:meth:`extra_rows`),
+        their :attr:`MARKER` field and their done flags.  False if the file
+        cannot be updated so (then :meth:`write` it in full)."""
+        from ..io.workspace import UPDATED_TIMING
+
+        chunks = np.asarray(sorted(set(chunks)), np.int64)
+        samples = (np.concatenate([self.grid.chunks[c] for c in chunks]) if len(chunks)
+                   else np.zeros(0, np.int64))
+        rows = [(f"samples/{name}", samples, self.data[name][samples]) for name in self.schema
+                if name != self.MARKER]
+        commit = self.extra_rows(samples, limits)
+        if self.MARKER is not None:
+            commit.append((f"samples/{self.MARKER}", samples, self.data[self.MARKER][samples]))
+        commit += [("grid/chunk_done", chunks, np.ones(len(chunks), bool)),
+                   ("samples/done", samples, np.ones(len(samples), bool))]
+        attrs = {"samples_done": self.samples_done}
+        attrs.update({f"timing/{key}": timing.get(key, 0.0) for key in UPDATED_TIMING})
+        if not layout.covers([name for name, _, _ in rows + commit], attrs):
+            return False
+        return layout.write(rows, commit, attrs)
 
     @property
     def samples_done(self) -> int:
-        return int(sum(len(self.grid.chunks[c]) for c in np.flatnonzero(self.chunk_done)))
+        return int(self._chunk_sizes[self.chunk_done].sum())
 
 
 def check_out(out, resume: bool, overwrite: bool) -> Path:
@@ -303,22 +353,34 @@ class _Collector:
         self.checkpoint_seconds = checkpoint_seconds
         self.finished = 1                                  # rank 0 itself, once done
         self.timing = {"ranks": comm.size, "seconds_io": 0.0}
+        self.layout = None             # of the file last written in full (io/inplace.py)
         self.t_start = self.last_write = time.perf_counter()
 
-    def checkpoint(self) -> None:
-        """Write the file; a failed write (full disk) stops the run like a signal:
-        the file keeps its previous checkpoint, the error is reported at the end."""
+    def checkpoint(self, full: bool = False) -> None:
+        """Write the chunks stored since the last checkpoint into the file in place
+        (O(new samples), io/inplace.py), or the whole file (``full``, the first and
+        the last checkpoint of a run, or a file that cannot be updated in place).
+        A failed write (full disk) stops the run like a signal: the file keeps
+        its previous checkpoint, the error is reported at the end."""
         if self.out is None or self.results.write_error is not None:
             return
         t0 = time.perf_counter()
         self.timing["seconds_wall"] = t0 - self.t_start
+        results = self.results
+        new = sum(len(results.grid.chunks[c]) for c in results.unsaved)
         try:
-            self.results.write(self.out, self.attrs, self.limits, self.timing)
+            if (full or self.layout is None
+                    or not results.update(self.layout, results.unsaved, self.limits, self.timing)):
+                self.layout, new = results.write(self.out, self.attrs, self.limits,
+                                                 self.timing), results.grid.size
+                full = True
+            results.unsaved.clear()
         except InputError as err:
-            self.results.write_error = str(err)
+            results.write_error = str(err)
             self.counter.exhaust()
         self.last_write = time.perf_counter()
         self.timing["seconds_io"] += self.last_write - t0
+        results.checkpoints.append(("full" if full else "in place", new, self.last_write - t0))
 
     def store(self, chunk: int, values: dict) -> None:
         self.results.store(chunk, values)
@@ -441,7 +503,7 @@ def run(grid: Grid, sampler, out: Path | None, attrs: dict, limits: dict, *, com
             rank0.drain()
             rank0.checkpoint()                         # before a launcher can kill us
         all_done = rank0.wait_for_ranks(stop)
-        rank0.checkpoint()
+        rank0.checkpoint(full=True)                    # complete, final timing
         bar.close(results.samples_done)
         results.stranded = not all_done
         if not all_done:

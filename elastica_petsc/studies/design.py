@@ -59,7 +59,8 @@ def parse_design_variables(names, n_tendons: int) -> tuple[list[int], list[int]]
         if not head.startswith("tendon") or not head[6:].isdigit() or what not in ("route",
                                                                                     "attach"):
             raise DesignError(f"--vary {name!r}: expected tendonK.route or tendonK.attach, "
-                              "e.g. tendon1.route")
+                              "e.g. tendon1.route (guide offsets, tendonK.offset or "
+                              "tendonK.guideJ.offset, are variables of the path objective)")
         k = int(head[6:])
         if not 1 <= k <= n_tendons:
             raise DesignError(f"--vary {name!r}: the arm has tendons 1..{n_tendons}")
@@ -127,15 +128,23 @@ class PathMisfit:
     p: np.ndarray
 
 
-def path_misfit(arm: Arm, tendons, targets_mm, elements: int | None = None) -> PathMisfit:
+def path_misfit(arm: Arm, tendons, targets_mm, elements: int | None = None,
+                offsets=()) -> PathMisfit:
     """Trace the targets (warm-started tip control, from the straight arm with
-    the sampler's head guess p = 2) and differentiate f (module docstring)."""
+    the sampler's head guess p = 2) and differentiate f (module docstring) with
+    respect to the routing points of ``tendons`` and then the guide offsets
+    ``offsets`` (studies/design_offsets.py)."""
+    from contextlib import ExitStack
+    from ..solvers.sensitivity import SensitivitySolver
+    from .design_offsets import offset_residual_derivative
+
     disc = Discretisation.from_arm(arm, elements)
-    l_mm = arm.length_mm
     targets = np.asarray(targets_mm, float)
-    grad = np.zeros(2 * len(tendons))
+    grad = np.zeros(2 * len(tendons) + len(offsets))
     f, reached, errors, tensions = 0.0, [], [], []
-    with TipController(arm, n_elements=disc.n_elements) as ctl, CurveTracer(disc) as tracer:
+    with TipController(arm, n_elements=disc.n_elements) as ctl, CurveTracer(disc) as tracer, \
+            ExitStack() as stack:
+        sens = stack.enter_context(SensitivitySolver(disc)) if offsets else None
         start, p0 = None, np.full(disc.n_tendons, 2.0)
         for x_d in targets:
             res = ctl.solve_mm(x_d, p0=p0 if start is None else None, start=start)
@@ -153,6 +162,11 @@ def path_misfit(arm: Arm, tendons, targets_mm, elements: int | None = None) -> P
                 dw = tracer.route_velocity(w, rows, i)                 # per unit of l
                 dtip = np.column_stack([tracer.mf.tip_velocity(w, dw[:, c]) for c in range(2)])
                 grad[2 * j:2 * j + 2] += residual_mm @ dtip            # mm^2 per mm
+            for j, var in enumerate(offsets, start=2 * len(tendons)):  # at fixed tensions
+                eq = res.equilibrium
+                dtip = sens.parameter_derivative(eq, offset_residual_derivative(
+                    eq.disc, eq.u, eq.p, var, arm))[1]
+                grad[j] += residual_mm @ dtip
     return PathMisfit(f, grad, np.array(reached), np.array(errors), np.array(tensions))
 
 
@@ -170,6 +184,7 @@ class DesignResult(Result):
     iterations: int = 0
     evaluations: int = 0
     seconds: float = 0.0
+    offsets: list = field(default_factory=list)     # OffsetVariable (design_offsets.py)
 
     def summary(self) -> dict:
         """What ``design --json`` prints for a path (targets reached before/after)."""
@@ -188,7 +203,8 @@ def scaled_path(targets_mm, margin: float) -> np.ndarray:
 def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = None,
                     reach_mm: float = 100.0, clearance_mm: float = 10.0, margin: float = 1.1,
                     max_iterations: int = 20, scale_mm: float = 10.0,
-                    options_prefix: str = "design_", progress=None) -> DesignResult:
+                    options_prefix: str = "design_", progress=None,
+                    offsets=()) -> DesignResult:
     """Routing points (mm) of ``tendons`` (0-based) that make every target of the
     path reachable (f = 0 on the path scaled by ``margin``), by TAO BLMVM with
     the exact gradient of the module docstring.  Options prefix ``design_``.
@@ -196,14 +212,23 @@ def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = Non
     (one per objective evaluation; their number is not known in advance)."""
     if margin < 1.0:
         raise DesignError(f"--margin must be at least 1, got {margin}")
+    from .design_offsets import offset_bounds, with_offsets
+
     t0 = time.perf_counter()
-    q0 = np.concatenate([arm.tendons[i].route_mm for i in tendons]).astype(float)
-    lo, hi = route_bounds(arm, tendons, reach_mm, clearance_mm)
+    n_routes = 2 * len(tendons)
+    q0 = np.concatenate([np.asarray(arm.tendons[i].route_mm, float) for i in tendons]
+                        + [[v.value_mm(arm) for v in offsets]])
+    bounds = [route_bounds(arm, tendons, reach_mm, clearance_mm),
+              offset_bounds(arm, offsets, reach_mm)]
+    lo, hi = (np.concatenate([b[k] for b in bounds]) for k in (0, 1))
+
+    def designed(q):
+        return with_offsets(with_routes(arm, tendons, q[:n_routes]), offsets, q[n_routes:])
     design_path = scaled_path(targets_mm, margin)
     history, best = [], {}
 
     def objective(q):
-        m = path_misfit(with_routes(arm, tendons, q), tendons, design_path, elements)
+        m = path_misfit(designed(q), tendons, design_path, elements, offsets)
         history.append({"q_mm": q.tolist(), "f_mm2": m.f, "reached": int(m.reached.sum()),
                         "gradient": m.gradient.tolist()})
         if not best or m.f < best["f"]:
@@ -220,10 +245,10 @@ def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = Non
                                           options_prefix=options_prefix,
                                           done=lambda: bool(best) and best["f"] == 0.0,
                                           status=status)
-    after = with_routes(arm, tendons, best["q"])
+    after = designed(best["q"])
     if progress is not None:
         progress(len(history), "tracing the task's path on the arm before and after")
     before_misfit = path_misfit(arm, tendons, targets_mm, elements)
     after_misfit = path_misfit(after, tendons, targets_mm, elements)
     return DesignResult(arm, after, list(tendons), before_misfit, after_misfit, history, reason,
-                        iterations, len(history), time.perf_counter() - t0)
+                        iterations, len(history), time.perf_counter() - t0, list(offsets))

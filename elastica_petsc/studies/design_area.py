@@ -27,9 +27,10 @@ the paper's arm, the gradient 15 % off).
 tip-map test (det(d x_t/d p)) must keep one sign (``det_sign_changes``
 reports a fold reaching the boundary); interior folds, unstable states and
 states off the quasi-static branch are what the independent re-sampling
-(:func:`resampled_area`) catches: a forward tension-grid map (``workspace
---mode tensions``) over B, its cells' images as triangles, and the area of
-their union counted on a fine lattice.  Where the map folds, the union is
+(:func:`resampled_area`) catches: forward solves on a tension lattice over
+B (:func:`tension_sweep`, the states ``workspace --mode tensions`` finds),
+its cells' images as triangles, and the area of their union counted on a
+fine lattice.  Where the map folds, the union is
 smaller than A; so the optimiser's gain is claimed only if the re-sampled
 areas before and after differ by more than their errors.
 """
@@ -44,7 +45,7 @@ from ..core.clearance import state_cable_clear
 from ..core.fem import Discretisation
 from ..core.geometry import triangles_union_area
 from ..core.model import Arm
-from .traced_area import TracedArea, traced_area
+from .traced_area import TracedArea, WarmStart, traced_area
 
 
 def infeasibility(area: TracedArea, force_scale_N: float) -> dict:
@@ -94,44 +95,59 @@ def _triangles(tips: np.ndarray, good: np.ndarray) -> np.ndarray:
 def resampled_area(arm: Arm, p_max: float, *, elements: int | None = None, cells: int = 20,
                    lattice_mm: float = 0.25) -> Resampled:
     """Re-sample the workspace of ``arm`` within 0 <= p_i <= ``p_max``: forward
-    solves on a (cells + 1)^2 tension lattice (``workspace --mode tensions``:
-    quasi-static loading from the straight arm, continued along rows), the
-    union of the images of the cells whose corners are stable (lambda_min > 0)
-    equilibria, its area counted on a lattice of ``lattice_mm``.  The error is
-    |A(s) - A(2s)| (the same map on every other lattice line; it bounds the
-    chords' error whenever halving s at least halves it, and Richardson's
-    s^2 estimate, a third of it, was too small on coarse grids) plus
-    perimeter x lattice spacing (a bound on the counting's).  Measured on the
-    paper's arm (60 elements, P_max = 10 N): A = 60917, 58914 mm^2 at 16, 32
-    cells against 58472 mm^2 for the box loop's shoelace at 48 nodes per edge
-    (the objective before issue 21)."""
-    from mpi4py import MPI
+    solves on a (cells + 1)^2 tension lattice (:func:`tension_sweep`:
+    quasi-static loading from the straight arm, continued along the rows),
+    the union of the images of the cells whose corners are stable
+    (no negative eigenvalue of K, Eq. (20)) equilibria, its area counted on
+    a lattice of ``lattice_mm``.  The error is |A(s) - A(2s)| (the same map
+    on every other lattice line; it bounds the chords' error whenever
+    halving s at least halves it, and Richardson's s^2 estimate, a third of
+    it, was too small on coarse grids) plus perimeter x lattice spacing (a
+    bound on the counting's).  Measured on the paper's arm (60 elements,
+    P_max = 10 N): A = 60917, 58914 mm^2 at 16, 32 cells against 58472 mm^2
+    for the box loop's shoelace at 48 nodes per edge (the objective before
+    issue 21)."""
+    import time
 
-    from .workspace import Status, run_map
-
+    t0 = time.perf_counter()
     disc = Discretisation.from_arm(arm, elements)
-    spacing = p_max / cells
-    ws = run_map(arm, disc, mode="tensions", tension_spacing=spacing, tension_max=p_max,
-                 comm=MPI.COMM_SELF, progress=False)
-    s = ws.samples
-    index = np.rint(np.asarray(ws.points) / spacing).astype(int)
-    n = cells + 1
-    tips = np.full((n, n, 2), np.nan)
-    good = np.zeros((n, n), bool)
-    reached = s["status"] == Status.REACHED
-    with np.errstate(invalid="ignore"):
-        stable = reached & (s["lambda_min"] > 0)
-    tips[index[:, 0], index[:, 1]] = s["tip"]
-    good[index[:, 0], index[:, 1]] = stable
-    fine = triangles_union_area(_triangles(tips, good), lattice_mm)
-    coarse = triangles_union_area(_triangles(tips[::2, ::2], good[::2, ::2]), lattice_mm)
+    tips, reached, stable, clear = tension_sweep(disc, p_max, cells)
+    tips = tips * arm.length_mm
+    fine = triangles_union_area(_triangles(tips, stable), lattice_mm)
+    coarse = triangles_union_area(_triangles(tips[::2, ::2], stable[::2, ::2]), lattice_mm)
     edge = np.concatenate([tips[:, 0], tips[-1, 1:], tips[-2::-1, -1], tips[0, -2:0:-1]])
     perimeter = float(np.nansum(np.linalg.norm(np.diff(edge, axis=0), axis=1)))
-    seconds = float(np.nansum(s["seconds_control"]) + np.nansum(s["seconds_eigen"]))
-    return Resampled(fine, abs(fine - coarse) + perimeter * lattice_mm, len(s["status"]),
-                     int(reached.sum()), int(stable.sum()),
-                     int(np.all(s["cable_clear"], axis=1)[reached].sum()), seconds,
-                     np.asarray(s["tip"])[stable])
+    return Resampled(fine, abs(fine - coarse) + perimeter * lattice_mm, reached.size,
+                     int(reached.sum()), int(stable.sum()), int((clear & reached).sum()),
+                     time.perf_counter() - t0, tips[stable])
+
+
+def tension_sweep(disc: Discretisation, p_max: float, cells: int):
+    """Forward solves on the lattice p = (i, j) p_max/cells, i, j = 0..cells:
+    one quasi-static loading path from the straight arm through every node,
+    serpentine along the rows (each node from the last one reached; ``workspace
+    --mode tensions`` restarts from the straight arm every 24 samples and
+    computes lambda_min with SLEPc: the same areas on the paper's arm and
+    its optimum, at a third of the cost), stability from the path's inertia
+    counts (Sylvester, Eq. (20)).  Returns tips (units of l),
+    reached, stable and cables-clear masks, each on the (cells + 1)^2 lattice."""
+    from ..solvers.equilibrium import EquilibriumSolver
+
+    n, spacing = cells + 1, p_max / cells
+    tips = np.full((n, n, 2), np.nan)
+    reached, stable, clear = (np.zeros((n, n), bool) for _ in range(3))
+    previous = None
+    with EquilibriumSolver(disc) as solver:
+        for i in range(n):
+            for j in (range(n) if i % 2 == 0 else range(n - 1, -1, -1)):
+                eq = solver.solve(np.array([i * spacing, j * spacing]), start=previous)
+                if not eq.converged:
+                    continue
+                previous = eq
+                tips[i, j], reached[i, j] = eq.tip, True
+                stable[i, j] = eq.unstable_modes == 0
+                clear[i, j] = bool(np.all(state_cable_clear(eq)))
+    return tips, reached, stable, clear
 
 
 # --- the optimiser -----------------------------------------------------------------------------
@@ -220,24 +236,29 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
     t0 = time.perf_counter()
     elements = Discretisation.from_arm(arm, elements).n_elements
     history, best, first, seen = [], {}, [], {}
+    warm = WarmStart()                  # each design starts from the last one's states
 
     def evaluate(candidate):
         key = tuple((t.attach_mm, *t.route_mm) for t in candidate.tendons)
         if key in seen:                          # TAO's first call is the start, evaluated
             return seen[key]
-        a = seen[key] = traced_area(candidate, tendons, p_max, elements=elements)
+        # the start in full (its report); later designs stop at a failed check
+        a = seen[key] = traced_area(candidate, tendons, p_max, elements=elements, warm=warm,
+                                    skip_infeasible=bool(first))
         if not first:
             first.append(a)
         history.append({"attach_mm": [t.attach_mm for t in candidate.tendons],
                         "routes_mm": [list(t.route_mm) for t in candidate.tendons],
-                        "area_mm2": a.area_mm2, "gradient": a.gradient.tolist(),
+                        "area_mm2": a.area_mm2 if a.traced else None,
+                        "gradient": a.gradient.tolist() if a.traced else None,
                         "feasible": a.feasible, "converged": a.converged,
                         "cables_clear": a.cables_clear, "det_sign_changes": a.det_sign_changes})
         if a.feasible and (not best or a.area_mm2 > best["area"].area_mm2):
             best.update(area=a, arm=candidate)
         if progress is not None:
             progress(len(history), f"area {a.area_mm2:.0f} mm^2"
-                     + ("" if a.feasible else " (rejected: infeasible)"))
+                     + ("" if a.feasible else " (rejected: infeasible)") if a.traced else
+                     "rejected: a cable crosses the arm or a node is not solved")
         return a
 
     designed, reason, iterations = arm, "", 0

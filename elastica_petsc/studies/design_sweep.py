@@ -137,10 +137,10 @@ class SweepResults(ChunkResults):
     def __init__(self, grid: Grid):
         super().__init__(grid, sweep_fields())
 
-    def write(self, path, attrs, limits, timing) -> None:
+    def write(self, path, attrs, limits, timing):
         from ..io.design import write_sweep
 
-        write_sweep(path, self, attrs, timing)
+        return write_sweep(path, self, attrs, timing)
 
 
 class SweepSampler:

@@ -39,6 +39,22 @@ class TracedSchedule(Result):
     schedule: MotorSchedule
     speed: dict
 
+    @property
+    def arm(self):
+        """The arm traced (the path's; saved as provenance)."""
+        return self.path.arm
+
+    def to_vtk(self, directory) -> list:
+        """The approach and the path, one state per point timed by the schedule
+        (``trace.pvd``, ``trace_path.vtu``), as ``trace --vtk`` writes them."""
+        from ..io.vtk import write_trace
+        from ..solvers.tip_problem import needs_arm
+
+        rows = self.schedule.path_rows()
+        return write_trace(directory, needs_arm(self.path), self.path,
+                           times_s=self.schedule.time_s[rows], approach=self.approach,
+                           approach_times_s=self.schedule.time_s[:rows[0]])
+
     def summary(self) -> dict:
         """What ``trace --json`` prints: the path, its approach and the schedule's timing."""
         from ..io.summaries import schedule_summary, trace_summary

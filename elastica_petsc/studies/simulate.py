@@ -20,6 +20,7 @@ from ..core.dynamics import Inertia
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm
+from ..core.results import Result
 from ..solvers.dynamics import SLACK, TAUT, DynamicsSolver, Trajectory
 from ..solvers.equilibrium import check_order, check_tensions, solve_equilibrium
 from ..solvers.stability import StabilitySolver
@@ -34,9 +35,10 @@ def time_scale_s(arm: Arm) -> float:
     return math.sqrt(arm.mass_per_length_kg_m * length_m**4 / arm.bending_stiffness_Nm2)
 
 
-@dataclass
-class SimulationResult:
-    """Every accepted step of a run, in mm, N, s, J."""
+@dataclass(frozen=True, repr=False)
+class SimulationResult(Result):
+    """Every accepted step of a run, in mm, N, s, J (a result type: ``save(path)``
+    writes ``simulate --out``'s layout, ``ep.read`` returns it)."""
 
     arm: Arm
     elements: int

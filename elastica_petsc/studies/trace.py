@@ -18,8 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.model import Arm
 from ..core.results import Result
 from ..solvers.control import ControlResult, Evaluation, TipController
+from ..solvers.tip_problem import needs_arm
 from ..core.errors import InputError
 
 
@@ -203,6 +205,7 @@ class TraceResult(Result):
     tip_errors_mm: np.ndarray       # (k,)
     seconds: float                  # wall time of the whole trace
     results: tuple[ControlResult, ...] = ()
+    arm: Arm | None = None          # the arm traced (saved as provenance)
 
     @property
     def all_converged(self) -> bool:
@@ -211,6 +214,14 @@ class TraceResult(Result):
     @property
     def n_points(self) -> int:
         return len(self.targets_mm)
+
+    def to_vtk(self, directory, *, times_s=None) -> list[Path]:
+        """One state per point in ``directory`` (``trace.pvd``, time ``times_s`` or
+        the point index) and the path ``trace_path.vtu``, as ``trace --vtk``
+        writes them; needs ``arm`` and the per-point results."""
+        from ..io.vtk import write_trace
+
+        return write_trace(directory, needs_arm(self), self, times_s=times_s)
 
     def to_xarray(self):
         """The traced path as an ``xarray.Dataset`` (xarray optional), dimensions
@@ -295,8 +306,9 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
         k; default the sharer's), e.g. ramped along an approach from the straight arm.
     """
     from ..solvers.reach import Reacher
+    from ..solvers.share import WarmStart
 
-    reacher = Reacher(controller)
+    reacher, warm = Reacher(controller), WarmStart()     # the sharer's, point to point
     targets = np.asarray(targets_mm, dtype=float)
     if targets.ndim != 2 or targets.shape[1] != 2 or len(targets) == 0:
         raise PathError(f"targets must have shape (k, 2) in mm, got {targets.shape}")
@@ -317,7 +329,7 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
             res = sharer.follow(x_d / controller.length_mm, previous, reacher, p0=p0,
                                 start=start, start_loading=loading,
                                 floor=None if floors is None else floors[k],
-                                global_search=global_search)
+                                global_search=global_search, warm=warm)
             if res.converged:          # the next point starts from the last shared state
                 previous = Evaluation(res.p, res.equilibrium, res.sensitivity, res.loading)
         results.append(res)
@@ -339,4 +351,4 @@ def trace(controller: TipController, targets_mm, *, p0=None, start=None,
         converged=np.array([r.converged for r in results]),
         tip_errors_mm=np.array([r.tip_error_mm for r in results]),
         seconds=seconds,
-        results=tuple(results) if keep_results else ())
+        results=tuple(results) if keep_results else (), arm=controller.arm)

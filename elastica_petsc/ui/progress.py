@@ -40,15 +40,19 @@ import sys
 import threading
 import time
 
-_SETTINGS: dict = {"quiet": False, "delay": None}
+_SETTINGS: dict = {"quiet": False, "delay": None, "log_seconds": None}
 _OPEN: set = set()
 
 
-def configure(*, quiet: bool = False, delay: float | None = None) -> None:
+def configure(*, quiet: bool = False, delay: float | None = None,
+              log_seconds: float | None = None) -> None:
     """Process-wide switches: ``quiet=True`` turns every later Progress off;
-    ``delay`` (seconds, None: each bar's own) replaces every later bar's delay."""
+    ``delay`` (seconds, None: each bar's own) replaces every later bar's delay;
+    ``log_seconds`` (None: each one's own) the least time between log lines,
+    which is also how long a run lasts before it logs anything."""
     _SETTINGS["quiet"] = bool(quiet)
     _SETTINGS["delay"] = None if delay is None else float(delay)
+    _SETTINGS["log_seconds"] = None if log_seconds is None else float(log_seconds)
 
 
 def quiet() -> bool:
@@ -115,6 +119,8 @@ class Progress:
                  unit: str = "", open_log_seconds: float = 10.0, delay: float = 0.0):
         self.total = None if total is None else int(total)
         self.label, self.unit, self.note = label, unit, ""
+        if _SETTINGS["log_seconds"] is not None:
+            log_seconds = _SETTINGS["log_seconds"]
         self.interval, self.log_percent, self.log_seconds = interval, log_percent, log_seconds
         self.delay = float(delay if _SETTINGS["delay"] is None else _SETTINGS["delay"])
         self.open_log_seconds = open_log_seconds

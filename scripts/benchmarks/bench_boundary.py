@@ -1,7 +1,8 @@
 """Benchmark: `boundary` (workspace boundary by continuation, issue 13) against
 an earlier revision, interleaved, median of repeats.
 
-    python scripts/benchmarks/bench_boundary.py [--repeats 5] [--before 2b03bce] [--map MAP.h5]
+    python scripts/benchmarks/bench_boundary.py [--repeats 5] [--before main] [--map MAP.h5]
+                                               [--refine 8]
 
 Each measurement is a fresh process that traces once to warm up (imports,
 PETSc start-up) and then times a second trace_boundary of the paper's arm
@@ -70,11 +71,33 @@ def map_counts(path: str) -> dict:
     return {"targets": n, "iterations": int(np.sum(iterations)) if n else None}
 
 
+ACCURACY = r"""
+import json, sys
+from elastica_petsc.core.model import load_config
+from elastica_petsc.studies.boundary import compare_traces, trace_boundary
+arm = load_config()
+print(json.dumps(compare_traces(trace_boundary(arm), trace_boundary(arm, refine=float(sys.argv[1])))))
+"""
+
+
+def accuracy(root: str, refine: float) -> dict:
+    """The default trace of ``root``'s code against its trace with every step
+    limit divided by ``refine`` (:func:`compare_traces`)."""
+    env = dict(os.environ, PYTHONPATH=root)
+    out = subprocess.run([sys.executable, "-c", ACCURACY, str(refine)], cwd=root, env=env,
+                         capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--before", default="2b03bce", help="earlier revision (git)")
+    ap.add_argument("--before", default="main", help="earlier revision (git)")
     ap.add_argument("--map", help="a workspace file (targets) to compare solve counts with")
+    ap.add_argument("--refine", type=float, default=0.0,
+                    help="also compare this tree's default trace with one whose step limits "
+                         "are divided by REFINE (e.g. 8): relative area differences and "
+                         "Hausdorff distances of the curves (mm)")
     args = ap.parse_args()
     print(f"load average: {os.getloadavg()}")
     with tempfile.TemporaryDirectory() as tmp:
@@ -97,6 +120,9 @@ def main() -> None:
                   f"{m['area']:10.0f}")
         print(f"{'':26s} ratio  {med['before']['wall'] / med['after']['wall']:8.2f} "
               f"{med['before']['cpu'] / med['after']['cpu']:8.2f}   (before / after)")
+    if args.refine:
+        for name, row in accuracy(HERE, args.refine).items():
+            print(f"against refine={args.refine:g}: {name}: {row}")
     if args.map:
         counts = map_counts(args.map)
         after = statistics.median(r["solves"] for r in rows["W0 + tip-map folds"]["after"])

@@ -11,8 +11,17 @@ areas.  ``optimise``: one ``design --objective area`` and one
 mm of examples/design_task.py), reporting iterations, evaluations, seconds
 and the outcome from their --json.
 
+``area``: ``design --vary tendon1.route tendon2.route --objective area``
+(the paper's arm, CLI defaults: 180 elements, 10 N, re-sampling at 32
+cells) in this tree and in an earlier revision (``git archive``, default
+``main``), interleaved, fresh processes, median wall and CPU (user + sys of
+the child) of --repeat runs, and the optimisation alone (``design_for_area``
+without the re-sampling, in-process after a warm-up): ratios before/after
+in one run, and the optimum of each (areas, routes, re-sampled areas).
+
 Usage: bench_design.py sweep [--elements N] [--repeat R]
        bench_design.py optimise [--elements N]
+       bench_design.py area [--repeat R] [--before REV]
 """
 from __future__ import annotations
 
@@ -81,13 +90,83 @@ def optimise(elements: int) -> None:
                   {k: s[k] for k in ("resampled_before", "resampled_after") if k in s})
 
 
+AREA_CMD = ["-m", "elastica_petsc.cli", "design", "--vary", "tendon1.route", "tendon2.route",
+            "--objective", "area", "--json", "--quiet"]
+OPTIMISE_ONLY = r"""
+import json, time
+from elastica_petsc.core.model import load_config
+from elastica_petsc.studies.design_area import design_for_area
+arm = load_config()
+p_max = 10.0 / arm.force_scale_N
+design_for_area(arm, (0, 1), p_max, resample_cells=None, max_iterations=1)     # warm-up
+w, c = time.perf_counter(), time.process_time()
+r = design_for_area(arm, (0, 1), p_max, resample_cells=None)
+print(json.dumps({"wall": time.perf_counter() - w, "cpu": time.process_time() - c,
+                  "evaluations": len(r.history), "area": r.after.area_mm2}))
+"""
+
+
+def _child(cmd, root) -> tuple[float, float, str]:
+    """(wall s, CPU s of the child, stdout) of one fresh process in ``root``."""
+    import resource
+
+    env = dict(ENV, PYTHONPATH=root)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    done = subprocess.run(cmd, cwd=root, capture_output=True, text=True, env=env)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode not in (0, 1):
+        raise SystemExit(f"{' '.join(cmd)} failed in {root}: {done.stderr[-2000:]}")
+    return wall, (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime), done.stdout
+
+
+def area(repeat: int, before: str) -> None:
+    here = str(Path(__file__).resolve().parents[2])
+    print(f"load average: {os.getloadavg()}")
+    with tempfile.TemporaryDirectory() as tmp:
+        archive = subprocess.run(["git", "archive", before, "elastica_petsc"], cwd=here,
+                                 capture_output=True, check=True).stdout
+        subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
+        roots = {"before": tmp, "after": here}
+        cli = {k: [] for k in roots}
+        alone = {k: [] for k in roots}
+        for _ in range(repeat):
+            for label, root in roots.items():                      # interleaved
+                wall, cpu, out = _child([sys.executable, *AREA_CMD], root)
+                cli[label].append((wall, cpu, json.loads(out)))
+                _, _, out = _child([sys.executable, "-c", OPTIMISE_ONLY], root)
+                alone[label].append(json.loads(out.strip().splitlines()[-1]))
+    print(f"load average after: {os.getloadavg()}")
+    print("| revision | CLI wall s | CLI CPU s | optimisation wall s | optimisation CPU s "
+          "| evaluations | area after mm^2 | routes after mm | re-sampled before / after mm^2 |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    med = {}
+    for label in roots:
+        s = cli[label][0][2]
+        med[label] = [statistics.median(r[0] for r in cli[label]),
+                      statistics.median(r[1] for r in cli[label]),
+                      statistics.median(r["wall"] for r in alone[label]),
+                      statistics.median(r["cpu"] for r in alone[label])]
+        routes = [[round(x, 3) for x in r] for r in s["routes_after_mm"]]
+        print(f"| {label} ({before if label == 'before' else 'this tree'}) | "
+              + " | ".join(f"{v:.2f}" for v in med[label])
+              + f" | {s['evaluations']} | {s['area_after_mm2']:.2f} | {routes} | "
+              f"{s['resampled_before']['area_mm2']:.1f} / {s['resampled_after']['area_mm2']:.1f} |")
+    print("| ratio before/after | " + " | ".join(
+        f"{b / a:.2f}" for b, a in zip(med["before"], med["after"])) + " | | | | |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=("sweep", "optimise"))
+    parser.add_argument("what", choices=("sweep", "optimise", "area"))
     parser.add_argument("--elements", type=int, default=60)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--before", default="main", help="area: the earlier revision (git)")
     args = parser.parse_args()
-    if args.what == "sweep":
+    if args.what == "area":
+        area(args.repeat, args.before)
+    elif args.what == "sweep":
         sweep(args.elements, args.repeat)
     else:
         optimise(args.elements)

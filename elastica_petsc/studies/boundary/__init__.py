@@ -58,10 +58,10 @@ Modules: :mod:`.walker` (the walk around D, fold curves, scan rays),
 and the process's trace, :func:`traced_w0`), :mod:`.compare` (against a
 sampled map); the plane geometry is :mod:`elastica_petsc.core.geometry`.
 """
-from .compare import compare_map, compare_restricted, compare_with_samples
+from .compare import compare_map, compare_restricted, compare_traces, compare_with_samples
 from .result import BoundaryResult
 from .trace import BoundaryError, TraceCache, boundary_proof, trace_boundary, traced_w0
 
-__all__ = ["BoundaryError", "BoundaryResult", "boundary_proof", "compare_map",
+__all__ = ["BoundaryError", "BoundaryResult", "boundary_proof", "compare_map", "compare_traces",
            "compare_restricted", "compare_with_samples", "TraceCache", "trace_boundary",
            "traced_w0"]

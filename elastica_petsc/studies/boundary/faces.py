@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.geometry import hermite_densify, ray_hits, winding_number
+from ...core.geometry import hermite_densify, ray_hits, segments_distance, winding_number
 from ...solvers.continuation import Curve
 from .walker import RegionBoundary
 
@@ -94,11 +94,7 @@ class OutsideMap:
         pts = np.atleast_2d(points_mm)
         out = np.full(len(pts), np.inf)
         for a, b in self.segments:
-            ab = b - a
-            denom = np.maximum(np.einsum("kc,kc->k", ab, ab), 1e-300)
-            t = np.clip(((pts[:, None, :] - a[None]) * ab[None]).sum(-1) / denom, 0.0, 1.0)
-            near = a[None] + t[..., None] * ab[None]
-            out = np.minimum(out, np.linalg.norm(pts[:, None, :] - near, axis=-1).min(axis=1))
+            out = np.minimum(out, segments_distance(a, b, pts))
         return out
 
     def hull_area(self) -> float:

@@ -17,7 +17,7 @@ from ...core.model import Arm
 from ...solvers.continuation import CurveTracer
 from .faces import classify_faces, curve_polyline, loop_polygon
 from .result import BoundaryResult
-from .walker import (FoldTracer, RegionBoundary, Walker, constraints_for, scan_rays,
+from .walker import (DS0, SCAN_TIP_STEP, FoldTracer, RegionBoundary, Walker, constraints_for, scan_rays,
                      tip_fold_crossings)
 
 
@@ -29,15 +29,15 @@ def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, tendons,
                    length_mm: float) -> np.ndarray:
     """d|A|/d(r_i x, r_i y) for each tendon i in ``tendons`` [mm^2 per mm]."""
     grads = []
-    for i in tendons:
-        velocity = walker.route_velocities(region, start_rows, i)     # (nodes, 2, 2), l per l
+    for velocity in walker.route_velocities(region, start_rows, tendons):  # (nodes, 2, 2)
         poly, dense_velocity = loop_polygon(region, length_mm, node_values=velocity)
         grads.append(union_area_gradient(poly, dense_velocity))          # mm^2 per mm
     return np.concatenate(grads)
 
 
 def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: bool = True,
-                   tip_folds: bool = True, route_gradients=(), progress=None) -> BoundaryResult:
+                   tip_folds: bool = True, route_gradients=(), progress=None,
+                   refine: float = 1.0) -> BoundaryResult:
     """The boundary of W_0 (and of the restricted workspace) of a two-tendon arm.
 
     Returns polygons in mm and areas in mm^2 (module docstring for the
@@ -51,7 +51,9 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
     integral of the normal velocity of the loop's nodes (exact for the node
     polygon; the area itself is that of the Hermite-densified polygon).
     ``progress(solves, note)``, if given, is called after every continuation
-    step (the number of solves is not known in advance).
+    step (the number of solves is not known in advance).  ``refine``: every
+    step limit (tip step, step length, first step, the scan's) divided by it,
+    for a finer reference trace (:func:`~.compare.compare_traces`).
     """
     disc = Discretisation.from_arm(arm) if disc is None else disc
     if disc.n_tendons != 2:
@@ -62,19 +64,26 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
     t0 = time.perf_counter()
     regions, polygons, areas, messages, gradients = {}, {}, {}, [], {}
     fold_crossings, fold_curves, scan, scan_solves = [], [], [], 0
+    if not (np.isfinite(refine) and refine >= 1.0):
+        raise InputError(f"refine must be a number >= 1, got {refine}")
     with CurveTracer(disc) as tracer:
+        tracer.max_tip_step /= refine
+        tracer.ds_max /= refine
         w0 = np.concatenate((disc.straight(), np.zeros(2)))
         wanted = (("W0", False), ("restricted", True)) if restricted else (("W0", False),)
         for name, extra in wanted:
             cons = constraints_for(tracer, arm, extra)
-            walker = Walker(tracer, cons, progress=progress)
+            # the restricted region lies in D: its walk takes over W_0's nodes
+            known = regions["W0"].curves if name == "restricted" else ()
+            walker = Walker(tracer, cons, progress=progress, ds0=DS0 / refine, known=known)
             try:
                 region = walker.walk(name, w0, first=cons[1], previous=cons[0])
                 if name == "W0" and tip_folds:
                     fold_crossings = tip_fold_crossings(region)
                     fold_curves = FoldTracer(walker).trace(region, fold_crossings)
                     before = tracer.solves
-                    scan = scan_rays(walker, w0, fold_curves)
+                    scan = scan_rays(walker, w0, fold_curves,
+                                     max_tip_step=SCAN_TIP_STEP / refine)
                     scan_solves = tracer.solves - before
                 if route_gradients and region.closed:
                     gradients[name] = _area_gradient(walker, region, cons[1::-1],

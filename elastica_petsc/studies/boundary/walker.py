@@ -54,13 +54,18 @@ def constraints_for(tracer: CurveTracer, arm: Arm, restricted: bool) -> list:
     return out
 
 
+DS0 = 0.3                 # first step length of each curve (metric D)
+SCAN_TIP_STEP = 0.5       # largest tip step of the scan rays (units of l)
+
+
 class Walker:
     """The wall follower around D of the module docstring."""
 
-    def __init__(self, tracer: CurveTracer, constraints: list, *, ds0: float = 0.3,
-                 ds_min: float = 1e-5, max_points: int = 400, progress=None):
+    def __init__(self, tracer: CurveTracer, constraints: list, *, ds0: float = DS0,
+                 ds_min: float = 1e-5, max_points: int = 400, progress=None, known=()):
         self.tr, self.progress = tracer, progress        # progress(solves, note) per step
         self.constraints = constraints
+        self.known = list(known)       # an earlier walk's curves, nodes to take over
         self.fold_system = FoldSystem(tracer.mf)
         self.fold = Fold(self.fold_system)
         self.ds0, self.ds_min, self.max_points = ds0, ds_min, max_points
@@ -96,8 +101,15 @@ class Walker:
         return w
 
     def _events(self, a, b, active):
-        """Constraints that became active between a and b (stability loss: fold)."""
-        hits = [c for c in self.constraints if c is not active and c.margin(b.w) < 0]
+        """Constraints that became active between a and b (stability loss: fold),
+        the one crossed first (linearly interpolated margins) first: the corner
+        is located with the first of them that converges, and a constraint
+        crossed later lies beyond that corner (before issue 25 they came in
+        list order: on configs/aluminium.toml a step that crossed the curvature
+        limit and then P1 = P_crit cornered on P1 = P_crit)."""
+        crossed = [(c.margin(a.w), c.margin(b.w), c) for c in self.constraints if c is not active]
+        crossed = [(max(ma, 0.0) / (max(ma, 0.0) - mb), c) for ma, mb, c in crossed if mb < 0]
+        hits = [c for _, c in sorted(crossed, key=lambda fc: fc[0])]
         if b.unstable_modes > 0 and a.unstable_modes == 0 and active is not self.fold:
             hits.append(self.fold)
         return hits
@@ -117,13 +129,71 @@ class Walker:
                     limit = min(limit, 0.5 * (c.value(pt.w) + c.eps) / -rate)
         return limit
 
+    def _land_on_collapse(self, pt, active, ds: float, tried: dict):
+        """(constraint, corner point) when a cable collapse is within the step ds
+        (linearised): the corner of ``active`` and L_i = eps solved directly
+        from the linear predictor, accepted if it lies ahead on the curve
+        within the step's limits and no other constraint or stability is lost
+        on the way (:meth:`_corner_point`); else None.  Approaching a collapse
+        by steps took 4-7 ever shorter steps (:meth:`_collapse_limit`); after
+        a failed landing the next is tried only once the distance has halved
+        (``tried``: constraint -> distance of its last failed try)."""
+        for c in self.constraints:
+            if not isinstance(c, CableCollapse) or c is active:
+                continue
+            rate = float(c.gradient(pt.w) @ pt.t)
+            if rate >= 0:
+                continue
+            reach = c.value(pt.w) / -rate
+            if reach > ds or reach > 0.5 * tried.get(c.name, np.inf):
+                continue
+            w, ok = self.tr.correct(pt.w + reach * pt.t, [active, c])
+            corner = self._corner_point(pt, w, active, c, reach * pt.t) if ok else None
+            if corner is not None:
+                return c, corner
+            tried[c.name] = reach
+        return None
+
+    def _corner_point(self, pt, w, active, hit, step):
+        """The corner point at w (directly solved) if it is the next event along
+        the curve from ``pt``: ahead of it, within the tracer's jump and
+        tip-step limits, inside every other constraint and as stable as
+        ``pt``; else None."""
+        tr = self.tr
+        n = tr.mf.disc.n_elements
+        if (float(tr.mf.metric * pt.t @ (w - pt.w)) <= 0
+                or np.max(np.abs(w[:n] - pt.w[:n] - step[:n])) > tr.jump_tol
+                or np.linalg.norm(tr.mf.tip(w) - pt.tip) > tr.max_tip_step
+                or any(c.margin(w) < 0 for c in self.constraints
+                       if c is not active and c is not hit)):
+            return None
+        corner = tr.point(w, pt.t, pt.det_sign, 0)
+        return corner if corner.unstable_modes == pt.unstable_modes else None
+
+    @staticmethod
+    def _end(curve, hit, corner):
+        """Close ``curve`` at the corner with ``hit``: (curve, hit, corner state)."""
+        curve.end, curve.end_constraint, curve.hit = "corner", hit.name, hit
+        curve.points.append(corner)
+        return curve, hit, corner.w
+
     def follow(self, start, active) -> tuple[Curve, object, np.ndarray | None]:
         """Follow ``active`` from the point ``start`` until another constraint
-        becomes active: (curve, the new constraint, the corner state w)."""
+        becomes active: (curve, the new constraint, the corner state w).  The
+        nodes of a curve of ``known`` (an earlier walk's) on the same
+        constraint are taken over while no constraint of this walk becomes
+        active (:meth:`_replay`)."""
         curve = Curve(active.name, [start], active=active)
-        pt, ds = start, self.ds0
+        done = self._replay(curve, active)
+        if done is not None:
+            return done
+        pt, ds, tried = curve.points[-1], self.ds0, {}
         while len(curve.points) < self.max_points:
-            ds = min(ds, self.tr.step_limit(pt), self._collapse_limit(pt, active))
+            ds = min(ds, self.tr.step_limit(pt))
+            landed = self._land_on_collapse(pt, active, ds, tried)
+            if landed is not None:
+                return self._end(curve, *landed)
+            ds = min(ds, self._collapse_limit(pt, active))
             new, its = self.tr.step(pt, active, ds)
             if self.progress is not None:
                 self.progress(self.tr.solves, f"along {active.name}, point {len(curve.points)}")
@@ -138,10 +208,7 @@ class Walker:
                 for hit in hits:
                     w = self._locate(pt, new, active, hit)
                     if w is not None:
-                        curve.end, curve.end_constraint, curve.hit = "corner", hit.name, hit
-                        corner = self.tr.point(w, pt.t, pt.det_sign, 0)
-                        curve.points.append(corner)
-                        return curve, hit, w
+                        return self._end(curve, hit, self.tr.point(w, pt.t, pt.det_sign, 0))
                 ds *= 0.5
                 if ds < self.ds_min:
                     curve.end = "could not locate the corner with " + hits[0].name
@@ -158,6 +225,38 @@ class Walker:
             ds = min(ds * 2.0 if its <= 3 else ds, self.tr.ds_max)
         curve.end = f"more than {self.max_points} points"
         return curve, None, None
+
+    def _replay(self, curve, active):
+        """Take over the nodes of a known curve on ``active`` (:attr:`known`,
+        e.g. the W_0 walk's curves for the restricted walk, whose region lies
+        inside D) from the start of ``curve`` on, while no constraint of this
+        walk becomes active between two of them; at such an event its corner
+        is solved for as after a step, and where the known curve ends its
+        corner is solved again with this walk's constraint.  Returns
+        (curve, hit, w) when the curve is done, None to go on by steps from
+        its last node."""
+        found = _find_on(self.known, active.name, curve.points[0], self.tr.mf.metric)
+        if found is None:
+            return None
+        known, j = found
+        by_name = {c.name: c for c in self.constraints + [self.fold]}
+        end = by_name.get(known.end_constraint) if known.hit is not None else None
+        pt = curve.points[0]
+        for k in range(j + 1, len(known.points)):
+            b, last = known.points[k], k == len(known.points) - 1
+            hits = [h for h in self._events(pt, b, active) if not (last and h is end)]
+            if not hits and not last:
+                curve.points.append(b)
+                pt = b
+                continue
+            break
+        if active is self.fold:                  # bordering vectors at the last node taken
+            active.update(pt.w)
+        for hit in hits or ([end] if end is not None and last else []):
+            w = self._locate(pt, b, active, hit)
+            if w is not None:
+                return self._end(curve, hit, self.tr.point(w, pt.t, pt.det_sign, 0))
+        return None
 
     def walk(self, name: str, w0: np.ndarray, first, previous, max_corners: int = 16):
         """Once around the region from the corner w0 (constraints ``previous`` and
@@ -180,16 +279,17 @@ class Walker:
         return RegionBoundary(name, curves, closed, message)
 
 
-    def route_velocities(self, region: RegionBoundary, start_rows, tendon: int) -> np.ndarray:
+    def route_velocities(self, region: RegionBoundary, start_rows, tendons) -> list[np.ndarray]:
         """d x_t/d r_i (units of l per unit of l) at every node of the loop, in the
-        order of :meth:`RegionBoundary.nodes`, shape (nodes, 2 tip, 2 route).
+        order of :meth:`RegionBoundary.nodes`, shape (nodes, 2 tip, 2 route),
+        for each tendon i of ``tendons`` (one factorisation per node).
 
         Corners (the ends of each curve, and the start, where ``start_rows``
         are active) move with both of their constraints; a node inside a curve
         slides orthogonally (metric D) to the curve's tangent.  Only the normal
         component of the tip motion matters for the area
         (:func:`~elastica_petsc.core.geometry.union_area_gradient`)."""
-        mf, out = self.tr.mf, []
+        mf, out = self.tr.mf, [[] for _ in tendons]
         for k, curve in enumerate(region.curves):
             for j, pt in enumerate(curve.points):
                 if j == 0:
@@ -201,9 +301,33 @@ class Walker:
                 for row in rows:
                     if row is self.fold:
                         self.fold.update(pt.w)
-                dw = self.tr.route_velocity(pt.w, rows, tendon)
-                out.append(np.column_stack([mf.tip_velocity(pt.w, dw[:, c]) for c in range(2)]))
-        return np.array(out)
+                for dest, dw in zip(out, self.tr.route_velocities(pt.w, rows, tendons)):
+                    dest.append(np.column_stack([mf.tip_velocity(pt.w, dw[:, c])
+                                                 for c in range(2)]))
+        return [np.array(v) for v in out]
+
+
+def _find_on(curves, name: str, start, metric: np.ndarray, tol: float = 0.1):
+    """(curve, j): the curve of ``curves`` on constraint ``name`` that passes
+    through the point ``start`` between its nodes j and j + 1, travelled the
+    way start's tangent points (start within ``tol`` of the chord's length,
+    metric D, from the chord); None if there is none."""
+    best = None
+    for curve in curves:
+        if curve.constraint != name or len(curve.points) < 2:
+            continue
+        nodes = np.array([pt.w for pt in curve.points])
+        chord, rel = np.diff(nodes, axis=0), start.w - nodes[:-1]
+        length2 = np.maximum(np.sum(metric * chord * chord, axis=1), 1e-300)
+        along = np.sum(metric * rel * chord, axis=1) / length2
+        off = rel - along[:, None] * chord
+        dist = np.sqrt(np.sum(metric * off * off, axis=1) / length2)
+        ahead = (chord @ (metric * start.t)) > 0
+        ok = (along >= 0) & (along <= 1) & (dist <= tol) & ahead
+        for j in np.flatnonzero(ok):
+            if best is None or dist[j] < best[2]:
+                best = (curve, int(j), dist[j])
+    return None if best is None else best[:2]
 
 
 @dataclass
@@ -314,7 +438,7 @@ SCAN_ANGLES = (np.radians(20.0), np.radians(45.0), np.radians(70.0))
 
 
 def scan_rays(walker: Walker, w0: np.ndarray, fold_curves: list, angles=SCAN_ANGLES,
-              max_tip_step: float = 0.5) -> list[tuple[str, int, int]]:
+              max_tip_step: float = SCAN_TIP_STEP) -> list[tuple[str, int, int]]:
     """A coarse scan of D for folds of the tip map that do not meet the loop:
     proportional loading rays p = s (cos a, sin a) followed by continuation
     from the straight arm until they leave D, the intrinsic test evaluated at

@@ -3,6 +3,7 @@ status of a sample, the per-sample fields with their units, the samples of a
 run in memory (:class:`Results`) and the finished map (:class:`WorkspaceMap`)."""
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from enum import IntEnum
 from pathlib import Path
@@ -10,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.results import Result
-from ...io.workspace import write_results
+from ...io.workspace import lattice_index, new_map_rows, write_results
 from ..chunks import ChunkResults, Grid
 
 
@@ -111,17 +112,32 @@ class Results(ChunkResults):
     """All samples' fields of a workspace map in memory (rank 0), with per-chunk
     done flags; its file is :func:`~elastica_petsc.io.workspace.write_results`'s."""
 
+    MARKER = "status"     # NOT_COMPUTED (0) until every other field is on disk
+
     def __init__(self, grid: Grid, n_tendons: int):
         super().__init__(grid, fields(n_tendons))
 
-    def write(self, path: Path, attrs: dict, limits: dict, timing: dict) -> None:
-        """One checkpoint (:func:`~elastica_petsc.io.workspace.write_results`)."""
-        write_results(path, self, attrs, limits, timing)
+    def write(self, path: Path, attrs: dict, limits: dict, timing: dict):
+        """One checkpoint in full (:func:`~elastica_petsc.io.workspace.write_results`)."""
+        return write_results(path, self, attrs, limits, timing)
 
-    def masks(self, limits: dict) -> dict[str, np.ndarray]:
-        """Admissibility masks W_0, W_Y, W_S, W_E, W_P (Eqs. (18)-(22)) of the samples,
-        and W_C: every cable clear of the arm."""
-        d = self.data
+    def extra_rows(self, samples: np.ndarray, limits: dict) -> list:
+        """In-place rows of masks and map cells
+        (:func:`~elastica_petsc.io.workspace.new_map_rows`)."""
+        return new_map_rows(self, samples, limits)
+
+    @functools.cached_property
+    def lattice(self):
+        """(index, axes) of :func:`~elastica_petsc.io.workspace.lattice_index`."""
+        return lattice_index(self.grid)
+
+    def masks(self, limits: dict, samples=None) -> dict[str, np.ndarray]:
+        """Admissibility masks W_0, W_Y, W_S, W_E, W_P (Eqs. (18)-(22)) of the samples
+        (or of the samples of index array ``samples``), and W_C: every cable clear
+        of the arm."""
+        d = self.data if samples is None else {
+            name: self.data[name][samples] for name in
+            ("status", "kappa_max", "lambda_min", "strain_energy", "tensions", "cable_clear")}
         w0 = d["status"] == Status.REACHED
         with np.errstate(invalid="ignore"):
             wy = w0 & (d["kappa_max"] < limits["kappa_limit"])
