@@ -106,8 +106,15 @@ def _free_vibration(disc, theta_eq, p, control="load", periods=2.0):
     # fixed steps, 800 per period: the trapezoidal rule's period error (omega dt)^2/12 = 5e-6
     sim = DynamicsSolver(disc, Inertia.build(disc), dt0=2 * math.pi / omega / 800,
                          adaptive=False)
-    tr = sim.run(theta_eq + 1e-4 * mode, np.zeros(disc.n_elements), p,
-                 TensionDrive.constant(p), None, periods * 2 * math.pi / omega)
+    if control == "load":
+        drive, modes = TensionDrive.constant(p), None
+    else:                   # the cables held at the equilibrium's lengths, both taut
+        from elastica_petsc.core.drive import LengthDrive
+        from elastica_petsc.solvers.dynamics import TAUT
+        drive = LengthDrive(np.zeros(1), sim.cable_lengths(theta_eq)[None, :])
+        modes = np.full(disc.n_tendons, TAUT)
+    tr = sim.run(theta_eq + 1e-4 * mode, np.zeros(disc.n_elements), p, drive, modes,
+                 periods * 2 * math.pi / omega)
     k = int(np.argmax(np.abs(mode)))
     q = np.array([th[k] for th in tr.theta]) - theta_eq[k]
     qd = np.array([w[k - 1] for w in tr.omega])
@@ -319,3 +326,18 @@ def test_length_drive_plays_from_rest_to_rest():
     assert np.allclose([drive.lengths(tk) for tk in t], L)
     for tk in t[1:-1]:
         assert np.allclose(drive.rates(tk - 1e-9), drive.rates(tk + 1e-9), atol=1e-6)
+
+
+@pytest.mark.slow
+def test_free_vibration_under_fixed_cable_lengths(arm):
+    """Length control: both cables held at the lengths of the equilibrium at p = (3, 6);
+    the frequency of a small first-mode vibration is SLEPc's length-controlled one."""
+    disc = Discretisation.from_arm(arm, 30)
+    eq = solve_equilibrium(disc, np.array([3.0, 6.0]))
+    measured, slepc, tr = _free_vibration(disc, eq.theta, np.asarray(eq.p), control="length")
+    assert tr.completed and tr.events == []
+    assert np.all(np.array(tr.p) > 0)                    # both cables stay taut
+    assert abs(measured / slepc - 1) < 1e-4
+    with StabilitySolver(disc) as st:                    # not the load-controlled frequency
+        load = st.frequencies(disc.consistent_state(eq.theta), eq.p, nev=1).omega2[0]
+    assert abs(slepc / math.sqrt(load) - 1) > 1e-2
