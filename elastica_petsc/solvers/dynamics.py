@@ -118,7 +118,8 @@ class DynamicsSolver:
     steps ``dt0`` (tau).  ``radius``: rho_inf of the alpha method;
     ``lag_jacobian``: the PC (principal Jacobian and its banded LU) is
     refreshed every this many Newton iterations, across steps
-    (``-snes_lag_jacobian_persists``; a new TS after an event starts fresh);
+    (``-snes_lag_jacobian_persists``), with fixed steps and force control only
+    (adaptive steps and TSEvent's shortened ones refresh it every iteration);
     ``max_steps``: cap on accepted steps.  ``comm``, ``options_prefix``
     (``sim_``), ``petsc_options``: the contract of :mod:`.options`.
     """
@@ -309,20 +310,16 @@ class DynamicsSolver:
             ts.setMaxTime(t_end + 0.5 * (t_end - t0) / count)
             ts.setMaxSteps(count)
             ts.setExactFinalTime(PETSc.TS.ExactFinalTime.STEPOVER)
-        else:       # steps dt0 with events: TSAdapt basic that never rejects (no error
-            ts.setTimeStep(dt0)      # control) grows the steps TSEvent shortened back to dt0
+        else:       # steps dt0 with events (TSEvent may shorten some)
+            ts.setTimeStep(dt0)
             ts.setMaxTime(t_end)
             ts.setMaxSteps(self.max_steps)
             ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
-            self.options.update({"ts_adapt_type": "basic", "ts_adapt_dt_max": self.dt0})
         ts.setMaxSNESFailures(-1)
         ts.setMaxStepRejections(-1)
         atol, rtol = U.duplicate(), U.duplicate()
-        no_control = not self.adaptive
-        atol.setArray(np.concatenate((np.full(self.N, EXCLUDED if no_control else self.atol),
-                                      np.full(self.n, EXCLUDED))))
-        rtol.setArray(np.concatenate((np.full(self.N, 0.0 if no_control else self.rtol),
-                                      np.zeros(self.n))))
+        atol.setArray(np.concatenate((np.full(self.N, self.atol), np.full(self.n, EXCLUDED))))
+        rtol.setArray(np.concatenate((np.full(self.N, self.rtol), np.zeros(self.n))))
         ts.setTolerances(rtol=rtol, atol=atol)
         snes = ts.getSNES()
         snes.setType("newtonls")
@@ -343,9 +340,6 @@ class DynamicsSolver:
                 self._fired = [int(i) for i in events_fired]
 
             ts.setEventHandler([-1] * self.n, [True] * self.n, events, post)
-            # PETSc's default value tolerance (1e-6) is contact_tol itself: a gap at 0
-            # just after a separation would count as a zero and TSEvent would creep on
-            ts.setEventTolerances(vtol=[1e-3 * self.contact_tol] * self.n)
         self.options.label(F, J, U, V)
         self.options.apply(ts)
         return ts, (U, V, F, J, atol, rtol)
@@ -363,6 +357,10 @@ class DynamicsSolver:
         self.offsets = np.zeros(self.n)
         self.modes = np.asarray(modes, int).copy() if isinstance(drive, LengthDrive) \
             else np.full(self.n, FORCE)
+        if self.adaptive or isinstance(drive, LengthDrive):
+            # the step changes (TSAdapt, TSEvent's location): a PC kept for another step's
+            # shift stalls Newton, so it is refreshed at every iteration
+            self.options.update({"snes_lag_jacobian": 1})
         traj = trajectory if trajectory is not None else Trajectory()
         U0 = np.concatenate((np.asarray(theta0, float)[1:], np.zeros(self.n)))
         V0 = np.concatenate((np.asarray(omega0, float), p0))
