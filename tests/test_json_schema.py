@@ -57,6 +57,13 @@ RUNS = [
                    *E, *Q], {0, 1}),
     ("simulate", ["simulate", "--initial-tensions-N", "0", "0.05", "--tensions-N", "0", "0",
                   "--duration", "0.2", *E, *Q], {0}),
+    # exit status 5: stopped by --max-seconds (TIME_LIMIT), a budget spent at the first question
+    ("control-time-limit", ["control", "--target", "380", "-100", "--max-seconds", "1e-9", *E],
+     {5}),
+    ("lengths-time-limit", ["lengths", "--lengths", "147.1", "472.5", "--all", "--max-seconds",
+                            "1e-9", *E, *Q], {5}),
+    ("design-area-time-limit", ["design", "--vary", "tendon2.route", "--objective", "area",
+                                "--resample-cells", "2", "--max-seconds", "1e-9", *E, *Q], {5}),
     # exit status 2: a usage error, bad input, an output that cannot be written
     ("usage-error", ["solve", "--tensions", "x"], {2}),
     ("input-error", ["solve", "--tensions", "1"], {2}),
@@ -109,6 +116,17 @@ def test_the_checker_rejects_what_the_schema_forbids(outputs):
     ws = dict(outputs["workspace"], status_counts={"reached with P >= 0": 3})
     assert errors(ws, SCHEMA, SCHEMA)
     assert errors(dict(outputs["usage-error"], error="oops"), SCHEMA, SCHEMA)
+
+
+@pytest.mark.slow
+def test_time_limit_outcomes(outputs):
+    """--max-seconds: the verdict TIME_LIMIT in each command's own field."""
+    assert outputs["control-time-limit"]["reason"] == "TIME_LIMIT"
+    assert outputs["control-time-limit"]["reachable"] is None
+    assert outputs["lengths-time-limit"]["search"]["outcome"] == "TIME_LIMIT"
+    assert outputs["lengths"]["search"].get("outcome") is None      # without --all: one path
+    assert outputs["design-area-time-limit"]["outcome"] == "TIME_LIMIT"
+    assert errors(dict(outputs["design-area-time-limit"], outcome="TIMEOUT"), SCHEMA, SCHEMA)
 
 
 @pytest.mark.slow

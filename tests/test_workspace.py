@@ -32,8 +32,11 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 FAST_CHECKPOINTS = dict(ENV, ELASTICA_PETSC_CHECKPOINT_SECONDS="0")
 
 ELEMENTS = 60                                                  # multiple of 3: s_1 = l/3 on a node
-TARGETS = ["--box", "-120", "480", "60", "420", "--spacing", "60",
-           "--elements", str(ELEMENTS), "--chunk", "4"]
+# the global-search sampler (the default before boundary-fill, tested against it in
+# tests/test_workspace_fill.py): these tests are about its global search
+LOCAL_TARGETS = ["--box", "-120", "480", "60", "420", "--spacing", "60",
+                 "--elements", str(ELEMENTS), "--chunk", "4", "--local-only"]
+TARGETS = LOCAL_TARGETS[:-1] + ["--sampler", "global-search"]
 # a finer grid for the MPI interruptions: Open MPI passes a signal on to the ranks ~2 s
 # after mpiexec receives it, so the run must last well beyond that (1581 targets: 5.5 s on
 # 2 ranks; 30 mm spacing, 273 targets, took 1.6 s once tip control got faster, and the
@@ -99,7 +102,7 @@ def targets_1(tmp_path_factory):
 def local_1(tmp_path_factory):
     """The target grid on one rank without the global search (the local verdicts)."""
     d = tmp_path_factory.mktemp("local_1")
-    ok(workspace(*TARGETS, "--local-only", "--out", d / "ws.h5"))
+    ok(workspace(*LOCAL_TARGETS, "--out", d / "ws.h5"))
     return d / "ws.h5"
 
 
@@ -521,7 +524,7 @@ def test_run_map_returns_the_arrays_without_a_file(targets_1, tmp_path, monkeypa
     monkeypatch.chdir(tmp_path)
     arm = load_config(ROOT / "configs" / "paper.toml")
     ws = run_map(arm, Discretisation.from_arm(arm, ELEMENTS), box_mm=(-120, 480, 60, 420),
-                 spacing_mm=60, chunk=4, progress=False)
+                 spacing_mm=60, chunk=4, progress=False, sampler="global-search")
     assert list(tmp_path.iterdir()) == [] and ws.file is None
     assert ws.complete and ws.samples_done == ws.samples_total == 77 and ws.ranks == 1
     reference = samples(targets_1)
@@ -639,4 +642,4 @@ def test_resume_needs_the_same_sampler_and_old_files_still_read(local_1, tmp_pat
     old = ep.read(out)
     assert old.sampler == "local" and old.complete
     assert set(old.status) == {"REACHED", "NEEDS_NEGATIVE"} and set(old.strategy) == {""}
-    ok(workspace(*TARGETS, "--local-only", "--out", out, "--resume"))
+    ok(workspace(*LOCAL_TARGETS, "--out", out, "--resume"))

@@ -15,14 +15,20 @@ from .arguments import (
 @_takes_petsc_options
 def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
            reach_mm: float = 100.0, margin: float = 1.1, elements: int | None = None,
-           progress=None):
+           progress=None, max_seconds: float | None = None):
     """Routing points that make every point of a path reachable with P >= 0
     (TAO BLMVM on the exact gradient; ``vary``: ``"tendonK.route"`` names, and
     guide offsets ``"tendonK.offset"``/``"tendonK.guideJ.offset"``, mm).
     Returns a ``DesignResult``: ``arm_after`` is the designed arm,
     ``misfit_before``/``misfit_after`` the path's reachability, ``history``.
     ``progress`` (True: a bar, or a callable ``progress(traces, note)``)
-    reports each path trace (one per objective evaluation)."""
+    reports each path trace (one per objective evaluation).  ``max_seconds``:
+    a time budget; once spent the optimiser stops at its next iteration and
+    the result (the best design so far, both paths traced) has ``reason``
+    ``"TIME_LIMIT"``."""
+    import dataclasses
+
+    from ..core.budget import TIME_LIMIT, TimeBudget, check_max_seconds
     from ..studies.design import design_for_path, parse_vary
     from ..studies.design_offsets import split_offset_names
 
@@ -32,9 +38,12 @@ def design(arm: Arm, points_mm, *, vary=("tendon1.route", "tendon2.route"),
     points = _points(points_mm, arm)
     inputs.design_points(points, "points_mm")
     inputs.design_options(DESIGN_NAMES, reach_mm=reach_mm, margin=margin)
+    budget = TimeBudget(check_max_seconds(max_seconds))
     with _progress(progress, "design", "path traces") as bar:
-        return design_for_path(arm, tendons, points, elements=elements,
-                               reach_mm=reach_mm, margin=margin, progress=bar, offsets=offsets)
+        result = design_for_path(arm, tendons, points, elements=elements, reach_mm=reach_mm,
+                                 margin=margin, progress=bar, offsets=offsets,
+                                 stop=budget.expired)
+    return dataclasses.replace(result, reason=TIME_LIMIT) if budget.reached else result
 
 
 DESIGN_NAMES = {k: k for k in ("iterations", "reach_mm", "clearance_mm", "margin",
@@ -53,7 +62,7 @@ def _tension_max(arm: Arm, tension_max_N) -> float:
 def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
                 tension_max_N: float = 10.0, reach_mm: float = 100.0,
                 iterations: int = 15, resample_cells: int | None = 32,
-                elements: int | None = None):
+                elements: int | None = None, max_seconds: float | None = None):
     """Routing points (mm; ``vary`` may add ``"tendonK.attach"``: attachment
     arc lengths on mesh nodes, by a pattern search) maximising the area A
     [mm^2] of the workspace W_0 within 0 <= P_i <= ``tension_max_N`` (tips of stable equilibria connected
@@ -63,7 +72,13 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
     component of the tip derivative (TAO BLMVM).  Both arms are then re-sampled on a tension grid; the gain
     is ``confirmed`` only if the re-sampled areas differ by more than their
     errors.  Returns an ``AreaDesign`` (``arm_after``, ``before``/``after``,
-    ``resampled_before``/``resampled_after``, ``confirmed``, ``history``)."""
+    ``resampled_before``/``resampled_after``, ``confirmed``, ``history``).
+    ``max_seconds``: a time budget; once spent the optimiser stops at its next
+    iteration, the re-sampling is skipped (nothing confirmed) and ``reason``
+    is ``"TIME_LIMIT"``."""
+    import dataclasses
+
+    from ..core.budget import TIME_LIMIT, TimeBudget, check_max_seconds
     from ..studies.design import parse_design_variables
     from ..studies.design_area import design_for_area
 
@@ -72,9 +87,11 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
     p_max = _tension_max(arm, tension_max_N)
     inputs.design_options(DESIGN_NAMES, reach_mm=reach_mm, iterations=iterations,
                           resample_cells=resample_cells)
-    return design_for_area(arm, tendons, p_max, elements=elements, attaches=attaches,
-                           reach_mm=reach_mm, max_iterations=iterations,
-                           resample_cells=resample_cells)
+    budget = TimeBudget(check_max_seconds(max_seconds))
+    result = design_for_area(arm, tendons, p_max, elements=elements, attaches=attaches,
+                             reach_mm=reach_mm, max_iterations=iterations,
+                             resample_cells=resample_cells, stop=budget.expired)
+    return dataclasses.replace(result, reason=TIME_LIMIT) if budget.reached else result
 
 
 @_takes_petsc_options

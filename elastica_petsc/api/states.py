@@ -166,47 +166,60 @@ def frequencies(state: State, *, control: str = "load", modes: int = 3):
 
 
 @_takes_petsc_options
-def lengths(arm: Arm, lengths_mm, *, elements: int | None = None):
+def lengths(arm: Arm, lengths_mm, *, elements: int | None = None,
+            max_seconds: float | None = None):
     """Length control (Sec. 4.6, Eq. (23)): the equilibrium, with its tensions,
     that prescribed cable lengths (mm) impose (slack cables carry no tension),
     reached from the straight arm by length continuation; a
     ``LengthEquilibrium``.  Every equilibrium at these lengths:
-    :func:`length_equilibria`."""
+    :func:`length_equilibria`.  ``max_seconds``: a time budget; once spent the
+    continuation stops at its next step (``converged`` False, ``reason``
+    ``"TIME_LIMIT"``, the state it had reached)."""
+    from ..core.budget import check_max_seconds
     from ..studies.search import follow_lengths
 
     disc = _mesh(arm, elements)
     lengths_mm = inputs.cable_lengths_mm(arm, lengths_mm, "lengths_mm")
-    return follow_lengths(arm, lengths_mm, elements=disc.n_elements)
+    return follow_lengths(arm, lengths_mm, elements=disc.n_elements,
+                          max_seconds=check_max_seconds(max_seconds))
 
 
 @_takes_petsc_options
-def length_equilibria(arm: Arm, lengths_mm, *, elements: int | None = None, progress=None):
+def length_equilibria(arm: Arm, lengths_mm, *, elements: int | None = None, progress=None,
+                      max_seconds: float | None = None):
     """Equilibria with 0 <= P_i <= P_crit (Eq. (22)) that prescribed cable
     lengths (mm) admit, by the search of
     :func:`~elastica_petsc.studies.search.search_lengths` (curve search and
     multi-start; a ``SearchResult``: the list found, not a proof that there
     are no more); ``progress`` (True: a bar, or a callable
     ``progress(steps, note)``) reports its search steps (curves, continuation
-    points and attempts from starts)."""
+    points and attempts from starts).  ``max_seconds``: a time budget; once
+    spent the search returns the states found so far with ``outcome``
+    ``"TIME_LIMIT"`` (``stopped`` says where; the list may be incomplete)."""
+    from ..core.budget import check_max_seconds
     from ..studies.search import search_lengths
 
     lengths_mm = inputs.cable_lengths_mm(arm, lengths_mm, "lengths_mm")
+    max_seconds = check_max_seconds(max_seconds)
     with _progress(progress, "lengths search", "search steps") as bar:
         return search_lengths(arm, lengths_mm, elements=_mesh(arm, elements).n_elements,
-                              progress=bar)
+                              progress=bar, max_seconds=max_seconds)
 
 
 @_takes_petsc_options
 def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None = None,
-               progress=None):
+               progress=None, max_seconds: float | None = None):
     """Equilibria that share the given tensions (N, or non-dimensional
     ``tensions`` p = P l^2/B; load control, Eq. (9), Fig. 8), by the search of
     :func:`~elastica_petsc.studies.search.search_tensions` (loading paths,
     curve search, multi-start); a ``SearchResult``: a list, not a proof that
-    there are no more.  ``progress``: as for :func:`length_equilibria`."""
+    there are no more.  ``progress``, ``max_seconds``: as for
+    :func:`length_equilibria`."""
+    from ..core.budget import check_max_seconds
     from ..studies.search import search_tensions
 
     p = _tensions(arm, tensions_N, tensions)
+    max_seconds = check_max_seconds(max_seconds)
     with _progress(progress, "equilibria", "search steps") as bar:
         return search_tensions(arm, p, elements=_mesh(arm, elements).n_elements,
-                               progress=bar)
+                               progress=bar, max_seconds=max_seconds)

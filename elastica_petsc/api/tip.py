@@ -14,7 +14,7 @@ from .arguments import (
 def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blmvm",
             tol_mm: float = 1e-5, global_search: bool = True, cables: str = "prefer",
             share: str | None = None, min_tension_N: float = 0.0, animate=None,
-            elements: int | None = None, progress=None):
+            elements: int | None = None, progress=None, max_seconds: float | None = None):
     """Non-negative tensions that put the tip on ``target_mm`` (Eqs. (10)-(12)):
     TAO BLMVM (``method="blmvm"``) or the paper's gradient descent (``"gd"``,
     Algorithm 1), from ``guess_N`` (or ``guess`` in p = P l^2/B; default 0).
@@ -23,20 +23,27 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
     orders, a homotopy in target space) unless ``global_search=False``;
     ``reachable`` is True, False only with evidence about the whole
     (``evidence``: ``BEYOND_REACH``, |x_d| > l; ``OUTSIDE_BOUNDARY``, outside
-    the traced boundary of W_0, docs/model.md §9, traced once per arm in the
-    process when the search is exhausted), or None when the strategies are
-    exhausted without proof.
+    the traced boundary of W_0 or in a hole of it, docs/model.md §9, traced
+    once per arm in the process when a short local solve first fails), or
+    None when the strategies are exhausted without proof.
     ``cables``: ``"prefer"``/``"require"``/``"ignore"`` states whose cables
     cross the arm.  With n >= 3 tendons, ``share="min-norm"``/``"min-energy"``
     and ``min_tension_N`` choose among the tension sets that reach the target.
     ``animate``: a .gif/.mp4 path for the arm through the iterations.
     ``progress`` (True: a bar after 1 s, or a callable ``progress(steps, note)``)
     reports the search steps (local solves, homotopy sub-targets, the seed
-    library, the boundary proof) with the stage.
+    library, the boundary proof) with the stage.  With two tendons a target
+    the traced boundary proves outside W_0 (or in a hole of it) is answered
+    by that proof before the global search (``strategy`` "boundary proof";
+    docs/model.md §21).  ``max_seconds``: a time budget; once spent the
+    search stops at its next step and returns the closest tip so far with
+    ``reason`` ``"TIME_LIMIT"`` and ``reachable`` None (the first local solve
+    always returns a state; sharing, if asked, still runs).
     Returns a ``ControlResult`` (``tensions_N``, ``cable_lengths_mm``,
     ``tip_mm``, ``converged``, ``reachable``, ``loading``)."""
     import dataclasses
 
+    from ..core.budget import TimeBudget, check_max_seconds
     from ..solvers.control import TipController
     from ..solvers.reach import Reacher, simplest_loading
     from ..solvers.share import share_rule
@@ -49,21 +56,26 @@ def control(arm: Arm, target_mm, *, guess_N=None, guess=None, method: str = "blm
     inputs.choice(cables, "cables", ("prefer", "require", "ignore"))
     inputs.choice(method, "method", ("blmvm", "gd"))
     sharer_asked = share_rule(share, _floor_N(min_tension_N))   # bad input before any solve
+    max_seconds = check_max_seconds(max_seconds)
     if animate:
         from ..plots.animate import check_animation_path
         check_animation_path(animate, True, "animate")
+    budget = TimeBudget(max_seconds)
     with (_progress(progress, "control", "search steps", delay=1.0) as bar,
           TipController(arm, n_elements=elements, method=method, tip_tol_mm=tol_mm) as ctl):
-        reacher = Reacher(ctl, boundary=boundary_proof(arm, ctl.disc), progress=bar)
+        reacher = Reacher(ctl, boundary=boundary_proof(arm, ctl.disc), progress=bar,
+                          budget=budget)
         result = reacher.reach(arm.from_mm(target), p0=p0, global_search=global_search,
                                cables=cables)
         sharer = _sharer(arm, ctl, sharer_asked, min_tension_N)
         if sharer is not None and result.converged:
             reacher.step(f"tension sharing ({sharer.share})")
             result = sharer.solve(result)
-        reacher.step("the simplest loading path that reaches the state")
-        result = dataclasses.replace(result, loading=simplest_loading(
-            ctl.solver, result.equilibrium, result.loading), arm=arm)
+        if not budget.expired():
+            reacher.step("the simplest loading path that reaches the state", check=False)
+            result = dataclasses.replace(result, loading=simplest_loading(
+                ctl.solver, result.equilibrium, result.loading))
+        result = dataclasses.replace(result, arm=arm)
         if animate:
             from ..plots.animate import animate_control
             animate_control(ctl, result, animate)

@@ -18,7 +18,8 @@ MIN_SPACING_MM = 1e-100        # finer: the grid count overflows before its limi
 def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "targets",
               out: str | Path | None = None, overwrite: bool = False, comm=None,
               elements: int | None = None, global_search: bool = True,
-              share: str | None = None, min_tension_N: float = 0.0, progress: bool = False):
+              share: str | None = None, min_tension_N: float = 0.0, progress: bool = False,
+              sampler: str | None = None):
     """Sample the workspace W_0 and its restrictions (Eqs. (18)-(22), Figs. 4-5)
     on a grid of targets (``mode="targets"``: tip control to each) or of
     tensions (``"tensions"``).  Runs in this process alone (``comm`` None:
@@ -36,7 +37,10 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
     with a floor the map samples W_0(P_min) (reached with every P_i >= P_min;
     BELOW_FLOOR: reached with P >= 0 but no tensions >= P_min found, not a
     proof; UNIQUE_BELOW_FLOOR: two tendons, the target's only tensions are
-    below P_min, proven; docs/model.md §9.3)."""
+    below P_min, proven; docs/model.md §9.3).  ``sampler`` (mode targets):
+    "boundary-fill" (the default: classes from the traced boundary of W_0,
+    Newton sweeps on the tip, the global search for what they miss; two
+    tendons), "global-search" or "local" (docs/model.md §22)."""
     from ..io.hdf5 import H5_SUFFIXES, check_output_path
     from ..studies.workspace import run_map
 
@@ -48,7 +52,8 @@ def workspace(arm: Arm, *, spacing_mm: float = 20.0, box_mm=None, mode: str = "t
         check_output_path(out, overwrite, H5_SUFFIXES, "out")
     return run_map(arm, disc, mode=mode, spacing_mm=spacing_mm, box_mm=box_mm,
                    comm=comm, out=out, overwrite=overwrite, global_search=global_search,
-                   share=share, min_tension_N=_floor_N(min_tension_N), progress=progress)
+                   share=share, min_tension_N=_floor_N(min_tension_N), progress=progress,
+                   sampler=sampler)
 
 
 @_takes_petsc_options

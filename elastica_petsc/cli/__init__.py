@@ -10,7 +10,9 @@ once, before any solver module is imported.
 Exit status: 0 success; 1 a solve that did not converge; 2 bad input or an
 output that cannot be written (one line on stderr, no traceback; with
 ``--json`` also an error object on stdout, docs/json.md); 3 a target
-outside the workspace; 130 interrupted (SIGINT or SIGTERM).  Under mpiexec an
+outside the workspace; 4 a target neither reached nor proven unreachable;
+5 stopped by ``--max-seconds`` (TIME_LIMIT: what was found in time is
+printed, and what was not decided is said); 130 interrupted (SIGINT or SIGTERM).  Under mpiexec an
 input error found by every rank is printed once, by rank 0; Open MPI's own
 banner about a non-zero exit status is mpiexec's to print (``mpiexec --quiet``
 or ``OMPI_MCA_orte_execute_quiet=1`` silences it).
@@ -37,7 +39,8 @@ prefix ctl_), -stab_eps_view (eigen solver, prefix stab_).
 
 Exit status: 0 ok, 1 not converged, 2 bad input (or an output that cannot be
 written), 3 target proven unreachable (control: |target| > l), 4 target not
-reached and not proven unreachable, 130 interrupted."""
+reached and not proven unreachable, 5 stopped by --max-seconds (TIME_LIMIT:
+the answer so far, incomplete), 130 interrupted."""
 
 
 class Parser(argparse.ArgumentParser):

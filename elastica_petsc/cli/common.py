@@ -206,3 +206,22 @@ def checkpoint_seconds() -> float | None:
         return check_checkpoint_seconds(value)
     except InputError:
         raise InputError(f"{CHECKPOINT_ENV}={value!r}: expected seconds >= 0") from None
+
+
+TIME_LIMIT_EXIT = 5         # stopped at --max-seconds before the answer was complete (TIME_LIMIT)
+
+
+def add_max_seconds_option(parser: argparse.ArgumentParser, what: str) -> None:
+    """--max-seconds S: a time budget after which ``what`` stops and reports
+    what it has (reason/outcome TIME_LIMIT, exit status 5)."""
+    parser.add_argument("--max-seconds", type=float, default=None, metavar="S",
+                        help=f"time budget in seconds: after it {what} stops at its next step "
+                             "and reports what it has with the verdict TIME_LIMIT "
+                             f"(exit status {TIME_LIMIT_EXIT}); default: no limit")
+
+
+def max_seconds(args) -> float | None:
+    """--max-seconds checked: None or a positive finite number (else InputError, exit 2)."""
+    from ..core.budget import check_max_seconds
+
+    return check_max_seconds(args.max_seconds, "--max-seconds")

@@ -22,8 +22,10 @@ def add_parser(sub) -> None:
                     "When the local iteration stalls, a global search follows (homotopy in "
                     "target space, restarts from other loading orders). Exit status 0: reached; "
                     "3: proven unreachable (|target| > l, or outside the traced boundary of W_0 "
-                    "with two tendons: evidence OUTSIDE_BOUNDARY); 4: not reached and not proven "
-                    "unreachable (the closest tip found is printed).")
+                    "with two tendons: evidence OUTSIDE_BOUNDARY, taken before any global search); "
+                    "4: not reached and not proven unreachable (the closest tip found is "
+                    "printed); 5: stopped by --max-seconds (TIME_LIMIT: the closest tip so far, "
+                    "reachability undecided).")
     parser.add_argument("--target", type=float, nargs=2, required=True, metavar=("X", "Y"),
                         help="desired tip position in mm")
     parser.add_argument("--method", choices=("blmvm", "gd"), default="blmvm",
@@ -41,6 +43,7 @@ def add_parser(sub) -> None:
                              "a crossing, keeping the crossing state if none is found; require "
                              "reports such a target as not reached (exit 4); ignore only flags")
     add_share_options(parser)
+    common.add_max_seconds_option(parser, "the search")
     parser.add_argument("--animate", metavar="GIF|MP4",
                         help="write an animation of the arm through the optimiser's iterations "
                              "(Fig. 2 as a movie; .gif with Pillow, .mp4 needs ffmpeg)")
@@ -77,6 +80,10 @@ def unreachable_message(s: dict) -> str:
         return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm is reached only "
                 f"with a cable through the arm (cable_clear {s['cable_clear']}) and --cables "
                 "require was given; no state with clear cables was found")
+    if s["reason"] == "TIME_LIMIT":
+        return (f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm not reached within "
+                f"--max-seconds and not proven unreachable (TIME_LIMIT): {where}; "
+                "reachability undecided")
     if s["reason"].startswith("SHARE_"):
         return f"target ({s['target_mm'][0]:g}, {s['target_mm'][1]:g}) mm: {s['message']}"
     if s["reachable"] is False:
@@ -123,6 +130,7 @@ def run(args) -> int:
     tip_tolerance_mm(arm, args.tol_mm, "--tol-mm")
     guess = common.guess(args, disc)
     target_mm(arm, args.target, "--target")
+    max_seconds = common.max_seconds(args)
     if args.animate:
         from ..plots.animate import check_animation_path
         check_animation_path(args.animate, args.overwrite)
@@ -130,7 +138,7 @@ def run(args) -> int:
     result = api.control(arm, args.target, guess=guess, method=args.method, tol_mm=args.tol_mm,
                          global_search=not args.local, cables=args.cables, share=args.share,
                          min_tension_N=args.min_tension_N, animate=args.animate,
-                         elements=disc.n_elements, progress=True)
+                         elements=disc.n_elements, progress=True, max_seconds=max_seconds)
     from ..io.summaries import control_summary
 
     summary = control_summary(arm, result)
@@ -149,4 +157,6 @@ def run(args) -> int:
     if result.converged:
         return 0
     print(f"elastica-petsc: {unreachable_message(summary)}", file=sys.stderr)
+    if result.reason == "TIME_LIMIT":
+        return common.TIME_LIMIT_EXIT
     return UNREACHABLE if result.reachable is False else UNDECIDED

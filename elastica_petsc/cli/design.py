@@ -54,6 +54,7 @@ def add_parser(sub) -> None:
                         help="half-width of each routing point's box (default 100)")
     parser.add_argument("--clearance", type=float, default=10.0, metavar="MM",
                         help="smallest distance of a routing point from y = 0 (default 10)")
+    common.add_max_seconds_option(parser, "the optimiser (--objective)")
     parser.add_argument("--resume", action="store_true",
                         help="--sweep: continue an interrupted sweep in --out")
     common.add_arm_options(parser)
@@ -74,6 +75,9 @@ def run(args) -> int:
     if args.sweep:
         if args.vary or args.plot:
             raise InputError("--sweep evaluates a grid of designs; leave out --vary and --plot")
+        if args.max_seconds is not None:
+            raise InputError("--max-seconds limits an optimisation (--objective); a --sweep "
+                             "is interrupted and resumed instead (--resume)")
         return _run_sweep(args)
     if not args.vary or not args.objective:
         raise InputError("design needs --vary and --objective (area or path:FILE.csv), "
@@ -83,6 +87,8 @@ def run(args) -> int:
                     ("iterations", "reach_mm", "clearance_mm", "margin", "resample_cells")},
                    iterations=args.iterations, reach_mm=args.reach, clearance_mm=args.clearance,
                    margin=args.margin, resample_cells=args.resample_cells)
+    from ..core.budget import TimeBudget
+    args.budget = TimeBudget(common.max_seconds(args))
     from ..io.hdf5 import PLOT_SUFFIXES, check_output_path
     if args.out:
         check_output_path(args.out, args.overwrite, (".toml",))
@@ -124,6 +130,7 @@ IMPROVED = "IMPROVED"                  # the design changed and its objective im
 NOT_CONFIRMED = "NOT_CONFIRMED"        # area: the optimiser's gain is within the re-sampling error
 NO_IMPROVEMENT = "NO_IMPROVEMENT"      # path: the task is not better reached than before
 UNCHANGED = "UNCHANGED"                # no design step was taken
+TIME_LIMIT = "TIME_LIMIT"              # --max-seconds stopped it before an improvement was shown
 INFEASIBLE_START = "INFEASIBLE_START"  # the starting design violates a constraint
 
 
@@ -164,14 +171,23 @@ def _run_path(args) -> int:
         result = design_for_path(arm, tendons, targets, elements=disc.n_elements,
                                  reach_mm=args.reach, clearance_mm=args.clearance,
                                  margin=args.margin, max_iterations=args.iterations,
-                                 progress=bar, offsets=offsets)
+                                 progress=bar, offsets=offsets, stop=args.budget.expired)
     from ..io.summaries import path_design_summary
 
     summary = path_design_summary(result, disc.n_elements)
-    summary["outcome"] = path_outcome(result)
+    summary["outcome"] = timed_outcome(path_outcome(result), args.budget)
     _write(args, result.arm_after, summary, _lines)
     _show(args, summary, result.history, _lines)
+    if summary["outcome"] == TIME_LIMIT:
+        return common.TIME_LIMIT_EXIT
     return 0 if result.misfit_after.reached.all() else 1
+
+
+def timed_outcome(outcome: str, budget) -> str:
+    """TIME_LIMIT when the time budget ended the optimisation before an
+    improvement was shown (an improved design stays IMPROVED)."""
+    return TIME_LIMIT if budget.reached and outcome not in (IMPROVED, INFEASIBLE_START) \
+        else outcome
 
 
 def path_outcome(result) -> str:
@@ -206,20 +222,24 @@ def _run_area(args) -> int:
                                  elements=disc.n_elements, attaches=attaches,
                                  reach_mm=args.reach, clearance_mm=args.clearance,
                                  max_iterations=args.iterations,
-                                 resample_cells=args.resample_cells, progress=bar)
+                                 resample_cells=args.resample_cells, progress=bar,
+                                 stop=args.budget.expired)
     from ..io.summaries import area_summary
 
     from ..studies.design_area import infeasibility
 
     summary = area_summary(result, disc.n_elements)
-    summary.update(outcome=area_outcome(result), start=result.history[0] | infeasibility(
-        result.before, result.arm_before.force_scale_N))
+    summary.update(outcome=timed_outcome(area_outcome(result), args.budget),
+                   start=result.history[0] | infeasibility(result.before,
+                                                           result.arm_before.force_scale_N))
     _write(args, result.arm_after, summary, area_lines)
     if args.plot:
         from ..plots.design import plot_area_design
         plot_area_design(result, args.plot)
         summary["plot"] = args.plot
     _show(args, summary, result.history, area_lines)
+    if summary["outcome"] == TIME_LIMIT:
+        return common.TIME_LIMIT_EXIT
     return 0 if summary["outcome"] == IMPROVED else 1
 
 
@@ -267,6 +287,10 @@ def area_lines(s: dict) -> list[str]:
     if s["outcome"] == UNCHANGED:
         return [head + f"{s['area_before_mm2']:.0f} mm^2, unchanged", _step_line(s),
                 *_file_lines(s)]
+    if s["outcome"] == TIME_LIMIT:
+        return [head + f"{s['area_before_mm2']:.0f} -> {s['area_after_mm2']:.0f} mm^2 when "
+                "--max-seconds stopped the optimiser (TIME_LIMIT): not re-sampled, so no "
+                "gain is claimed", _step_line(s), *_file_lines(s)]
     gain = 100.0 * (s["area_after_mm2"] / s["area_before_mm2"] - 1.0)
     verdict = ("confirmed by re-sampling" if s["confirmed"] else
                "NOT confirmed by re-sampling (the optimiser's gain is not claimed)")
@@ -361,4 +385,7 @@ def _lines(s: dict) -> list[str]:
     for name, a, b in zip(s.get("offset_variables", ()), s.get("offsets_before_mm", ()),
                           s.get("offsets_after_mm", ())):
         lines.append(f"  {name}: {a:.2f} -> {b:.2f} mm")
+    if s["outcome"] == TIME_LIMIT:
+        lines.append("  --max-seconds stopped the optimiser (TIME_LIMIT): the best design so "
+                     "far, not an improvement of the task")
     return lines

@@ -49,7 +49,7 @@ def run(args) -> int:
     with Progress(None, "equilibria", unit="search steps") as bar:
         result = search_tensions(arm, p, elements=disc.n_elements, effort=args.effort,
                                  levels=args.levels, deflation_rounds=args.deflation_rounds,
-                                 progress=bar)
+                                 progress=bar, max_seconds=settings["max_seconds"])
     states = [f.state for f in result.states]
     data = {"control": "load", "tensions": rounded(p), "tensions_N": rounded(arm.tensions_to_N(p)),
             "elements": disc.n_elements,

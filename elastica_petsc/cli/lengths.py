@@ -33,6 +33,7 @@ def add_search_options(parser) -> None:
                                    "(default 5 10 20, extended by --effort)")
     parser.add_argument("--deflation-rounds", type=int, metavar="K",
                         help="deflated Newton solves per start and sweep (default 2 x effort)")
+    common.add_max_seconds_option(parser, "the search")
 
 
 def add_parser(sub) -> None:
@@ -80,7 +81,7 @@ def check_search_options(args) -> dict:
     settings = effort_settings(args.effort, args.levels, name="--effort")
     if args.deflation_rounds is not None:
         settings["deflation_rounds"] = args.deflation_rounds
-    return dict(settings, effort=args.effort)
+    return dict(settings, effort=args.effort, max_seconds=common.max_seconds(args))
 
 
 # --- plain data ------------------------------------------------------------------------
@@ -148,6 +149,9 @@ def format_states(arm, data: dict) -> str:
             lines.append("  note: the continuation jumped (snap/buckling) at L = ("
                          + ", ".join(f"{v:.3f}" for v in L) + ") mm")
     lines.append("")
+    if search.get("stopped"):
+        lines.append(f"{search['stopped']}: these are the states found before the time "
+                     "limit; the list may be incomplete (exit status 5).")
     lines.append(data["note"])
     return "\n".join(lines)
 
@@ -168,7 +172,8 @@ def plot(arm, data: dict, states, path, title: str) -> None:
 
 
 def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
-    """Print, write, plot; exit 1 if no state converged."""
+    """Print, write, plot; exit 5 if the time budget stopped the search
+    (TIME_LIMIT), else 1 if no state converged."""
     if args.json:
         common.print_json(args.command, data)
     else:
@@ -181,6 +186,10 @@ def finish(args, arm, data: dict, states, kind: str, title: str) -> int:
     if args.vtk and states:
         from ..io.vtk import write_states as write_vtk       # io.states.write_states: HDF5
         write_vtk(args.vtk, arm, states, numbers=[s["number"] for s in data["equilibria"]])
+    if data["search"].get("stopped"):
+        print(f"elastica-petsc: {data['search']['stopped']}: {len(states)} state(s) found "
+              "before the time limit; the list may be incomplete", file=sys.stderr)
+        return common.TIME_LIMIT_EXIT
     if not states:
         msg = data.get("message") or "no equilibrium converged"
         print(f"elastica-petsc: {msg}", file=sys.stderr)
@@ -205,13 +214,14 @@ def run(args) -> int:
         with Progress(None, "lengths --all", unit="search steps") as bar:
             result = search_lengths(arm, L_mm, elements=disc.n_elements, effort=args.effort,
                                     levels=args.levels, deflation_rounds=args.deflation_rounds,
-                                    progress=bar)
+                                    progress=bar, max_seconds=settings["max_seconds"])
         states = [f.state for f in result.states]
         data["equilibria"] = [state_summary(arm, f.state, "length", f) for f in result.states]
         data["search"] = search_summary(result, settings)
         data["note"] = NOT_COMPLETE
     else:
-        state = follow_lengths(arm, L_mm, elements=disc.n_elements)
+        state = follow_lengths(arm, L_mm, elements=disc.n_elements,
+                               max_seconds=settings["max_seconds"])
         states = [state] if state.converged else []
         data["equilibria"] = [state_summary(arm, s, "length") for s in states]
         data["search"] = {
@@ -230,6 +240,8 @@ def run(args) -> int:
                         "for them; the list is not proven complete.")
         if not state.converged:
             data["message"] = state.message
+        if state.reason == "TIME_LIMIT":
+            data["search"].update(outcome="TIME_LIMIT", stopped=state.message)
     title = ("Equilibria found at L = (" + ", ".join(f"{v:g}" for v in L_mm)
              + ") mm (length control)")
     return finish(args, arm, data, states, "length_equilibria", title)

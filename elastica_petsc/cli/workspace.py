@@ -32,10 +32,18 @@ def add_parser(sub) -> None:
                               help="tension grid spacing in mode tensions")
     common.add_tension_option(parser, "--tension-max", default=40.0,
                               help="largest tension on the grid in mode tensions")
+    parser.add_argument("--sampler", choices=("boundary-fill", "global-search", "local"),
+                        help="mode targets: 'boundary-fill' (the default) classes every target "
+                             "by the traced boundary of W_0 first, fills its interior by Newton "
+                             "sweeps on the tip and searches globally only the targets they "
+                             "miss (two tendons; other arms: the global search); "
+                             "'global-search': tip control and the global search for every "
+                             "target (the sampler before); 'local': as --local-only")
     parser.add_argument("--local-only", action="store_true",
                         help="mode targets: no global search for the targets local tip control "
                              "does not reach; they keep its local verdicts (ended on P_i = 0, "
-                             "not converged), as before the global search; faster")
+                             "not converged), as before the global search; faster "
+                             "(= --sampler local)")
     from .control import add_share_options
     add_share_options(parser, "each reached target (mode targets; the map then samples "
                               "W_0(P_min), docs/model.md §9.3)")
@@ -77,6 +85,15 @@ def run(args) -> int:
         comm.Abort(2 if isinstance(err, InputError) else 1)
 
 
+def _sampler(args) -> str | None:
+    """The --sampler asked for (--local-only: 'local'); InputError for both at odds."""
+    from ..core.errors import InputError
+
+    if args.local_only and args.sampler not in (None, "local"):
+        raise InputError(f"--local-only contradicts --sampler {args.sampler}")
+    return "local" if args.local_only else args.sampler
+
+
 def _run(args, comm) -> int:
     from ..core.errors import InputError
     from ..studies.chunks import agree
@@ -86,6 +103,7 @@ def _run(args, comm) -> int:
     try:
         arm, disc = _check_inputs(args)
         seconds = common.checkpoint_seconds()
+        sampler = _sampler(args)
         error = None
     except InputError as err:
         error = str(err)
@@ -95,6 +113,7 @@ def _run(args, comm) -> int:
         tension_spacing=args.tension_spacing, tension_max=args.tension_max, chunk=args.chunk,
         comm=comm, out=args.out, resume=args.resume, overwrite=args.overwrite,
         global_search=not args.local_only, share=args.share, min_tension_N=args.min_tension_N,
+        sampler=sampler,
         region=default_region(args), checkpoint_seconds=seconds, progress=True)
     if comm.rank != 0:
         if comm.size > 1 and not result.complete:

@@ -54,22 +54,31 @@ class Deflation:
         self.power = float(power)
         self.shift = float(shift)
         self.roots: list[np.ndarray] = []
+        self._stack = None                      # the roots as one (K, N) array, built on use
 
     def add(self, theta: np.ndarray) -> None:
         """Deflate one more known solution (its free angles theta_1..theta_N)."""
         self.roots.append(np.array(theta, dtype=float, copy=True))
+        self._stack = None
 
     def clear(self) -> None:
         self.roots.clear()
+        self._stack = None
 
     def __len__(self) -> int:
         return len(self.roots)
+
+    def _roots(self) -> np.ndarray:
+        """The roots stacked (K, N); restacked only after :meth:`add` or :meth:`clear`."""
+        if self._stack is None:
+            self._stack = np.asarray(self.roots)
+        return self._stack
 
     def distances(self, theta: np.ndarray) -> np.ndarray:
         """||theta - theta_k|| (discrete L2 on [0, l]) to every deflated root."""
         if not self.roots:
             return np.zeros(0)
-        diff = theta[None, :] - np.asarray(self.roots)
+        diff = theta[None, :] - self._roots()
         return np.sqrt(self.h * np.sum(diff * diff, axis=1))
 
     def factor_and_gradient(self, theta: np.ndarray) -> tuple[float, np.ndarray]:
@@ -81,7 +90,7 @@ class Deflation:
         if not self.roots:
             return 1.0, np.zeros_like(theta)
         q, sigma = self.power, self.shift
-        diff = theta[None, :] - np.asarray(self.roots)             # (K, N)
+        diff = theta[None, :] - self._roots()                      # (K, N)
         s = np.maximum(self.h * np.sum(diff * diff, axis=1), np.finfo(float).tiny)
         # log(s^(-q/2) + sigma) = -(q/2) log s + log(1 + sigma s^(q/2))
         log_M = float(np.sum(-(q / 2.0) * np.log(s) + np.log1p(sigma * s ** (q / 2.0))))

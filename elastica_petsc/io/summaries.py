@@ -294,7 +294,7 @@ def search_summary(result, settings: dict | None = None) -> dict:
             "found_from": [{"state": f.number, "start": f.start, "method": f.method,
                             "attempts_reaching_it": int(f.hits)}
                            for f in result.states],
-            "complete": False}
+            "complete": False, "outcome": result.outcome, "stopped": result.stopped}
 
 
 def _search_method(result, settings: dict) -> str:

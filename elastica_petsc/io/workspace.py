@@ -24,7 +24,7 @@ from ..core.errors import InputError
 # the sampler attribute of a file (part of what a resume must match); files
 # written before it existed were made by the local sampler (targets) or by
 # forward solves (tensions)
-SAMPLERS = {"targets": ("global-search", "local"), "tensions": ("forward",),
+SAMPLERS = {"targets": ("global-search", "boundary-fill", "local"), "tensions": ("forward",),
             "design-sweep": ("design-sweep",)}
 
 # what must be equal for a resume: everything that changes a sample's result
@@ -248,7 +248,7 @@ def _difference(key: str, stored, now) -> str:
         return (f"the {stored!r} sampler (now {now!r}): its unreached samples are "
                 + ("local verdicts" if stored == "local" else "searched globally")
                 + "; start a new file, or resume it with the same sampler"
-                + (" (--local-only)" if stored == "local" else ""))
+                + f" (--sampler {stored}" + (" or --local-only)" if stored == "local" else ")"))
     if key in ATTR_DEFAULTS:
         option, what = (("--share", "the sharing rule") if key == "share" else
                         ("--min-tension-N", "the tension floor [N]"))

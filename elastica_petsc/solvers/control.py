@@ -408,7 +408,8 @@ class TipController:
     # --- public API --------------------------------------------------------------
     def solve(self, target, p0=None, start: Equilibrium | None = None,
               max_failures: int | None = None,
-              start_loading: Loading | None = None, max_it: int | None = None) -> ControlResult:
+              start_loading: Loading | None = None, max_it: int | None = None,
+              budget=None, stall: tuple[int, float] | None = None) -> ControlResult:
         """Tensions putting the tip at ``target`` (units of l), Algorithm 1.
 
         One local run (a stationary point away from the target is reported
@@ -425,6 +426,12 @@ class TipController:
             ``loading`` is known; without it a result started from ``start``
             has ``loading`` None.
         max_it : iteration limit of this solve (default: the controller's).
+        budget : a :class:`~elastica_petsc.core.budget.TimeBudget`; once it is
+            spent the solve stops after its current iteration with reason
+            ``TIME_LIMIT`` (an undecided local end).
+        stall : (iterations, relative decrease of E) of the STALLED test for
+            this solve (default: the controller's ``stall_its``, ``stall_rtol``),
+            e.g. a coarse one when only the closest tip is wanted.
         """
         target = np.asarray(target, dtype=float).ravel()
         if target.shape != (2,) or not np.all(np.isfinite(target)):
@@ -437,11 +444,14 @@ class TipController:
         p0 = np.clip(p0, 0.0, np.inf if self.upper is None else self.upper)
         if start is not None and not start.converged:
             raise InputError("start must be a converged equilibrium")
+        rule = self.rule if stall is None else dataclasses.replace(
+            self.rule, stall_its=int(stall[0]), stall_rtol=float(stall[1]))
         problem = TipProblem(
-            target=target, rule=self.rule, evaluate=self._evaluate, anchor=start,
+            target=target, rule=rule, evaluate=self._evaluate, anchor=start,
             anchor_loading=start_loading,
             max_failures=self.max_failures if max_failures is None else int(max_failures),
-            max_it=self.max_it if max_it is None else min(int(max_it), self.max_it))
+            max_it=self.max_it if max_it is None else min(int(max_it), self.max_it),
+            budget=budget)
         self._keep_start(start, start_loading, p0)
         if self.tao is None:
             ev, tao_reason, iterations = gradient_descent(problem, p0)

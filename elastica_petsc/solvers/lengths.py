@@ -4,102 +4,35 @@ docs/model.md §4.7).
 Everything is non-dimensional (docs/model.md §3): lengths in units of l, tensions
 p = P l^2 / B; ``*_mm`` helpers convert with the arm length.
 
-Length control as a complementarity problem
--------------------------------------------
-The experiments prescribe the cable lengths L_i, not the tensions.  The
-unknowns are z = (theta_1..theta_N, y_1..y_n, p_1..p_n): the bordered state
-of :mod:`elastica_petsc.core.fem` plus the tensions.  The equations are the
-bordered equilibrium residual F(u, p) = 0 (Eq. (9) and y_i = X_i(theta)) and,
-per tendon, the complementarity conditions of a cable that cannot push or
-stretch (Eq. (23)):
-
-    p_i >= 0,   g_i = L_i - |r_i - y_i| >= 0,   p_i g_i = 0.
-
-This is a mixed complementarity problem solved by PETSc's semismooth
-reduced-space Newton for variational inequalities (SNES ``vinewtonrsls``),
-options prefix ``len_``.  PETSc's convention: at a variable's lower bound
-its function must be >= 0, between the bounds it must vanish.  So the row of
-p_i is g_i = L_i - |r_i - y_i| (prescribed minus actual chord): a slack
-cable has p_i = 0 and g_i > 0; a taut one p_i >= 0 and g_i = 0.  Angles and
-attachment unknowns are unbounded.  The consistent Jacobian is the bordered
-Jacobian, the columns dF/dp_i (:meth:`Discretisation.load_derivative`), and
-the rows dg_i/dy_i = d_i^T; its CSR pattern extends ``disc.pattern`` once
-and is filled with ``setValuesCSR``.  Natural-order LU fills only the
-border: O(N) per Newton step.
-
-Deflation
----------
-:mod:`elastica_petsc.core.deflation`: the equation rows are multiplied by
-M(z) = prod_k (1/||theta - theta_k||^2 + 1), with mu = M(z) carried as one
-extra unknown (so every system here has the unknowns (u, p, mu) and the
-extra row mu - M(z); without deflated roots M = 1 and mu stays 1).  M > 0,
-so the complementarity signs are unchanged.  Load control uses the same
-system with the p rows p_i - p_i* = 0.  Deflated solves use their own SNES
-(prefixes ``len_defl_`` and ``defl_``) with the l2 line search, which
-leaves the start's basin far more often than backtracking.  The searches
-built on this live in :mod:`elastica_petsc.studies.search`.
-
-Stability under length control (Sec. 4.6)
------------------------------------------
-With the cables rigid, the potential is the strain energy alone,
-constrained by L_i(theta) = L_i for the taut cables; the tensions are the
-Lagrange multipliers and the Hessian of the Lagrangian is the same tangent
-K as under load control (docs/model.md §2).  A taut state is stable iff K is
-positive definite on null(C^T), C = [grad_theta L_i] of the taut cables
-(N x m, full rank).  Counted with inertia, still O(N):
-
-    H_c = [[T, W, C], [W^T, -I_n, 0], [C^T, 0, 0]],
-    In(H_c) = (0, n, 0) + In([[K, C], [C^T, 0]])
-            = (0, n, 0) + (m, m, 0) + In(K restricted to null C^T)
-
-(Haynsworth on the -I block, then the saddle-point inertia theorem).  A
-slack cable gets a zero column and a corner entry +1 (one positive
-eigenvalue), so the matrix keeps its size.  A cable with p_i = 0 that is
-just taut (g_i = 0) counts as slack: with a zero multiplier the one-sided
-constraint |r_i - x_i| <= L_i leaves a half-space of admissible
-variations, on which the quadratic form v^T K v is positive iff it is
-positive on the whole space (it is even in v).  LDL^T in the natural order
-(zero block last; PETSc's own SBAIJ Cholesky accepts the negative pivots);
-if it meets a zero pivot the state is counted as marginal.
-
-Full rank of C fails where a cable's length is stationary, e.g. the
-straight arm with a cable along its axis (grad L = 0): the tension is then
-indeterminate under length control and the saddle matrix singular (zero
-pivot, reported as marginal); such states are limits of well-posed ones.
-
-Being stable under load control (K > 0) implies stability under length
-control (constraints only remove variations).  The two are tied by the
-folds of the load path (Maddocks 1987): along a load-controlled branch
-dL/dp = -C^T K^{-1} C (m x m), and the Schur complement of [[K, C],
-[C^T, 0]] gives neg_length = neg_load - pos(dL/dp) (tested): a state that
-is unstable under load control is stable under length control where the
-cable lengths grow with the tensions along the branch.
+The pieces: the augmented VI system (unknowns, complementarity, deflation)
+is :mod:`.length_system`; stability under length control (the constrained
+inertia count, the buckling mode, limit point or bifurcation) is
+:mod:`.length_stability`; this module holds the results and
+:class:`LengthSolver` (one solve, continuation in the cable lengths, the
+branches past a critical point).  The searches built on them live in
+:mod:`elastica_petsc.studies.search`.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-import math
 
 import numpy as np
-import scipy.sparse as sp
-from petsc4py import PETSc
 
+from ..core.budget import TIME_LIMIT
 from ..core.deflation import Deflation
-from .equilibrium import Equilibrium
 from ..core.errors import InputError
 from ..core.fem import Discretisation
-from .bifurcation import inverse_iteration
-from .inertia import BorderedInertia, InertiaCounter
-from .linalg import use_bordered_lu
-from .options import SolverOptions, check_comm
-from .reasons import SNES_REASONS, reason_name
+from .equilibrium import Equilibrium
+from .inertia import InertiaCounter
+from .length_stability import (LENGTH_BIFURCATION_TOL, LengthInertia, constrained_mode,
+                               instability_kind)
+from .length_system import TAUT_TOL, AugmentedSystem
+from .options import SolverOptions
 
-# A tension below this (non-dimensional, p = P l^2/B) counts as zero: the
-# cable is slack or just taut and constrains nothing (module docstring).
-TAUT_TOL = 1e-8
-# |q . dL| / (|(v, q)| |dL|) below this: a loss of stability under length control is a
-# bifurcation, not a limit point (instability_kind; calibrated on Fig. 7 only, 0.005).
-LENGTH_BIFURCATION_TOL = 0.05
+__all__ = ["DEFLATED_DIVERGENCE_FACTOR", "DEFLATION_OPTIONS", "LENGTH_BIFURCATION_TOL", "MAX_SNAP_SEARCHES", "SAME_SHAPE_TOL",
+           "TAUT_TOL", "AugmentedSystem", "LengthEquilibrium", "LengthInertia", "LengthSolver",
+           "check_lengths", "constrained_mode", "instability_kind", "same_shape"]
+
 # Global searches for a state to snap to (``post_critical`` of LengthSolver.follow) per path.
 MAX_SNAP_SEARCHES = 3
 # Two states are the same equilibrium if no nodal angle differs by more (rad).
@@ -107,6 +40,9 @@ SAME_SHAPE_TOL = 1e-4
 # PETSc options (under the solver's prefix) for deflated solves, unless the
 # user sets them: the secant ("l2") line search explores beyond the start's basin.
 DEFLATION_OPTIONS = {"snes_linesearch_type": "l2"}
+# A deflated solve whose residual norm grows past this factor times its best is
+# given up (length_system.DivergenceStop, measured there): a search's failures cost less.
+DEFLATED_DIVERGENCE_FACTOR = 50.0
 
 
 # --- results -----------------------------------------------------------------------------
@@ -190,267 +126,6 @@ def same_shape(a: Equilibrium, b: Equilibrium, tol: float = SAME_SHAPE_TOL) -> b
     return float(np.max(np.abs(a.theta - b.theta))) <= tol
 
 
-# --- the augmented system (u, p, mu) on one SNES VI --------------------------------------
-class AugmentedSystem:
-    """SNES ``vinewtonrsls`` on z = (theta, y, p, mu) (module docstring).
-
-    ``mode="length"``: p rows g_i = L_i - |r_i - y_i| with p_i >= 0.
-    ``mode="load"``: p rows p_i - p_i* (p fixed), no bounds on p.
-    Rows of F and g are multiplied by mu, and mu - M(theta) = 0 (deflation).
-    The contract of :mod:`.options`: ``options_prefix`` (of the SNES, its
-    Jacobian and vectors), ``petsc_options``, ``comm`` (one process).
-    """
-
-    def __init__(self, disc: Discretisation, mode: str, options_prefix: str,
-                 deflation: Deflation | None = None, max_it: int = 50,
-                 petsc_options=None, comm=None):
-        if mode not in ("length", "load"):
-            raise ValueError(f"mode must be 'length' or 'load', got {mode!r}")
-        self.options = SolverOptions(options_prefix, petsc_options)
-        self.comm = comm = check_comm(comm)
-        self.disc, self.mode = disc, mode
-        N, n = disc.n_elements, disc.n_tendons
-        self.nu, self.n = disc.size, n
-        self.ip, self.imu = disc.size, disc.size + n
-        self.size = disc.size + n + 1
-        self.deflation = deflation if deflation is not None else Deflation(disc.h)
-        self.target = np.zeros(n)
-        self._build_pattern()
-        z0 = self.augment(disc.straight(), np.zeros(n))
-        self.J = PETSc.Mat().createAIJ(size=(self.size, self.size), comm=comm,
-                                       csr=(self.indptr, self.indices, self.jacobian_values(z0)))
-        self.x = PETSc.Vec().createSeq(self.size, comm=comm)
-        self.f = self.x.duplicate()
-        self.xl, self.xu = self.x.duplicate(), self.x.duplicate()
-        lower = np.full(self.size, PETSc.NINFINITY)
-        if mode == "length":
-            lower[self.ip:self.imu] = 0.0                   # a cable cannot push
-        lower[self.imu] = 0.5                # mu = M >= shift^K at a solution (see newton)
-        self.xl.setArray(lower)
-        self.xu.set(PETSc.INFINITY)
-        snes = PETSc.SNES().create(comm)
-        self.options.label(snes, self.J, self.x, self.f, self.xl, self.xu)
-        snes.setType("vinewtonrsls")
-        snes.setFunction(self._form_function, self.f)
-        snes.setJacobian(self._form_jacobian, self.J, self.J)
-        snes.setVariableBounds(self.xl, self.xu)
-        # residual round-off grows like N^(3/2) (see EquilibriumSolver)
-        self.atol = max(1e-10, 1e-14 * N ** 1.5)
-        snes.setTolerances(rtol=1e-10, atol=self.atol, stol=1e-14, max_it=max_it)
-        use_bordered_lu(snes.getKSP())
-        self.options.apply(snes)
-        self.snes = snes
-
-    # --- layout ----------------------------------------------------------------------
-    def augment(self, u, p, mu: float | None = None) -> np.ndarray:
-        z = np.empty(self.size)
-        z[: self.nu], z[self.ip:self.imu] = u, p
-        z[self.imu] = self.deflation.factor_and_gradient(np.asarray(u)[: self.disc.n_elements])[0] \
-            if mu is None else mu
-        return z
-
-    def parts(self, z):
-        return z[: self.nu], z[self.ip:self.imu], z[self.imu]
-
-    def _build_pattern(self) -> None:
-        disc = self.disc
-        N, n, nu, ip, imu = disc.n_elements, self.n, self.nu, self.ip, self.imu
-        indptr, indices, _ = disc.pattern
-        rows = [np.repeat(np.arange(nu), np.diff(indptr)), ]
-        cols = [np.asarray(indices)]
-        for i, m in enumerate(disc.length_supports):        # dF_theta/dp_i (rows < m_i)
-            rows.append(np.arange(m)); cols.append(np.full(m, ip + i))
-        for i in range(n):                                  # dg_i/dy (its cable's points)
-            c = disc.length_columns(i)
-            rows.append(np.full(len(c), ip + i)); cols.append(N + c)
-        rows.append(ip + np.arange(n)); cols.append(ip + np.arange(n))   # p diagonal
-        rows.append(np.arange(imu)); cols.append(np.full(imu, imu))      # d/dmu = F, g
-        rows.append(np.full(N, imu)); cols.append(np.arange(N))          # -grad M
-        rows.append(np.array([imu])); cols.append(np.array([imu]))
-        rows, cols = np.concatenate(rows), np.concatenate(cols)
-        order = np.lexsort((cols, rows))
-        self._order = order
-        self.indptr = np.searchsorted(rows[order], np.arange(self.size + 1)).astype(np.int32)
-        self.indices = cols[order].astype(np.int32)
-
-    # --- residual and Jacobian ---------------------------------------------------------
-    def equations(self, z) -> tuple[np.ndarray, np.ndarray]:
-        """Unscaled residuals: F(u, p) (bordered) and the p rows."""
-        u, p, _ = self.parts(z)
-        F = self.disc.residual(u, p)
-        if self.mode == "length":
-            g = self.target - self.disc.cables(self.disc.split(u)[1])[0]
-        else:
-            g = p - self.target
-        return F, g
-
-    def residual(self, z) -> np.ndarray:
-        F, g = self.equations(z)
-        mu = z[self.imu]
-        M, _ = self.deflation.factor_and_gradient(z[: self.disc.n_elements])
-        return np.concatenate((mu * F, mu * g if self.mode == "length" else g, [mu - M]))
-
-    def jacobian_values(self, z) -> np.ndarray:
-        disc = self.disc
-        u, p, mu = self.parts(z)
-        F, g = self.equations(z)
-        _, gradM = self.deflation.factor_and_gradient(u[: disc.n_elements])
-        dFdp = disc.load_derivative(u)
-        blocks = [mu * disc.jacobian_values(u, p)]
-        blocks += [mu * dFdp[i, :m] for i, m in enumerate(disc.length_supports)]
-        columns = [disc.length_columns(i) for i in range(self.n)]
-        if self.mode == "length":
-            dLdy = disc.length_gradients(disc.split(u)[1])           # dg/dy = -dL/dy
-            blocks += [-mu * dLdy[i, c] for i, c in enumerate(columns)]
-            blocks += [np.zeros(self.n), F, g]
-        else:
-            blocks += [np.zeros(sum(len(c) for c in columns)), np.ones(self.n), F,
-                       np.zeros(self.n)]
-        blocks += [-gradM, [1.0]]
-        return np.concatenate(blocks)[self._order]
-
-    def _form_function(self, snes, X, Fv) -> None:
-        Fv.setArray(self.residual(X.getArray(readonly=True)))
-
-    def _form_jacobian(self, snes, X, J, P) -> None:
-        P.setValuesCSR(self.indptr, self.indices, self.jacobian_values(X.getArray(readonly=True)))
-        P.assemble()
-
-    def scipy_jacobian(self, z) -> sp.csr_matrix:
-        return sp.csr_matrix((self.jacobian_values(z), self.indices, self.indptr),
-                             shape=(self.size, self.size))
-
-    # --- one solve ---------------------------------------------------------------------
-    def newton(self, z0, target, max_it: int | None = None) -> tuple[np.ndarray, int, str, bool]:
-        """One VI Newton solve from z0: (z, iterations, reason, converged);
-        ``max_it`` caps the Newton iterations of this solve only."""
-        self.options.refresh(self.snes)
-        self.target = np.asarray(target, float)
-        z0 = np.array(z0, float)
-        if self.mode == "length":
-            z0[self.ip:self.imu] = np.maximum(z0[self.ip:self.imu], 0.0)
-        M, _ = self.deflation.factor_and_gradient(z0[: self.disc.n_elements])
-        z0[self.imu] = M
-        if not np.isfinite(M) or M > 1e12:       # the start sits on a deflated root
-            return z0, 0, "START_ON_DEFLATED_ROOT", False
-        # mu > 0 keeps the complementarity signs; M >= shift^K, so this bound never binds
-        floor = 0.5 * min(1.0, self.deflation.shift ** len(self.deflation))
-        self.xl.setValue(self.imu, floor)
-        self.xl.assemble()
-        self.x.setArray(z0)
-        default_max_it = self.snes.getTolerances()[3]
-        if max_it is not None:
-            self.snes.setTolerances(max_it=max_it)
-        try:
-            self.snes.solve(None, self.x)
-        except PETSc.Error:                      # e.g. a zero pivot in the LU
-            return z0, self.snes.getIterationNumber(), "PETSC_ERROR", False
-        finally:
-            self.snes.setTolerances(max_it=default_max_it)
-        reason = self.snes.getConvergedReason()
-        z = self.x.getArray().copy()
-        return z, self.snes.getIterationNumber(), reason_name(SNES_REASONS, reason), \
-            reason > 0 and self.verified(z)
-
-    def verified(self, z) -> bool:
-        """Independent check of a converged state with the numpy kernels."""
-        F, g = self.equations(z)
-        if not (np.all(np.isfinite(F)) and np.all(np.isfinite(g))):
-            return False
-        tol = 1e-8 * max(1.0, (self.disc.n_elements / 180.0) ** 1.5)
-        if np.max(np.abs(F)) > tol:
-            return False
-        if self.mode == "length":
-            p = z[self.ip:self.imu]
-            gtol = 1e-9
-            if np.any(g < -gtol) or np.any(np.abs(g[p > TAUT_TOL]) > gtol):
-                return False
-        else:
-            if np.max(np.abs(g)) > 1e-12 * max(1.0, np.max(np.abs(self.target))):
-                return False
-        lengths = self.disc.cables(self.disc.split(z[: self.nu])[1])[0]
-        return bool(np.all(lengths > 1e-6))
-
-    def destroy(self) -> None:
-        for obj in (self.snes, self.J, self.x, self.f, self.xl, self.xu):
-            obj.destroy()
-
-
-# --- stability under length control ------------------------------------------------------
-class LengthInertia(BorderedInertia):
-    """Negative eigenvalues of K restricted to null(C^T) of the taut cables
-    (module docstring), by the LDL^T inertia of the bordered H_c, O(N)."""
-
-    def __init__(self, disc: Discretisation, taut_tol: float = TAUT_TOL, **contract):
-        self.disc, self.taut_tol = disc, taut_tol
-        w_supports = disc.stability_pattern_supports
-        supports = np.concatenate((w_supports, disc.length_supports))        # W cols, C cols
-        starts = np.concatenate((disc.stability_pattern_starts, np.zeros(disc.n_tendons, int)))
-        pattern = disc.bordered_pattern(supports, upper=True, starts=starts)
-        self._src = pattern[2]
-        super().__init__(pattern, disc.n_elements + len(supports),
-                         self.values(disc.straight(), np.zeros(disc.n_tendons))[0], **contract)
-
-    def values(self, u, p) -> tuple[np.ndarray, int]:
-        """Upper-triangle entries of H_c and the number m of taut cables."""
-        disc = self.disc
-        p = np.asarray(p, float)
-        theta, y = disc.split(u)
-        w = disc.stiffness_border(theta, y, p)                              # (n, N)
-        taut = p > self.taut_tol
-        C = disc.load_derivative(u)[:, : disc.n_elements] * taut[:, None]  # grad L_i (n, N)
-        border = np.vstack((w, C))                                          # (2n, N)
-        corner = np.concatenate((-np.ones(disc.stability_border), np.where(taut, 0.0, 1.0)))
-        source = np.concatenate((disc.band(theta, disc.cables(y)[1], p).ravel(),
-                                 border.T.ravel(), border.ravel(), corner))
-        return source[self._src], int(np.count_nonzero(taut))
-
-    def negative_eigenvalues(self, u, p) -> int:
-        """Negative (or zero) eigenvalues of K on null(C_taut^T); 0: stable
-        under length control."""
-        vals, m = self.values(u, p)
-        return self.count(vals, self.disc.stability_border + m)
-
-
-def constrained_mode(system: AugmentedSystem, z, iterations: int = 30,
-                     full: bool = False) -> tuple:
-    """Eigenpair of K v = lambda h v on null(C_taut^T) with the smallest
-    |lambda| (the buckling mode near a loss of stability), by inverse
-    iteration with the length-control Jacobian [[J, dF/dp], [dg/du, 0]]
-    (sparse LU, O(N), :func:`~elastica_petsc.solvers.bifurcation.inverse_iteration`).
-    Returns (lambda, v) with v the N nodal angle increments, max |v| = 1;
-    with ``full`` also the tension increments q (n) that go with v (zero for
-    slack cables, which have no constraint)."""
-    disc = system.disc
-    z = np.array(z, float)
-    z[system.imu] = 1.0
-    A = system.scipy_jacobian(z).tolil()
-    p = z[system.ip:system.imu]
-    for i in np.flatnonzero(p <= TAUT_TOL):       # slack: p_i stays 0, no constraint row
-        r = system.ip + i
-        A[r, :] = 0.0
-        A[:, r] = 0.0
-        A[r, r] = 1.0
-    lam, v, w = inverse_iteration(A, disc.n_elements, disc.h, iterations)
-    return (lam, v, w[system.ip:system.imu]) if full else (lam, v)
-
-
-def instability_kind(system: AugmentedSystem, z, dL) -> str:
-    """"bifurcation" or "limit point" for a loss of stability under length
-    control at the state z, the lengths moving along ``dL``: the
-    constrained critical mode (v, q) (:func:`constrained_mode`) is the null
-    vector of the symmetric length-control Jacobian, and the path derivative
-    of the residual is -dL in the cable rows, so the test of
-    :mod:`~elastica_petsc.solvers.bifurcation` reads |q . dL| <=
-    LENGTH_BIFURCATION_TOL |(v, q)| |dL| (v weighted by h).  The tolerance
-    is looser than under load control: a path of straight segments in the
-    lengths only approximates a perfect column (Fig. 7's aligned path:
-    measured 0.005 one step before the crossing)."""
-    _, v, q = constrained_mode(system, z, full=True)
-    dL = np.asarray(dL, float)
-    scale = math.sqrt(system.disc.h * float(v @ v) + float(q @ q)) * float(np.linalg.norm(dL))
-    return "bifurcation" if abs(float(q @ dL)) <= LENGTH_BIFURCATION_TOL * scale \
-        else "limit point"
 
 
 # --- the length-control solver ----------------------------------------------------------
@@ -490,7 +165,8 @@ class LengthSolver:
         # of the start far more often than backtracking (measured on Fig. 8)
         self.deflated_system = AugmentedSystem(disc, "length", self.prefix + "defl_",
                                                petsc_options={**DEFLATION_OPTIONS, **deflated},
-                                               comm=comm)
+                                               comm=comm,
+                                               divergence_factor=DEFLATED_DIVERGENCE_FACTOR)
         self.inertia = LengthInertia(disc, comm=comm, options_prefix=self.prefix + "inertia_")
         self.load_inertia = InertiaCounter(disc, comm=comm,
                                            options_prefix=self.prefix + "load_inertia_")
@@ -564,7 +240,7 @@ class LengthSolver:
     # --- continuation in the cable lengths -------------------------------------------------
     def follow(self, lengths, start=None, *, keep_stable: bool = True,
                min_fraction: float = 1e-4, label: str = "",
-               post_critical=None) -> LengthEquilibrium:
+               post_critical=None, budget=None) -> LengthEquilibrium:
         """Continuation from ``start`` (an equilibrium; its own cable chords are
         the initial lengths, or for a slack cable of a LengthEquilibrium its
         prescribed length) to ``lengths`` (units of l) along the straight
@@ -588,7 +264,10 @@ class LengthSolver:
         ``jump_tol`` (at most :data:`MAX_SNAP_SEARCHES` searches per path).  If no stable state is found the result has
         ``converged=False`` and a message that says it was not found (not that
         none exists).  Without ``keep_stable`` unstable states are followed
-        like stable ones (used by searches).
+        like stable ones (used by searches).  ``budget`` (a
+        :class:`~elastica_petsc.core.budget.TimeBudget`): once spent, the path
+        stops before its next step: ``converged=False``, reason TIME_LIMIT, the
+        last state reached and its lengths.
         """
         L_end = check_lengths(lengths, self.disc.n_tendons)
         u, p = self._start(start)
@@ -613,6 +292,9 @@ class LengthSolver:
             return L_start + t * (L_end - L_start)
 
         while lam < 1.0:
+            if budget is not None and budget.expired():
+                return self._stopped(z, where(lam), L_end, its_total, steps, jumps,
+                                     instabilities, kinds, label)
             step = min(dlam, 1.0 - lam)
             pred = z if z_prev is None else z + (z - z_prev) * (step / dlam_prev)
             pred[sys.ip:sys.imu] = np.maximum(pred[sys.ip:sys.imu], 0.0)
@@ -662,6 +344,16 @@ class LengthSolver:
                                 instabilities=instabilities, kinds=kinds, label=label)
         return self._result(z, L_end, its_total, reason, True, steps=steps, jumps=jumps,
                             instabilities=instabilities, kinds=kinds, label=label)
+
+    def _stopped(self, z, lengths, L_end, its, steps, jumps, instabilities, kinds,
+                 label) -> LengthEquilibrium:
+        """The state a continuation reached when its time budget was spent:
+        not converged, reason TIME_LIMIT, at the lengths it had reached."""
+        msg = (f"{TIME_LIMIT}: the length continuation stopped by its time budget at L/l = ("
+               + ", ".join(f"{v:.6g}" for v in lengths) + ") on the way to ("
+               + ", ".join(f"{v:.6g}" for v in L_end) + ")")
+        return self._result(z, lengths, its, TIME_LIMIT, False, steps=steps, message=msg,
+                            jumps=jumps, instabilities=instabilities, kinds=kinds, label=label)
 
     def _post_critical(self, base, where, lam: float, step: float, full: float) -> list:
         """Stable states past a critical point of a continuation: the state

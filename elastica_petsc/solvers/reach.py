@@ -32,13 +32,19 @@ Verdicts (``ControlResult.reachable``):
   here: ``|x_d| > l`` (``BEYOND_REACH``): the arm is inextensible, so
   |x_t| = |int_0^l t ds| <= l (Eq. (2)) for every state.  With a
   ``boundary`` (a callable, e.g. :func:`elastica_petsc.studies.boundary.boundary_proof`),
-  once the search is exhausted: ``OUTSIDE_BOUNDARY``, the target lies in the
-  unbounded component of the plane minus the traced boundary curves of W_0
-  (faces and tip-map folds, docs/model.md §9), with its distance to them.
+  before any global strategy (proof first: before the local solve when the
+  boundary is traced already, else after a short local solve, the probe,
+  has failed): ``OUTSIDE_BOUNDARY``, the target lies in the unbounded
+  component of the plane minus the traced boundary curves of W_0, or in a
+  hole of W_0 (faces and tip-map folds, docs/model.md §9), with its distance
+  to them; the result is then the local solve's closest tip.
 * None (reason ``SEARCH_EXHAUSTED``): not reached and not proven
   unreachable; the result is the closest tip found (a stationary point with
   a tension on its lower bound is *local* evidence that the target needs
   P_i < 0, see ``on_bound``).
+* None (reason ``TIME_LIMIT``): the :class:`~elastica_petsc.core.budget.TimeBudget`
+  was spent before a verdict: the closest tip found so far, reachability
+  undecided (the strategies not run are named in ``evidence``).
 
 Cables through the arm (:mod:`elastica_petsc.core.clearance`): with
 ``cables="prefer"`` a reached state whose cable crosses the arm starts a
@@ -56,6 +62,7 @@ import math
 
 import numpy as np
 
+from ..core.budget import TIME_LIMIT, TimeLimitReached
 from ..core.clearance import state_cable_clear
 from ..core.loading import Loading
 from .control import ControlResult, StartFailed, TipController
@@ -68,6 +75,11 @@ SEARCH_EXHAUSTED = "SEARCH_EXHAUSTED"    # reason: global strategies tried, unde
 CABLE_CROSSES_ARM = "CABLE_CROSSES_ARM"  # reason (cables="require"): reached only with a
 #                                          cable through the arm
 CABLE_POLICIES = ("ignore", "prefer", "require")
+CLOSEST_STALL = (2, 1e-3)                # the local solve beside an OUTSIDE_BOUNDARY proof
+#                                          stops once E falls by < 0.1 % over 2 iterations:
+#                                          the closest tip is then known to ~0.05 % of its
+#                                          distance (measured: 5 s -> 0.04 s on the hole of
+#                                          the paper's arm at (387.4, -261.1) mm)
 MAX_SEED_SOLVES = 2000                   # budget of a seed library, equilibrium solves (the
 #                                          full library of n <= 3 tendons fits: 1566 for n = 3)
 
@@ -176,9 +188,13 @@ class SeedLibrary:
             self._seeds = []
             n = self.controller.n
             root = Start(None, Loading.straight(n), "")
-            for order in self.orders:
-                self._sweep(root, order)
-            self._rays()
+            try:
+                for order in self.orders:
+                    self._sweep(root, order)
+                self._rays()
+            except BaseException:          # e.g. a time limit: never keep half a library
+                self._seeds = None
+                raise
         return self._seeds
 
     def _keep(self, eq: Equilibrium, loading: Loading, label: str) -> bool:
@@ -258,9 +274,18 @@ class Reacher:
     local_its : iteration limit of the local solves of the global phase (a
         reached target needs < 10 from a good start; a solve that stalls
         would otherwise spend its full budget on penalised evaluations).
-    boundary : None, or a callable target (units of l) -> (evidence, distance
-        in units of l), evidence '' unless the target is proven outside W_0;
-        asked only when the search is exhausted (``OUTSIDE_BOUNDARY``).
+    boundary : None, or a callable ``boundary(target, trace=True)`` (target in
+        units of l) -> (evidence, distance in units of l), evidence '' unless
+        the target is proven outside W_0 (``OUTSIDE_BOUNDARY``); with
+        ``trace=False`` it may answer only from a boundary already traced
+        (:func:`~elastica_petsc.studies.boundary.boundary_proof`; distance
+        nan: not traced).  Asked before the local solve (``trace=False``),
+        and after a failed probe (:meth:`_probe`) when it was not traced.
+    budget : None, or a :class:`~elastica_petsc.core.budget.TimeBudget`:
+        once spent, the search stops at its next step and returns the
+        closest tip so far with reason ``TIME_LIMIT`` (the first local solve
+        always yields a state; a proof is then taken only from a boundary
+        already traced).
     progress : None, or a callable ``progress(steps, note)`` told of every
         search step of :meth:`reach` (a local solve, a homotopy sub-target,
         building the seed library, the boundary proof) with what it is doing
@@ -270,8 +295,9 @@ class Reacher:
     def __init__(self, controller: TipController, *, homotopy_step: float = 0.08,
                  min_step: float = 2e-3, max_seeds: int = 6, max_substeps: int = 25,
                  local_its: int = 30, max_homotopies: int = 4, seeds: SeedLibrary | None = None,
-                 boundary=None, progress=None):
+                 boundary=None, progress=None, budget=None):
         self.controller = controller
+        self.budget = budget
         self.progress, self.steps = progress, 0
         self.boundary = boundary
         self.max_homotopies = max_homotopies
@@ -282,17 +308,32 @@ class Reacher:
         self.max_substeps = max_substeps
         self.library = seeds if seeds is not None else SeedLibrary(controller)
 
-    def step(self, note: str) -> None:
-        """One search step done or starting (``progress``)."""
+    def step(self, note: str, check: bool = True) -> None:
+        """One search step done or starting (``progress``); with ``check``,
+        raises TimeLimitReached once the budget is spent."""
         self.steps += 1
         if self.progress is not None:
             self.progress(self.steps, note)
+        if check and self.budget is not None:
+            self.budget.check(note)
+
+    def _on_seed(self, count: int) -> None:
+        """Progress of the seed library, which also stops at the time budget."""
+        if self.progress is not None:
+            self.progress(self.steps, f"global search: seed library, {count} equilibria"
+                          + (f" (capped: budget of {self.library.max_solves} solves)"
+                             if self.library.cap_note else ""))
+        if self.budget is not None:
+            self.budget.check("the seed library")
+
+    def _solve(self, target, **kw) -> ControlResult:
+        """One local solve (:meth:`TipController.solve`) under the budget."""
+        return self.controller.solve(target, budget=self.budget, **kw)
 
     # --- strategies --------------------------------------------------------------
     def homotopy(self, target: np.ndarray, start: Start) -> ControlResult | None:
         """Move the target from ``start``'s tip to ``target`` in warm-started
         steps; the last converged sub-result (its target may fall short)."""
-        ctl = self.controller
         tip0 = start.equilibrium.tip.copy()
         d = target - tip0
         dist = float(np.linalg.norm(d))
@@ -304,8 +345,8 @@ class Reacher:
             t_new = 1.0 if t + h >= 1.0 - 1e-12 else t + h
             self.step(f"homotopy in target space from {start.label or 'a state'}: "
                        f"{100 * t_new:.0f} % of the way")
-            res = ctl.solve(tip0 + t_new * d, start=eq, start_loading=loading, max_failures=2,
-                            max_it=self.local_its)
+            res = self._solve(tip0 + t_new * d, start=eq, start_loading=loading,
+                              max_failures=2, max_it=self.local_its)
             if res.converged:
                 t, eq, loading, last = t_new, res.equilibrium, res.loading, res
                 if t >= 1.0:
@@ -319,8 +360,8 @@ class Reacher:
 
     def _local(self, target, start: Start, tried: list) -> ControlResult | None:
         self.step(f"local solve from {start.label or 'a state'}")
-        res = self.controller.solve(target, start=start.equilibrium, start_loading=start.loading,
-                                    max_failures=3, max_it=self.local_its)
+        res = self._solve(target, start=start.equilibrium, start_loading=start.loading,
+                          max_failures=3, max_it=self.local_its)
         tried.append(res)
         return res if res.converged else None
 
@@ -345,29 +386,48 @@ class Reacher:
         require cables clear of the arm (module doc)."""
         if cables not in CABLE_POLICIES:
             raise ValueError(f"cables must be one of {CABLE_POLICIES}, got {cables!r}")
-        ctl = self.controller
         target = np.asarray(target, dtype=float).ravel()
-        evidence = beyond_reach(target)
+        evidence, reason, traced = beyond_reach(target), BEYOND_REACH, True
+        if not evidence and global_search and self.boundary is not None:
+            self.step("boundary proof from the boundary already traced", check=False)
+            evidence, distance = self.boundary(target, trace=False)
+            reason, traced = OUTSIDE_BOUNDARY, not math.isnan(distance)
         if evidence:                 # the closest tip from a short local solve
-            first = ctl.solve(target, p0=p0, start=start, start_loading=start_loading,
-                              max_failures=3, max_it=self.local_its)
-            return dataclasses.replace(first, reachable=False, reason=BEYOND_REACH,
+            first = self._solve(target, p0=p0, start=start, start_loading=start_loading,
+                                max_failures=3, max_it=self.local_its,
+                                stall=CLOSEST_STALL if reason == OUTSIDE_BOUNDARY else None)
+            return dataclasses.replace(first, reachable=False, reason=reason,
                                        local_reason=first.reason, evidence=evidence,
-                                       message=evidence)
-        self.step("local tip control")
+                                       message=evidence,
+                                       strategy="boundary proof" if reason == OUTSIDE_BOUNDARY
+                                       else first.strategy)
+        self.step("local tip control", check=False)
+        if not traced:                   # a short local solve before tracing the boundary
+            probe = self._probe(target, p0, start, start_loading)
+            if probe is not None and probe.converged:
+                return self._clear(target, probe, cables)
+            proven = None if probe is None else self._outside(target, probe)
+            if proven is not None and proven.reachable is False:
+                return proven
         first = self._first(target, p0, start, start_loading)
         if first.converged:
             return self._clear(target, first, cables)
         if not global_search:
             return first
+        proven = self._outside(target, first)
+        if proven.reachable is False:
+            return proven
         tried = [first]
+        try:
+            return self._global(target, first, tried, start, start_loading, neighbours, cables)
+        except TimeLimitReached as stop:
+            return self._stopped(target, tried, str(stop))
+
+    def _global(self, target, first, tried, start, start_loading, neighbours, cables):
+        """The global strategies of the module doc after a failed local solve."""
         origin = self._origin(first, start, start_loading)
         self.step("global search: seed library (equilibria over every loading order)")
-        if self.progress is not None:
-            self.library.on_seed = lambda count: self.progress(
-                self.steps, f"global search: seed library, {count} equilibria"
-                + (f" (capped: budget of {self.library.max_solves} solves)"
-                   if self.library.cap_note else ""))
+        self.library.on_seed = self._on_seed
         seeds = self.library.nearest(target, self.max_seeds)
         plan = ([("neighbour", s, self._local) for s in neighbours]
                 + [("seed", s, self._local) for s in seeds]
@@ -378,53 +438,89 @@ class Reacher:
             if res is not None:
                 res = dataclasses.replace(res, strategy=f"{kind} from {s.label}")
                 return self._clear(target, res, cables)
-        return self._outside(target, self._closest(target, tried))
+        return self._closest(target, tried)
+
+    def _probe(self, target, p0, start, start_loading) -> ControlResult | None:
+        """The local solve cut short (``local_its`` iterations, 3 failures,
+        stopped when E stalls: ``CLOSEST_STALL``), before the boundary is
+        traced: a target it reaches has exactly the full solve's result (the
+        same iterations, none of the limits met); one it does not reach is
+        asked of the boundary before the full local solve runs.  None if the
+        start fails."""
+        try:
+            return self._solve(target, p0=p0, start=start, start_loading=start_loading,
+                               max_failures=3, max_it=self.local_its, stall=CLOSEST_STALL)
+        except StartFailed:
+            return None
 
     def _first(self, target, p0, start, start_loading) -> ControlResult:
         """The local solve from the given start; a start at which no equilibrium
         can be computed (a guess that collapses a cable) is a failed start like
         any other: the local solve from the straight arm follows."""
         try:
-            return self.controller.solve(target, p0=p0, start=start, start_loading=start_loading)
+            return self._solve(target, p0=p0, start=start, start_loading=start_loading)
         except StartFailed as failed:
             if p0 is None and start is None:
                 raise
-            self.step("the initial tensions failed: local tip control from the straight arm")
-            res = self.controller.solve(target)
+            self.step("the initial tensions failed: local tip control from the straight arm",
+                      check=False)
+            res = self._solve(target)
             return dataclasses.replace(res, strategy=f"local from the straight arm ({failed})")
 
     def _outside(self, target: np.ndarray, res: ControlResult) -> ControlResult:
-        """An undecided result becomes ``reachable=False`` (OUTSIDE_BOUNDARY)
-        when ``self.boundary`` proves the target outside W_0."""
+        """Proof first: an undecided local result becomes ``reachable=False``
+        (OUTSIDE_BOUNDARY, strategy "boundary proof") when ``self.boundary``
+        proves the target outside W_0, without any global search.  With the
+        budget spent only a boundary already traced is asked."""
         if res.converged or res.reachable is not None or self.boundary is None:
             return res
-        self.step("boundary proof: the traced boundary of W_0")
-        evidence, _ = self.boundary(target)
+        self.step("boundary proof: the traced boundary of W_0", check=False)
+        trace = self.budget is None or not self.budget.expired()
+        evidence, _ = self.boundary(target) if trace else self.boundary(target, trace=False)
         if not evidence:
             return res
         return dataclasses.replace(res, reachable=False, reason=OUTSIDE_BOUNDARY,
-                                   evidence=evidence, message=evidence)
+                                   local_reason=res.reason, evidence=evidence,
+                                   message=evidence, strategy="boundary proof")
+
+    def _stopped(self, target: np.ndarray, tried: list, stop: str) -> ControlResult:
+        """The closest tip found before the budget was spent, undecided (TIME_LIMIT)."""
+        best = min(tried, key=lambda r: float(np.linalg.norm(r.tip - target)))
+        mm = self.controller.length_mm
+        proof = ("; the traced boundary of W_0 does not prove it outside" if self.boundary
+                 is not None else "")
+        note = (f"{stop}: not reached in time by {len(tried)} local solve(s); reachability "
+                f"undecided (the global search was not finished{proof}). Closest tip so far "
+                f"{best.tip_error * mm:.4g} mm away, local end {best.reason}")
+        return dataclasses.replace(best, converged=False, reachable=None, reason=TIME_LIMIT,
+                                   local_reason=best.reason, message=note, evidence=note)
 
     def _clear(self, target, res: ControlResult, cables: str) -> ControlResult:
         """Apply the cable policy to a reached state (module doc)."""
         if cables == "ignore" or np.all(state_cable_clear(res.equilibrium)):
             return res
-        self.step("a cable crosses the arm: searching for clear cables")
-        tried = []
-        seeds = [s for s in self.library.nearest(target, 4 * self.max_seeds)
-                 if np.all(state_cable_clear(s.equilibrium))]
-        plan = ([(s, self._local) for s in seeds[:2 * self.max_seeds]]
-                + [(s, self._homotopy) for s in seeds[:self.max_homotopies]])
-        for s, run in plan:
-            found = run(target, s, tried)
-            if found is not None and np.all(state_cable_clear(found.equilibrium)):
-                return dataclasses.replace(found, strategy=f"clear cables: from {s.label}")
+        stopped = ""
+        try:
+            self.step("a cable crosses the arm: searching for clear cables")
+            tried = []
+            seeds = [s for s in self.library.nearest(target, 4 * self.max_seeds)
+                     if np.all(state_cable_clear(s.equilibrium))]
+            plan = ([(s, self._local) for s in seeds[:2 * self.max_seeds]]
+                    + [(s, self._homotopy) for s in seeds[:self.max_homotopies]])
+            for s, run in plan:
+                found = run(target, s, tried)
+                if found is not None and np.all(state_cable_clear(found.equilibrium)):
+                    return dataclasses.replace(found, strategy=f"clear cables: from {s.label}")
+        except TimeLimitReached as stop:
+            stopped = str(stop)
         if cables == "prefer":
             return res
         crossing = [i + 1 for i, c in enumerate(state_cable_clear(res.equilibrium)) if not c]
         note = (f"{CABLE_CROSSES_ARM}: the target is reached only with the cable of tendon(s) "
-                f"{crossing} through the arm; no state with clear cables found")
-        return dataclasses.replace(res, converged=False, reachable=None, reason=CABLE_CROSSES_ARM,
+                f"{crossing} through the arm; no state with clear cables found"
+                + (f" before the time limit ({stopped})" if stopped else ""))
+        return dataclasses.replace(res, converged=False, reachable=None,
+                                   reason=TIME_LIMIT if stopped else CABLE_CROSSES_ARM,
                                    local_reason=res.reason, message=note, evidence=note)
 
     def _origin(self, first: ControlResult, start, start_loading) -> list:
@@ -440,10 +536,13 @@ class Reacher:
         best = min(tried, key=lambda r: float(np.linalg.norm(r.tip - target)))
         if not np.array_equal(best.target, target):
             self.step("local solve from the closest tip found")
-            best = self.controller.solve(target, start=best.equilibrium,
-                                         start_loading=best.loading, max_failures=3)
+            tried.append(self._solve(target, start=best.equilibrium,
+                                     start_loading=best.loading, max_failures=3))
+            best = tried[-1]
         if best.converged:
             return dataclasses.replace(best, strategy="closest state")
+        if best.reason == TIME_LIMIT:
+            raise TimeLimitReached(f"{TIME_LIMIT}: during the local solve from the closest tip")
         mm = self.controller.length_mm
         capped = self.library.cap_note
         note = (f"{SEARCH_EXHAUSTED}: not reached by the local solve, a homotopy in target "

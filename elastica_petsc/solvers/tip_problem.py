@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from petsc4py import PETSc
 
+from ..core.budget import TIME_LIMIT        # the solve's TimeBudget is spent -> DIVERGED_USER
 from ..core.loading import Loading
 from ..core.model import Arm
 from ..core.results import Result
@@ -204,6 +205,7 @@ class TipProblem:
     failed_at: set = field(default_factory=set)   # tensions whose equilibrium failed
     collapsing: int | None = None                  # cable (0-based) the GN step would collapse
     penalty_row: np.ndarray | None = None          # BRGN: residual Jacobian row of a failure
+    budget: object = None                          # core.budget.TimeBudget or None
 
     # --- the objective -----------------------------------------------------------
     def residual_E(self, ev: Evaluation) -> tuple[np.ndarray, float]:
@@ -260,6 +262,8 @@ class TipProblem:
             return TARGET_REACHED, Reason.CONVERGED_USER
         if self.collapsing is not None:
             return CABLE_COLLAPSE, Reason.DIVERGED_USER
+        if self.budget is not None and self.budget.expired():
+            return TIME_LIMIT, Reason.DIVERGED_USER
         if its >= self.max_it:
             return MAX_ITERATIONS, Reason.DIVERGED_MAXITS
         if self.evaluations >= rule.max_evaluations:

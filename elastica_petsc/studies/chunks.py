@@ -21,7 +21,7 @@ the others write in place only the rows of the chunks stored since the
 previous checkpoint, then their done flags (io/inplace.py), so their cost
 does not grow with the samples already in the file.  A chunk is marked
 done only when all its rows are on disk, so the file on disk is always a
-valid file that resumes correctly (docs/model.md, "Checkpoints in place").
+valid file that resumes correctly (docs/model.md §23).
 
 Stop protocol (SIGINT/SIGTERM to any rank, to mpiexec or to its process
 group; :func:`run`): the stopped rank exhausts the shared chunk counter

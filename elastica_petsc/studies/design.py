@@ -204,12 +204,14 @@ def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = Non
                     reach_mm: float = 100.0, clearance_mm: float = 10.0, margin: float = 1.1,
                     max_iterations: int = 20, scale_mm: float = 10.0,
                     options_prefix: str = "design_", progress=None,
-                    offsets=()) -> DesignResult:
+                    offsets=(), stop=None) -> DesignResult:
     """Routing points (mm) of ``tendons`` (0-based) that make every target of the
     path reachable (f = 0 on the path scaled by ``margin``), by TAO BLMVM with
     the exact gradient of the module docstring.  Options prefix ``design_``.
     ``progress(traces, note)``, if given, is called after every path trace
-    (one per objective evaluation; their number is not known in advance)."""
+    (one per objective evaluation; their number is not known in advance).
+    ``stop()``, if given, is asked at every iteration: True ends the
+    optimisation there (a time budget, core/budget.py)."""
     if margin < 1.0:
         raise DesignError(f"--margin must be at least 1, got {margin}")
     from .design_offsets import offset_bounds, with_offsets
@@ -243,7 +245,8 @@ def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = Non
     reason, iterations = minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
                                           max_iterations=max_iterations,
                                           options_prefix=options_prefix,
-                                          done=lambda: bool(best) and best["f"] == 0.0,
+                                          done=lambda: (bool(best) and best["f"] == 0.0)
+                                          or (stop is not None and stop()),
                                           status=status)
     after = designed(best["q"])
     if progress is not None:

@@ -215,7 +215,7 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
                     attaches=(), reach_mm: float = 100.0, clearance_mm: float = 10.0,
                     max_iterations: int = 15, scale_mm: float = 10.0,
                     resample_cells: int | None = 32, options_prefix: str = "design_",
-                    progress=None) -> AreaDesign:
+                    progress=None, stop=None) -> AreaDesign:
     """Routing points (mm) of ``tendons`` (0-based) maximising the area A of the
     workspace within 0 <= p_i <= ``p_max`` (= P_max l^2/B; module docstring),
     by TAO BLMVM with the exact gradient dA/dq, within the bounds of
@@ -226,7 +226,8 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
     tension axis; None skips it) and the gain is ``confirmed`` only if the
     re-sampled areas differ by more than their errors.  ``progress(evaluations,
     note)``, if given, is called after every evaluation and before the
-    re-sampling."""
+    re-sampling.  ``stop()``, if given, is asked at every iteration: True ends
+    the optimisation there and skips the re-sampling (a time budget)."""
     import time
 
     from .design import DesignError
@@ -272,10 +273,10 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
         reason, iterations = _optimise_routes(designed, tendons, evaluate, history,
                                               reach_mm=reach_mm, clearance_mm=clearance_mm,
                                               scale_mm=scale_mm, max_iterations=max_iterations,
-                                              options_prefix=options_prefix)
+                                              options_prefix=options_prefix, stop=stop)
     after_arm = best.get("arm", arm)
     checks = [None, None]
-    if resample_cells:
+    if resample_cells and not (stop is not None and stop()):
         if progress is not None:
             progress(len(history), "re-sampling both arms on a tension grid")
         checks = [resampled_area(a, p_max, elements=elements, cells=resample_cells)
@@ -285,7 +286,7 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
 
 
 def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm, scale_mm,
-                     max_iterations, options_prefix):
+                     max_iterations, options_prefix, stop=None):
     """TAO BLMVM on the routing points of ``tendons`` (f = -A/A_0); an
     infeasible design (a node unreachable, or a cable across the arm) returns
     f = 1, so that the (Armijo) line search backs off."""
@@ -316,4 +317,4 @@ def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm,
     return minimise_bounded(objective, q0, lo, hi, scale_mm=scale_mm,
                             max_iterations=max_iterations, options_prefix=options_prefix,
                             line_search="armijo",
-                            done=stalled)
+                            done=lambda: stalled() or (stop is not None and stop()))

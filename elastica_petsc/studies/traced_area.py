@@ -22,7 +22,7 @@ finite differences of ``boundary``; the traced loop agrees with ``boundary``
 by construction and its gradient with finite differences of ``boundary``
 to 2 % (within 1.3 % on the paper's arm; tests/test_traced_area.py, docs/model.md §17.3).
 
-For an optimiser (issue 25, docs/model.md "Boundary and design at speed") the
+For an optimiser (issue 25, docs/model.md §24) the
 clearance check runs first, each node warm-started from the previous design's
 state there (:class:`WarmStart`), and a design that fails it is not traced.
 """

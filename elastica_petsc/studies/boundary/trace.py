@@ -160,11 +160,19 @@ class TraceCache:
     def __len__(self) -> int:
         return len(self._traces)
 
+    @staticmethod
+    def _key(arm: Arm, disc: Discretisation) -> tuple:
+        return (arm.length_mm, disc.n_elements, disc.attach_nodes,
+                np.asarray(disc.routes).tobytes(), arm.max_tension, tuple(arm.tendons),
+                arm.gravity_m_s2, arm.tip_mass_kg, arm.mass_per_length_kg_m,
+                arm.bending_stiffness_Nm2)
+
+    def holds(self, arm: Arm, disc: Discretisation) -> bool:
+        """True if the W_0 boundary of this arm and mesh is traced already."""
+        return self._key(arm, disc) in self._traces
+
     def get(self, arm: Arm, disc: Discretisation) -> BoundaryResult:
-        key = (arm.length_mm, disc.n_elements, disc.attach_nodes,
-               np.asarray(disc.routes).tobytes(), arm.max_tension, tuple(arm.tendons),
-               arm.gravity_m_s2, arm.tip_mass_kg, arm.mass_per_length_kg_m,
-               arm.bending_stiffness_Nm2)
+        key = self._key(arm, disc)
         if key in self._traces:
             self._traces.move_to_end(key)
         else:
@@ -190,11 +198,14 @@ def boundary_proof(arm: Arm, disc: Discretisation | None = None,
     """A callable for :class:`~elastica_petsc.solvers.reach.Reacher`'s ``boundary``:
     target (units of l) -> (evidence, distance in units of l), from
     :meth:`BoundaryResult.outside` on :func:`traced_w0` (traced on the first
-    call); arms with other than two tendons give no evidence ('')."""
+    call; with ``trace=False`` only a boundary already traced answers, else
+    ('', nan)); arms with other than two tendons give no evidence ('')."""
     disc = Discretisation.from_arm(arm) if disc is None else disc
 
-    def outside(target: np.ndarray) -> tuple[str, float]:
-        if disc.n_tendons != 2:
+    traces = _PROCESS_TRACES if cache is None else cache
+
+    def outside(target: np.ndarray, trace: bool = True) -> tuple[str, float]:
+        if disc.n_tendons != 2 or not (trace or traces.holds(arm, disc)):
             return "", float("nan")
         evidence, dist = traced_w0(arm, disc, cache).outside(np.asarray(target, float) * arm.length_mm)
         return evidence, dist / arm.length_mm

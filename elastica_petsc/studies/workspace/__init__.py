@@ -5,7 +5,9 @@ per-sample fields and their units; :class:`WorkspaceMap`, the result),
 :mod:`.grids` (target and tension lattices cut into chunks), :mod:`.settings`
 (:class:`SamplerSettings`, how a map samples), :mod:`.samplers` (what one
 sample computes: tip control with the global search, or a forward solve),
-:mod:`.driver` (:func:`run_map`, :func:`read_map`).  The MPI chunk engine is
+:mod:`.fill` (the default sampler: classes from the traced boundary, Newton
+sweeps on the tip of :mod:`.tip_newton`, the global search for the rest),
+:mod:`.driver` (:func:`run_map`, :func:`read_map`, :func:`~.driver.make_sampler`).  The MPI chunk engine is
 :mod:`elastica_petsc.studies.chunks`, the file layout
 :mod:`elastica_petsc.io.workspace`.
 """

@@ -24,7 +24,8 @@ from ...io.workspace import read_map_file
 from ..chunks import (CollectiveInputError, Grid, Stop, agree, check_checkpoint_seconds,
                       check_out, run)
 from .grids import make_grid
-from .samplers import make_sampler
+from .fill import BoundaryFillSampler
+from .samplers import TargetSampler, TensionSampler
 from .schema import Results, WorkspaceMap, limits_of
 from .settings import SamplerSettings
 
@@ -44,7 +45,7 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
             progress=None, checkpoint_seconds: float | None = None,
             provenance: dict | None = None, global_search: bool = True,
             share: str | None = None, min_tension_N: float = 0.0,
-            region: str = "half-disc") -> WorkspaceMap:
+            region: str = "half-disc", sampler: str | None = None) -> WorkspaceMap:
     """Sample the workspace W_0 of ``arm`` (Eq. (18), Fig. 4) and its restrictions
     W_Y, W_S, W_E, W_P (Eqs. (19)-(22), Fig. 5) on ``disc``.
 
@@ -64,6 +65,15 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
     and is classed REACHED, UNDECIDED (no proof either way) or BEYOND_REACH
     (|x_d| > l, proven); False keeps the local classes NEEDS_NEGATIVE (ended
     on P_i = 0, a local verdict) and NOT_CONVERGED, at the old cost.
+
+    ``sampler`` (mode targets): "boundary-fill" (the default; None means it
+    with ``global_search`` and "local" without): every target is first classed
+    by the traced boundary of W_0 and the interior filled by Newton sweeps on
+    the tip, the global search only for the targets they miss
+    (:mod:`~elastica_petsc.studies.workspace.fill`, docs/model.md "Maps filled
+    from the traced boundary"); "global-search": every target by tip control
+    and the global search; "local": ``global_search=False``.  It overrides
+    ``global_search``.
 
     ``share`` ('min-norm', 'min-energy', 'none'; None: 'min-norm' with a floor,
     else 'none') and ``min_tension_N`` (the floor P_min in N; mode targets):
@@ -111,7 +121,7 @@ def run_map(arm, disc, *, mode: str = "targets", spacing_mm: float = 20.0, box_m
                 if checkpoint_seconds is not None:
                     checkpoint_seconds = check_checkpoint_seconds(checkpoint_seconds)
                 settings = SamplerSettings.make(arm, grid.mode, global_search, share,
-                                                min_tension_N)
+                                                min_tension_N, sampler)
                 path = None if out is None else check_out(out, resume, overwrite)
                 if path is not None and comm.rank == 0:
                     from ...io.hdf5 import OutputLock
@@ -150,6 +160,20 @@ def _sample(arm, disc, grid: Grid, settings: SamplerSettings, path, comm, resume
                    progress_label=f"workspace ({grid.mode}, {comm.size} rank(s))", stop=stop)
     finally:
         sampler.destroy()
+
+
+def make_sampler(arm, disc, settings: SamplerSettings):
+    """The sampler of ``settings``: in mode targets
+    :class:`~.fill.BoundaryFillSampler` ("boundary-fill") or
+    :class:`~.samplers.TargetSampler` ("global-search", "local"); in mode
+    tensions :class:`~.samplers.TensionSampler`.  The caller destroys it."""
+    if settings.fill:
+        return BoundaryFillSampler(arm, disc, share=settings.share,
+                                   min_tension=settings.min_tension)
+    if settings.mode == "targets":
+        return TargetSampler(arm, disc, global_search=settings.global_search,
+                             share=settings.share, min_tension=settings.min_tension)
+    return TensionSampler(arm, disc)
 
 
 def map_attrs(arm, disc, grid: Grid, extra: dict | None) -> dict:

@@ -28,7 +28,6 @@ from ...solvers.equilibrium import Equilibrium, EquilibriumSolver
 from ...solvers.stability import StabilityError, StabilitySolver
 from ..chunks import empty_fields
 from .schema import Status, fields
-from .settings import SamplerSettings
 
 
 class _Sampler:
@@ -257,7 +256,10 @@ class TargetSampler(_Sampler):
         head = np.full(self.disc.n_tendons, self.head_guess)
         reached = boundary = None          # last reached state; state after an outside target
         for k, target in enumerate(points):
-            if out["status"][k] == Status.BEYOND_REACH:
+            if k in states:                # reached before this pass (boundary fill)
+                reached, boundary = states[k], None
+                continue
+            if out["status"][k] != Status.NOT_COMPUTED:
                 continue
             if stop():
                 return False
@@ -534,12 +536,3 @@ def _same_state(a, b, tol: float = 1e-9) -> bool:
     p = P l^2/B): for a local solve, the same start."""
     return a is b or (np.allclose(a.p, b.p, rtol=tol, atol=tol)
                       and np.allclose(a.tip, b.tip, rtol=0.0, atol=tol))
-
-
-def make_sampler(arm: Arm, disc: Discretisation, settings: SamplerSettings):
-    """The sampler of ``settings`` (:class:`TargetSampler` in mode targets,
-    :class:`TensionSampler` in mode tensions); the caller destroys it."""
-    if settings.mode == "targets":
-        return TargetSampler(arm, disc, global_search=settings.global_search,
-                             share=settings.share, min_tension=settings.min_tension)
-    return TensionSampler(arm, disc)

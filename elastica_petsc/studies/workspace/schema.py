@@ -18,7 +18,8 @@ from ..chunks import ChunkResults, Grid
 class Status(IntEnum):
     """The status of a sample (the integers stored in ``samples/status``).
 
-    With the global search (the default, sampler "global-search"), a target is REACHED,
+    With the global search (samplers "boundary-fill", the default, and "global-search"),
+    a target is REACHED,
     UNDECIDED (not reached after the global search: no proof either way), BEYOND_REACH
     (|x_d| > l: proven) or OUTSIDE_BOUNDARY (outside the traced boundary of W_0,
     docs/model.md §9.1: proven).  NEEDS_NEGATIVE and NOT_CONVERGED are the local
@@ -248,7 +249,8 @@ class WorkspaceMap(Result):
         """Per sample: REACHED; UNDECIDED (not reached after the global search:
         not proven outside W_0), BEYOND_REACH (|x_d| > l, proven) or
         OUTSIDE_BOUNDARY (outside the traced boundary of W_0, proven: docs/model.md
-        §9.1) with the global search (``sampler`` "global-search"); with a floor
+        §9.1) with the global search (``sampler`` "boundary-fill" or
+        "global-search"); with a floor
         (``min_tension_N`` > 0) BELOW_FLOOR: reached with P >= 0 but no tensions
         >= the floor found (not a proof, docs/model.md §9.3), and UNIQUE_BELOW_FLOOR:
         two tendons, the target's only tensions are below the floor (proven);
