@@ -296,16 +296,18 @@ def _inverse_iteration(band, W, weights, sigma: float, x: np.ndarray, rtol: floa
     if info != 0:
         return None
     Y, info = lapack.dgttrs(dl, d, du, du2, ipiv, np.ascontiguousarray(W.T))
-    capacitance = np.eye(W.shape[0]) + W @ Y
-    if info != 0 or not np.all(np.isfinite(capacitance)):
+    if info != 0:
+        return None
+    try:                               # Y (I + W Y)^{-1}: the n x n capacitance inverted once
+        YC = Y @ np.linalg.inv(np.eye(W.shape[0]) + W @ Y)
+    except np.linalg.LinAlgError:
+        return None
+    if not np.all(np.isfinite(YC)):
         return None
     rho = None
     for _ in range(max_steps):
         y, info = lapack.dgttrs(dl, d, du, du2, ipiv, weights * x)
-        try:
-            x = y - Y @ np.linalg.solve(capacitance, W @ y)
-        except np.linalg.LinAlgError:
-            return None
+        x = y - YC @ (W @ y)
         x /= np.max(np.abs(x))
         previous, rho = rho, _rayleigh(band, W, weights, x)
         if not np.isfinite(rho):
@@ -577,6 +579,8 @@ class StabilitySolver:
                 lower, upper = (lower, sigma) if below(sigma) else (sigma, upper)
             return lower, upper
 
+        if lower < 0.0 < upper:            # most states are stable: halve from 0, not Gershgorin
+            lower, upper = (lower, 0.0) if below(0.0) else (0.0, upper)
         lower, upper = bisect(lower, upper, self.coarse_rtol)
         rho = _inverse_iteration(band, W, weights, lower, mode, self.rayleigh_rtol)
         if rho is not None and lower <= rho <= upper:
