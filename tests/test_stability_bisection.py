@@ -1,4 +1,4 @@
-"""The smallest eigenvalue by Sylvester bisection (StabilitySolver.smallest)
+"""The smallest eigenvalue without SLEPc (StabilitySolver.smallest, solvers/lambda_min.py)
 against SLEPc's shift-and-invert solve (StabilitySolver.solve): the same
 lambda_min and raw_min to 1e-8 relative, on stable and unstable states, both
 mass models; the bracket is exact (the inertia count of K - lambda M)."""
@@ -10,6 +10,7 @@ import pytest
 from elastica_petsc.core.fem import Discretisation
 from elastica_petsc.core.model import Arm, Tendon, load_config
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.solvers.lambda_min import SmallestEigenvalue
 from elastica_petsc.solvers.stability import StabilitySolver
 
 RTOL = 1e-8
@@ -72,7 +73,7 @@ def test_bisection_bracket_is_the_inertia(states):
         for u, p in found:
             lam, _ = solver.smallest(u, p)
             values = disc.stability_values(u, p)
-            slots = solver._bisection_pattern()[1]
+            slots = SmallestEigenvalue(disc).diagonal
             for sigma, expected in ((lam - 1e-6 * abs(lam), 0), (lam + 1e-6 * abs(lam), 1)):
                 shifted = values.copy()
                 shifted[slots] -= sigma * solver.m
@@ -91,11 +92,11 @@ def test_unloaded_arm_is_pi2_over_4():
 def test_bisection_alone_when_inverse_iteration_fails(states, monkeypatch):
     """Without the inverse iteration (a singular factor, no settling), bisection
     alone gives the same values."""
-    import elastica_petsc.solvers.stability as stability
+    import elastica_petsc.solvers.lambda_min as lambda_min
 
     disc, found = states
     with StabilitySolver(disc, nev=1) as solver:
         expected = [solver.smallest(u, p) for u, p in found]
-        monkeypatch.setattr(stability, "_inverse_iteration", lambda *args, **kw: None)
+        monkeypatch.setattr(lambda_min, "inverse_iteration", lambda *args, **kw: None)
         for (u, p), (lam, raw) in zip(found, expected):
             assert solver.smallest(u, p) == pytest.approx((lam, raw), rel=1e-10)

@@ -97,15 +97,15 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.linalg import lapack
 from petsc4py import PETSc
 from slepc4py import SLEPc
 
 from ..core.results import Result
 from ..core.errors import SolverError
 from ..core.dynamics import EB_BETA1, mass_apply, node_masses
-from ..core.fem import Discretisation, ldlt_negatives
+from ..core.fem import Discretisation
 from .inertia import InertiaCounter
+from .lambda_min import SmallestEigenvalue
 from ..core.model import Arm
 from .linalg import use_bordered_lu
 from .options import SolverOptions, check_comm
@@ -271,52 +271,6 @@ def _real_eigenpairs(eps, A, n_theta: int, wanted: int):
     return vals.real[order], float(np.max(np.abs(vals.imag))), np.array(modes)[order]
 
 
-def _tridiagonal_apply(band: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """T x for the band (N, 3) = (lower, diag, upper) of :meth:`Discretisation.band`."""
-    y = band[:, 1] * x
-    y[1:] += band[1:, 0] * x[:-1]
-    y[:-1] += band[:-1, 2] * x[1:]
-    return y
-
-
-def _rayleigh(band, W, weights, x) -> float:
-    """x^T K x / x^T M x for K = T + W^T W, M = diag(weights): >= lambda_min."""
-    return float(x @ (_tridiagonal_apply(band, x) + W.T @ (W @ x)) / (x @ (weights * x)))
-
-
-def _inverse_iteration(band, W, weights, sigma: float, x: np.ndarray, rtol: float,
-                       max_steps: int = 12) -> float | None:
-    """The Rayleigh quotient of inverse iteration x <- (K - sigma M)^{-1} M x for
-    K = T + W^T W (Woodbury: (T - sigma M) by LAPACK's pivoted tridiagonal LU,
-    then the n x n capacitance I + W (T - sigma M)^{-1} W^T), until it changes
-    by less than ``rtol``; None if a factor is singular or it does not settle.
-    With sigma below lambda_min it converges to lambda_min (the caller checks)."""
-    dl, d, du, du2, ipiv, info = lapack.dgttrf(band[1:, 0], band[:, 1] - sigma * weights,
-                                                band[:-1, 2])
-    if info != 0:
-        return None
-    Y, info = lapack.dgttrs(dl, d, du, du2, ipiv, np.ascontiguousarray(W.T))
-    if info != 0:
-        return None
-    try:                               # Y (I + W Y)^{-1}: the n x n capacitance inverted once
-        YC = Y @ np.linalg.inv(np.eye(W.shape[0]) + W @ Y)
-    except np.linalg.LinAlgError:
-        return None
-    if not np.all(np.isfinite(YC)):
-        return None
-    rho = None
-    for _ in range(max_steps):
-        y, info = lapack.dgttrs(dl, d, du, du2, ipiv, weights * x)
-        x = y - YC @ (W @ y)
-        x /= np.max(np.abs(x))
-        previous, rho = rho, _rayleigh(band, W, weights, x)
-        if not np.isfinite(rho):
-            return None
-        if previous is not None and abs(rho - previous) <= rtol * abs(rho):
-            return rho
-    return None
-
-
 class _ShellOperator:
     """Python context of the shell matrix x -> K^{-1} M_phys x (frequencies)."""
 
@@ -394,6 +348,7 @@ class StabilitySolver:
             self.eps_raw = self._make_eps(self.A, self.B_raw, 1, tol, prefix + "raw_")
         self.inertia = InertiaCounter(disc, comm=self.comm,
                                       options_prefix=self.options.name("inertia_"))
+        self._smallest = None                  # SmallestEigenvalue, on first use
 
     def _target_given(self, part: str) -> bool:
         """Whether the user set ``-<prefix><part>eps_target`` (command line or code)."""
@@ -516,92 +471,20 @@ class StabilitySolver:
                          iterations=self.eps.getIterationNumber(),
                          reason=reason_name(eps_reasons(), reason))
 
-    # --- the smallest eigenvalue alone, by Sylvester bisection --------------------------------
+    # --- the smallest eigenvalue alone, without SLEPc ------------------------------------------
     def smallest(self, u, p) -> tuple[float, float]:
-        """(lambda_min, raw_min) of :meth:`solve` without SLEPc: the smallest
-        eigenvalue of (K, M) and of (K, I) at the state ``u``, tensions ``p``, each
-        by bisection on the Sylvester inertia of K - sigma M (docs/model.md
-        "Fast maps"): the compiled LDL^T of the bordered H(sigma) =
-        [[T - sigma M, W], [W^T, -I]] counts the eigenvalues below sigma in O(N)
-        (:class:`InertiaCounter`), so the bracket [lower, upper] always holds
-        lambda_min; it is halved to a relative width ``bisection_rtol`` (the
-        rounding of the counts: ~eps ||K||).  Deterministic, no eigenvectors,
-        no asymmetry estimate (K is symmetric by construction).  ``raw_min`` is
-        NaN with ``mass="paper"`` (it is h lambda_min then, as in :meth:`solve`)."""
-        disc = self.disc
-        u = np.asarray(u, float)
-        p = np.asarray(p, float)
-        theta, y = disc.split(u)
-        _, d = disc.cables(y)
-        band = disc.band(theta, d, p)
-        W = disc.stiffness_border(theta, y, p)
-        values = disc.stability_values(u, p)
-        lam = self._bisect(band, W, values, self.m)
-        raw = disc.h * lam if self.mass == "paper" else \
-            self._bisect(band, W, values, np.ones(disc.n_elements))
+        """(lambda_min, raw_min) of :meth:`solve` without SLEPc (docs/model.md §25):
+        the smallest eigenvalue of (K, M) and of (K, I) (``raw_min`` = h lambda_min
+        with ``mass="paper"``, as in :meth:`solve`) at the state ``u``, tensions
+        ``p``, by inertia bisection and certified inverse iteration
+        (:class:`~.lambda_min.SmallestEigenvalue`): within 1e-11 relative,
+        deterministic; no eigenvectors, no asymmetry estimate, no inertia cross-check."""
+        if self._smallest is None:
+            self._smallest = SmallestEigenvalue(self.disc)
+        lam = self._smallest.of(u, p, self.m)
+        raw = self.disc.h * lam if self.mass == "paper" else \
+            self._smallest.of(u, p, np.ones(self.disc.n_elements))
         return lam, raw
-
-    bisection_rtol = 1e-11        # relative width of a bracket from bisection alone
-    coarse_rtol = 0.1             # bisection's bracket before inverse iteration
-    rayleigh_rtol = 1e-10         # inverse iteration stops when the quotient settles so
-                                  # (its rounding: ~eps ||K|| / lambda_min ~ 1e-12 here)
-
-    def _bisect(self, band, W, values, weights) -> float:
-        """Smallest eigenvalue of (K = T + W^T W, diag(weights)) (:meth:`smallest`):
-        inertia bisection from the bounds Gershgorin(T) <= lambda_min <= Rayleigh
-        quotients to a relative width ``coarse_rtol``; then inverse iteration
-        shifted at the bracket's lower end (:meth:`_inverse_iteration`), whose
-        Rayleigh quotient rho >= lambda_min is kept if the inertia proves
-        lambda_min >= rho (1 - bisection_rtol); else bisection to ``bisection_rtol``."""
-        N = self.disc.n_elements
-        csr, diag = self._bisection_pattern()
-        s = 1.0 / np.sqrt(weights)
-        radius = np.append(0.0, np.abs(band[1:, 0]) * s[1:] * s[:-1]) + \
-            np.append(np.abs(band[:-1, 2]) * s[:-1] * s[1:], 0.0)
-        scaled_diag = band[:, 1] * s * s
-        scale = float(np.max(np.abs(scaled_diag) + radius)) + float(np.sum(W * W) / weights.min())
-        lower = float(np.min(scaled_diag - radius)) - 1e-12 * scale   # Gershgorin of T <= K
-        mode = np.sin(0.5 * np.pi * np.arange(1, N + 1) / N)           # the unloaded first mode
-        upper = min(float(np.min((band[:, 1] + np.sum(W * W, axis=0)) / weights)),
-                    _rayleigh(band, W, weights, mode)) + 1e-12 * scale
-        shifted = np.array(values, float)
-        on_diag = shifted[diag].copy()
-        border = self.disc.stability_border
-
-        def below(sigma: float) -> bool:     # lambda_min < sigma (or = : singular)
-            shifted[diag] = on_diag - sigma * weights
-            negative = ldlt_negatives(csr, shifted, N)
-            return negative is None or negative > border
-
-        def bisect(lower, upper, rtol):
-            while upper - lower > rtol * max(abs(lower), abs(upper)) + 1e-16 * scale:
-                sigma = 0.5 * (lower + upper)
-                lower, upper = (lower, sigma) if below(sigma) else (sigma, upper)
-            return lower, upper
-
-        if lower < 0.0 < upper:            # most states are stable: halve from 0, not Gershgorin
-            lower, upper = (lower, 0.0) if below(0.0) else (0.0, upper)
-        lower, upper = bisect(lower, upper, self.coarse_rtol)
-        rho = _inverse_iteration(band, W, weights, lower, mode, self.rayleigh_rtol)
-        if rho is not None and lower <= rho <= upper:
-            proven = rho - self.bisection_rtol * abs(rho) - 1e-16 * scale
-            if not below(proven):
-                return rho
-            upper = rho
-        lower, upper = bisect(lower, upper, self.bisection_rtol)
-        return 0.5 * (lower + upper)
-
-    def _bisection_pattern(self):
-        """(indptr, indices) of :attr:`Discretisation.stability_pattern` as int32, and the
-        positions of T's diagonal in its values (each upper-triangle row starts there)."""
-        if getattr(self, "_bisection", None) is None:
-            indptr, indices, _ = self.disc.stability_pattern
-            slots = np.asarray(indptr[:self.disc.n_elements], np.int64)
-            if not np.array_equal(indices[slots], np.arange(self.disc.n_elements)):
-                raise ValueError("the stability pattern's rows do not start at the diagonal")
-            self._bisection = ((np.ascontiguousarray(indptr, np.int32),
-                                np.ascontiguousarray(indices, np.int32)), slots)
-        return self._bisection
 
     # --- eigenfrequencies --------------------------------------------------------------------
     def _constrained_matrix(self, u, p, control: str) -> sp.csr_matrix:
