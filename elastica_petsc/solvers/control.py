@@ -55,6 +55,7 @@ from ..core.fem import Discretisation
 from ..core.loading import Loading
 from ..core.model import Arm
 from .descent import gradient_descent
+from .direct_steps import gauss_newton_steps
 from .equilibrium import COLLAPSE_LENGTH, Equilibrium, EquilibriumSolver, check_tensions
 from .options import SolverOptions, check_comm
 from .reasons import converged_reason
@@ -405,6 +406,20 @@ class TipController:
         ev = self._cache.get(p.tobytes()) or self._evaluate(p, problem)
         return ev, converged_reason(self.tao), self.tao.getIterationNumber()
 
+    def _solve_blmvm(self, problem: TipProblem, p0: np.ndarray):
+        """A warm start (p0's evaluation known) first takes the direct
+        Gauss-Newton steps of :mod:`.direct_steps`; TAO runs from where they
+        stop without a verdict (the iterations add up)."""
+        known = self._cache.get(p0.tobytes()) if self.gauss_newton else None
+        if known is None:
+            return self._solve_tao(problem, p0)
+        ev, tao_reason, steps = gauss_newton_steps(problem, known, problem.max_it)
+        if tao_reason is not None:
+            return ev, tao_reason, steps
+        problem.max_it -= steps
+        ev, tao_reason, iterations = self._solve_tao(problem, ev.p)
+        return ev, tao_reason, steps + iterations
+
     # --- public API --------------------------------------------------------------
     def solve(self, target, p0=None, start: Equilibrium | None = None,
               max_failures: int | None = None,
@@ -456,7 +471,7 @@ class TipController:
         if self.tao is None:
             ev, tao_reason, iterations = gradient_descent(problem, p0)
         else:
-            ev, tao_reason, iterations = self._solve_tao(problem, p0)
+            ev, tao_reason, iterations = self._solve_blmvm(problem, p0)
         if ev is None:
             ev = problem.last_good
         if ev is None:
