@@ -19,6 +19,8 @@ then runs as before from there.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .reasons import TAO_REASONS
@@ -44,14 +46,15 @@ def gauss_newton_steps(problem: TipProblem, ev: Evaluation, max_steps: int):
     while True:
         problem.history.append((p, ev.equilibrium.tip.copy(), E))
         step = problem.gauss_newton(ev)[1] if E >= problem.rule.eps else None
-        pgnorm = float(np.linalg.norm(problem.projected_gradient(p, g)))
+        pg = problem.projected_gradient(p, g)
+        pgnorm = math.sqrt(float(pg @ pg))
         stop = problem.stop(its, E, pgnorm, ev)
         if stop is not None:
             problem.reason = stop[0]
             return ev, TAO_REASONS[stop[1]], its
         if its >= max_steps:
             break
-        p_new = np.clip(p + step, 0.0, upper)
+        p_new = np.minimum(np.maximum(p + step, 0.0), upper)
         d = p_new - p
         slope = float(g @ d)
         ev_new, E_new, g_new = problem.objective(p_new)
