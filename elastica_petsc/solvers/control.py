@@ -55,7 +55,7 @@ from ..core.fem import Discretisation
 from ..core.loading import Loading
 from ..core.model import Arm
 from .descent import gradient_descent
-from .direct_steps import gauss_newton_steps
+from .direct_steps import PathPredictor, gauss_newton_steps
 from .equilibrium import COLLAPSE_LENGTH, Equilibrium, EquilibriumSolver, check_tensions
 from .options import SolverOptions, check_comm
 from .reasons import converged_reason
@@ -173,6 +173,7 @@ class TipController:
                              stall_rtol, np.inf if self.upper is None else self.upper,
                              trust_tension)
         self._cache: OrderedDict[bytes, Evaluation] = OrderedDict()
+        self.predictor = PathPredictor()
         self.tao = self.H0 = None
         if method == "blmvm":
             self._create_tao()
@@ -413,7 +414,11 @@ class TipController:
         known = self._cache.get(p0.tobytes()) if self.gauss_newton else None
         if known is None:
             return self._solve_tao(problem, p0)
-        ev, tao_reason, steps = gauss_newton_steps(problem, known, problem.max_it)
+        start = problem.anchor
+        ev, tao_reason, steps = gauss_newton_steps(
+            problem, known, problem.max_it, self.predictor.correction(start, problem.target))
+        self.predictor.record(start, problem.target, p0, problem, ev,
+                              tao_reason is not None and problem.reason == TARGET_REACHED)
         if tao_reason is not None:
             return ev, tao_reason, steps
         problem.max_it -= steps

@@ -30,11 +30,15 @@ ARMIJO = 1e-4            # TAO's More-Thuente ftol
 CURVATURE = 0.1          # control.LINE_SEARCH_GTOL
 
 
-def gauss_newton_steps(problem: TipProblem, ev: Evaluation, max_steps: int):
+def gauss_newton_steps(problem: TipProblem, ev: Evaluation, max_steps: int,
+                       correction: np.ndarray | None = None):
     """Up to ``max_steps`` accepted Gauss-Newton steps from the known
-    evaluation ``ev``.  Returns (evaluation, TAO-style reason or None, steps):
-    a reason when :meth:`TipProblem.stop` ended the solve, None when TAO must
-    continue from the evaluation returned (its iterate not yet recorded)."""
+    evaluation ``ev``; ``correction`` (the path predictor of
+    :class:`PathPredictor`) is added to the first.  Returns (evaluation,
+    TAO-style reason or None, steps): a reason when :meth:`TipProblem.stop`
+    ended the solve, None when TAO must continue from the evaluation
+    returned (its iterate not yet recorded).  ``problem.first_step`` is the
+    first Gauss-Newton step (without the correction)."""
     upper = problem.rule.upper
     problem.evaluations += 1                          # as TAO's first evaluation, cached
     p = ev.p
@@ -46,6 +50,10 @@ def gauss_newton_steps(problem: TipProblem, ev: Evaluation, max_steps: int):
     while True:
         problem.history.append((p, ev.equilibrium.tip.copy(), E))
         step = problem.gauss_newton(ev)[1] if E >= problem.rule.eps else None
+        if its == 0:
+            problem.first_step = step
+            if correction is not None and step is not None:
+                step = step + correction
         pg = problem.projected_gradient(p, g)
         pgnorm = math.sqrt(float(pg @ pg))
         stop = problem.stop(its, E, pgnorm, ev)
@@ -67,3 +75,47 @@ def gauss_newton_steps(problem: TipProblem, ev: Evaluation, max_steps: int):
     problem.history.pop()                 # TAO records this iterate again
     problem.best_E.pop()
     return ev, None, its
+
+
+class PathPredictor:
+    """The second-order defect of the previous point of a path, as a
+    correction of the next point's first Gauss-Newton step.
+
+    Along a path x_d^k with steps dx_k = x_d^k - x_t(p_{k-1}), the first
+    Gauss-Newton step s_k = S_{k-1}^+ dx_k is exact to first order; the
+    tensions actually needed differ by the quadratic term of p(x_d),
+    q_k = (p_k - p_{k-1}) - s_k.  When the next step is nearly the same
+    vector (|dx_{k+1} - dx_k| <= ``SAME_STEP`` |dx_k|: straight lines and
+    arcs of equally spaced points), q_{k+1} = q_k + O(|dx| |dx_{k+1} - dx_k|),
+    so p_k + s_{k+1} + q_k lands within the tolerance in one step where the
+    plain step needs two.  The corrected step must still pass the line
+    search's tests (:func:`gauss_newton_steps`), else TAO takes over."""
+
+    SAME_STEP = 0.25
+
+    def __init__(self):
+        self.end = None                  # the equilibrium of the last point
+        self.dx = self.defect = self.last = None
+
+    def correction(self, start, target: np.ndarray) -> np.ndarray | None:
+        """The defect to add to the first step of a solve from ``start``."""
+        if start is None or start is not self.end:
+            return None
+        dx = target - start.tip
+        if float(np.linalg.norm(dx - self.dx)) > self.SAME_STEP * float(np.linalg.norm(self.dx)):
+            return None
+        return self.defect
+
+    def record(self, start, target: np.ndarray, p0: np.ndarray, problem: TipProblem,
+               ev: Evaluation | None, reached: bool) -> None:
+        """Remember the defect of a point reached from ``start`` at ``p0``."""
+        chained = start is not None and start is self.end
+        self.end = None
+        if not reached or start is None or problem.first_step is None:
+            return
+        S = ev.sensitivity.tip                       # (n, 2): remove the residual error
+        exact = ev.p - S @ np.linalg.solve(S.T @ S, ev.equilibrium.tip - target)
+        defect = (exact - p0) - problem.first_step
+        self.end, self.dx = ev.equilibrium, target - start.tip
+        self.defect = 2.0 * defect - self.last if chained and self.last is not None else defect
+        self.last = defect

@@ -214,6 +214,7 @@ class TipProblem:
     collapsing: int | None = None                  # cable (0-based) the GN step would collapse
     penalty_row: np.ndarray | None = None          # BRGN: residual Jacobian row of a failure
     budget: object = None                          # core.budget.TimeBudget or None
+    first_step: np.ndarray | None = None           # the first Gauss-Newton step (direct_steps)
 
     # --- the objective -----------------------------------------------------------
     def residual_E(self, ev: Evaluation) -> tuple[np.ndarray, float]:
