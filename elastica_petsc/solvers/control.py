@@ -461,7 +461,8 @@ class TipController:
         p0 = np.asarray(p0, dtype=float).ravel()
         if p0.size != self.n or not np.all(np.isfinite(p0)):
             raise InputError(f"expected {self.n} finite initial tensions, got {p0!r}")
-        p0 = np.clip(p0, 0.0, np.inf if self.upper is None else self.upper)
+        p0 = np.maximum(p0, 0.0) if self.upper is None else np.minimum(np.maximum(p0, 0.0),
+                                                                          self.upper)
         if start is not None and not start.converged:
             raise InputError("start must be a converged equilibrium")
         rule = self.rule if stall is None else dataclasses.replace(

@@ -256,6 +256,8 @@ class TipProblem:
     # --- bounds and stopping -------------------------------------------------------
     def active(self, p: np.ndarray, g: np.ndarray) -> np.ndarray:
         """Tensions on a bound with the gradient pushing through it."""
+        if p.min() > 0.0 and p.max() < self.rule.upper:
+            return np.zeros(p.shape, bool)                      # the common case, cheaper
         return ((p <= 0.0) & (g > 0)) | ((p >= self.rule.upper) & (g < 0))
 
     def projected_gradient(self, p: np.ndarray, g: np.ndarray) -> np.ndarray:
