@@ -45,6 +45,7 @@ ends the solve with that reason.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections import OrderedDict
 
 import numpy as np
@@ -532,12 +533,13 @@ class TipController:
         on_bound = self._on_bound(ev, ev.sensitivity.tip @ r)
         reachable = True if converged else None   # a local end proves nothing
         mm = self.length_mm
+        tip_error = math.sqrt(float(r @ r))
         if converged:
-            message = f"tip within {np.linalg.norm(r) * mm:.2e} mm of the target"
+            message = f"tip within {tip_error * mm:.2e} mm of the target"
         else:
             bound_txt = ", ".join(f"p_{i} on its {kind} bound" for i, kind in on_bound)
             message = (f"stopped ({reason}, TAO {tao_reason}) with the tip "
-                       f"{np.linalg.norm(r) * mm:.4g} mm from the target"
+                       f"{tip_error * mm:.4g} mm from the target"
                        + (f"; {bound_txt}" if bound_txt else "")
                        + (f"; tendon {problem.collapsing + 1}'s cable is "
                           f"{eq.cable_lengths[problem.collapsing] * mm:.2f} mm long and the next "
@@ -552,7 +554,7 @@ class TipController:
             message=message, method=self.method, iterations=iterations,
             evaluations=problem.evaluations, failed_evaluations=problem.failed,
             target=problem.target.copy(), p=ev.p.copy(), tip=eq.tip.copy(),
-            tip_error=float(np.linalg.norm(r)), E=E, eps=self.eps, equilibrium=eq,
+            tip_error=tip_error, E=E, eps=self.eps, equilibrium=eq,
             sensitivity=ev.sensitivity, cable_lengths=eq.cable_lengths.copy(),
             history_p=np.array([h[0] for h in hist]), history_tip=np.array([h[1] for h in hist]),
             history_E=np.array([h[2] for h in hist]), on_bound=on_bound,
