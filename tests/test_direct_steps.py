@@ -72,3 +72,15 @@ def test_path_predictor_only_for_a_chained_similar_step(arm):
             is not None
         assert pred.correction(b.equilibrium, np.array([433.0, 240.0]) / ctl.length_mm) is None
         assert pred.correction(c.equilibrium, np.array([432.0, 241.0]) / ctl.length_mm) is None
+
+
+def test_path_from_the_straight_arm(arm):
+    """A path out of the straight arm's tip and back (S of rank one at p = 0,
+    cond(S^T S) ~ 1e10 at the last point): every point reached within the
+    tolerance, the predictor's corrected steps included."""
+    with TipController(arm, n_elements=90) as ctl:
+        straight = ctl.forward([0.0, 0.0]).tip * ctl.length_mm
+        off = straight + np.array([-6.0, 3.0])
+        targets = np.vstack((paths.line(straight, off, 7), paths.line(off, straight, 7)[1:]))
+        res = paths.trace(ctl, targets)
+    assert res.all_converged and np.all(res.tip_errors_mm < TOL_MM)

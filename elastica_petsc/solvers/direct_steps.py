@@ -114,8 +114,14 @@ class PathPredictor:
         if not reached or start is None or problem.first_step is None:
             return
         S = ev.sensitivity.tip                       # (n, 2): remove the residual error
-        exact = ev.p - S @ np.linalg.solve(S.T @ S, ev.equilibrium.tip - target)
-        defect = (exact - p0) - problem.first_step
+        step = ev.p - p0
+        try:
+            fix = S @ np.linalg.solve(S.T @ S, ev.equilibrium.tip - target)
+        except np.linalg.LinAlgError:                # S rank one (the straight arm)
+            return
+        if not (np.all(np.isfinite(fix)) and fix @ fix <= step @ step):
+            return                                   # S nearly singular: no prediction
+        defect = (ev.p - fix - p0) - problem.first_step
         self.end, self.dx = ev.equilibrium, target - start.tip
         self.defect = 2.0 * defect - self.last if chained and self.last is not None else defect
         self.last = defect
