@@ -50,10 +50,11 @@ def gauss_newton_steps(problem: TipProblem, ev: Evaluation, max_steps: int,
     while True:
         problem.history.append((p, ev.equilibrium.tip.copy(), E))
         step = problem.gauss_newton(ev)[1] if E >= problem.rule.eps else None
+        corrected = its == 0 and correction is not None and step is not None
         if its == 0:
             problem.first_step = step
-            if correction is not None and step is not None:
-                step = step + correction
+        if corrected:
+            step = step + correction
         pg = problem.projected_gradient(p, g)
         pgnorm = math.sqrt(float(pg @ pg))
         stop = problem.stop(its, E, pgnorm, ev)
@@ -66,14 +67,19 @@ def gauss_newton_steps(problem: TipProblem, ev: Evaluation, max_steps: int,
         d = p_new - p
         slope = float(g @ d)
         ev_new, E_new, g_new = problem.objective(p_new)
+        if ev_new is not None:
+            problem.E_max = max(problem.E_max, E_new)   # as TAO's penalised objective
         if ev_new is None or not (E_new <= E + ARMIJO * slope
                                   and abs(float(g_new @ d)) <= CURVATURE * abs(slope)):
-            break                         # TAO's line search takes over from p
-        problem.E_max = max(problem.E_max, E_new)
+            if not corrected:   # TAO's line search tries p_new first again (cached or
+                problem.evaluations -= 1        # known to fail): counted there, not twice
+                problem.failed -= ev_new is None
+            break
         p, ev, E, g = ev_new.p, ev_new, E_new, g_new
         its += 1
-    problem.history.pop()                 # TAO records this iterate again
+    problem.history.pop()                 # TAO evaluates and records this iterate again
     problem.best_E.pop()
+    problem.evaluations -= 1
     return ev, None, its
 
 
