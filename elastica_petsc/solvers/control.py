@@ -418,7 +418,7 @@ class TipController:
         start = problem.anchor
         ev, tao_reason, steps = gauss_newton_steps(
             problem, known, problem.max_it, self.predictor.correction(start, problem.target))
-        self.predictor.record(start, problem.target, p0, problem, ev,
+        self.predictor.record(start, problem.target, known, problem, ev,
                               tao_reason is not None and problem.reason == TARGET_REACHED)
         if tao_reason is not None:
             return ev, tao_reason, steps

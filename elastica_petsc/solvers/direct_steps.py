@@ -103,6 +103,10 @@ class PathPredictor:
         self.end = None                  # the equilibrium of the last point
         self.dx = self.defect = self.last = None
 
+    def _turn(self, v: np.ndarray) -> np.ndarray:
+        """-S^+ dS^T v: the change of the defect when the first step changes by v."""
+        return -self.S @ np.linalg.solve(self.G, self.dS.T @ v)
+
     def correction(self, start, target: np.ndarray) -> np.ndarray | None:
         """The defect to add to the first step of a solve from ``start``."""
         if start is None or start is not self.end:
@@ -110,24 +114,31 @@ class PathPredictor:
         dx = target - start.tip
         if float(np.linalg.norm(dx - self.dx)) > self.SAME_STEP * float(np.linalg.norm(self.dx)):
             return None
-        return self.defect
+        step = self.S @ np.linalg.solve(self.G, dx)      # the first step, to first order
+        return self.defect + self._turn(step - self.first)
 
-    def record(self, start, target: np.ndarray, p0: np.ndarray, problem: TipProblem,
+    def record(self, start, target: np.ndarray, known: Evaluation, problem: TipProblem,
                ev: Evaluation | None, reached: bool) -> None:
-        """Remember the defect of a point reached from ``start`` at ``p0``."""
+        """Remember the defect of a point reached from ``start`` (evaluation ``known``)."""
         chained = start is not None and start is self.end
         self.end = None
         if not reached or start is None or problem.first_step is None:
             return
         S = ev.sensitivity.tip                       # (n, 2): remove the residual error
+        G = S.T @ S
+        p0 = known.p
         step = ev.p - p0
         try:
-            fix = S @ np.linalg.solve(S.T @ S, ev.equilibrium.tip - target)
+            fix = S @ np.linalg.solve(G, ev.equilibrium.tip - target)
         except np.linalg.LinAlgError:                # S rank one (the straight arm)
             return
         if not (np.all(np.isfinite(fix)) and fix @ fix <= step @ step):
             return                                   # S nearly singular: no prediction
         defect = (ev.p - fix - p0) - problem.first_step
-        self.end, self.dx = ev.equilibrium, target - start.tip
-        self.defect = 2.0 * defect - self.last if chained and self.last is not None else defect
-        self.last = defect
+        first = problem.first_step
+        self.S, self.G, self.dS = S, G, S - known.sensitivity.tip
+        if chained and self.last is not None:        # the last defect turned to this step
+            self.defect = 2.0 * defect - (self.last + self._turn(first - self.first))
+        else:
+            self.defect = defect
+        self.end, self.dx, self.last, self.first = ev.equilibrium, target - start.tip, defect, first
