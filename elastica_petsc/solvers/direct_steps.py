@@ -90,12 +90,17 @@ class PathPredictor:
     Along a path x_d^k with steps dx_k = x_d^k - x_t(p_{k-1}), the first
     Gauss-Newton step s_k = S_{k-1}^+ dx_k is exact to first order; the
     tensions actually needed differ by the quadratic term of p(x_d),
-    q_k = (p_k - p_{k-1}) - s_k.  When the next step is nearly the same
+    q_k = (p_k^* - p_{k-1}) - s_k (p_k^*: p_k with its residual tip error
+    removed, S_k^+ (x_t - x_d^k)).  When the next step is nearly the same
     vector (|dx_{k+1} - dx_k| <= ``SAME_STEP`` |dx_k|: straight lines and
-    arcs of equally spaced points), q_{k+1} = q_k + O(|dx| |dx_{k+1} - dx_k|),
-    so p_k + s_{k+1} + q_k lands within the tolerance in one step where the
-    plain step needs two.  The corrected step must still pass the line
-    search's tests (:func:`gauss_newton_steps`), else TAO takes over."""
+    arcs of equally spaced points) the first step is s_{k+1} plus the
+    defect extrapolated along the path, 2 q_k - q_{k-1}, and turned with the
+    step: a change v of the first step changes the defect by -S^+ dS^T v to
+    first order (dS = S_k - S_{k-1} ~ d^2 x_t / dp^2 [p_k - p_{k-1}, .];
+    S^+ = S (S^T S)^{-1}), for the vertices of polygons and arcs.  So
+    most points land within the tolerance in one step where the plain step
+    needs two (docs/model.md §25).  The corrected step must still pass the
+    line search's tests (:func:`gauss_newton_steps`), else TAO takes over."""
 
     SAME_STEP = 0.25
 
