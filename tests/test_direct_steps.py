@@ -84,3 +84,18 @@ def test_path_from_the_straight_arm(arm):
         targets = np.vstack((paths.line(straight, off, 7), paths.line(off, straight, 7)[1:]))
         res = paths.trace(ctl, targets)
     assert res.all_converged and np.all(res.tip_errors_mm < TOL_MM)
+
+
+def test_path_predictor_turns_with_the_step_at_polygon_vertices(arm):
+    """Arc of the 73-gon circle of Fig. 3a, chords cut into 1 mm steps: the
+    step turns by 5 degrees at every vertex.  With the turned defect most
+    points take one step; without it every vertex costs two."""
+    targets = paths.densify(paths.circle((400.0, 200.0), 40.0, 73)[:16], 1.0)
+    with TipController(arm, n_elements=90) as ctl:
+        first = ctl.solve_mm(targets[0])
+        turned = paths.trace(ctl, targets[1:], p0=first.p, start=first.equilibrium)
+        ctl.predictor._turn = lambda v: 0.0 * v                  # the defect not turned
+        straight = paths.trace(ctl, targets[1:], p0=first.p, start=first.equilibrium)
+    assert turned.all_converged and np.all(turned.tip_errors_mm < TOL_MM)
+    assert np.mean(turned.iterations[2:] == 1) >= 0.75
+    assert turned.iterations.sum() < straight.iterations.sum()
