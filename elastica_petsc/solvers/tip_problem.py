@@ -315,7 +315,8 @@ class TipProblem:
         L = ev.equilibrium.cable_lengths
         dL = ev.sensitivity.cable_lengths               # [i, j] = d L_j / d p_i
         mu = 1e-10 * scale
-        step = -np.linalg.solve(H + mu * eye, g)        # the Gauss-Newton step
+        A = H + mu * eye
+        step = -np.linalg.solve(A, g)                   # the Gauss-Newton step
         doomed = (L + step @ dL < COLLAPSE_LENGTH) & (L < COLLAPSE_STOP * COLLAPSE_LENGTH)
         self.collapsing = int(doomed.argmax()) if doomed.any() else None
         trust = self.rule.trust_tension
@@ -325,5 +326,6 @@ class TipProblem:
             if abs(step).max() <= radius and (step @ dL >= floor).all():
                 break
             mu *= 4.0
-            step = -np.linalg.solve(H + mu * eye, g)
-        return H + mu * eye, step
+            A = H + mu * eye
+            step = -np.linalg.solve(A, g)
+        return A, step
