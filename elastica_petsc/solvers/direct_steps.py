@@ -110,7 +110,7 @@ class PathPredictor:
 
     def _turn(self, v: np.ndarray) -> np.ndarray:
         """-S^+ dS^T v: the change of the defect when the first step changes by v."""
-        return -self.S @ np.linalg.solve(self.G, self.dS.T @ v)
+        return -self.S_plus @ (self.dS.T @ v)
 
     def correction(self, start, target: np.ndarray) -> np.ndarray | None:
         """The defect to add to the first step of a solve from ``start``."""
@@ -119,7 +119,7 @@ class PathPredictor:
         dx = target - start.tip
         if float(np.linalg.norm(dx - self.dx)) > self.SAME_STEP * float(np.linalg.norm(self.dx)):
             return None
-        step = self.S @ np.linalg.solve(self.G, dx)      # the first step, to first order
+        step = self.S_plus @ dx                          # the first step, to first order
         return self.defect + self._turn(step - self.first)
 
     def record(self, start, target: np.ndarray, known: Evaluation, problem: TipProblem,
@@ -130,18 +130,18 @@ class PathPredictor:
         if not reached or start is None or problem.first_step is None:
             return
         S = ev.sensitivity.tip                       # (n, 2): remove the residual error
-        G = S.T @ S
         p0 = known.p
         step = ev.p - p0
         try:
-            fix = S @ np.linalg.solve(G, ev.equilibrium.tip - target)
+            S_plus = S @ np.linalg.inv(S.T @ S)      # S^+ = S (S^T S)^{-1}
         except np.linalg.LinAlgError:                # S rank one (the straight arm)
             return
+        fix = S_plus @ (ev.equilibrium.tip - target)
         if not (np.all(np.isfinite(fix)) and fix @ fix <= step @ step):
             return                                   # S nearly singular: no prediction
         defect = (ev.p - fix - p0) - problem.first_step
         first = problem.first_step
-        self.S, self.G, self.dS = S, G, S - known.sensitivity.tip
+        self.S_plus, self.dS = S_plus, S - known.sensitivity.tip
         if chained and self.last is not None:        # the last defect turned to this step
             self.defect = 2.0 * defect - (self.last + self._turn(first - self.first))
         else:
