@@ -8,8 +8,10 @@ time in tau = sqrt(rho_A l^4 / B)):
   the last row; one row: constant tensions).
 * :class:`LengthDrive` - the paper's steppers: cable lengths Lbar_i(t)
   through the rows of a motor schedule, interpolated by a monotone C^1 cubic
-  (PCHIP) so that the cable speeds are continuous (a rigid cable whose speed
-  jumps would need an infinite tension); held after the last row.
+  (PCHIP slopes inside, zero slopes at the first and last rows: the motors
+  start from rest and stop) so that the cable speeds are continuous (a rigid
+  cable whose speed jumps would need an infinite tension, an impact); held
+  after the last row.
 
 The CSV files (one header line, ``,``-separated, numbers only in the columns
 read; other columns are ignored):
@@ -28,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
+from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
 
 from .errors import InputError
 
@@ -60,8 +62,11 @@ class LengthDrive:
     def __init__(self, times: np.ndarray, lengths: np.ndarray):
         self.times = np.asarray(times, float)
         self.values = np.asarray(lengths, float)
-        self._spline = (PchipInterpolator(self.times, self.values, axis=0)
-                        if len(self.times) > 1 else None)
+        self._spline = None
+        if len(self.times) > 1:
+            slopes = PchipInterpolator(self.times, self.values, axis=0)(self.times, 1)
+            slopes[0] = slopes[-1] = 0.0          # from rest, to rest
+            self._spline = CubicHermiteSpline(self.times, self.values, slopes, axis=0)
 
     @property
     def n_tendons(self) -> int:

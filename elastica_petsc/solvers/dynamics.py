@@ -59,7 +59,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..core.drive import LengthDrive, TensionDrive
-from ..core.dynamics import BandedInverse, Inertia, elastic_band
+from ..core.dynamics import BandedInverse, Inertia, elastic_band, solve_lcp
 from ..core.fem import Discretisation
 from .options import SolverOptions, check_comm
 from .reasons import TS_REASONS, reason_name
@@ -116,6 +116,10 @@ class DynamicsSolver:
     ``adaptive``: TSAdapt ``basic`` with tolerances ``rtol``/``atol`` on the
     angles (rad) and angular velocities, first step ``dt0``; otherwise fixed
     steps ``dt0`` (tau).  ``radius``: rho_inf of the alpha method;
+    ``lag_jacobian``: the PC (principal Jacobian and its banded LU) is
+    refreshed every this many Newton iterations, across steps
+    (``-snes_lag_jacobian_persists``), with fixed steps and force control only
+    (adaptive steps and TSEvent's shortened ones refresh it every iteration);
     ``max_steps``: cap on accepted steps.  ``comm``, ``options_prefix``
     (``sim_``), ``petsc_options``: the contract of :mod:`.options`.
     """
@@ -123,10 +127,12 @@ class DynamicsSolver:
     def __init__(self, disc: Discretisation, inertia: Inertia, *, rtol: float = 1e-6,
                  atol: float = 1e-8, radius: float = 1.0, dt0: float = 1e-3,
                  adaptive: bool = True, contact_tol: float = 1e-6, max_steps: int = 10**7,
+                 lag_jacobian: int = 10,
                  comm=None, options_prefix: str = "sim_", petsc_options=None):
         self.options = SolverOptions(options_prefix, petsc_options, {
             "ts_alpha_radius": radius, "ts_adapt_type": "basic" if adaptive else "none",
-            "snes_linesearch_type": "basic"})
+            "snes_linesearch_type": "basic", "snes_lag_jacobian": lag_jacobian,
+            "snes_lag_jacobian_persists": True})
         self.comm = check_comm(comm)
         self.adaptive = adaptive
         self.disc, self.inertia = disc, inertia
@@ -209,31 +215,45 @@ class DynamicsSolver:
 
         self.pc_ctx.apply_fn = apply
 
-    # --- events ----------------------------------------------------------------------
-    def consistent_tensions(self, t, theta, omega, p) -> np.ndarray:
-        """The tensions of the taut cables that the equations of motion and
-        the constraints' second derivative (grad L_i . theta'' + theta' . Hess L_i
-        theta' = Lbar_i'') give at (t, theta, theta'); other entries from ``p``.
-        A function of the state alone, continuous in time, unlike the
-        integrator's multiplier (an event function must be)."""
-        taut = np.flatnonzero(self.modes == TAUT)
-        p = np.array(p, float)
-        if not len(taut):
-            return p
-        disc, N = self.disc, self.N
-        p[taut] = 0.0
-        grad = self._grad_lengths(theta)
-        f = -(self.inertia.force(theta, omega, np.zeros(N))
-              + disc.residual(disc.consistent_state(theta), p)[:N])
+    # --- contact: the cables' complementarity (docs/model.md §16.3) -----------------------
+    def _delassus(self, theta, idx):
+        """(C, M^{-1} C, W = C^T M^{-1} C, M^{-1}) of the cables ``idx``; C = [grad L_i]."""
+        C = self._grad_lengths(theta)[idx].T                  # (N, k)
+        inv = BandedInverse(self.disc, theta, self.inertia.weights, 1.0, self.inertia.rotary)
+        MinvC = inv.solve(C).reshape(self.N, len(idx))
+        return C, MinvC, C.T @ MinvC, inv
+
+    def _unforced(self, t, theta, omega, idx):
+        """(W, q) of the cables ``idx`` at the acceleration level: with tensions
+        p on them (and none on the others), gap_i'' = Lbar_i'' - d^2 L_i/dt^2 = q + W p."""
+        disc = self.disc
+        C, _, W, inv = self._delassus(theta, idx)
+        f = -(self.inertia.force(theta, omega, np.zeros(self.N))
+              + disc.residual(disc.consistent_state(theta), np.zeros(self.n))[: self.N])
         eps = 1e-7
         pad = np.concatenate(([0.0], omega))
         curvature = (self._grad_lengths(theta + eps * pad)
-                     - self._grad_lengths(theta - eps * pad)) @ omega / (2 * eps)
-        b = self.drive.rates(t, 2)[taut] - curvature[taut]
-        inv = BandedInverse(disc, theta, self.inertia.weights, 1.0, self.inertia.rotary)
-        C = grad[taut].T
-        MinvC = inv.solve(C)
-        p[taut] = np.linalg.solve(C.T @ MinvC, C.T @ inv.solve(f) - b)
+                     - self._grad_lengths(theta - eps * pad))[idx] @ omega / (2 * eps)
+        return W, self.drive.rates(t, 2)[idx] - curvature - C.T @ inv.solve(f)
+
+    def consistent_tensions(self, t, theta, omega, p) -> np.ndarray:
+        """The tensions of the taut cables that the equations of motion and
+        the constraints' second derivative (gap_i'' = 0) give at (t, theta,
+        theta'), negative values allowed (the event function); other entries
+        from ``p``.  A function of the state alone, continuous in time, unlike
+        the integrator's multiplier: the velocities are first projected on the
+        taut cables' constraints C^T theta' = Lbar' (the alpha method imposes
+        them at mid-step, so the step-end velocities carry a component
+        alternating in sign from step to step that does not vanish as the step
+        shrinks; left in, it makes the event function jump and TSEvent stall).
+        """
+        taut = np.flatnonzero(self.modes == TAUT)
+        p = np.array(p, float)
+        if len(taut):
+            C, MinvC, W, _ = self._delassus(theta, taut)
+            omega = omega - MinvC @ np.linalg.solve(W, C.T @ omega - self.drive.rates(t)[taut])
+            W, q = self._unforced(t, theta, omega, taut)
+            p[taut] = np.linalg.solve(W, -q)
         return p
 
     def _grad_lengths(self, theta) -> np.ndarray:
@@ -252,17 +272,6 @@ class DynamicsSolver:
             gap = self.drive.lengths(t) + self.offsets - self.cable_lengths(theta)
             out[slack] = gap[slack] + self.contact_tol
         return out
-
-    def impulse(self, t, theta, omega) -> np.ndarray:
-        """Velocities after the plastic impact of the taut cables (module docstring)."""
-        taut = np.flatnonzero(self.modes == TAUT)
-        disc = self.disc
-        u = disc.consistent_state(theta)
-        C = disc.load_derivative(u)[taut, : self.N].T          # grad L_i, (N, k)
-        inv = BandedInverse(disc, theta, self.inertia.weights, 1.0, self.inertia.rotary)
-        MinvC = inv.solve(C)
-        lam = np.linalg.solve(C.T @ MinvC, C.T @ omega - self.drive.rates(t)[taut])
-        return omega - MinvC @ lam
 
     # --- the TS ----------------------------------------------------------------------
     def _make_ts(self, t0, t_end, U0, V0, record, dt0):
@@ -295,12 +304,17 @@ class DynamicsSolver:
             ts.setTimeStep(dt0)
             ts.setMaxSteps(self.max_steps)
             ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
-        else:       # equal steps that end on t_end (no round-off sliver of a last step)
+        elif (self.modes == FORCE).all():   # equal steps ending on t_end (no sliver)
             count = max(1, math.ceil((t_end - t0) / dt0 - 1e-9))
             ts.setTimeStep((t_end - t0) / count)
             ts.setMaxTime(t_end + 0.5 * (t_end - t0) / count)
             ts.setMaxSteps(count)
             ts.setExactFinalTime(PETSc.TS.ExactFinalTime.STEPOVER)
+        else:       # steps dt0 with events (TSEvent may shorten some)
+            ts.setTimeStep(dt0)
+            ts.setMaxTime(t_end)
+            ts.setMaxSteps(self.max_steps)
+            ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
         ts.setMaxSNESFailures(-1)
         ts.setMaxStepRejections(-1)
         atol, rtol = U.duplicate(), U.duplicate()
@@ -343,16 +357,23 @@ class DynamicsSolver:
         self.offsets = np.zeros(self.n)
         self.modes = np.asarray(modes, int).copy() if isinstance(drive, LengthDrive) \
             else np.full(self.n, FORCE)
+        if self.adaptive or isinstance(drive, LengthDrive):
+            # the step changes (TSAdapt, TSEvent's location): a PC kept for another step's
+            # shift stalls Newton, so it is refreshed at every iteration
+            self.options.update({"snes_lag_jacobian": 1})
         traj = trajectory if trajectory is not None else Trajectory()
         U0 = np.concatenate((np.asarray(theta0, float)[1:], np.zeros(self.n)))
         V0 = np.concatenate((np.asarray(omega0, float), p0))
+        if isinstance(drive, LengthDrive):      # the start: cables at zero gap in contact
+            self._switch(None, 0.0, U0, V0, contact=self.modes == TAUT)
         t, dt = 0.0, self.dt0
         self._record(traj, t, U0, V0)
         while True:
             ts, objs = self._make_ts(t, t_end, U0, V0, self._monitor(traj, on_step), dt)
             try:
                 try:
-                    ts.solve(objs[0])
+                    with np.errstate(all="ignore"):     # a diverged step is reported below
+                        ts.solve(objs[0])
                     reason = ts.getConvergedReason()
                 except (np.linalg.LinAlgError, PETSc.Error) as err:   # a singular step
                     traj.completed, traj.reason = False, f"DIVERGED: {str(err).splitlines()[0]}"
@@ -368,41 +389,53 @@ class DynamicsSolver:
                 for obj in objs:
                     obj.destroy()
             if reason != PETSc.TS.ConvergedReason.CONVERGED_EVENT:
-                traj.completed = reason > 0
+                traj.completed = reason > 0 and t >= t_end * (1 - 1e-12)
                 traj.reason = _reason(reason)
                 return traj
             U0, V0 = U, V
             self._switch(traj, t, U0, V0)
             dt = max(dt, self.dt0) if self.adaptive else self.dt0
 
-    def _switch(self, traj, t, U, V):
-        """Change the mode of the cables whose event fired; impact if one
-        tightens.  A cable going slack keeps its length drift (index 2, module
-        docstring) as an offset, so that its gap starts at exactly 0.  After an
-        impact a cable whose consistent tension is negative stays slack (the
-        complementarity at the new velocities)."""
-        tightened = False
-        for i in self._fired:
-            if self.modes[i] == TAUT:
-                self.modes[i] = SLACK
-                V[self.N + i] = 0.0
-                self.offsets[i] = self.cable_lengths(self.theta_of(U))[i] \
-                    - self.drive.lengths(t)[i]
-                traj.events.append((t, i + 1, "slack"))
-            elif self.modes[i] == SLACK:
-                self.modes[i] = TAUT
-                tightened = True
-                traj.events.append((t, i + 1, "taut"))
-        if tightened:
-            theta = self.theta_of(U)
-            V[: self.N] = self.impulse(t, theta, V[: self.N])
-            p = self.consistent_tensions(t, theta, V[: self.N], V[self.N:])
-            for i in np.flatnonzero((self.modes == TAUT) & (p < 0)):
-                self.modes[i] = SLACK
-                self.offsets[i] = self.cable_lengths(theta)[i] - self.drive.lengths(t)[i]
-                traj.events.append((t, i + 1, "slack"))
-            taut = self.modes == TAUT
-            V[self.N:][taut] = p[taut]
+    def _switch(self, traj, t, U, V, contact=None):
+        """Resolve the cables' complementarity at an event (or at the start).
+
+        The cables in contact are the taut ones and those whose gap closed
+        (``contact``: a boolean mask; by default the taut cables and the fired
+        ones).  Velocity level (the impact, plastic): impulses lam >= 0 with
+        gap rates w = Lbar' - C^T theta'+ >= 0, lam w = 0, theta'+ = theta'- -
+        M^{-1} C lam; a cable with w > 0 separates.  Acceleration level for the
+        others: tensions p >= 0 with gap'' >= 0, p gap'' = 0; p > 0 keeps a
+        cable taut, otherwise it goes slack with its length drift (index 2,
+        module docstring) kept as an offset, so that its gap starts at exactly 0.
+        ``V`` is changed in place (velocities and tensions)."""
+        N = self.N
+        theta = self.theta_of(U)
+        if contact is None:
+            contact = self.modes == TAUT
+            contact[self._fired] = True
+        before = self.modes.copy()
+        idx = np.flatnonzero(contact)
+        new = np.full(self.n, SLACK)
+        p = np.zeros(self.n)
+        if len(idx):
+            _, MinvC, W, _ = self._delassus(theta, idx)
+            lam, w = solve_lcp(W, self.drive.rates(t)[idx]
+                               - self._grad_lengths(theta)[idx] @ V[:N])
+            V[:N] -= MinvC @ lam
+            stay = idx[w <= 1e-9 * max(1.0, float(np.max(np.abs(w))))]
+            if len(stay):
+                W2, q2 = self._unforced(t, theta, V[:N], stay)
+                p_stay, _ = solve_lcp(W2, q2)
+                p[stay] = p_stay
+                new[stay[p_stay > 1e-8 * max(1.0, float(np.max(p_stay)))]] = TAUT
+        lengths, Lbar = self.cable_lengths(theta), self.drive.lengths(t)
+        for i in range(self.n):
+            if new[i] == SLACK and contact[i]:
+                self.offsets[i] = lengths[i] - Lbar[i]
+            if new[i] != before[i] and traj is not None:
+                traj.events.append((t, i + 1, MODE_NAMES[new[i]]))
+        self.modes = new
+        V[N:] = p
 
     def _monitor(self, traj, on_step):
         def monitor(ts, step, t, U):

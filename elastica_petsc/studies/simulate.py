@@ -155,7 +155,7 @@ def simulate(arm: Arm, *, elements: int | None = None, initial_tensions_N=None, 
         drive = LengthDrive(t_rows / tau, arm.from_mm(L_mm))
         end_s = t_rows[-1] + settle_s if duration_s is None else duration_s
         gap = arm.from_mm(L_mm[0] - start_L_mm)
-        modes = np.where((gap <= 1e-9) & ((p0 > 0) | (drive.rates(0.0) <= 0)), TAUT, SLACK)
+        modes = np.where(gap <= 1e-9, TAUT, SLACK)     # in contact; the solver resolves
         kind = "schedule"
         planned = rows
     else:

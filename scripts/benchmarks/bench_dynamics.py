@@ -3,7 +3,9 @@
 Runs a fixed number of equal steps of the paper's arm released from the equilibrium at
 P = (0, 0.05) N (the free vibration of the issue's first command), on one core, and prints
 the median wall time per step over repeated runs, per element and relative to N = 180,
-and the real-time factor at 180 elements.
+and the real-time factor at 180 elements; then, at 180 elements, the step time with the
+PC refreshed at every Newton iteration (lag_jacobian=1) against the default (10, persisting
+across steps), in the same run.
 
     python scripts/benchmarks/bench_dynamics.py [--repeats 3] [--steps 40]
 """
@@ -26,14 +28,15 @@ from elastica_petsc.studies.simulate import build_inertia, time_scale_s
 SIZES = (180, 720, 2880, 11520, 20160)
 
 
-def per_step(arm, N, steps, repeats, dt_s):
+def per_step(arm, N, steps, repeats, dt_s, lag_jacobian=10):
     disc = Discretisation.from_arm(arm, N)
     tau = time_scale_s(arm)
     eq = solve_equilibrium(disc, arm.tensions_from_N([0.0, 0.05]))
     inertia = build_inertia(arm, disc)
     times = []
     for _ in range(repeats):
-        sim = DynamicsSolver(disc, inertia, dt0=dt_s / tau, adaptive=False)
+        sim = DynamicsSolver(disc, inertia, dt0=dt_s / tau, adaptive=False,
+                             lag_jacobian=lag_jacobian)
         start = time.perf_counter()
         tr = sim.run(eq.theta, np.zeros(N), np.zeros(2), TensionDrive.constant([0.0, 0.0]),
                      None, steps * dt_s / tau)
@@ -57,6 +60,10 @@ def main():
         if N == 180:
             print(f"       real-time factor at 180 elements: {dt_s / t:.3g} "
                   f"({1 / t:.0f} steps/s, {1 / dt_s:.0f} steps per simulated second)")
+    fresh = per_step(arm, 180, args.steps, args.repeats, dt_s, lag_jacobian=1)
+    lagged = per_step(arm, 180, args.steps, args.repeats, dt_s)
+    print(f"N = 180: {1e3 * fresh:.3f} ms/step with a fresh PC every Newton iteration, "
+          f"{1e3 * lagged:.3f} with the default lag (ratio {fresh / lagged:.2f})")
 
 
 if __name__ == "__main__":
