@@ -317,7 +317,8 @@ class TipProblem:
         mu = 1e-10 * scale
         A = H + mu * eye
         step = -np.linalg.solve(A, g)                   # the Gauss-Newton step
-        doomed = (L + step @ dL < COLLAPSE_LENGTH) & (L < COLLAPSE_STOP * COLLAPSE_LENGTH)
+        short = L < COLLAPSE_STOP * COLLAPSE_LENGTH
+        doomed = (L + step @ dL < COLLAPSE_LENGTH) & short if short.any() else short
         self.collapsing = int(doomed.argmax()) if doomed.any() else None
         trust = self.rule.trust_tension
         radius = np.inf if trust is None else max(trust, float(ev.p.max()))
