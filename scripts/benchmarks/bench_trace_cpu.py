@@ -13,7 +13,10 @@ the base commit, with the compiled kernels copied in): rounds alternate
 between DIR and this tree, each in its own process, and the ratio of the
 medians is printed with the largest difference of the traced tensions.
 
+``--shape convoluted`` (our Fig. 3b stand-in) and ``--step`` (mm) trace other paths.
+
 Usage: python scripts/benchmarks/bench_trace_cpu.py [--repeat 5] [--rounds 2] [--against DIR]
+                                                    [--shape triangle|convoluted] [--step MM]
 """
 from __future__ import annotations
 
@@ -28,7 +31,16 @@ import time
 from pathlib import Path
 
 
-def run_here(repeat: int, save: str | None) -> dict:
+def shape_targets(shape: str, step_mm: float):
+    """The targets (mm) of ``shape`` about (400, 200) mm at ``step_mm`` spacing."""
+    from elastica_petsc.studies import trace as paths
+
+    points = (paths.paper_triangle([400.0, 200.0]) if shape == "triangle"
+              else paths.convoluted_curve([400.0, 200.0]))
+    return paths.densify(points, step_mm)
+
+
+def run_here(repeat: int, save: str | None, shape: str = "triangle", step_mm: float = 1.0) -> dict:
     """The trace measured in this process (this interpreter's elastica_petsc)."""
     import numpy as np
 
@@ -37,7 +49,7 @@ def run_here(repeat: int, save: str | None) -> dict:
     from elastica_petsc.studies import trace as paths
 
     arm = load_config()
-    targets = paths.densify(paths.paper_triangle([400.0, 200.0]), 1.0)
+    targets = shape_targets(shape, step_mm)
     cpu, wall = [], []
     with TipController(arm, n_elements=180) as ctl:
         first = ctl.solve_mm(targets[0])                  # cold, not timed
@@ -55,25 +67,25 @@ def run_here(repeat: int, save: str | None) -> dict:
             "max_tip_error_mm": float(tr.tip_errors_mm.max())}
 
 
-def run_tree(tree: str | None, repeat: int, save: str) -> dict:
+def run_tree(tree: str | None, repeat: int, save: str, shape: str, step_mm: float) -> dict:
     """One round in a fresh process on ``tree`` (None: this tree)."""
     env = dict(os.environ)
     if tree is not None:
         env["PYTHONPATH"] = str(Path(tree).resolve())
     out = subprocess.run([sys.executable, __file__, "--repeat", str(repeat), "--json",
-                          "--save", save], env=env, check=True, capture_output=True,
+                          "--save", save, "--shape", shape, "--step", str(step_mm)], env=env, check=True, capture_output=True,
                          text=True, cwd=tempfile.gettempdir())
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def compare(tree: str, repeat: int, rounds: int) -> None:
+def compare(tree: str, repeat: int, rounds: int, shape: str, step_mm: float) -> None:
     import numpy as np
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(rounds):
-            base = run_tree(tree, repeat, f"{tmp}/base.npy")
-            new = run_tree(None, repeat, f"{tmp}/new.npy")
+            base = run_tree(tree, repeat, f"{tmp}/base.npy", shape, step_mm)
+            new = run_tree(None, repeat, f"{tmp}/new.npy", shape, step_mm)
             rows.append((k + 1, base, new, os.getloadavg()[0]))
         dp = float(np.max(np.abs(np.load(f"{tmp}/base.npy") - np.load(f"{tmp}/new.npy"))))
     print("| round (load) | base targets/s CPU (wall) | new targets/s CPU (wall) | ratio CPU |")
@@ -93,13 +105,16 @@ def main() -> int:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--against", help="source tree to compare with (base)")
+    ap.add_argument("--shape", choices=("triangle", "convoluted"), default="triangle",
+                    help="Fig. 3a (default) or our Fig. 3b stand-in")
+    ap.add_argument("--step", type=float, default=1.0, help="target spacing [mm]")
     ap.add_argument("--json", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--save", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.against:
-        compare(args.against, args.repeat, args.rounds)
+        compare(args.against, args.repeat, args.rounds, args.shape, args.step)
         return 0
-    res = run_here(args.repeat, args.save)
+    res = run_here(args.repeat, args.save, args.shape, args.step)
     print(json.dumps(res) if args.json else
           f"{res['cpu']:.0f} targets/s CPU, {res['wall']:.0f} wall (median of {args.repeat})")
     return 0
