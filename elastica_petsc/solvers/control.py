@@ -33,8 +33,10 @@ Methods
     default 5 pairs, 5 with none), so it is off by default
     (``lmvm_history=0``, i.e. ``-ctl_tao_blmvm_mat_lmvm_hist_size 0``): the
     method is then a projected Gauss-Newton/Levenberg-Marquardt iteration
-    run by BLMVM.  ``gauss_newton=False`` gives stock BLMVM (15 iterations
-    on Fig. 2).
+    run by BLMVM.  From a warm start (p0's evaluation known) the same steps
+    are taken first without TAO, with a path predictor (:mod:`.direct_steps`);
+    TAO continues where they stop undecided.  ``gauss_newton=False`` gives
+    stock BLMVM (15 iterations on Fig. 2).
 ``gd``
     The paper's Algorithm 1 (:mod:`.descent`).  The ``ctl_`` options do not
     apply to it.
