@@ -38,6 +38,7 @@ solve; at most ``max_failures`` are solved per solve.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -166,6 +167,13 @@ def needs_arm(result) -> Arm:
     return result.arm
 
 
+def spectral_norm(S: np.ndarray) -> float:
+    """|S|_2 of an (n, 2) matrix: the square root of the largest eigenvalue
+    of the 2x2 Gram matrix S^T S = [[a, b], [b, c]], in closed form."""
+    a, b, c = float(S[:, 0] @ S[:, 0]), float(S[:, 0] @ S[:, 1]), float(S[:, 1] @ S[:, 1])
+    return math.sqrt(0.5 * (a + c) + math.hypot(0.5 * (a - c), b))
+
+
 @dataclass(frozen=True)
 class StopRule:
     """The settings of :meth:`TipProblem.stop` and of the step limits."""
@@ -206,6 +214,7 @@ class TipProblem:
     collapsing: int | None = None                  # cable (0-based) the GN step would collapse
     penalty_row: np.ndarray | None = None          # BRGN: residual Jacobian row of a failure
     budget: object = None                          # core.budget.TimeBudget or None
+    first_step: np.ndarray | None = None           # the first Gauss-Newton step (direct_steps)
 
     # --- the objective -----------------------------------------------------------
     def residual_E(self, ev: Evaluation) -> tuple[np.ndarray, float]:
@@ -247,6 +256,8 @@ class TipProblem:
     # --- bounds and stopping -------------------------------------------------------
     def active(self, p: np.ndarray, g: np.ndarray) -> np.ndarray:
         """Tensions on a bound with the gradient pushing through it."""
+        if p.min() > 0.0 and p.max() < self.rule.upper:
+            return np.zeros(p.shape, bool)                      # the common case, cheaper
         return ((p <= 0.0) & (g > 0)) | ((p >= self.rule.upper) & (g < 0))
 
     def projected_gradient(self, p: np.ndarray, g: np.ndarray) -> np.ndarray:
@@ -269,7 +280,7 @@ class TipProblem:
         if self.evaluations >= rule.max_evaluations:
             return MAX_EVALUATIONS, Reason.DIVERGED_MAXFCN
         if ev is not None and pgnorm <= rule.stationary_rtol * np.sqrt(2 * E) * max(
-                np.linalg.norm(ev.sensitivity.tip, 2), 1e-300):
+                spectral_norm(ev.sensitivity.tip), 1e-300):
             return STATIONARY, Reason.CONVERGED_GATOL
         if (len(self.best_E) > rule.stall_its
                 and self.best_E[-1] >= (1.0 - rule.stall_rtol) * self.best_E[-1 - rule.stall_its]):
@@ -293,9 +304,9 @@ class TipProblem:
         S = ev.sensitivity.tip                         # (n, 2), rows d x_t / d p_i
         g = S @ (ev.equilibrium.tip - self.target)
         H = S @ S.T
-        scale = max(float(np.trace(H)), 1e-300)
+        scale = max(float(H.trace()), 1e-300)
         active = self.active(ev.p, g)
-        if np.any(active):
+        if active.any():
             diag = np.diag(H).copy()
             H[active, :] = 0.0
             H[:, active] = 0.0
@@ -304,14 +315,18 @@ class TipProblem:
         L = ev.equilibrium.cable_lengths
         dL = ev.sensitivity.cable_lengths               # [i, j] = d L_j / d p_i
         mu = 1e-10 * scale
-        step = -np.linalg.solve(H + mu * eye, g)        # the Gauss-Newton step
-        doomed = (L + step @ dL < COLLAPSE_LENGTH) & (L < COLLAPSE_STOP * COLLAPSE_LENGTH)
-        self.collapsing = int(np.argmax(doomed)) if np.any(doomed) else None
+        A = H + mu * eye
+        step = -np.linalg.solve(A, g)                   # the Gauss-Newton step
+        short = L < COLLAPSE_STOP * COLLAPSE_LENGTH
+        doomed = (L + step @ dL < COLLAPSE_LENGTH) & short if short.any() else short
+        self.collapsing = int(doomed.argmax()) if doomed.any() else None
         trust = self.rule.trust_tension
-        radius = np.inf if trust is None else max(trust, float(np.max(ev.p)))
+        radius = np.inf if trust is None else max(trust, float(ev.p.max()))
+        floor = -CABLE_FRACTION * L
         for _ in range(60):
-            if np.max(np.abs(step)) <= radius and np.all(step @ dL >= -CABLE_FRACTION * L):
+            if abs(step).max() <= radius and (step @ dL >= floor).all():
                 break
             mu *= 4.0
-            step = -np.linalg.solve(H + mu * eye, g)
-        return H + mu * eye, step
+            A = H + mu * eye
+            step = -np.linalg.solve(A, g)
+        return A, step
