@@ -1,4 +1,4 @@
-"""Direct Gauss-Newton steps and the path predictor of tip control (docs/model.md §26)."""
+"""Direct Gauss-Newton steps and the path predictor of tip control (docs/model.md §25)."""
 from __future__ import annotations
 
 import numpy as np

@@ -99,7 +99,7 @@ class PathPredictor:
     first order (dS = S_k - S_{k-1} ~ d^2 x_t / dp^2 [p_k - p_{k-1}, .];
     S^+ = S (S^T S)^{-1}), for the vertices of polygons and arcs.  So
     most points land within the tolerance in one step where the plain step
-    needs two (docs/model.md §26).  The corrected step must still pass the
+    needs two (docs/model.md §25).  The corrected step must still pass the
     line search's tests (:func:`gauss_newton_steps`), else TAO takes over."""
 
     SAME_STEP = 0.25

@@ -105,7 +105,6 @@ from ..core.errors import SolverError
 from ..core.dynamics import EB_BETA1, mass_apply, node_masses
 from ..core.fem import Discretisation
 from .inertia import InertiaCounter
-from .lambda_min import SmallestEigenvalue
 from ..core.model import Arm
 from .linalg import use_bordered_lu
 from .options import SolverOptions, check_comm
@@ -348,7 +347,6 @@ class StabilitySolver:
             self.eps_raw = self._make_eps(self.A, self.B_raw, 1, tol, prefix + "raw_")
         self.inertia = InertiaCounter(disc, comm=self.comm,
                                       options_prefix=self.options.name("inertia_"))
-        self._smallest = None                  # SmallestEigenvalue, on first use
 
     def _target_given(self, part: str) -> bool:
         """Whether the user set ``-<prefix><part>eps_target`` (command line or code)."""
@@ -470,21 +468,6 @@ class StabilitySolver:
                          operator=self.operator, target=float(target),
                          iterations=self.eps.getIterationNumber(),
                          reason=reason_name(eps_reasons(), reason))
-
-    # --- the smallest eigenvalue alone, without SLEPc ------------------------------------------
-    def smallest(self, u, p) -> tuple[float, float]:
-        """(lambda_min, raw_min) of :meth:`solve` without SLEPc (docs/model.md §25):
-        the smallest eigenvalue of (K, M) and of (K, I) (``raw_min`` = h lambda_min
-        with ``mass="paper"``, as in :meth:`solve`) at the state ``u``, tensions
-        ``p``, by inertia bisection and certified inverse iteration
-        (:class:`~.lambda_min.SmallestEigenvalue`): within 1e-11 relative,
-        deterministic; no eigenvectors, no asymmetry estimate, no inertia cross-check."""
-        if self._smallest is None:
-            self._smallest = SmallestEigenvalue(self.disc)
-        lam = self._smallest.of(u, p, self.m)
-        raw = self.disc.h * lam if self.mass == "paper" else \
-            self._smallest.of(u, p, np.ones(self.disc.n_elements))
-        return lam, raw
 
     # --- eigenfrequencies --------------------------------------------------------------------
     def _constrained_matrix(self, u, p, control: str) -> sp.csr_matrix:

@@ -25,7 +25,7 @@ from ...core.clearance import state_cable_clear
 from ...core.fem import Discretisation
 from ...core.model import Arm
 from ...solvers.equilibrium import Equilibrium, EquilibriumSolver
-from ...solvers.stability import StabilitySolver
+from ...solvers.stability import StabilityError, StabilitySolver
 from ..chunks import empty_fields
 from .schema import Status, fields
 
@@ -51,8 +51,12 @@ class _Sampler:
         out["strain_energy"][k] = eq.strain_energy
         out["cable_clear"][k] = state_cable_clear(eq)
         t0 = time.perf_counter()
-        # by Sylvester bisection, SLEPc's values to 1e-8 (tests/test_stability_bisection.py)
-        out["lambda_min"][k], out["lambda_min_raw"][k] = self.stability.smallest(eq.u, eq.p)
+        try:
+            result = self.stability.solve(eq.u, eq.p)
+            out["lambda_min"][k] = result.lambda_min
+            out["lambda_min_raw"][k] = result.raw_min
+        except StabilityError:
+            pass                                        # NaN: eigen solve failed
         out["seconds_eigen"][k] = time.perf_counter() - t0
 
     def destroy(self) -> None:
