@@ -27,7 +27,9 @@ MPI_ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CO
 def commands(tmp: Path, ranks) -> dict[str, list[str]]:
     out = {
         "boundary (paper's arm)": CLI + ["boundary", "--quiet"],
-        "design --objective area": CLI + ["design", "--objective", "area", "--quiet"],
+        "design --objective area (both routes)": CLI + ["design", "--vary", "tendon1.route",
+                                                   "tendon2.route", "--objective", "area",
+                                                   "--quiet"],
         "lengths --all L = (147.1, 472.5) mm": CLI + ["lengths", "--lengths", "147.1", "472.5",
                                                       "--all", "--quiet"],
         "control (387.4, -261.1) mm, a hole of W_0": CLI + ["control", "--target", "387.4",
