@@ -255,9 +255,9 @@ class CurveTracer:
         and det B by reciprocal factors).  In the stable region, with the rows
         picking p, it is det S det J: its sign changes exactly across a fold of
         the tip map (det S = 0), and it stays finite across the fold of M.
-        Also sets ``last_inward`` = side * T tau, the tip's motion as the
-        state leaves the curve into the constraint's admissible side.
-        One sparse LU (scipy SuperLU, partial pivoting) gives all three."""
+        Fourth, ``inward`` = side * T tau, the tip's motion as the state
+        leaves the curve into the constraint's admissible side.  One sparse
+        LU (scipy SuperLU, partial pivoting) gives all four."""
         mf = self.mf
         values = self.A.pattern.values(mf.jacobian_values(w), mf.load_columns(w),
                                        np.array([constraint.gradient(w), mf.metric * orient]))
@@ -271,8 +271,7 @@ class CurveTracer:
         T = mf.tip_gradient(w)
         n = mf.size
         tip_det = sign * float(np.linalg.det(np.column_stack((T @ tau[:n], T @ t[:n]))))
-        self.last_inward = constraint.side * (T @ tau[:n])
-        return t, sign, tip_det
+        return t, sign, tip_det, constraint.side * (T @ tau[:n])
 
     def point(self, w, t, det_sign, iterations, tip_det: float = np.nan,
               tip_inward=None) -> CurvePoint:
@@ -345,8 +344,8 @@ class CurveTracer:
                 or np.linalg.norm(self.mf.tip(w) - pt.tip) > self.max_tip_step):
             counts.rejected += 1
             return None, its
-        t, det_sign, tip_det = self.tangent(w, constraint, pt.t)
-        return self.point(w, t, det_sign, its, tip_det, self.last_inward), its
+        t, det_sign, tip_det, inward = self.tangent(w, constraint, pt.t)
+        return self.point(w, t, det_sign, its, tip_det, inward), its
 
     def destroy(self) -> None:
         self.inertia.destroy()

@@ -81,8 +81,8 @@ class Walker:
         return lambda w: constraint.side * constraint.gradient(w) / self.tr.mf.metric
 
     def _start_point(self, w, active, into):
-        t, det_sign, tip_det = self.tr.tangent(w, active, into(w))
-        return self.tr.point(w, t, det_sign, 0, tip_det, self.tr.last_inward)
+        t, det_sign, tip_det, inward = self.tr.tangent(w, active, into(w))
+        return self.tr.point(w, t, det_sign, 0, tip_det, inward)
 
     def _locate(self, a, b, active, hit) -> np.ndarray | None:
         """Corner where ``hit`` becomes active between accepted points a and b."""
