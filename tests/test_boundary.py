@@ -373,7 +373,7 @@ def test_fold_point_route_derivative_taylor_and_invariance(paper):
     tip motion does not depend on how the point is held on the curve (the
     envelope property the area derivative relies on)."""
     from elastica_petsc.solvers.continuation import (CurveTracer, Fold, FoldSystem,
-                                                     TensionBound)
+                                                     TensionBound, TraceCounts)
 
     arm, disc, result = paper
     fold_curve = next(c for c in result.regions["W0"].curves if c.constraint == "fold")
@@ -403,7 +403,7 @@ def test_fold_point_route_derivative_taylor_and_invariance(paper):
             sys2 = FoldSystem(tr2.mf)
             f2 = Fold(sys2)
             f2.update(w)
-            w2, ok = tr2.correct(w, [f2, TensionBound(tr2.mf, 1, w[-1])])
+            w2, ok = tr2.correct(w, [f2, TensionBound(tr2.mf, 1, w[-1])], TraceCounts())
             sys2.destroy()
             assert ok
             return tr2.mf.tip(w2) * arm.length_mm

@@ -58,9 +58,8 @@ def test_restricted_walk_takes_over_w0_nodes():
                                         ("replay", True, "W0")):
             cons = constraints_for(tracer, arm, restricted)
             walker = Walker(tracer, cons, known=regions[known].curves if known else ())
-            before = tracer.solves
             regions[name] = walker.walk(name, w0, first=cons[1], previous=cons[0])
-            solves[name] = tracer.solves - before
+            solves[name] = walker.counts.solves
             walker.destroy()
     assert all(r.closed for r in regions.values())
     shared = {id(pt) for c in regions["W0"].curves for pt in c.points}

@@ -230,7 +230,8 @@ def test_simulate_and_calibrate_files_read_back_as_their_results(results, tmp_pa
     assert_same(results["CalibrationResult"], ep.read(tmp_path / "c.h5"), "calibrate --h5")
 
 
-@pytest.mark.parametrize("name", ["ControlResult", "TraceResult", "TracedSchedule"])
+@pytest.mark.parametrize("name", ["ControlResult", "TraceResult", "TracedSchedule",
+                                  "SearchResult"])
 @pytest.mark.slow
 def test_saved_control_and_trace_results_carry_their_arm(results, name, tmp_path):
     """Their files have the arm's config (provenance ``config_json``, as every

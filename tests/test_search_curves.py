@@ -16,6 +16,7 @@ import pytest
 
 from elastica_petsc.core.model import load_config
 from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.solvers.continuation import TraceCounts
 from elastica_petsc.solvers.lengths import LengthSolver
 from elastica_petsc.studies.preimage import (CurveSearch, FaceChord, LengthLine, SearchTracer,
                                              TensionLine)
@@ -120,7 +121,7 @@ def _fold_by_arclength(disc, L_end, ds: float = 0.02) -> np.ndarray:
     the line, d/ds a = grad a . t, changes sign (linear interpolation between the
     two points that bracket it)."""
     with SearchTracer(disc) as tr:
-        mf = tr.mf
+        mf, counts = tr.mf, TraceCounts()
         w = np.concatenate((disc.straight(), np.zeros(2)))
         L0 = disc.cables(disc.split(disc.straight())[1])[0]
         d = L_end - L0
@@ -129,7 +130,7 @@ def _fold_by_arclength(disc, L_end, ds: float = 0.02) -> np.ndarray:
         pt = tr.point(w, t, sign, 0)
         prev = (along.gradient(pt.w) @ pt.t, pt.w)
         for _ in range(2000):
-            pt, _ = tr.step(pt, line, ds)
+            pt, _ = tr.step(pt, line, ds, counts)
             assert pt is not None
             rate = along.gradient(pt.w) @ pt.t
             if rate < 0.0 < prev[0]:

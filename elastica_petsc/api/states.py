@@ -4,7 +4,7 @@ length control (Eq. (23)) and the searches for every equilibrium at given
 lengths or tensions."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 
@@ -202,8 +202,9 @@ def length_equilibria(arm: Arm, lengths_mm, *, elements: int | None = None, prog
     lengths_mm = inputs.cable_lengths_mm(arm, lengths_mm, "lengths_mm")
     max_seconds = check_max_seconds(max_seconds)
     with _progress(progress, "lengths search", "search steps") as bar:
-        return search_lengths(arm, lengths_mm, elements=_mesh(arm, elements).n_elements,
-                              progress=bar, max_seconds=max_seconds)
+        result = search_lengths(arm, lengths_mm, elements=_mesh(arm, elements).n_elements,
+                                progress=bar, max_seconds=max_seconds)
+    return replace(result, arm=arm)          # the arm, saved as provenance (config_json)
 
 
 @_takes_petsc_options
@@ -221,5 +222,6 @@ def equilibria(arm: Arm, tensions_N=None, *, tensions=None, elements: int | None
     p = _tensions(arm, tensions_N, tensions)
     max_seconds = check_max_seconds(max_seconds)
     with _progress(progress, "equilibria", "search steps") as bar:
-        return search_tensions(arm, p, elements=_mesh(arm, elements).n_elements,
-                               progress=bar, max_seconds=max_seconds)
+        result = search_tensions(arm, p, elements=_mesh(arm, elements).n_elements,
+                                 progress=bar, max_seconds=max_seconds)
+    return replace(result, arm=arm)          # the arm, saved as provenance (config_json)

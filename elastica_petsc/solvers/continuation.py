@@ -76,7 +76,7 @@ from .reasons import converged_reason
 
 __all__ = ["BorderedAIJ", "BorderedPattern", "CableCollapse", "Constraint", "ContinuationError",
            "Curve", "CurvePoint", "CurveTracer", "Fold", "FoldSystem", "Manifold",
-           "PIVOTING_LU", "StateLevel", "TensionBound", "TensionRay", "TipFold",
+           "PIVOTING_LU", "StateLevel", "TensionBound", "TensionRay", "TipFold", "TraceCounts",
            "permutation_sign", "use_pivoting_lu"]
 
 
@@ -108,11 +108,31 @@ class Curve:
     hit: object = field(default=None, repr=False)           # the one met at the end corner
 
 
+@dataclass
+class TraceCounts:
+    """What one trace spent: ``solves`` corrector solves (each one nonlinear
+    solve of the extended system), ``rejected`` the steps among them that were
+    not accepted (failed or rejected, then halved).  The caller owns it and
+    passes it to every :meth:`CurveTracer.step` and :meth:`CurveTracer.correct`."""
+
+    solves: int = 0
+    rejected: int = 0
+
+
+class _Correction:
+    """One corrector solve's state, which the SNES callbacks read (through the
+    SNES application context): the two scalar equations (callables (value,
+    gradient)) and the residual norms of its iterations so far."""
+
+    def __init__(self, rows):
+        self.rows = rows
+        self.fnorms = []
+
+
 class CurveTracer:
     """Pseudo-arclength continuation on M with one active constraint and SNES
-    as the corrector.  ``solves`` counts the corrector solves (each one
-    nonlinear solve of the extended system), ``rejected`` the steps among
-    them that were not accepted.  The contract of :mod:`.options`: ``comm``
+    as the corrector; it holds no state of a trace (its counts: a
+    :class:`TraceCounts` the caller passes).  The contract of :mod:`.options`: ``comm``
     (one process), ``options_prefix`` (default ``cont_``; the tangent solves
     ``<prefix>tangent_``), ``petsc_options``."""
 
@@ -143,7 +163,6 @@ class CurveTracer:
         self.rtol, self.atol, self.stol, _ = snes.getTolerances()
         self.contraction = 0.5
         self.lag_below = 1e-7          # residual norm below which the Jacobian is kept
-        self._fnorms = []
         snes.setConvergenceTest(self._converged)
         self.snes = snes
         self.ksp = PETSc.KSP().create(comm)
@@ -152,14 +171,12 @@ class CurveTracer:
         self.options.apply(self.ksp)
         self.inertia = InertiaCounter(disc, comm=comm,
                                       options_prefix=self.options.name("inertia_"))
-        self.solves = 0
-        self.rejected = 0            # steps whose corrector failed or was rejected (halved)
-        self._rows = None            # the two scalar equations: callables (value, gradient)
 
     # --- the extended system G(w) = [F; r_1; r_2] -----------------------------
     def _form_function(self, snes, X, Fv) -> None:
         w = X.getArray(readonly=True)
-        Fv.setArray(np.concatenate((self.mf.residual(w), [value(w) for value, _ in self._rows])))
+        rows = snes.getAppCtx().rows
+        Fv.setArray(np.concatenate((self.mf.residual(w), [value(w) for value, _ in rows])))
 
     def _fill(self, w, rows) -> None:
         self.A.fill(self.mf.jacobian_values(w), self.mf.load_columns(w), rows)
@@ -170,18 +187,22 @@ class CurveTracer:
         factored) matrix is kept (PETSc does not refactor an unchanged
         operator), a chord step from an O(|dx|)-accurate Jacobian; the stopping
         tests on the residual are unchanged."""
-        if snes.getIterationNumber() > 0 and self._fnorms and self._fnorms[-1] < self.lag_below:
+        correction = snes.getAppCtx()
+        fnorms = correction.fnorms
+        if snes.getIterationNumber() > 0 and fnorms and fnorms[-1] < self.lag_below:
             return
         w = X.getArray(readonly=True)
-        self._fill(w, np.array([gradient(w) for _, gradient in self._rows]))
+        self._fill(w, np.array([gradient(w) for _, gradient in correction.rows]))
 
-    def _solve(self, w0: np.ndarray, rows, max_it: int = 12) -> tuple[np.ndarray, bool, int]:
+    def _solve(self, w0: np.ndarray, rows, counts: TraceCounts,
+               max_it: int = 12) -> tuple[np.ndarray, bool, int]:
         self.options.refresh(self.snes, self.ksp)
-        self._rows = rows
+        self.snes.setAppCtx(_Correction(rows))
         self.x.setArray(w0)
         self.snes.setTolerances(max_it=max_it)
         self.snes.solve(None, self.x)
-        self.solves += 1
+        self.snes.setAppCtx(None)
+        counts.solves += 1
         reason = self.snes.getConvergedReason()
         ok = reason > 0 and np.all(np.isfinite(self.x.getArray(readonly=True)))
         return self.x.getArray().copy(), bool(ok), self.snes.getIterationNumber()
@@ -196,18 +217,20 @@ class CurveTracer:
         (the step is too long or the curve jumped): stop, the step is halved."""
         xnorm, snorm, fnorm = norms
         R = PETSc.SNES.ConvergedReason
-        self._fnorms = [fnorm] if it == 0 else self._fnorms + [fnorm]
+        correction = snes.getAppCtx()
+        correction.fnorms = [fnorm] if it == 0 else correction.fnorms + [fnorm]
+        fnorms = correction.fnorms
         if not np.isfinite(fnorm):
             return R.DIVERGED_FNORM_NAN
         if fnorm < self.atol:
             return R.CONVERGED_FNORM_ABS
-        if it > 0 and fnorm < self.rtol * self._fnorms[0]:
+        if it > 0 and fnorm < self.rtol * fnorms[0]:
             return R.CONVERGED_FNORM_RELATIVE
         if it > 0 and snorm < self.stol * xnorm:
             return R.CONVERGED_SNORM_RELATIVE
         if it >= snes.getTolerances()[3]:
             return R.DIVERGED_MAX_IT
-        if it >= 2 and fnorm > self.contraction * self._fnorms[-2]:
+        if it >= 2 and fnorm > self.contraction * fnorms[-2]:
             return R.DIVERGED_DTOL
         return R.ITERATING
 
@@ -232,9 +255,9 @@ class CurveTracer:
         and det B by reciprocal factors).  In the stable region, with the rows
         picking p, it is det S det J: its sign changes exactly across a fold of
         the tip map (det S = 0), and it stays finite across the fold of M.
-        Also sets ``last_inward`` = side * T tau, the tip's motion as the
-        state leaves the curve into the constraint's admissible side.
-        One sparse LU (scipy SuperLU, partial pivoting) gives all three."""
+        Fourth, ``inward`` = side * T tau, the tip's motion as the state
+        leaves the curve into the constraint's admissible side.  One sparse
+        LU (scipy SuperLU, partial pivoting) gives all four."""
         mf = self.mf
         values = self.A.pattern.values(mf.jacobian_values(w), mf.load_columns(w),
                                        np.array([constraint.gradient(w), mf.metric * orient]))
@@ -248,8 +271,7 @@ class CurveTracer:
         T = mf.tip_gradient(w)
         n = mf.size
         tip_det = sign * float(np.linalg.det(np.column_stack((T @ tau[:n], T @ t[:n]))))
-        self.last_inward = constraint.side * (T @ tau[:n])
-        return t, sign, tip_det
+        return t, sign, tip_det, constraint.side * (T @ tau[:n])
 
     def point(self, w, t, det_sign, iterations, tip_det: float = np.nan,
               tip_inward=None) -> CurvePoint:
@@ -262,9 +284,11 @@ class CurveTracer:
                           tip_inward=(np.full(2, np.nan) if tip_inward is None
                                       else np.array(tip_inward, float)))
 
-    def correct(self, w_guess: np.ndarray, constraints) -> tuple[np.ndarray, bool]:
-        """Solve F = 0 with two scalar constraints (a corner of two curves)."""
-        w, ok, _ = self._solve(w_guess, [self._row(c) for c in constraints])
+    def correct(self, w_guess: np.ndarray, constraints,
+                counts: TraceCounts) -> tuple[np.ndarray, bool]:
+        """Solve F = 0 with two scalar constraints (a corner of two curves);
+        the solve is counted in ``counts``."""
+        w, ok, _ = self._solve(w_guess, [self._row(c) for c in constraints], counts)
         return w, ok
 
     def route_velocity(self, w: np.ndarray, rows, i: int) -> np.ndarray:
@@ -306,21 +330,22 @@ class CurveTracer:
         speed = float(np.linalg.norm(pt.tip_velocity))
         return 0.8 * self.max_tip_step / speed if speed > 0 else self.ds_max
 
-    def step(self, pt: CurvePoint, constraint: Constraint, ds: float):
-        """One predictor-corrector step of length ds: (point | None, iterations).
-        The corrector gets ``step_max_it`` Newton iterations: from the tangent
-        predictor a step that needs more is too long (it is halved)."""
+    def step(self, pt: CurvePoint, constraint: Constraint, ds: float, counts: TraceCounts):
+        """One predictor-corrector step of length ds: (point | None, iterations),
+        counted in ``counts``.  The corrector gets ``step_max_it`` Newton
+        iterations: from the tangent predictor a step that needs more is too
+        long (it is halved)."""
         interrupt.check()                         # a run's stop, inside long work
         w_pred = pt.w + ds * pt.t
         w, ok, its = self._solve(w_pred, [self._row(constraint), self._arclength_row(pt.t, w_pred)],
-                                 max_it=self.step_max_it)
+                                 counts, max_it=self.step_max_it)
         n_angles = self.mf.disc.n_elements
         if (not ok or np.max(np.abs(w[:n_angles] - w_pred[:n_angles])) > self.jump_tol
                 or np.linalg.norm(self.mf.tip(w) - pt.tip) > self.max_tip_step):
-            self.rejected += 1
+            counts.rejected += 1
             return None, its
-        t, det_sign, tip_det = self.tangent(w, constraint, pt.t)
-        return self.point(w, t, det_sign, its, tip_det, self.last_inward), its
+        t, det_sign, tip_det, inward = self.tangent(w, constraint, pt.t)
+        return self.point(w, t, det_sign, its, tip_det, inward), its
 
     def destroy(self) -> None:
         self.inertia.destroy()

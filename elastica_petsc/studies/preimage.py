@@ -44,7 +44,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..solvers.continuation import Constraint, CurvePoint, CurveTracer, Manifold, TensionBound
+from ..solvers.continuation import (Constraint, CurvePoint, CurveTracer, Manifold, TensionBound,
+                                    TraceCounts)
 
 # a cable within this distance (units of l) of its routing point ends a curve
 COLLAPSE = 1e-3
@@ -161,7 +162,7 @@ def _closes(mf: Manifold, start, a, b) -> bool:
 
 
 def follow_curve(tracer: CurveTracer, w0, constraint: Constraint, events, name: str, *,
-                 p_max: float, ds0: float = 0.1, ds_min: float = 1e-5,
+                 p_max: float, counts: TraceCounts, ds0: float = 0.1, ds_min: float = 1e-5,
                  max_points: int = 400) -> list[Trace]:
     """Follow the curve {F = 0, constraint = 0} from its point w0 in both
     orientations, by pseudo-arclength continuation; every sign change of an
@@ -170,7 +171,7 @@ def follow_curve(tracer: CurveTracer, w0, constraint: Constraint, events, name: 
     branch ends when it closes on itself (the other orientation is then
     skipped), leaves the box max |p_i| <= p_max, pulls a cable onto its
     routing point, cannot be followed with steps above ``ds_min`` ("lost")
-    or after ``max_points`` points."""
+    or after ``max_points`` points.  Its solves are counted in ``counts``."""
     mf = tracer.mf
     out = []
     t0 = tracer.tangent(w0, constraint, np.ones(mf.m))[0]
@@ -183,7 +184,7 @@ def follow_curve(tracer: CurveTracer, w0, constraint: Constraint, events, name: 
             if trace.points >= max_points:
                 trace.end = "max_points"
                 break
-            new, its = tracer.step(pt, constraint, ds)
+            new, its = tracer.step(pt, constraint, ds, counts)
             if new is None:
                 ds *= 0.5
                 if ds < ds_min:
@@ -192,7 +193,7 @@ def follow_curve(tracer: CurveTracer, w0, constraint: Constraint, events, name: 
                 continue
             trace.points += 1
             trace.crossings += _crossings(tracer, constraint, events, pt.w, new.w,
-                                          first=trace.points == 1)
+                                          counts, first=trace.points == 1)
             closed = trace.points > 2 and _closes(mf, w0, pt.w, new.w)
             pt = new
             if its <= 3:
@@ -209,7 +210,8 @@ def follow_curve(tracer: CurveTracer, w0, constraint: Constraint, events, name: 
     return out
 
 
-def _crossings(tracer: CurveTracer, constraint, events, wa, wb, first: bool) -> list:
+def _crossings(tracer: CurveTracer, constraint, events, wa, wb, counts: TraceCounts,
+               first: bool) -> list:
     """(w, k) for each event k that changes sign between the points wa and wb of
     a curve, located by Newton; an event vanishing at the curve's start
     (``first`` step from a crossing) is not a crossing again."""
@@ -220,7 +222,7 @@ def _crossings(tracer: CurveTracer, constraint, events, wa, wb, first: bool) -> 
             continue
         if a0 < 0.0 <= a1 or a1 < 0.0 <= a0:
             frac = a0 / (a0 - a1) if a0 != a1 else 1.0
-            w, ok = tracer.correct(wa + frac * (wb - wa), [constraint, event])
+            w, ok = tracer.correct(wa + frac * (wb - wa), [constraint, event], counts)
             if ok:
                 out.append((w, k))
     return out
@@ -264,7 +266,7 @@ class CurveSearch:
         self.queue: list[int] = []              # indices into states, to be followed
         self.done: set = set()                  # (index, direction) curves already followed
         self.whole = True
-        self.solves = 0
+        self.counts = TraceCounts()             # the corrector solves of every curve followed
 
     @property
     def in_box(self) -> list[tuple[np.ndarray, str]]:
@@ -310,17 +312,15 @@ class CurveSearch:
         says whether the curve was followed to its ends both ways (closed,
         box, collapse) rather than given up ("lost", "max_points")."""
         out = []
-        before = self.tracer.solves
         self.whole = True
         for tr in follow_curve(self.tracer, w, constraint, events, label,
-                               p_max=self.margin * self.p_max, ds0=self.ds0,
+                               p_max=self.margin * self.p_max, counts=self.counts, ds0=self.ds0,
                                max_points=self.max_points):
             self.traces.append(tr)
             if self.on_curve is not None:
                 self.on_curve(label)
             self.whole &= tr.end in ("closed", "p_max", "collapse")
             out += [(x, k, f"{label} ({tr.end})") for x, k in tr.crossings]
-        self.solves += self.tracer.solves - before
         return out
 
     def line(self, w, direction, label, through=None, offered: bool = True) -> list:

@@ -179,7 +179,7 @@ class Collector:
             kept = [e for e in self.found if np.all(e[0].p <= curves.p_max)]
             coverage = {"p_max": float(curves.p_max), "directions": int(curves.directions),
                         "curves_followed": len(curves.traces), "curve_ends": curves.ends(),
-                        "corrector_solves": int(curves.solves),
+                        "corrector_solves": int(curves.counts.solves),
                         "outside_the_box": len(self.found) - len(kept)}
         numbers = state_numbers([e[0] for e in kept])
         found = sorted((FoundState(*e, number=k) for e, k in zip(kept, numbers)),

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..core.budget import TIME_LIMIT
 from ..core.errors import InputError
+from ..core.model import Arm
 from ..core.results import Result
 from ..solvers.equilibrium import Equilibrium
 
@@ -115,6 +116,7 @@ class SearchResult(Result):
     log: tuple = ()               # (start, method, outcome) per attempt
     curves: dict = field(default_factory=dict)   # the curve search's coverage ({}: none)
     stopped: str = ""             # why the time budget stopped it ('' : it ran every phase)
+    arm: Arm | None = None        # the arm (ep.equilibria's results; saved as provenance)
 
     def __len__(self) -> int:
         return len(self.states)

@@ -40,6 +40,7 @@ class BoundaryResult(Result):
     rejected_steps: int = 0                              # of ``solves``, steps not accepted
     area_bounds_mm2: tuple = (np.nan, np.nan)            # W0: (proven in, not proven out)
     _outside: object = field(default=None, repr=False)
+    _trees: dict = field(default_factory=dict, repr=False, compare=False)   # step -> k-d tree
 
     @property
     def area_mm2(self) -> float:
@@ -102,7 +103,11 @@ class BoundaryResult(Result):
         the curves (exact distances only where the tree cannot decide)."""
         pts = np.atleast_2d(np.asarray(points_mm, float)).reshape(-1, 2)
         margin = 3 * self.cell_mm if margin_mm is None else margin_mm
-        return self._counts(pts, _farther_than(self.outside_map, pts, margin))
+        step = 0.25 * margin if margin > 0 else self.outside_map.cell
+        if step not in self._trees:        # a cache (a mutable dict), built once per step
+            self._trees[step] = _curve_samples_tree(self.outside_map, step)
+        return self._counts(pts, _farther_than(self.outside_map, self._trees[step], step,
+                                               pts, margin))
 
     def _counts(self, pts: np.ndarray, far: np.ndarray) -> list:
         """N (or None) of each point of ``pts``, given whether it lies farther
@@ -141,21 +146,27 @@ class BoundaryResult(Result):
         return boundary_summary(self)
 
 
-def _farther_than(outside_map: OutsideMap, pts: np.ndarray, margin: float) -> np.ndarray:
-    """Whether each point lies farther than ``margin`` (mm) from the polylines of
-    ``outside_map``: a k-d tree of points every ``step`` along the segments
-    gives d_tree - step/2 <= d <= d_tree; exact distances where that brackets
-    the margin."""
+def _curve_samples_tree(outside_map: OutsideMap, step: float):
+    """A k-d tree of points every ``step`` (mm) or less along the polylines of
+    ``outside_map`` (both ends of every segment included)."""
     from scipy.spatial import cKDTree
 
-    step = 0.25 * margin if margin > 0 else outside_map.cell
     samples = []
     for a, b in outside_map.segments:
         n = np.maximum(np.ceil(np.linalg.norm(b - a, axis=1) / step), 1).astype(int)
         seg = np.repeat(np.arange(len(a)), n + 1)
         frac = (np.arange(len(seg)) - np.repeat(np.cumsum(n + 1) - (n + 1), n + 1)) / n[seg]
         samples.append(a[seg] + frac[:, None] * (b - a)[seg])
-    d_tree = cKDTree(np.concatenate(samples)).query(pts)[0]
+    return cKDTree(np.concatenate(samples))
+
+
+def _farther_than(outside_map: OutsideMap, tree, step: float, pts: np.ndarray,
+                  margin: float) -> np.ndarray:
+    """Whether each point lies farther than ``margin`` (mm) from the polylines of
+    ``outside_map``: ``tree`` (:func:`_curve_samples_tree`, points every ``step``
+    along the segments) gives d_tree - step/2 <= d <= d_tree; exact distances
+    where that brackets the margin."""
+    d_tree = tree.query(pts)[0]
     far = d_tree - 0.5 * step > margin
     unsure = ~far & (d_tree > margin)
     if unsure.any():

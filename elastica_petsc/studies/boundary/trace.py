@@ -14,7 +14,7 @@ from ...core.errors import InputError
 from ...core.fem import Discretisation
 from ...core.geometry import self_intersections, union_area, union_area_gradient
 from ...core.model import Arm
-from ...solvers.continuation import CurveTracer
+from ...solvers.continuation import CurveTracer, TraceCounts
 from .faces import classify_faces, curve_polyline, loop_polygon
 from .result import BoundaryResult
 from .walker import (DS0, SCAN_TIP_STEP, FoldTracer, RegionBoundary, Walker, constraints_for, scan_rays,
@@ -66,6 +66,7 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
     fold_crossings, fold_curves, scan, scan_solves = [], [], [], 0
     if not (np.isfinite(refine) and refine >= 1.0):
         raise InputError(f"refine must be a number >= 1, got {refine}")
+    counts = TraceCounts()                 # this trace's solves, over both walks
     with CurveTracer(disc) as tracer:
         tracer.max_tip_step /= refine
         tracer.ds_max /= refine
@@ -75,16 +76,17 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
             cons = constraints_for(tracer, arm, extra)
             # the restricted region lies in D: its walk takes over W_0's nodes
             known = regions["W0"].curves if name == "restricted" else ()
-            walker = Walker(tracer, cons, progress=progress, ds0=DS0 / refine, known=known)
+            walker = Walker(tracer, cons, progress=progress, ds0=DS0 / refine, known=known,
+                            counts=counts)
             try:
                 region = walker.walk(name, w0, first=cons[1], previous=cons[0])
                 if name == "W0" and tip_folds:
                     fold_crossings = tip_fold_crossings(region)
                     fold_curves = FoldTracer(walker).trace(region, fold_crossings)
-                    before = tracer.solves
+                    before = counts.solves
                     scan = scan_rays(walker, w0, fold_curves,
                                      max_tip_step=SCAN_TIP_STEP / refine)
-                    scan_solves = tracer.solves - before
+                    scan_solves = counts.solves - before
                 if route_gradients and region.closed:
                     gradients[name] = _area_gradient(walker, region, cons[1::-1],
                                                      route_gradients, arm.length_mm)
@@ -104,20 +106,19 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
                 messages.append(f"{name}: the loop's image crosses itself {crossings} times "
                                 "(the tip map is not one-to-one on the region); the area is "
                                 f"that of the set it winds around{faces}")
-        solves, rejected = tracer.solves, tracer.rejected
     folds = np.array([x.tip for x in fold_crossings]).reshape(-1, 2) * arm.length_mm
-    result = BoundaryResult(arm, regions, polygons, areas, folds, solves,
+    result = BoundaryResult(arm, regions, polygons, areas, folds, counts.solves,
                             time.perf_counter() - t0, messages, gradients, fold_curves,
                             [curve_polyline(c, arm.length_mm) for c in fold_curves], fold_crossings,
                             cell_mm=arm.length_mm / 500, scan=scan, scan_solves=scan_solves,
-                            rejected_steps=rejected)
+                            rejected_steps=counts.rejected)
     messages += [f"W0: tip-map fold not traced: {why} (no OUTSIDE_BOUNDARY verdicts)"
                  for why in result.untraced_folds]
     if tip_folds and regions["W0"].closed and not result.untraced_folds:
         result = _assemble_w0(result)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     if progress is not None:
-        progress(solves, "traced")
+        progress(counts.solves, "traced")
     return result
 
 

@@ -13,7 +13,7 @@ import numpy as np
 from ...core.geometry import segments_cross
 from ...core.model import Arm
 from ...solvers.continuation import (CableCollapse, Curve, CurveTracer, Fold, FoldSystem,
-                                     StateLevel, TensionBound, TensionRay, TipFold)
+                                     StateLevel, TensionBound, TensionRay, TipFold, TraceCounts)
 from ...solvers.equilibrium import COLLAPSE_LENGTH
 
 
@@ -62,8 +62,10 @@ class Walker:
     """The wall follower around D of the module docstring."""
 
     def __init__(self, tracer: CurveTracer, constraints: list, *, ds0: float = DS0,
-                 ds_min: float = 1e-5, max_points: int = 400, progress=None, known=()):
+                 ds_min: float = 1e-5, max_points: int = 400, progress=None, known=(),
+                 counts: TraceCounts | None = None):
         self.tr, self.progress = tracer, progress        # progress(solves, note) per step
+        self.counts = TraceCounts() if counts is None else counts   # the walk's solves
         self.constraints = constraints
         self.known = list(known)       # an earlier walk's curves, nodes to take over
         self.fold_system = FoldSystem(tracer.mf)
@@ -79,8 +81,8 @@ class Walker:
         return lambda w: constraint.side * constraint.gradient(w) / self.tr.mf.metric
 
     def _start_point(self, w, active, into):
-        t, det_sign, tip_det = self.tr.tangent(w, active, into(w))
-        return self.tr.point(w, t, det_sign, 0, tip_det, self.tr.last_inward)
+        t, det_sign, tip_det, inward = self.tr.tangent(w, active, into(w))
+        return self.tr.point(w, t, det_sign, 0, tip_det, inward)
 
     def _locate(self, a, b, active, hit) -> np.ndarray | None:
         """Corner where ``hit`` becomes active between accepted points a and b."""
@@ -91,7 +93,7 @@ class Walker:
         frac = ma / (ma - mb) if ma != mb else 0.5
         frac = min(max(frac, 0.0), 1.0)
         guess = a.w + frac * (b.w - a.w)
-        w, ok = self.tr.correct(guess, [active, hit])
+        w, ok = self.tr.correct(guess, [active, hit], self.counts)
         if not ok:
             return None
         if hit is self.fold:
@@ -147,7 +149,7 @@ class Walker:
             reach = c.value(pt.w) / -rate
             if reach > ds or reach > 0.5 * tried.get(c.name, np.inf):
                 continue
-            w, ok = self.tr.correct(pt.w + reach * pt.t, [active, c])
+            w, ok = self.tr.correct(pt.w + reach * pt.t, [active, c], self.counts)
             corner = self._corner_point(pt, w, active, c, reach * pt.t) if ok else None
             if corner is not None:
                 return c, corner
@@ -194,9 +196,9 @@ class Walker:
             if landed is not None:
                 return self._end(curve, *landed)
             ds = min(ds, self._collapse_limit(pt, active))
-            new, its = self.tr.step(pt, active, ds)
+            new, its = self.tr.step(pt, active, ds, self.counts)
             if self.progress is not None:
-                self.progress(self.tr.solves, f"along {active.name}, point {len(curve.points)}")
+                self.progress(self.counts.solves, f"along {active.name}, point {len(curve.points)}")
             if new is None:
                 ds *= 0.5
                 if ds < self.ds_min:
@@ -395,7 +397,8 @@ class FoldTracer:
         a, b = curve.points[x.a], curve.points[x.b]
         self.tipfold.reset(a.w)
         frac = a.tip_det / (a.tip_det - b.tip_det)
-        w, ok = walker.tr.correct(a.w + frac * (b.w - a.w), [curve.active, self.tipfold])
+        w, ok = walker.tr.correct(a.w + frac * (b.w - a.w), [curve.active, self.tipfold],
+                                  walker.counts)
         if not ok:
             return None, f"corrector failed ({walker.tr.reason()})"
         return w, walker._orient(curve.active)
