@@ -30,27 +30,16 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from petsc4py import PETSc
 
 from ..core.calibration_data import CalibrationData
 from ..core.calibration_params import ParameterModel, has_weight
 from ..core.errors import InputError
 from ..solvers.calibration import RowError, RowSolver, RowState
 from ..solvers.lengths import SAME_SHAPE_TOL
-from ..solvers.reasons import TAO_REASONS, reason_name
+from ..solvers.least_squares import METHODS, bounded_least_squares
 
 # Convergence: no scaled parameter moved by more in one Gauss-Newton iteration.
 STEP_TOL = 1e-7
-# ... or the objective fell by less than this fraction of itself (its round-off floor).
-F_RTOL = 1e-10
-# Residual [mm] reported for a trial point at which some row has no equilibrium.
-FAILED_RESIDUAL_MM = 1e6
-# POUNDERS (derivative-free): stop on this gradient of its model (scaled units) ...
-POUNDERS_GATOL = 1e-9
-POUNDERS_GRTOL = 1e-10           # ... or on |g| / f (residuals that do not vanish)
-# ... or after max_iterations x this x parameters iterations.
-POUNDERS_ITERATIONS_PER_PARAMETER = 4
-METHODS = ("brgn", "pounders")
 
 
 class CalibrationError(InputError):
@@ -245,7 +234,8 @@ def least_squares(problem: CalibrationProblem, theta0, weights, *, method: str =
     ~1e-8 mm).  "pounders": derivative-free (residuals only, a check of the
     Jacobian's optimum), converged on its model gradient (POUNDERS_GATOL).
     A trial point whose rows cannot be solved gets residuals of
-    FAILED_RESIDUAL_MM, so the step is refused.
+    FAILED_RESIDUAL (mm), so the step is refused; all by
+    :func:`~elastica_petsc.solvers.least_squares.bounded_least_squares`.
     Returns (theta, TAO's reason, iterations)."""
     if method not in METHODS:
         raise CalibrationError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
@@ -253,77 +243,20 @@ def least_squares(problem: CalibrationProblem, theta0, weights, *, method: str =
     scale = model.scales()
     lo, hi = model.bounds()
     sqrt_w = np.sqrt(weights)
-    M, P_ = len(weights), model.size
-    cache: dict = {}
 
-    def at(X):
-        key = X.getArray(readonly=True).tobytes()
-        if cache.get("key") != key:
-            ev = problem.evaluate(theta0 + scale * X.getArray(readonly=True),
-                                  jacobian=method == "brgn")
-            cache.update(key=key, r=sqrt_w * ev.residual, J=None if ev.jacobian is None
-                         else sqrt_w[:, None] * ev.jacobian * scale[None, :])
-        return cache
+    def evaluate(X, jacobian):
+        ev = problem.evaluate(theta0 + scale * X, jacobian=jacobian)
+        return sqrt_w * ev.residual, (None if ev.jacobian is None
+                                      else sqrt_w[:, None] * ev.jacobian * scale[None, :])
 
-    def residual(tao, X, R):
-        try:
-            R.setArray(at(X)["r"])
-        except (RowError, CalibrationError):   # a trial step too far: make it look bad
-            problem.failed_trials += 1
-            R.setArray(np.full(M, FAILED_RESIDUAL_MM))
+    def failed() -> None:
+        problem.failed_trials += 1
 
-    def jacobian(tao, X, J, P):
-        try:
-            values = at(X)["J"].ravel()
-        except (RowError, CalibrationError):   # the failed trial point of residual()
-            values = np.zeros(M * P_)
-        J.setValues(range(M), range(P_), values)
-        J.assemble()
-
-    previous = {}
-
-    def monitor(t) -> None:
-        X = t.getSolution().getArray(readonly=True)
-        f, step = t.getObjectiveValue(), t.getSolutionStatus()[4]
-        if "X" in previous and step > 0 and (np.max(np.abs(X - previous["X"])) <= step_tol
-                                             or previous["f"] - f <= F_RTOL * previous["f"]):
-            t.setConvergedReason(PETSc.TAO.Reason.CONVERGED_USER)
-        previous.update(X=X.copy(), f=f)
-
-    x = PETSc.Vec().createSeq(P_, comm=PETSc.COMM_SELF)
-    x.set(0.0)
-    R = PETSc.Vec().createSeq(M, comm=PETSc.COMM_SELF)
-    Jm = PETSc.Mat().createDense((M, P_), comm=PETSc.COMM_SELF)
-    Jm.setUp()
-    xl, xu = x.duplicate(), x.duplicate()
-    xl.setArray((lo - theta0) / scale)
-    xu.setArray((hi - theta0) / scale)
-    tao = PETSc.TAO().create(PETSc.COMM_SELF)
-    tao.setOptionsPrefix(prefix)
-    tao.setType(method)
-    tao.setResidual(residual, R)
-    if method == "brgn":
-        tao.setJacobianResidual(jacobian, Jm, Jm)
-    tao.setVariableBounds(xl, xu)
-    tao.setFromOptions()
-    inner = tao.getBRGNSubsolver() if method == "brgn" else tao   # BRGN iterates inside
-    if method == "brgn":
-        inner.setOptionsPrefix(prefix + "brgn_")      # PETSc 3.18 gives it no prefix of ours
-        inner.setFromOptions()
-        inner.setTolerances(gatol=1e-12, grtol=1e-14, gttol=0.0)
-        inner.setMaximumIterations(max_iterations)
-        inner.setMonitor(monitor)
-    else:
-        tao.setTolerances(gatol=POUNDERS_GATOL, grtol=POUNDERS_GRTOL, gttol=0.0)
-        tao.setMaximumIterations(POUNDERS_ITERATIONS_PER_PARAMETER * P_ * max_iterations)
-    try:
-        tao.solve(x)
-        theta = theta0 + scale * x.getArray(readonly=True)
-        reason = inner.getConvergedReason()
-        return theta, reason_name(TAO_REASONS, reason), inner.getIterationNumber()
-    finally:
-        for obj in (tao, x, R, Jm, xl, xu):
-            obj.destroy()
+    X, reason, iterations = bounded_least_squares(
+        evaluate, model.size, len(weights), (lo - theta0) / scale, (hi - theta0) / scale,
+        method=method, max_iterations=max_iterations, step_tol=step_tol,
+        failures=(RowError, CalibrationError), on_failure=failed, prefix=prefix)
+    return theta0 + scale * X, reason, iterations
 
 
 def huber_weights(problem: CalibrationProblem, residual, delta_mm: float | None):
