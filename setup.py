@@ -4,5 +4,7 @@ else is declared in pyproject.toml.  Needs a C compiler and Python's headers
 from setuptools import Extension, setup
 
 setup(ext_modules=[Extension("elastica_petsc.core.fem_kernels",
-                             ["elastica_petsc/core/fem_kernels.c"],
+                             ["elastica_petsc/core/fem_kernels.c",
+                              "elastica_petsc/core/fem_inertia.c"],
+                             depends=["elastica_petsc/core/fem_kernels.h"],
                              extra_compile_args=["-O2", "-std=c99"])])

@@ -50,14 +50,17 @@ if [ ! -x "$venv/bin/python" ]; then
   /usr/bin/python3 -m venv --system-site-packages "$venv"
 fi
 # --no-deps --no-build-isolation: never let pip fetch numpy/h5py/mpi4py/petsc4py wheels.
-# The install compiles the kernels (elastica_petsc/core/fem_kernels.c, setup.py) in
-# place; it runs again when the C source or the build files change.
-kernels="$here/elastica_petsc/core/fem_kernels.c"
+# The install compiles the kernels (elastica_petsc/core/fem_*.c and fem_kernels.h,
+# setup.py) in place; it runs again when the C sources or the build files change.
 built="$(compgen -G "$here/elastica_petsc/core/fem_kernels*.so" | head -n 1 || true)"
+stale=0
+for source in "$here"/elastica_petsc/core/fem_*.c "$here"/elastica_petsc/core/fem_kernels.h; do
+  [ -n "$built" ] && [ "$source" -nt "$built" ] && stale=1
+done
 if ! "$venv/bin/python" -c "import elastica_petsc.core.fem" 2>/dev/null \
    || [ "$here/pyproject.toml" -nt "$venv/.elastica-installed" ] \
    || [ "$here/setup.py" -nt "$venv/.elastica-installed" ] \
-   || [ -z "$built" ] || [ "$kernels" -nt "$built" ]; then
+   || [ -z "$built" ] || ((stale)); then
   echo "setup: installing elastica_petsc (editable, compiling its kernels) into $venv" >&2
   if ! "$venv/bin/python" -m pip install -q --no-deps --no-build-isolation -e "$here"; then
     echo "setup: error: installing elastica_petsc failed; if the compiler output above" \
