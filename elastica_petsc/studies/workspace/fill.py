@@ -69,23 +69,15 @@ class BoundaryFillSampler(TargetSampler):
         return self._boundary
 
     def solve_chunk(self, points: np.ndarray, stop) -> dict | None:
-        out = self._empty(len(points))
-        out["target"][:] = points
-        self._reached = {}
-        states = {}                        # sample -> equilibrium, reached samples
-        runs = {}                          # sample -> [(start, result)] of its local solves
+        out, states, runs = self._start_chunk(points)
         counts = self._classify_by_boundary(points, out)
-        if not self._sweep(points, out, counts, states, stop):
-            return None
-        if not (self._forward(points, out, states, runs, stop)
+        if not (self._sweep(points, out, counts, states, stop)
+                and self._forward(points, out, states, runs, stop)
                 and self._backward(points, out, states, runs, stop)
                 and self._search(points, out, states, runs, stop)):
             return None
-        out["status"][(out["status"] == Status.NEEDS_NEGATIVE)
-                      | (out["status"] == Status.NOT_CONVERGED)] = Status.UNDECIDED
-        if self.share != "none" and not self._share_chunk(points, out, stop):
-            return None
-        return out
+        self._mark_undecided(out)
+        return self._shared(points, out, stop)
 
     def _classify_by_boundary(self, points, out: dict) -> list:
         """Pass 1 (module doc): BEYOND_REACH and OUTSIDE_BOUNDARY, no solve;

@@ -226,11 +226,7 @@ class TargetSampler(_Sampler):
         return Status.NEEDS_NEGATIVE if _on_lower_bound(result) else Status.NOT_CONVERGED
 
     def solve_chunk(self, points: np.ndarray, stop) -> dict | None:
-        out = self._empty(len(points))
-        out["target"][:] = points
-        self._reached = {}
-        states = {}                        # sample -> equilibrium, reached samples
-        runs = {}                          # sample -> [(start, result)] of its local solves
+        out, states, runs = self._start_chunk(points)
         if self.global_search:
             from ...solvers.reach import beyond_reach
             for k, target in enumerate(points):
@@ -244,8 +240,26 @@ class TargetSampler(_Sampler):
             self._prove_outside(points, out)
             if not self._search(points, out, states, runs, stop):
                 return None
-            out["status"][(out["status"] == Status.NEEDS_NEGATIVE)
-                          | (out["status"] == Status.NOT_CONVERGED)] = Status.UNDECIDED
+            self._mark_undecided(out)
+        return self._shared(points, out, stop)
+
+    def _start_chunk(self, points: np.ndarray) -> tuple[dict, dict, dict]:
+        """The empty result of a chunk of ``points`` and its records: ``states``
+        (sample -> equilibrium, reached samples) and ``runs`` (sample ->
+        [(start, result)] of its local solves)."""
+        out = self._empty(len(points))
+        out["target"][:] = points
+        self._reached = {}
+        return out, {}, {}
+
+    @staticmethod
+    def _mark_undecided(out: dict) -> None:
+        """After the global search, a local verdict is no class: UNDECIDED."""
+        out["status"][(out["status"] == Status.NEEDS_NEGATIVE)
+                      | (out["status"] == Status.NOT_CONVERGED)] = Status.UNDECIDED
+
+    def _shared(self, points: np.ndarray, out: dict, stop) -> dict | None:
+        """``out`` with the reached samples' tensions shared (if asked); None if stopped."""
         if self.share != "none" and not self._share_chunk(points, out, stop):
             return None
         return out
