@@ -86,11 +86,14 @@ def run(args) -> int:
 
 
 def _sampler(args) -> str | None:
-    """The --sampler asked for (--local-only: 'local'); InputError for both at odds."""
+    """The --sampler asked for (--local-only: 'local'); InputError for both at odds
+    or for a sampler in mode tensions."""
     from ..core.errors import InputError
 
     if args.local_only and args.sampler not in (None, "local"):
         raise InputError(f"--local-only contradicts --sampler {args.sampler}")
+    if args.sampler is not None and args.mode != "targets":
+        raise InputError("--sampler applies to mode targets (mode tensions: forward solves)")
     return "local" if args.local_only else args.sampler
 
 

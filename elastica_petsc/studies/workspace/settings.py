@@ -37,9 +37,10 @@ class SamplerSettings:
 
         names = SAMPLERS["targets"]
         if sampler is not None and sampler not in names:
-            raise InputError(f"--sampler {sampler!r}: expected one of {', '.join(names)}")
+            raise InputError(f"sampler {sampler!r}: expected one of {', '.join(names)}")
         if sampler is not None and mode != "targets":
-            raise InputError("--sampler applies to mode targets (mode tensions: forward solves)")
+            raise InputError("a sampler applies to mode targets only (mode tensions: forward "
+                             "solves)")
         if sampler is None:
             sampler = "boundary-fill" if global_search else "local"
         rule = share_rule(share, float(min_tension_N))
