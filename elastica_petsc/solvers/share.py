@@ -234,11 +234,6 @@ class TensionSharer:
         self.method, self.max_it, self.trust, self.kkt_tol = method, int(max_it), trust, kkt_tol
         self.max_evaluations = int(max_evaluations)
 
-    def reset(self) -> None:
-        """Nothing to forget: the sharer keeps no per-solve state (each
-        :meth:`track` starts cold unless given a path's :class:`WarmStart`).
-        Kept for callers written when it did (studies/workspace/samplers.py)."""
-
     # --- public --------------------------------------------------------------------
     def solve(self, reached: ControlResult, floor: float | None = None,
               warm: WarmStart | None = None) -> ControlResult:

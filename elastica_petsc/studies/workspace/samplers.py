@@ -513,7 +513,6 @@ class TargetSampler(_Sampler):
                 start = Evaluation(reached.p.copy(), reached.equilibrium, reached.sensitivity,
                                    reached.loading)
             self.controller.forget()                # evaluations cached for another branch
-            self.sharer.reset()
             result = self.sharer.track(target, start)
             if result.converged:
                 break
