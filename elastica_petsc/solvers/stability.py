@@ -222,6 +222,19 @@ def schur_asymmetry(T, B, C, rng: np.random.Generator, probes: int = 4) -> float
     return float(np.linalg.norm(KV - KTV) / np.linalg.norm(KV))
 
 
+def gershgorin_lower_bound(disc: Discretisation, u, p, weights: np.ndarray) -> float:
+    """Gershgorin lower bound of the spectrum of (T, diag(weights)), hence of
+    (K, diag(weights)) since K - T = W W^T >= 0."""
+    theta, y = disc.split(np.asarray(u, float))
+    _, d = disc.cables(y)
+    band = disc.band(theta, d, np.asarray(p, float))
+    s = 1.0 / np.sqrt(weights)
+    lower = np.abs(band[1:, 0]) * s[1:] * s[:-1]      # |T[r, r-1]|, r >= 1
+    upper = np.abs(band[:-1, 2]) * s[:-1] * s[1:]     # |T[r, r+1]|, r < N-1
+    radius = np.append(0.0, lower) + np.append(upper, 0.0)
+    return float(np.min(band[:, 1] * s * s - radius))
+
+
 def _diag_mat(values: np.ndarray) -> PETSc.Mat:
     """A diagonal AIJ matrix on COMM_SELF."""
     n = len(values)
@@ -383,18 +396,8 @@ class StabilitySolver:
         self.A.assemble()
 
     def lower_bound(self, u, p, weights=None) -> float:
-        """Gershgorin lower bound of the spectrum of (T, diag(weights)), hence of
-        (K, diag(weights)) since K - T = W W^T >= 0 (default weights: the mass)."""
-        disc = self.disc
-        theta, y = disc.split(np.asarray(u, float))
-        _, d = disc.cables(y)
-        band = disc.band(theta, d, np.asarray(p, float))
-        w = self.m if weights is None else weights
-        s = 1.0 / np.sqrt(w)
-        lower = np.abs(band[1:, 0]) * s[1:] * s[:-1]      # |T[r, r-1]|, r >= 1
-        upper = np.abs(band[:-1, 2]) * s[:-1] * s[1:]     # |T[r, r+1]|, r < N-1
-        radius = np.append(0.0, lower) + np.append(upper, 0.0)
-        return float(np.min(band[:, 1] * s * s - radius))
+        """:func:`gershgorin_lower_bound` (default weights: the mass)."""
+        return gershgorin_lower_bound(self.disc, u, p, self.m if weights is None else weights)
 
     # --- asymmetry ----------------------------------------------------------------------
     def asymmetry(self, u, p, probes: int = 4) -> float:
