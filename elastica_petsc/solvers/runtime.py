@@ -2,6 +2,8 @@
 which itself builds no PETSc object)."""
 from __future__ import annotations
 
+import os
+
 PETSC_ERRORS = {55: "out of memory", 56: "not supported", 60: "nonconforming sizes",
                 62: "invalid argument", 63: "argument out of range", 73: "object in wrong state",
                 76: "error in an external library"}
@@ -11,11 +13,33 @@ def init(program: str, options: list[str], quiet_errors: bool = True) -> None:
     """``petsc4py.init`` with ``options`` (once per process, before any solver);
     ``quiet_errors``: PETSc prints no error stack, its errors are raised only
     (the caller reports them in one line: :func:`error_text`)."""
+    singleton_mpi_defaults(os.environ)
     import petsc4py
     petsc4py.init([program] + list(options))
     from petsc4py import PETSc
     if quiet_errors:
         PETSc.Sys.pushErrorHandler("ignore")
+
+
+# Set by the MPI launchers (Open MPI's mpiexec, PMIx, MPICH's hydra/PMI, Slurm's srun).
+LAUNCHER_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE",
+                      "SLURM_PROCID")
+# Open MPI started without a launcher (a singleton: one process talking to itself):
+# no supporting daemon (we never spawn), the ob1 transport and no UCX one-sided
+# layer.  Probing UCX and starting the daemon took 0.35 of MPI_Init's 0.47 s wall
+# (BENCHMARKS.md, "Start-up of a singleton"); ignored by other MPI libraries.
+SINGLETON_MCA = {"OMPI_MCA_ess_singleton_isolated": "1", "OMPI_MCA_pml": "ob1",
+                 "OMPI_MCA_osc": "^ucx"}
+
+
+def singleton_mpi_defaults(environ) -> None:
+    """Without an MPI launcher, the :data:`SINGLETON_MCA` settings the user has
+    not set, in ``environ`` (before MPI is initialised); under a launcher the
+    launcher's environment decides."""
+    if any(name in environ for name in LAUNCHER_VARIABLES):
+        return
+    for name, value in SINGLETON_MCA.items():
+        environ.setdefault(name, value)
 
 
 def error_text(err: BaseException) -> str | None:
