@@ -31,6 +31,17 @@ from ...solvers.equilibrium import COLLAPSE_LENGTH, Equilibrium
 from ...solvers.sensitivity import SensitivityError
 
 
+def solve2(S: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """S^{-1} r for the 2 x 2 tip Jacobian (n = 2) in closed form;
+    LinAlgError if S is singular (a fold of the tip map) or not finite."""
+    (a, b), (c, d) = S.tolist()
+    det = a * d - b * c
+    if det == 0.0 or not math.isfinite(det):
+        raise np.linalg.LinAlgError("singular tip Jacobian")
+    r0, r1 = r.tolist()
+    return np.array(((d * r0 - b * r1) / det, (a * r1 - c * r0) / det))
+
+
 @dataclass(frozen=True)
 class Linearisation:
     """What a Newton step on the tip needs of a state: du/dp_i (rows, Eq. (14))
@@ -91,11 +102,11 @@ class TipNewton:
         eq, lin = start
         target = np.asarray(target, float)
         tol = self.tol if tol is None else tol
-        if np.linalg.norm(target - eq.tip) < tol:
+        if math.hypot(*(target - eq.tip)) < tol:
             return eq, lin
         disc, N = self.disc, self.disc.n_elements
         try:
-            dp = np.linalg.solve(lin.tip_jacobian, target - eq.tip)
+            dp = solve2(lin.tip_jacobian, target - eq.tip)
         except np.linalg.LinAlgError:
             return None
         p, u = eq.p + dp, eq.u + dp @ lin.state_derivative          # Euler predictor, Eq. (14)
@@ -106,7 +117,7 @@ class TipNewton:
             F = disc.residual(u, p)
             theta = disc.split(u)[0]
             miss = target - disc.node_positions(theta)[-1]
-            if np.linalg.norm(F) <= self.solver.atol and np.linalg.norm(miss) < tol:
+            if math.sqrt(F @ F) <= self.solver.atol and math.hypot(*miss) < tol:
                 if its > 0:                # the factorisation of the iterate before is at hand
                     p, u = self._polish(p, u, F, theta, miss, lin)
                 return self._accept(p, u, predicted, its, lin)
@@ -116,7 +127,7 @@ class TipNewton:
                 rows = self.sens.tangent_solves(u, p, -np.vstack((F, disc.load_derivative(u))))
                 moved = disc.position_derivative(theta, rows, [N])[:, 0]     # (1 + n, 2)
                 lin = Linearisation(rows[1:], moved[1:].T)
-                dp = np.linalg.solve(lin.tip_jacobian, miss - moved[0])
+                dp = solve2(lin.tip_jacobian, miss - moved[0])
             except (SensitivityError, np.linalg.LinAlgError):
                 return None
             p, u = p + dp, u + rows[0] + dp @ rows[1:]
@@ -132,16 +143,17 @@ class TipNewton:
         try:
             z = self.sens.solve_again(-F[None])
             dz = self.disc.position_derivative(theta, z, [self.disc.n_elements])[0, 0]
-            dp = np.linalg.solve(lin.tip_jacobian, miss - dz)
+            dp = solve2(lin.tip_jacobian, miss - dz)
         except (SensitivityError, np.linalg.LinAlgError):
             return p, u
         return (p + dp, u + z[0] + dp @ lin.state_derivative) if self._admissible(dp, p + dp) \
             else (p, u)
 
     def _admissible(self, dp: np.ndarray, p: np.ndarray) -> bool:
-        """A step within ``max_dp`` that keeps 0 <= P_i <= the motor limit."""
-        return bool(np.all(np.isfinite(dp)) and np.max(np.abs(dp)) <= self.max_dp
-                    and p.min() >= 0.0 and p.max() <= self.upper)
+        """A finite step within ``max_dp`` that keeps 0 <= P_i <= the motor limit
+        (the comparisons are False for NaN)."""
+        return (all(abs(x) <= self.max_dp for x in dp.tolist())
+                and all(0.0 <= x <= self.upper for x in p.tolist()))
 
     def _accept(self, p, u, predicted, its: int, lin):
         """The converged (equilibrium, linearisation), or None after a jump to
