@@ -235,7 +235,7 @@ def gershgorin_lower_bound(disc: Discretisation, u, p, weights: np.ndarray) -> f
     return float(np.min(band[:, 1] * s * s - radius))
 
 
-def _diag_mat(values: np.ndarray) -> PETSc.Mat:
+def diagonal_matrix(values: np.ndarray) -> PETSc.Mat:
     """A diagonal AIJ matrix on COMM_SELF."""
     n = len(values)
     idx = np.arange(n + 1, dtype=np.int32)
@@ -345,7 +345,7 @@ class StabilitySolver:
         self.n_border = size - N
         self.A = PETSc.Mat().createAIJ(size=(size, size), csr=(indptr, indices, values),
                                        comm=self.comm)
-        self.B = _diag_mat(np.concatenate((self.m, np.zeros(self.n_border))))
+        self.B = diagonal_matrix(np.concatenate((self.m, np.zeros(self.n_border))))
         self.options.label(self.A, self.B)
         # a fixed initial vector: each eigen solve is reproducible bit for bit,
         # whatever solves the process did before (workspace results must not
@@ -356,7 +356,7 @@ class StabilitySolver:
         self.nev = self.eps.getDimensions()[0]
         self.eps_raw = None
         if mass != "paper":
-            self.B_raw = _diag_mat(np.concatenate((np.ones(N), np.zeros(self.n_border))))
+            self.B_raw = diagonal_matrix(np.concatenate((np.ones(N), np.zeros(self.n_border))))
             self.eps_raw = self._make_eps(self.A, self.B_raw, 1, tol, prefix + "raw_")
         self.inertia = InertiaCounter(disc, comm=self.comm,
                                       options_prefix=self.options.name("inertia_"))

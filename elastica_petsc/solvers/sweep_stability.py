@@ -40,7 +40,7 @@ from .inertia import InertiaCounter
 from .linalg import use_bordered_lu
 from .options import SolverOptions, check_comm
 from .reasons import eps_reasons, reason_name
-from .stability import StabilityError, _diag_mat, gershgorin_lower_bound
+from .stability import StabilityError, diagonal_matrix, gershgorin_lower_bound
 
 
 class SweepStability:
@@ -67,8 +67,8 @@ class SweepStability:
         self.A = PETSc.Mat().createAIJ(
             size=(size, size), comm=self.comm,
             csr=(*self._csr, disc.jacobian_values(disc.straight(), np.zeros(disc.n_tendons))))
-        self.B = _diag_mat(np.concatenate((self.mass, np.zeros(n_border))))
-        self.B_raw = _diag_mat(np.concatenate((np.ones(N), np.zeros(n_border))))
+        self.B = diagonal_matrix(np.concatenate((self.mass, np.zeros(n_border))))
+        self.B_raw = diagonal_matrix(np.concatenate((np.ones(N), np.zeros(n_border))))
         self.options.label(self.A, self.B)
         self._v0 = np.random.default_rng(2019).standard_normal(size)   # as StabilitySolver
         self.eps = self._make_eps(self.B, tol, ncv, "", None)
