@@ -19,14 +19,26 @@ ELEMENTS = 60
 
 
 class SentComm:
-    """Rank ``rank`` of ``size``; ``bcast`` from another rank gives what that
-    rank computed (``sent[root]``, round-tripped through pickle)."""
+    """Rank ``rank`` of ``size``: a message from another rank is what that rank
+    computed (``sent[source]``, round-tripped through pickle); sends complete."""
+
+    class Done:
+        def Test(self) -> bool:
+            return True
 
     def __init__(self, rank: int, size: int, sent: dict):
         self.rank, self.size, self.sent = rank, size, sent
+        self.sends = []
 
-    def bcast(self, value, root: int):
-        return value if root == self.rank else pickle.loads(pickle.dumps(self.sent[root]))
+    def isend(self, value, dest: int, tag: int):
+        self.sends.append((dest, tag))
+        return self.Done()
+
+    def iprobe(self, source: int, tag: int) -> bool:
+        return source in self.sent
+
+    def recv(self, source: int, tag: int):
+        return pickle.loads(pickle.dumps(self.sent[source]))
 
 
 @pytest.fixture(scope="module")
@@ -63,7 +75,9 @@ def test_other_ranks_adopt_without_tracing(built, rank, monkeypatch):
             sampler.library.seeds()
         else:                            # rank 2 builds nothing
             monkeypatch.setattr(type(sampler.library), "_sweep", no_trace)
-        share_fixed_costs(sampler, SentComm(rank, 3, sent), stop=lambda: False)
+        comm = SentComm(rank, 3, sent)
+        share_fixed_costs(sampler, comm, stop=lambda: False)
+        assert comm.sends == ([(0, 32), (2, 32)] if rank == 1 else [])
         points = np.random.default_rng(3).uniform(-600.0, 600.0, (200, 2))
         assert sampler.boundary().preimage_counts(points) == \
             done.boundary().preimage_counts(points)

@@ -6,8 +6,9 @@ arm, and most ranks need the seed library of the global search
 (:class:`~elastica_petsc.solvers.reach.SeedLibrary`) sooner or later; both
 are fixed functions of the arm (a map does not depend on how its chunks are
 spread over ranks).  Before the first chunk, rank 0 traces the boundary
-while rank 1 builds the library; each is then broadcast (mpi4py's pickled
-``bcast``) and adopted by every rank, which neither traces nor builds
+while rank 1 builds the library; each is then sent to every other rank
+(pickled by mpi4py; received by polling, not by a spinning broadcast) and
+adopted by every rank, which neither traces nor builds
 again.  Two ranks thus pay max(trace, library) once instead of each paying
 trace + library; the results are bit for bit those of a rank that did both
 itself (the same computation, sent as the floats it produced).
@@ -21,6 +22,7 @@ it (preimage counts, proofs, the loop nodes of the anchors).
 from __future__ import annotations
 
 import dataclasses
+import time
 
 from ...core import interrupt
 from ..boundary import TraceCache
@@ -37,6 +39,29 @@ def plain_boundary(result):
     return dataclasses.replace(result, regions=regions,
                                fold_curves=[plain(c) for c in result.fold_curves],
                                _outside=None, _trees={})
+
+
+# Message tags of the exchange (the chunk engine's are 11 and 12) and the polling period.
+TAG_BOUNDARY, TAG_SEEDS = 31, 32
+POLL_SECONDS = 0.001
+
+
+def _send(comm, value, root: int, tag: int) -> list:
+    """On ``root``: ``value`` sent to every other rank (pickled, not waited for); the requests."""
+    if comm.rank != root:
+        return []
+    return [comm.isend(value, dest=rank, tag=tag) for rank in range(comm.size) if rank != root]
+
+
+def _receive(comm, value, root: int, tag: int):
+    """``value`` on ``root``; elsewhere what ``root`` sent, polled with short sleeps
+    (a blocking broadcast spins in MPI and takes a core from the rank still
+    computing when ranks share cores)."""
+    if comm.rank == root:
+        return value
+    while not comm.iprobe(source=root, tag=tag):
+        time.sleep(POLL_SECONDS)
+    return comm.recv(source=root, tag=tag)
 
 
 class AdoptedTraces(TraceCache):
@@ -69,8 +94,11 @@ def share_fixed_costs(sampler, comm, stop) -> None:
         pass                                     # the run stops at its first sample
     except Exception as err:                     # raised after the broadcasts
         error = err
-    boundary = comm.bcast(boundary, root=0)
-    seeds = comm.bcast(seeds, root=1)
+    sent = _send(comm, boundary, 0, TAG_BOUNDARY) + _send(comm, seeds, 1, TAG_SEEDS)
+    boundary = _receive(comm, boundary, 0, TAG_BOUNDARY)
+    seeds = _receive(comm, seeds, 1, TAG_SEEDS)
+    while not all(request.Test() for request in sent):
+        time.sleep(POLL_SECONDS)
     if boundary is not None and comm.rank != 0:
         sampler.adopt_boundary(boundary[0])
     if seeds is not None and comm.rank != 1:
