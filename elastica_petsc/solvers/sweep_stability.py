@@ -64,9 +64,11 @@ class SweepStability:
         n_border = size - N
         self.mass = np.full(N, disc.h)
         self.mass[-1] *= 0.5                              # lumped: h, ..., h, h/2
-        self.A = PETSc.Mat().createAIJ(
-            size=(size, size), comm=self.comm,
-            csr=(*self._csr, disc.jacobian_values(disc.straight(), np.zeros(disc.n_tendons))))
+        self._ones = np.ones(N)                           # the raw pencil's weights
+        # A keeps this array (no copy): each solve writes the Jacobian's values in place
+        self._values = disc.jacobian_values(disc.straight(), np.zeros(disc.n_tendons))
+        self.A = PETSc.Mat().createAIJWithArrays((size, size), (*self._csr, self._values),
+                                                 comm=self.comm)
         self.B = diagonal_matrix(np.concatenate((self.mass, np.zeros(n_border))))
         self.B_raw = diagonal_matrix(np.concatenate((np.ones(N), np.zeros(n_border))))
         self.options.label(self.A, self.B)
@@ -110,11 +112,10 @@ class SweepStability:
         u = np.asarray(u, float)
         p = np.asarray(p, float)
         negatives = self.inertia.negative_eigenvalues(u, p)
-        self.A.setValuesCSR(*self._csr, disc.jacobian_values(u, p))
-        self.A.assemble()
-        ones = np.ones(disc.n_elements)
+        self._values[:] = disc.jacobian_values(u, p)
+        self.A.assemble()                  # raises the matrix state: SLEPc refactors
         return (self._smallest(self.eps, self.B, 0, u, p, negatives, self.mass),
-                self._smallest(self.eps_raw, self.B_raw, 1, u, p, negatives, ones))
+                self._smallest(self.eps_raw, self.B_raw, 1, u, p, negatives, self._ones))
 
     def _smallest(self, eps, B, which: int, u, p, negatives: int, weights) -> float:
         """One solve (module doc): shift, warm start, the eigenvalue."""
