@@ -205,10 +205,13 @@ def union_area_gradient(nodes: np.ndarray, velocity: np.ndarray,
     return np.einsum("k,k,kq->q", outward, length, vn)
 
 
-def hermite_densify(tip, velocity, per_segment: int = 8) -> np.ndarray:
+def hermite_densify(tip, velocity, per_segment: int = 8, parameters: bool = False):
     """Cubic Hermite curve through the nodes with their tip velocities d x_t/ds
     (per unit of the curve's arclength parameter), ``per_segment`` points each
-    (a segment with a zero chord or velocity keeps only its end node)."""
+    (a segment with a zero chord or velocity keeps only its end node).  With
+    ``parameters`` also returns, per dense point, its segment k and its
+    Hermite parameter s in [0, 1] (the point is node k at s = 0, node k + 1
+    at s = 1), to interpolate values given at the nodes."""
     tip, velocity = np.asarray(tip, float), np.asarray(velocity, float)
     a, b = tip[:-1], tip[1:]
     chord = np.linalg.norm(b - a, axis=1)
@@ -224,7 +227,12 @@ def hermite_densify(tip, velocity, per_segment: int = 8) -> np.ndarray:
              + h11[None] * mb[:, None])                          # (segments, per_segment, 2)
     keep = np.where(smooth[:, None], True, np.arange(per_segment)[None] == per_segment - 1)
     curve[~smooth, -1] = b[~smooth]
-    return np.vstack((tip[:1], curve[keep]))
+    dense = np.vstack((tip[:1], curve[keep]))
+    if not parameters:
+        return dense
+    segment = np.broadcast_to(np.arange(len(a))[:, None], keep.shape)[keep]
+    param = np.broadcast_to(s[:, 0][None], keep.shape)[keep]
+    return dense, (np.concatenate(([0], segment)), np.concatenate(([0.0], param)))
 
 
 def triangles_union_area(triangles: np.ndarray, h: float) -> float:

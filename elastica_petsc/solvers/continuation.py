@@ -258,6 +258,16 @@ class CurveTracer:
         Fourth, ``inward`` = side * T tau, the tip's motion as the state
         leaves the curve into the constraint's admissible side.  One sparse
         LU (scipy SuperLU, partial pivoting) gives all four."""
+        t, _, sign, tip_det, inward = self.tangents(w, constraint, orient)
+        return t, sign, tip_det, inward
+
+    def tangents(self, w: np.ndarray, constraint: Constraint, orient: np.ndarray) -> tuple:
+        """:meth:`tangent`'s (t, tau, sign det B, tip_det, inward) with tau, the
+        direction in M that leaves the curve with dc = 1 and orient^T D tau = 0.
+        At a corner where ``orient`` is D^-1 times the gradient of the other
+        constraint, tau is the tangent of that other curve (both rows of B are
+        its constraints' then): the corner's tangent for the curve that ends
+        there, from the same LU."""
         mf = self.mf
         values = self.A.pattern.values(mf.jacobian_values(w), mf.load_columns(w),
                                        np.array([constraint.gradient(w), mf.metric * orient]))
@@ -271,7 +281,7 @@ class CurveTracer:
         T = mf.tip_gradient(w)
         n = mf.size
         tip_det = sign * float(np.linalg.det(np.column_stack((T @ tau[:n], T @ t[:n]))))
-        return t, sign, tip_det, constraint.side * (T @ tau[:n])
+        return t, tau, sign, tip_det, constraint.side * (T @ tau[:n])
 
     def point(self, w, t, det_sign, iterations, tip_det: float = np.nan,
               tip_inward=None) -> CurvePoint:

@@ -185,25 +185,22 @@ def classify_faces(result: "BoundaryResult") -> list[dict]:
 
 def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
                  node_values: np.ndarray | None = None):
-    """The tip image of the loop, densified per curve by :func:`hermite_densify`,
-    in mm (closing point dropped).  With ``node_values`` (one row per node, in
-    the order of :meth:`RegionBoundary.nodes`) also returns them interpolated
-    linearly (in the Hermite parameter) at the dense points."""
+    """The tip image of the loop, densified per curve by :func:`hermite_densify`
+    (every piece, the one into the corner at a curve's end too: the corner
+    carries its curve's tangent, ``Walker._corner``), in mm (closing point
+    dropped).  With ``node_values`` (one row per node, in the order of
+    :meth:`RegionBoundary.nodes`) also returns them interpolated linearly (in
+    the Hermite parameter) at the dense points."""
     pieces, values, start = [], [], 0
     for curve in region.curves:
         tip = np.array([pt.tip for pt in curve.points])
         vel = np.array([pt.tip_velocity for pt in curve.points])
-        # corners carry the previous curve's tangent: no Hermite into a corner
-        dense = hermite_densify(tip[:-1], vel[:-1], per_segment) if len(tip) > 2 else tip[:1]
-        pieces.append(np.vstack((dense, tip[-1:])))
+        dense, (seg, s) = hermite_densify(tip, vel, per_segment, parameters=True)
+        pieces.append(dense)
         if node_values is not None:
             nv = node_values[start:start + len(tip)]
-            s = np.linspace(0, 1, per_segment + 1)[1:]
-            rows = [nv[:1]]
-            for k in range(len(tip) - 2):
-                rows.append(nv[k][None] + np.multiply.outer(s, nv[k + 1] - nv[k]))
-            rows.append(nv[-1:])
-            values.append(np.concatenate(rows))
+            nxt = np.minimum(seg + 1, len(tip) - 1)
+            values.append(nv[seg] + s.reshape((-1,) + (1,) * (nv.ndim - 1)) * (nv[nxt] - nv[seg]))
         start += len(tip)
     poly = np.vstack(pieces) * length_mm
     keep = np.concatenate(([True], np.linalg.norm(np.diff(poly, axis=0), axis=1) > 1e-9))
@@ -218,6 +215,4 @@ def curve_polyline(curve: Curve, length_mm: float) -> np.ndarray:
     """Tip image of one curve in mm, Hermite-densified (:func:`hermite_densify`)."""
     tip = np.array([pt.tip for pt in curve.points])
     vel = np.array([pt.tip_velocity for pt in curve.points])
-    if len(tip) < 3:
-        return tip * length_mm
-    return np.vstack((hermite_densify(tip[:-1], vel[:-1]), tip[-1:])) * length_mm
+    return hermite_densify(tip, vel) * length_mm
