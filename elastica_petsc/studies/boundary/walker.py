@@ -306,17 +306,19 @@ class Walker:
         return RegionBoundary(name, curves, closed, message)
 
 
-    def route_velocities(self, region: RegionBoundary, start_rows, tendons) -> list[np.ndarray]:
-        """d x_t/d r_i (units of l per unit of l) at every node of the loop, in the
-        order of :meth:`RegionBoundary.nodes`, shape (nodes, 2 tip, 2 route),
-        for each tendon i of ``tendons`` (one factorisation per node).
+    def parameter_velocities(self, region: RegionBoundary, start_rows,
+                             parameters) -> list[np.ndarray]:
+        """d x_t/d q (units of l per unit of l) at every node of the loop, in the
+        order of :meth:`RegionBoundary.nodes`, shape (nodes, 2 tip, k), for each
+        parameter block of ``parameters`` (``solvers/continuation.py``: RouteParameter,
+        k = 2, OffsetParameter, k = 1; one factorisation per node).
 
         Corners (the ends of each curve, and the start, where ``start_rows``
         are active) move with both of their constraints; a node inside a curve
         slides orthogonally (metric D) to the curve's tangent.  Only the normal
         component of the tip motion matters for the area
         (:func:`~elastica_petsc.core.geometry.union_area_gradient`)."""
-        mf, out = self.tr.mf, [[] for _ in tendons]
+        mf, out = self.tr.mf, [[] for _ in parameters]
         for k, curve in enumerate(region.curves):
             for j, pt in enumerate(curve.points):
                 if j == 0:
@@ -328,9 +330,9 @@ class Walker:
                 for row in rows:
                     if row is self.fold:
                         self.fold.update(pt.w)
-                for dest, dw in zip(out, self.tr.route_velocities(pt.w, rows, tendons)):
+                for dest, dw in zip(out, self.tr.parameter_velocities(pt.w, rows, parameters)):
                     dest.append(np.column_stack([mf.tip_velocity(pt.w, dw[:, c])
-                                                 for c in range(2)]))
+                                                 for c in range(dw.shape[1])]))
         return [np.array(v) for v in out]
 
 
