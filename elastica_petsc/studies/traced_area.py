@@ -17,7 +17,8 @@ the boundary integral of the normal velocity of the loop's nodes
 points).  The node polygon of a fixed loop in tension space (the previous
 objective: the image of the box's boundary at 24 nodes per edge) cut the
 curved inner edge with straight chords: on the paper's arm at 10 N it gave
-59,436 mm^2 against 58,330 mm^2 from ``boundary`` and a gradient 15 % off
+59,436 mm^2 against 58,330 mm^2 from ``boundary`` (58,250 since the corners'
+tangents, docs/model.md §26; 58,254 converged) and a gradient 15 % off
 finite differences of ``boundary``; the traced loop agrees with ``boundary``
 by construction and its gradient with finite differences of ``boundary``
 to 2 % (within 1.3 % on the paper's arm; tests/test_traced_area.py, docs/model.md §17.3).
