@@ -235,6 +235,31 @@ def hermite_densify(tip, velocity, per_segment: int = 8, parameters: bool = Fals
     return dense, (np.concatenate(([0], segment)), np.concatenate(([0.0], param)))
 
 
+def monotone_slopes(values: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """Slopes d values/d s at the nodes of a polyline whose segments have the
+    ``lengths`` (s: its length parameter), per component of ``values`` (nodes,
+    ...): the weighted harmonic mean of the two neighbouring secants
+    (Fritsch-Butland, as in PCHIP), 0 where they differ in sign (a node at an
+    extremum), the one secant at the ends.  A cubic Hermite interpolant with
+    these slopes is monotone between nodes: it does not overshoot where
+    values change steeply (near a cable collapse or the fold of M)."""
+    values = np.asarray(values, float)
+    out = np.zeros_like(values)
+    if len(values) < 2:
+        return out
+    shape = (-1,) + (1,) * (values.ndim - 1)
+    L = np.asarray(lengths, float).reshape(shape)
+    d = np.divide(np.diff(values, axis=0), L, out=np.zeros_like(values[1:]), where=L > 0)
+    out[0], out[-1] = d[0], d[-1]
+    a, b = d[:-1], d[1:]
+    w1, w2 = 2 * L[1:] + L[:-1], L[1:] + 2 * L[:-1]
+    ok = a * b > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        harmonic = (w1 + w2) / (w1 / np.where(ok, a, 1.0) + w2 / np.where(ok, b, 1.0))
+    out[1:-1] = np.where(ok, harmonic, 0.0)
+    return out
+
+
 def triangles_union_area(triangles: np.ndarray, h: float) -> float:
     """Area (mm^2) of the union of triangles, counted on a square lattice of
     spacing ``h`` mm (a point counts once however many triangles hold it)."""

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.geometry import hermite_densify, ray_hits, segments_distance, winding_number
+from ...core.geometry import (hermite_densify, monotone_slopes, ray_hits, segments_distance,
+                              winding_number)
 from ...solvers.continuation import Curve
 from .walker import RegionBoundary
 
@@ -184,13 +185,15 @@ def classify_faces(result: "BoundaryResult") -> list[dict]:
 
 
 def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
-                 node_values: np.ndarray | None = None):
+                 node_values: np.ndarray | None = None, monotone: bool = False):
     """The tip image of the loop, densified per curve by :func:`hermite_densify`
     (every piece, the one into the corner at a curve's end too: the corner
-    carries its curve's tangent, ``Walker._corner``), in mm (closing point
-    dropped).  With ``node_values`` (one row per node, in the order of
-    :meth:`RegionBoundary.nodes`) also returns them interpolated linearly (in
-    the Hermite parameter) at the dense points."""
+    carries its curve's tangent, ``Walker._corner_tangent``), in mm (closing
+    point dropped).  With ``node_values`` (one row per node, in the order of
+    :meth:`RegionBoundary.nodes`) also returns them interpolated at the dense
+    points: linearly in the Hermite parameter, or with ``monotone`` by cubic
+    Hermite interpolation along each curve's chord lengths with
+    :func:`monotone_slopes` (docs/model.md §26.2)."""
     pieces, values, start = [], [], 0
     for curve in region.curves:
         tip = np.array([pt.tip for pt in curve.points])
@@ -199,8 +202,7 @@ def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
         pieces.append(dense)
         if node_values is not None:
             nv = node_values[start:start + len(tip)]
-            nxt = np.minimum(seg + 1, len(tip) - 1)
-            values.append(nv[seg] + s.reshape((-1,) + (1,) * (nv.ndim - 1)) * (nv[nxt] - nv[seg]))
+            values.append(_interpolate(nv, tip, seg, s, monotone))
         start += len(tip)
     poly = np.vstack(pieces) * length_mm
     keep = np.concatenate(([True], np.linalg.norm(np.diff(poly, axis=0), axis=1) > 1e-9))
@@ -209,6 +211,23 @@ def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
     if node_values is None:
         return poly[keep]
     return poly[keep], np.concatenate(values)[keep]
+
+
+def _interpolate(nv: np.ndarray, tip: np.ndarray, seg: np.ndarray, s: np.ndarray,
+                 monotone: bool) -> np.ndarray:
+    """Node values ``nv`` of one curve at the dense points (segment ``seg``,
+    Hermite parameter ``s``): linear in s, or monotone cubic Hermite in the
+    chord length (:func:`monotone_slopes`)."""
+    nxt = np.minimum(seg + 1, len(nv) - 1)
+    sh = s.reshape((-1,) + (1,) * (nv.ndim - 1))
+    if not monotone or len(nv) < 2:
+        return nv[seg] + sh * (nv[nxt] - nv[seg])
+    lengths = np.linalg.norm(np.diff(tip, axis=0), axis=1)
+    m = monotone_slopes(nv, lengths)
+    L = lengths[np.minimum(seg, len(lengths) - 1)].reshape(sh.shape)
+    h00, h10 = 2 * sh**3 - 3 * sh**2 + 1, sh**3 - 2 * sh**2 + sh
+    h01, h11 = -2 * sh**3 + 3 * sh**2, sh**3 - sh**2
+    return h00 * nv[seg] + h10 * L * m[seg] + h01 * nv[nxt] + h11 * L * m[nxt]
 
 
 def curve_polyline(curve: Curve, length_mm: float) -> np.ndarray:

@@ -31,7 +31,8 @@ def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, parameter
     (r_i x, r_i y), guide offsets) [mm^2 per mm]."""
     grads = []
     for velocity in walker.parameter_velocities(region, start_rows, parameters):  # (nodes, 2, k)
-        poly, dense_velocity = loop_polygon(region, length_mm, node_values=velocity)
+        poly, dense_velocity = loop_polygon(region, length_mm, node_values=velocity,
+                                            monotone=True)
         grads.append(union_area_gradient(poly, dense_velocity))          # mm^2 per mm
     return np.concatenate(grads)
 
