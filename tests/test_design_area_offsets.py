@@ -87,8 +87,8 @@ def test_loop_nodes_and_their_polygon_area_taylor(guided):
     with CurveTracer(disc) as tracer:
         walker = Walker(tracer, constraints_for(tracer, arm, False))
         cons = walker.constraints
-        velocity = walker.parameter_velocities(
-            region, [cons[1], cons[0]], [OffsetParameter(tracer.mf, v.points(arm)) for v in offsets])
+        parameters = [OffsetParameter(tracer.mf, v.points(arm)) for v in offsets]
+        velocity = walker.parameter_velocities(region, [cons[1], cons[0]], parameters)
         walker.destroy()
     dX = np.concatenate(velocity, axis=2)                     # (nodes, 2, 2) mm per mm
     assert np.max(np.abs(dX)) > 0.1
@@ -176,4 +176,5 @@ def test_design_command_area_with_an_offset(tmp_path):
     assert out["offset_variables"] == ["tendon1.offset"] and out["offsets_before_mm"] == [8.0]
     assert out["offsets_after_mm"][0] > 8.0 and out["outcome"] == "IMPROVED"
     text = subprocess.run(base + ["--overwrite"], capture_output=True, text=True, timeout=300)
-    assert f"tendon1.offset: 8.00 -> {out['offsets_after_mm'][0]:.2f} mm" in text.stdout, text.stdout
+    line = f"tendon1.offset: 8.00 -> {out['offsets_after_mm'][0]:.2f} mm"
+    assert line in text.stdout, text.stdout

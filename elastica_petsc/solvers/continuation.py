@@ -76,7 +76,8 @@ from .reasons import converged_reason
 
 __all__ = ["BorderedAIJ", "BorderedPattern", "CableCollapse", "Constraint", "ContinuationError",
            "Curve", "CurvePoint", "CurveTracer", "Fold", "FoldSystem", "Manifold",
-           "OffsetParameter", "RouteParameter", "PIVOTING_LU", "StateLevel", "TensionBound", "TensionRay", "TipFold", "TraceCounts",
+           "OffsetParameter", "RouteParameter", "PIVOTING_LU", "StateLevel", "TensionBound",
+           "TensionRay", "TipFold", "TraceCounts",
            "permutation_sign", "use_pivoting_lu"]
 
 
