@@ -13,7 +13,7 @@ def init(program: str, options: list[str], quiet_errors: bool = True) -> None:
     """``petsc4py.init`` with ``options`` (once per process, before any solver);
     ``quiet_errors``: PETSc prints no error stack, its errors are raised only
     (the caller reports them in one line: :func:`error_text`)."""
-    singleton_mpi_defaults(os.environ)
+    mpi_defaults(os.environ)
     import petsc4py
     petsc4py.init([program] + list(options))
     from petsc4py import PETSc
@@ -27,18 +27,28 @@ LAUNCHER_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE
 # Open MPI started without a launcher (a singleton: one process talking to itself):
 # no supporting daemon (we never spawn), the ob1 transport and no UCX one-sided
 # layer.  Probing UCX and starting the daemon took 0.35 of MPI_Init's 0.47 s wall
-# (BENCHMARKS.md, "Start-up of a singleton"); ignored by other MPI libraries.
+# (BENCHMARKS.md, "Workspace maps and lengths --all at speed"); other MPI libraries
+# ignore these variables.
 SINGLETON_MCA = {"OMPI_MCA_ess_singleton_isolated": "1", "OMPI_MCA_pml": "ob1",
                  "OMPI_MCA_osc": "^ucx"}
+# Open MPI's launcher with every rank on this node: shared memory only, so the ob1
+# transport and no UCX one-sided layer likewise (0.55 -> 0.41 s for two ranks).
+SINGLE_NODE_MCA = {"OMPI_MCA_pml": "ob1", "OMPI_MCA_osc": "^ucx"}
 
 
-def singleton_mpi_defaults(environ) -> None:
-    """Without an MPI launcher, the :data:`SINGLETON_MCA` settings the user has
-    not set, in ``environ`` (before MPI is initialised); under a launcher the
-    launcher's environment decides."""
-    if any(name in environ for name in LAUNCHER_VARIABLES):
+def mpi_defaults(environ) -> None:
+    """Open MPI settings the user has not set, in ``environ`` (before MPI is
+    initialised): :data:`SINGLETON_MCA` without a launcher,
+    :data:`SINGLE_NODE_MCA` under Open MPI's launcher with all ranks on one node
+    (``OMPI_COMM_WORLD_LOCAL_SIZE`` = ``OMPI_COMM_WORLD_SIZE``, the same on every
+    rank); under any other launcher its environment decides."""
+    if not any(name in environ for name in LAUNCHER_VARIABLES):
+        chosen = SINGLETON_MCA
+    elif environ.get("OMPI_COMM_WORLD_LOCAL_SIZE", "") == environ.get("OMPI_COMM_WORLD_SIZE"):
+        chosen = SINGLE_NODE_MCA
+    else:
         return
-    for name, value in SINGLETON_MCA.items():
+    for name, value in chosen.items():
         environ.setdefault(name, value)
 
 
