@@ -67,24 +67,36 @@ def test_dockerfile_layers_user_and_pinned_base():
     assert runs[1].startswith("bash scripts/setup.sh --runtime ")
     for forbidden in ("apt-get", "pip ", "apt ", "VOLUME", "SHELL"):
         assert forbidden not in text, forbidden
-    # the base: a digest, and the same tag named in a comment
-    base = steps[0][1]
+    # the base: a digest, and the same tag named in a comment; overridable (ARG BASE) by
+    # a local image where no registry is reachable, and every stage starts from it
+    assert words[0] == "ARG" and steps[0][1].startswith("BASE="), steps[0]
+    base = steps[0][1].removeprefix("BASE=")
     match = re.fullmatch(r"debian:(12\.\d+)@sha256:[0-9a-f]{64}", base)
-    assert words[0] == "FROM" and match, base
-    assert f"debian:{match.group(1)}" in text.split("FROM", 1)[0]
+    assert match, base
+    assert f"debian:{match.group(1)}" in text.split("ARG", 1)[0]
+    stages = [rest.split() for word, rest in steps if word == "FROM"]
+    assert len(stages) == 2 and all(stage[0] == "${BASE}" for stage in stages), stages
     # layer order: only the set-up script and package lists before the packages' RUN
     first_run = words.index("RUN")
     early_copies = [rest.split()[:-1] for word, rest in steps[:first_run] if word == "COPY"]
     assert early_copies and all(src.startswith("scripts/") for c in early_copies for src in c)
     assert all(not src.startswith(("elastica_petsc", ".", "configs"))
                for c in early_copies for src in c)
-    assert any(word == "COPY" and rest.startswith("elastica_petsc/")
-               for word, rest in steps[first_run:])
+    project = [k for k, (word, rest) in enumerate(steps)
+               if word == "COPY" and rest.startswith("elastica_petsc/")]
+    assert len(project) == 1 and project[0] > first_run
+    # the build stage's compiler is a cached layer too, installed before the project
+    compiler = steps.index(["RUN", "bash scripts/setup.sh --runtime --build --system-only"])
+    assert words.index("FROM") < compiler < project[0]
+    # the package layers keep no .deb files or lists (scripts/setup.sh --runtime)
+    assert "apt-get clean; $sudo_cmd rm -rf /var/lib/apt/lists/*" in (
+        ROOT / "scripts" / "setup.sh").read_text()
     # a non-root user after the last RUN; a matplotlib folder any user can write
     user = [rest for word, rest in steps if word == "USER"]
     assert len(user) == 1 and user[0].split(":")[0] not in ("0", "root")
     assert words.index("USER") > len(words) - 1 - words[::-1].index("RUN")
     assert "MPLCONFIGDIR=/tmp/" in text
+    assert "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1" in text  # --user 0:0
     cmd = [rest for word, rest in steps if word == "CMD"][0]
     assert '"reproduce", "--quick"' in cmd and "--overwrite" not in cmd
     # the packages installed are the run-time list; the dev list holds the compilers
