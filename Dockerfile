@@ -17,7 +17,8 @@ FROM ${BASE} AS build
 WORKDIR /opt/elastica_petsc
 # 1. Debian packages: this layer is rebuilt only when the package lists or the set-up
 #    script change, not when the project's sources or README do.
-COPY scripts/setup.sh scripts/system-packages.txt scripts/system-packages-dev.txt scripts/system-packages-build.txt scripts/
+COPY scripts/setup.sh scripts/pythran-standin.sh scripts/system-packages.txt scripts/system-packages-dev.txt \
+     scripts/system-packages-build.txt scripts/
 RUN bash scripts/setup.sh --runtime --system-only
 # 2. The build stage: the compiler (a cached layer too), then the project (the only
 #    layers an edit rebuilds), its kernels compiled by the editable install.  A RUN of
@@ -36,7 +37,8 @@ RUN bash scripts/setup.sh --runtime --build \
 #    project (venv, sources, compiled kernels) from the build stage, no compiler.
 FROM ${BASE}
 WORKDIR /opt/elastica_petsc
-COPY scripts/setup.sh scripts/system-packages.txt scripts/system-packages-dev.txt scripts/system-packages-build.txt scripts/
+COPY scripts/setup.sh scripts/pythran-standin.sh scripts/system-packages.txt scripts/system-packages-dev.txt \
+     scripts/system-packages-build.txt scripts/
 RUN bash scripts/setup.sh --runtime --system-only
 COPY --from=build /opt/elastica_petsc /opt/elastica_petsc
 RUN useradd --uid 1000 --user-group --no-create-home --shell /usr/sbin/nologin elastica

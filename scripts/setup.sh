@@ -28,16 +28,12 @@ mapfile -t packages < <(cat "${lists[@]}" | grep -v '^\s*#' | grep -v '^\s*$')
 missing=(); sudo_cmd=""; [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
 for pkg in "${packages[@]}"; do installed "$pkg" || missing+=("$pkg"); done
-# Debian 12's python3-scipy depends on python3-pythran, and so on g++, python3-dev and the
-# Boost headers (about 470 MB), though scipy imports no pythran at run time: the container's
-# run-time layer (--runtime) satisfies that dependency with an empty stand-in package.
+# Debian 12's python3-scipy depends on python3-pythran (and so on a compiler and headers,
+# about 470 MB) but does not import it: the container's layer installs a stand-in first.
 if ((runtime && ${#missing[@]})) && ! installed python3-pythran; then
-  standin="$(mktemp -d)"; mkdir "$standin/DEBIAN"
-  printf '%s\n' "Package: elastica-petsc-no-pythran" "Version: 1" "Architecture: all" \
-    "Maintainer: elastica_petsc" "Provides: python3-pythran" "Description: stand-in for" \
-    " python3-pythran, which python3-scipy needs only to be built" > "$standin/DEBIAN/control"
-  dpkg-deb --build "$standin" "$standin.deb" >/dev/null && $sudo_cmd dpkg -i "$standin.deb" >/dev/null
-  rm -rf "$standin" "$standin.deb"
+  standin="$(mktemp -u /tmp/elastica-petsc-no-pythran.XXXXXX).deb"
+  bash "$here/scripts/pythran-standin.sh" "$standin"
+  $sudo_cmd dpkg -i "$standin" >/dev/null && rm -f "$standin"
 fi
 if ((${#missing[@]})); then
   echo "setup: installing Debian packages: ${missing[*]}" >&2

@@ -88,6 +88,7 @@ def test_dockerfile_layers_user_and_pinned_base():
     # the build stage's compiler is a cached layer too, installed before the project
     compiler = steps.index(["RUN", "bash scripts/setup.sh --runtime --build --system-only"])
     assert words.index("FROM") < compiler < project[0]
+    assert ["scripts/setup.sh", "scripts/pythran-standin.sh"] == early_copies[0][:2]
     # the package layers keep no .deb files or lists (scripts/setup.sh --runtime)
     assert "apt-get clean; $sudo_cmd rm -rf /var/lib/apt/lists/*" in (
         ROOT / "scripts" / "setup.sh").read_text()
@@ -120,6 +121,29 @@ def test_container_entry_refuses_an_unmounted_results_folder(tmp_path):
     other = subprocess.run([str(entry), "solve", "--tensions", "1", "1"], env=env,
                            capture_output=True, text=True)
     assert other.returncode == 0 and other.stdout.strip() == "solve --tensions 1 1"
+
+
+@pytest.mark.skipif(shutil.which("dpkg-deb") is None, reason="not a Debian system")
+def test_pythran_standin_is_an_empty_package_that_satisfies_scipy(tmp_path):
+    """Debian 12's python3-scipy depends on python3-pythran (and so on g++, python3-dev
+    and the Boost headers, about 470 MB) though scipy does not import it; the container's
+    run-time layer (setup.sh --runtime) installs an empty package providing it first.
+    The stand-in is a valid package with no files and no dependencies, and scipy's
+    dependency on pythran is unversioned, so the stand-in satisfies it."""
+    deb = tmp_path / "standin.deb"
+    subprocess.run(["bash", str(ROOT / "scripts" / "pythran-standin.sh"), str(deb)], check=True)
+    fields = subprocess.run(["dpkg-deb", "--field", str(deb)], capture_output=True,
+                            text=True, check=True).stdout
+    assert "Provides: python3-pythran\n" in fields and "Depends" not in fields, fields
+    listing = subprocess.run(["dpkg-deb", "--contents", str(deb)], capture_output=True,
+                             text=True, check=True).stdout.split()
+    assert listing[-1] == "./" and listing[0] == "drwxr-xr-x", listing
+    assert 'scripts/pythran-standin.sh" "$standin"' in (ROOT / "scripts" / "setup.sh").read_text()
+    depends = subprocess.run(["dpkg-query", "-W", "-f=${Depends}", "python3-scipy"],
+                             capture_output=True, text=True).stdout
+    if depends:                                  # scipy is a run-time package of setup.sh
+        pythran = [d.strip() for d in depends.split(",") if "python3-pythran" in d]
+        assert pythran == ["python3-pythran"], depends
 
 
 @pytest.mark.skipif(shutil.which("hadolint") is None and not (
