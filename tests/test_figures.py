@@ -207,3 +207,25 @@ def test_design_figure_rejected_steps_and_legends_off_the_data(drawn):
     assert np.isnan(feasible.get_ydata()[[1, 2]]).all()
     assert sorted(t.get_text() for t in ax.texts) == ["r_1", "r_1", "r_2", "r_2"]
     assert clear_of(ax, ax, hx) and clear_of(hx, ax, hx)
+
+
+def test_equilibria_text_says_which_cable_crosses_the_arm(tmp_path):
+    """`equilibria` at Fig. 8's tensions (14, 6) N: the state that loading tendon 1
+    first reaches (Fig. 8's state 3) is noted as having cable 2 across the arm;
+    the state of tendon 2 first / proportional loading (state 1) is not."""
+    import subprocess
+    import sys
+
+    run = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "equilibria",
+                          "--tensions-N", "14", "6", "--elements", str(ELEMENTS), "--effort", "1",
+                          "--quiet"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    blocks = run.stdout.split("\nstate ")[1:]
+    notes = {b.split(";")[0]: [line.strip() for line in b.splitlines() if "crosses the arm" in line]
+             for b in blocks}
+    by_order = {b.split(";")[0]: b.splitlines()[0] for b in blocks}
+    first = next(k for k, head in by_order.items() if "'straight arm, proportional'" in head)
+    state3 = next(k for k, head in by_order.items() if "'straight arm, order 1,2'" in head)
+    assert notes[first] == []
+    assert notes[state3] == ["note: cable 2 crosses the arm (a straight cable through the arm: "
+                             "this state needs a guide or is not physical; core/clearance.py)"]
