@@ -136,11 +136,12 @@ def test_fig4_one_marker_size_and_named_routing_points():
         classes = [line for line in ax.lines if line.get_label().startswith(
             ("reached", "not reached", "outside"))]
         names = [t.get_text() for t in ax.texts]
+        halos = [bool(t.get_path_effects()) for t in ax.texts]    # legible over samples
     finally:
         plt.close(fig)
     assert len(classes) == 4
     assert len({line.get_markersize() for line in classes}) == 1
-    assert names == ["r_1", "r_2"]
+    assert names == ["r_1", "r_2"] and all(halos)
 
 
 def test_fig5_tensions_in_newton(drawn):
