@@ -209,7 +209,8 @@ def retime(positions_steps, limits: MotorLimits, *, tips_mm=None,
             break
     if np.any(np.isfinite(limits.accel_steps_s2)) and np.any(u < caps * (1 - 1e-12)):
         chain = chain_speeds(dq, caps, u, limits.accel_steps_s2)   # motion_chain docstring
-        if np.sum(1.0 / chain) < np.sum(1.0 / u) * (1 - 1e-12):
+        shorter = np.sum(1.0 / chain) < np.sum(1.0 / u) * (1 - 1e-12)
+        if shorter and not check(q, 1.0 / chain, limits):     # playable, checked again
             u = chain
             labels = np.where(u >= caps * (1 - 1e-9), cap_labels,
                               _binding_accel(dq, u, limits.accel_steps_s2)).astype(object)

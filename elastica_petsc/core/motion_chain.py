@@ -73,6 +73,8 @@ def chain_speeds(dq: np.ndarray, caps: np.ndarray, passes: np.ndarray,
         back[k] = np.argmin(total, axis=0)
         cost = total[back[k], np.arange(GRID)] + 1.0 / grid[k]
     cost = np.where(_end_ok(dq[-1], accel, grid[-1]), cost, np.inf)
+    if not np.isfinite(cost).any():        # round-off rejected even the passes' schedule
+        return passes
     pick = np.empty(K1, int)
     pick[-1] = int(np.argmin(cost))
     for k in range(K1 - 1, 0, -1):
