@@ -1,0 +1,230 @@
+"""Capstan friction at the guides: one tension per cable segment, stick and slip
+at every guide as a complementarity problem (docs/model.md §26).  Numpy only,
+non-dimensional (l = 1, B = 1, p = P l^2/B).
+
+Segment a of a tendon joins point a (a guide or the end) to its predecessor
+(the routing point for the first).  At guide a the cable turns through
+
+    beta_a = |angle(e_a, e_{a+1})|,   e_a = z_a / |z_a|  (chord of segment a),
+
+and the material of the cable between guide a and the end has length
+S_a = sum_{b > a} l_b (the end is attached).  Over one increment of a load
+path S_a changes by dS_a = S_a - S_a^ref and the capstan law with maximal
+dissipation is the variational inequality (Coulomb friction wound round the
+guide)
+
+    dS_a < 0 (reeling in, slip toward the motor): P_{a+1} = P_a exp(-mu beta_a)
+    dS_a > 0 (paying out, slip toward the end):   P_{a+1} = P_a exp(+mu beta_a)
+    P_a exp(-mu beta_a) < P_{a+1} < P_a exp(mu beta_a):  dS_a = 0 (stick),
+
+written without smoothing as the semismooth equation (c > 0 any scale)
+
+    Phi_a = P_{a+1} - clip(P_{a+1} + c dS_a, P_a exp(-mu beta_a), P_a exp(mu beta_a)) = 0.
+
+Each branch of the clip is a mode (SLIP_IN, STICK, SLIP_OUT); in a fixed mode
+Phi is smooth and :meth:`CapstanKernel.jacobian_values` is its exact derivative.
+
+The unknowns are w = (u, q): u the bordered state of core/guided.py (angles
+and chords) and q the tensions of every segment after a guide (the first
+segment of each tendon carries the motor tension, given).  The equations are
+the guided equilibrium with segment tensions (f_a = P_a e_a - P_{a+1} e_{a+1})
+and one Phi per guide.  With mu = 0 the clip interval is {P_a}: every tension
+equals the motor's and the state is the frictionless one.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from .errors import InputError
+from .guided import GuidedDiscretisation
+
+SLIP_IN, STICK, SLIP_OUT = -1, 0, 1
+MODE_NAMES = {SLIP_IN: "slip toward the motor", STICK: "stick", SLIP_OUT: "slip toward the end"}
+
+
+def _perp(v: np.ndarray) -> np.ndarray:
+    return np.column_stack((-v[:, 1], v[:, 0]))
+
+
+@dataclass(frozen=True)
+class CapstanKernel:
+    """Residual and Jacobian of a guided arm with capstan friction at its guides.
+
+    ``mu``: the friction coefficient of every guide (a scalar, or one value per
+    guide in the order of the arm's points); ``scale``: the constant c of Phi.
+    """
+
+    disc: GuidedDiscretisation
+    mu: np.ndarray
+    scale: float = 1.0
+
+    @classmethod
+    def of(cls, disc: GuidedDiscretisation, mu, scale: float = 1.0) -> "CapstanKernel":
+        if not getattr(disc, "has_paths", False):
+            raise InputError("capstan friction needs an arm whose cables run through guides")
+        n_guides = int(np.count_nonzero(~disc.last_point))
+        mu = np.broadcast_to(np.asarray(mu, float), (n_guides,)).copy()
+        if not np.isfinite(mu).all() or (mu < 0).any():
+            raise InputError(f"friction coefficient must be finite and >= 0, got {mu.tolist()}")
+        if n_guides == 0:
+            raise InputError("capstan friction needs at least one guide on a cable")
+        return cls(disc, mu, float(scale))
+
+    # --- layout -----------------------------------------------------------------------
+    @cached_property
+    def guides(self) -> np.ndarray:
+        """The arm point of each guide (every point but the cables' ends)."""
+        return np.flatnonzero(~self.disc.last_point)
+
+    @property
+    def n_guides(self) -> int:
+        return len(self.guides)
+
+    @property
+    def size(self) -> int:
+        return self.disc.size + self.n_guides
+
+    @cached_property
+    def unknown_of_segment(self) -> np.ndarray:
+        """Index in q of each segment's tension, -1 for a motor segment (given)."""
+        out = np.full(self.disc.n_points, -1)
+        out[self.guides + 1] = np.arange(self.n_guides)
+        return out
+
+    def split(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return w[:self.disc.size], w[self.disc.size:]
+
+    def segment_tensions(self, w: np.ndarray, p_motor) -> np.ndarray:
+        """P_a of every segment: the motor's on first segments, q after the guides."""
+        out = np.empty(self.disc.n_points)
+        out[self.disc.first_point] = np.asarray(p_motor, float)
+        out[self.guides + 1] = self.split(w)[1]
+        return out
+
+    def frictionless_state(self, u: np.ndarray, p_motor) -> np.ndarray:
+        """w of a frictionless state u: every segment at its motor's tension."""
+        return np.concatenate((u, np.asarray(p_motor, float)[self.disc.point_tendon][self.guides + 1]))
+
+    # --- geometry of the cables ------------------------------------------------------
+    def beyond(self, w: np.ndarray) -> np.ndarray:
+        """S_a of every guide: the cable length from guide a to its end, sum_{b>a} l_b."""
+        seg_len = self.disc.segments(self.disc.split(self.split(w)[0])[1])[0]
+        after = np.empty_like(seg_len)
+        starts = self.disc.path_starts
+        for i in range(self.disc.n_tendons):
+            part = seg_len[starts[i]:starts[i + 1]]
+            after[starts[i]:starts[i + 1]] = np.cumsum(part[::-1])[::-1] - part
+        return after[self.guides]
+
+    def turning(self, e: np.ndarray) -> np.ndarray:
+        """Signed angle from e_a to e_{a+1} at each guide (its modulus is beta_a)."""
+        a, b = e[self.guides], e[self.guides + 1]
+        return np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], np.sum(a * b, axis=1))
+
+    def wrap_angles(self, w: np.ndarray) -> np.ndarray:
+        """beta_a of every guide."""
+        e = self.disc.segments(self.disc.split(self.split(w)[0])[1])[1]
+        return np.abs(self.turning(e))
+
+    # --- the complementarity ----------------------------------------------------------
+    def _bounds(self, w, p_motor):
+        seg_len, e = self.disc.segments(self.disc.split(self.split(w)[0])[1])
+        tension = self.segment_tensions(w, p_motor)
+        tau = self.turning(e)
+        beta = np.abs(tau)
+        pa, pb = tension[self.guides], tension[self.guides + 1]
+        return seg_len, e, tension, tau, pa, pb, pa * np.exp(-self.mu * beta), pa * np.exp(self.mu * beta)
+
+    def modes(self, w: np.ndarray, p_motor, s_ref: np.ndarray) -> np.ndarray:
+        """The branch of the clip at w: SLIP_IN, STICK or SLIP_OUT per guide (ties to slip,
+        so that mu = 0 is never a stick)."""
+        *_, pb, lo, hi = self._bounds(w, p_motor)
+        trial = pb + self.scale * (self.beyond(w) - s_ref)
+        return np.where(trial <= lo, SLIP_IN, np.where(trial >= hi, SLIP_OUT, STICK))
+
+    def guide_residual(self, w, p_motor, s_ref, modes) -> np.ndarray:
+        """Phi of every guide in the given modes."""
+        *_, pb, lo, hi = self._bounds(w, p_motor)
+        stick = -self.scale * (self.beyond(w) - s_ref)
+        return np.where(modes == SLIP_IN, pb - lo, np.where(modes == SLIP_OUT, pb - hi, stick))
+
+    def residual(self, w: np.ndarray, p_motor, s_ref: np.ndarray, modes=None) -> np.ndarray:
+        """F(w): the guided equilibrium with segment tensions, then Phi per guide
+        (``modes`` None: the modes of w, :meth:`modes`)."""
+        modes = self.modes(w, p_motor, s_ref) if modes is None else np.asarray(modes)
+        u = self.split(w)[0]
+        terms = self.disc.segment_terms(u, self.segment_tensions(w, p_motor))
+        return np.concatenate((self.disc.residual(u, None, terms=terms),
+                               self.guide_residual(w, p_motor, s_ref, modes)))
+
+    # --- the Jacobian: the guided pattern, the q columns and the Phi rows ----------------
+    @cached_property
+    def _coo(self):
+        """(rows, cols) of every stored entry, and the order that sorts them into CSR."""
+        disc, n_u = self.disc, self.disc.size
+        indptr, indices, _ = disc.pattern
+        rows = [np.repeat(np.arange(n_u), np.diff(indptr))]
+        cols = [np.asarray(indices)]
+        chord, grow = disc.entries[:2]
+        on_q = self.unknown_of_segment[chord] >= 0
+        rows.append(grow[on_q])                                       # dF_theta / dq
+        cols.append(n_u + self.unknown_of_segment[chord[on_q]])
+        for j, a in enumerate(self.guides):                           # dPhi_j / d(z, q)
+            last = disc.path_starts[disc.point_tendon[a] + 1]
+            zc = disc.n_elements + np.arange(2 * a, 2 * last)
+            qc = [n_u + k for k in (self.unknown_of_segment[a], j) if k >= 0]
+            rows.append(np.full(len(zc) + len(qc), n_u + j))
+            cols.append(np.concatenate((zc, qc)))
+        rows, cols = np.concatenate(rows), np.concatenate(cols)
+        order = np.lexsort((cols, rows))
+        return rows, cols, order, on_q
+
+    @cached_property
+    def pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """CSR (indptr, indices) of the Jacobian, int32."""
+        rows, cols, order, _ = self._coo
+        indptr = np.searchsorted(rows[order], np.arange(self.size + 1)).astype(np.int32)
+        return indptr, cols[order].astype(np.int32)
+
+    def jacobian_values(self, w: np.ndarray, p_motor, s_ref: np.ndarray, modes) -> np.ndarray:
+        """Entries of dF/dw in the order of :attr:`pattern`, in the fixed ``modes``."""
+        disc = self.disc
+        u = self.split(w)[0]
+        tension = self.segment_tensions(w, p_motor)
+        t = disc.segment_terms(u, tension)
+        dg = disc.segment_gradients(t.theta, (t.c, t.s))
+        chord = disc.entries[0]
+        _, _, order, on_q = self._coo
+        parts = [disc.jacobian_values(u, None, t, dg)]
+        # dF_theta/dP_a = grad_theta l_a = -D_a^T e_a (docs/model.md §11.3, per segment)
+        parts.append(-np.sum(dg[on_q] * t.e[chord[on_q]], axis=1))
+        parts.extend(self._guide_rows(w, p_motor, np.asarray(modes)))
+        return np.concatenate(parts)[order]
+
+    def _guide_rows(self, w, p_motor, modes) -> list[np.ndarray]:
+        """dPhi_j/d(z_a..z_last, P_a, P_{a+1}) in the column order of :attr:`_coo`."""
+        disc = self.disc
+        seg_len, e, _, tau, pa, _, lo, hi = self._bounds(w, p_motor)
+        # d beta / d z: phi_a = angle of z_a, d phi_a/d z_a = e_a^perp / l_a
+        sign = np.sign(tau)[:, None]
+        dphi = _perp(e) / seg_len[:, None]
+        out = []
+        for j, a in enumerate(self.guides):
+            last = disc.path_starts[disc.point_tendon[a] + 1]
+            dz = np.zeros((last - a, 2))
+            q_own = [] if self.unknown_of_segment[a] < 0 else [0.0]
+            if modes[j] == STICK:                     # Phi = -c (S_a - S_ref)
+                dz[1:] = -self.scale * e[a + 1:last]
+                out.append(np.concatenate((dz.ravel(), q_own, [0.0])))
+                continue
+            bound = lo[j] if modes[j] == SLIP_IN else hi[j]
+            rate = modes[j] * self.mu[j]              # Phi = P_{a+1} - P_a exp(rate beta)
+            dz[0] = bound * rate * sign[j] * dphi[a]
+            dz[1] = -bound * rate * sign[j] * dphi[a + 1]
+            q_own = [] if not q_own else [-bound / pa[j] if pa[j] != 0.0 else
+                                          -np.exp(rate * abs(tau[j]))]
+            out.append(np.concatenate((dz.ravel(), q_own, [1.0])))
+        return out
