@@ -21,6 +21,12 @@ from .options import SolverOptions, check_comm
 from .reasons import SNES_REASONS
 
 
+# Full Newton steps: a backtracking line search on |F| (not smooth across a change of
+# mode) stalled the path on configs/guided3.toml and on the closed form's arm (4-6x
+# more iterations); the load increments keep the predictor within reach.
+DEFAULTS = {"snes_linesearch_type": "basic"}
+
+
 class CapstanSolver:
     """SNES on the friction system of one arm, reused across increments.
 
@@ -39,7 +45,7 @@ class CapstanSolver:
 
     def __init__(self, kernel: CapstanKernel, *, comm=None, options_prefix: str = "fric_",
                  petsc_options=None):
-        self.options = SolverOptions(options_prefix, petsc_options)
+        self.options = SolverOptions(options_prefix, petsc_options, DEFAULTS)
         self.comm = comm = check_comm(comm)
         self.kernel = kernel
         n = kernel.size

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import InputError
-from ..core.friction import CapstanKernel
+from ..core.friction import DEFAULT_SCALE, CapstanKernel
 from ..core.guided import GuidedDiscretisation
 from ..core.results import Result
 from ..solvers.equilibrium import check_tensions, solve_equilibrium
@@ -56,7 +56,7 @@ def check_history(history, n_tendons: int) -> np.ndarray:
 
 
 def friction_path(disc: GuidedDiscretisation, mu, history, *, max_step: float = 1.0,
-                  scale: float = 1.0, petsc_options=None) -> FrictionPath:
+                  scale: float = DEFAULT_SCALE, petsc_options=None) -> FrictionPath:
     """Follow the motor tensions ``history`` (K, n) with friction ``mu`` at the guides
     (a scalar or one per guide), from the frictionless equilibrium at history[0];
     increments no larger than ``max_step`` in any tension."""
@@ -66,11 +66,11 @@ def friction_path(disc: GuidedDiscretisation, mu, history, *, max_step: float = 
     if not start.converged:
         raise InputError(f"no frictionless equilibrium at the first tensions: {start.message}")
     w = kernel.frictionless_state(start.u, history[0])
-    rows, counts, message = [], [0, 0], ""
+    rows, counts, message, secant = [], [0, 0], "", [None, 0.0]
     with CapstanSolver(kernel, petsc_options=petsc_options) as solver:
         rows.append(_record(kernel, w, history[0], kernel.beyond(w)))
         for p_from, p_to in zip(history[:-1], history[1:]):
-            w, s_ref, message = _advance(solver, w, p_from, p_to, max_step, counts)
+            w, s_ref, message = _advance(solver, w, p_from, p_to, max_step, counts, secant)
             if message:
                 break
             rows.append(_record(kernel, w, p_to, s_ref))
@@ -79,27 +79,37 @@ def friction_path(disc: GuidedDiscretisation, mu, history, *, max_step: float = 
                         converged=not message, message=message, **stack)
 
 
-def _advance(solver: CapstanSolver, w, p_from, p_to, max_step: float, counts):
+def _advance(solver: CapstanSolver, w, p_from, p_to, max_step: float, counts, secant):
     """w at p_to from w at p_from in increments (halved on failure): (w, the cable
-    beyond each guide at the start of the last increment, message)."""
+    beyond each guide at the start of the last increment, message).  Each Newton
+    solve starts from the secant predictor w + (step / last step) dw of the last
+    accepted increment (``secant``: [dw, its tension step], updated), so that the
+    guides' slip continues in its direction and the modes are right from the
+    first iterate (from w itself every trial value is a tie between the modes)."""
     kernel = solver.kernel
-    steps = max(1, int(np.ceil(np.max(np.abs(p_to - p_from)) / max_step)))
+    span = float(np.max(np.abs(p_to - p_from)))
+    steps = max(1, int(np.ceil(span / max_step)))
     done, step, halvings = 0.0, 1.0 / steps, 0
     s_ref = kernel.beyond(w)
     while done < 1.0 - 1e-12:
         step = min(step, 1.0 - done)
         p = p_from + (done + step) * (p_to - p_from)
         s_ref = kernel.beyond(w)
-        trial, its, reason, ok = solver.increment(w, p, s_ref)
+        guess = w.copy()
+        if secant[0] is not None and secant[1] > 0.0:
+            guess += (step * span / secant[1]) * secant[0]
+        trial, its, reason, ok = solver.increment(guess, p, s_ref)
         counts[0] += 1
         counts[1] += its
         if not ok:
             halvings += 1
             if halvings > MAX_HALVINGS:
-                return w, s_ref, (f"the increment to motor tensions {np.round(p, 6).tolist()} did not "
-                           f"converge ({reason}) after {MAX_HALVINGS} halvings")
+                return w, s_ref, (f"the increment to motor tensions {np.round(p, 6).tolist()} did "
+                                  f"not converge ({reason}) after {MAX_HALVINGS} halvings")
             step *= 0.5
+            secant[0] = None
             continue
+        secant[:] = [trial - w, step * span]
         w, done = trial, done + step
     return w, s_ref, ""
 
