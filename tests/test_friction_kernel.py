@@ -1,0 +1,92 @@
+"""Kernel of capstan friction at the guides (core/friction.py, docs/model.md §26):
+the residual and its Jacobian in each fixed stick/slip mode (Taylor remainders of
+order 2, every derivative inside the stored pattern), the reduction to the
+frictionless kernel, and the inputs refused."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from elastica_petsc.core.errors import InputError
+from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.core.friction import SLIP_IN, SLIP_OUT, STICK, CapstanKernel
+from elastica_petsc.core.model import load_config
+from conftest import REPO
+
+MODES = (SLIP_IN, STICK, SLIP_OUT)
+
+
+@pytest.fixture(scope="module")
+def kernel():
+    disc = Discretisation.from_arm(load_config(REPO / "configs" / "guided3.toml"), 24)
+    return CapstanKernel.of(disc, 0.3)
+
+
+def bent_state(kernel, seed=0):
+    """A state off equilibrium with bent arm, chords off their consistent values,
+    segment tensions unrelated to each other, and reference lengths beside S."""
+    rng = np.random.default_rng(seed)
+    disc = kernel.disc
+    theta = np.concatenate(([0.0], np.cumsum(rng.normal(0.05, 0.02, disc.n_elements))))
+    u = disc.consistent_state(theta) + 1e-3 * rng.normal(size=disc.size)
+    w = np.concatenate((u, rng.uniform(5.0, 10.0, kernel.n_guides)))
+    s_ref = kernel.beyond(w) + 1e-3 * rng.normal(size=kernel.n_guides)
+    return w, np.array([12.0, 7.0]), s_ref
+
+
+def jacobian(kernel, w, p, s_ref, modes):
+    indptr, indices = kernel.pattern
+    return sp.csr_matrix((kernel.jacobian_values(w, p, s_ref, modes), indices, indptr),
+                         shape=(kernel.size, kernel.size))
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_jacobian_taylor_order_two_in_each_mode(kernel, mode):
+    w, p, s_ref = bent_state(kernel)
+    modes = np.full(kernel.n_guides, mode)
+    modes[::3] = MODES[(MODES.index(mode) + 1) % 3]          # mixed modes along the cables
+    J = jacobian(kernel, w, p, s_ref, modes)
+    v = np.random.default_rng(1).normal(size=w.size)
+    F0 = kernel.residual(w, p, s_ref, modes)
+    rem = [np.linalg.norm(kernel.residual(w + e * v, p, s_ref, modes) - F0 - e * (J @ v))
+           for e in (1e-3, 5e-4, 2.5e-4)]
+    orders = np.log2(np.array(rem[:-1]) / np.array(rem[1:]))
+    assert np.all(np.abs(orders - 2.0) < 0.1), (rem, orders)
+
+
+def test_every_derivative_is_in_the_pattern(kernel):
+    w, p, s_ref = bent_state(kernel, seed=2)
+    for mode in MODES:
+        modes = np.full(kernel.n_guides, mode)
+        J = jacobian(kernel, w, p, s_ref, modes).toarray()
+        fd = np.empty_like(J)
+        for k in range(kernel.size):
+            step = np.zeros(kernel.size)
+            step[k] = 1e-7
+            fd[:, k] = (kernel.residual(w + step, p, s_ref, modes)
+                        - kernel.residual(w - step, p, s_ref, modes)) / 2e-7
+        assert np.max(np.abs(fd - J)) < 1e-6 * max(1.0, np.abs(J).max())
+        stored = np.zeros(J.shape, bool)
+        indptr, indices = kernel.pattern
+        stored[np.repeat(np.arange(kernel.size), np.diff(indptr)), indices] = True
+        assert np.max(np.abs(fd[~stored]), initial=0.0) < 1e-6
+
+
+def test_mu_zero_residual_is_the_frictionless_one(kernel):
+    frictionless = CapstanKernel.of(kernel.disc, 0.0)
+    w, p, s_ref = bent_state(kernel, seed=3)
+    u = frictionless.split(w)[0]
+    w0 = frictionless.frictionless_state(u, p)
+    F = frictionless.residual(w0, p, s_ref)
+    np.testing.assert_array_equal(F[:kernel.disc.size], kernel.disc.residual(u, p))
+    assert np.all(F[kernel.disc.size:] == 0.0)
+    # with mu = 0 no guide can stick, whatever the slip
+    assert not np.any(frictionless.modes(w, p, s_ref) == STICK)
+
+
+def test_refused_inputs(kernel, paper_arm):
+    with pytest.raises(InputError, match="friction coefficient"):
+        CapstanKernel.of(kernel.disc, -0.1)
+    with pytest.raises(InputError, match="through guides"):
+        CapstanKernel.of(Discretisation.from_arm(paper_arm), 0.2)

@@ -1,0 +1,126 @@
+"""Load paths with capstan friction at the guides (studies/friction.py, docs/model.md §26):
+
+- mu = 0 gives the frictionless equilibria of the same tensions to round-off;
+- the capstan closed form: a cable through n guides at offset d along the arm, loaded
+  in slip toward the motor, bends the arm to theta(l) = ln(1 + mu p d)/mu and, unloaded
+  in slip toward the end, to -ln(1 - mu p d)/mu (tension P e^{-+mu theta(s)} along the
+  backbone), converging at rate n^-2; the segment tensions are P e^{-mu sum beta};
+- a load-unload cycle of configs/guided3.toml: hysteresis of the tip against the motor
+  tension, with the guides sticking at the reversal, and none with mu = 0.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from elastica_petsc.core.errors import InputError
+from elastica_petsc.core.fem import Discretisation
+from elastica_petsc.core.friction import SLIP_IN, SLIP_OUT, STICK
+from elastica_petsc.core.model import Arm, Guide, Tendon, load_config
+from elastica_petsc.solvers.equilibrium import EquilibriumSolver
+from elastica_petsc.studies.friction import friction_path
+from conftest import REPO
+
+MU = 0.3
+OFFSET = 0.05            # d / l
+P_MAX, P_BACK = 20.0, 10.0
+
+
+def cycle(p_max: float, steps: int) -> np.ndarray:
+    up = np.linspace(0.0, p_max, steps + 1)
+    return np.concatenate((up, up[::-1][1:]))
+
+
+@pytest.fixture(scope="module")
+def guided3():
+    return Discretisation.from_arm(load_config(REPO / "configs" / "guided3.toml"), 48)
+
+
+def test_mu_zero_is_the_frictionless_model(guided3):
+    history = np.column_stack((np.linspace(0.0, 30.0, 7), np.linspace(0.0, 12.0, 7)))
+    path = friction_path(guided3, 0.0, history)
+    assert path.converged
+    # every segment carries its motor's tension exactly
+    motor = path.p_motor[:, guided3.point_tendon]
+    np.testing.assert_array_equal(path.tensions, motor)
+    with EquilibriumSolver(guided3) as solver:
+        for k in (2, 6):
+            eq = solver.solve(history[k])
+            theta = guided3.split(path.states[k][:guided3.size])[0]
+            assert np.max(np.abs(theta - eq.theta)) < 1e-11
+            assert np.max(np.abs(path.tip[k] - eq.tip)) < 1e-11
+
+
+def guided_column(n_guides: int) -> Arm:
+    """l = 1000 mm, B = 1 N m^2; one cable from its motor 500 mm behind the clamp on
+    the line y = d (so it reaches the first guide along the backbone's tangent), through
+    n - 1 guides at s = j l / n and offset d to the tip, offset d."""
+    d_mm = 1000.0 * OFFSET
+    guides = tuple(Guide(1000.0 * j / n_guides, d_mm) for j in range(1, n_guides))
+    return Arm(length_mm=1000.0, bending_stiffness_Nm2=1.0, guide_radius_mm=d_mm, elements=480,
+               tendons=(Tendon(1000.0, (-500.0, d_mm), attach_offset_mm=d_mm, guides=guides),))
+
+
+def test_capstan_closed_form_loading_and_unloading():
+    """B theta' = P(s) d with P(s) = P e^{-mu theta(s)} (slip toward the motor) or
+    e^{+mu theta(s)} (toward the end): theta(l) = +-ln(1 +- mu p d)/mu."""
+    load = np.log(1.0 + MU * P_MAX * OFFSET) / MU
+    unload = -np.log(1.0 - MU * P_BACK * OFFSET) / MU
+    history = np.concatenate((np.linspace(0.0, P_MAX, 6), np.linspace(P_MAX, P_BACK, 6)[1:]))
+    errors = []
+    for n in (8, 16, 32):
+        path = friction_path(Discretisation.from_arm(guided_column(n)), MU, history[:, None],
+                             max_step=4.0)
+        assert path.converged, path.message
+        top = 5
+        assert np.all(path.modes[1:top + 1] == SLIP_IN)
+        assert np.all(path.modes[-1] == SLIP_OUT)
+        errors.append((path.tip_angle[top] - load, path.tip_angle[-1] - unload))
+        # the segment tensions are the motor's times e^{-+mu (the angles turned so far)},
+        # to Newton's tolerance (absolute 1e-10 on every equation)
+        for k, sign in ((top, -1.0), (-1, 1.0)):
+            turned = np.concatenate(([0.0], np.cumsum(path.wrap[k])))
+            np.testing.assert_allclose(path.tensions[k], path.p_motor[k, 0] *
+                                       np.exp(sign * MU * turned), rtol=0, atol=1e-10)
+    errors = np.array(errors)
+    orders = np.log2(errors[:-1] / errors[1:])
+    assert np.all(errors[-1] > 0) and np.all(np.abs(errors[-1]) < [2e-3, 5e-4]), errors
+    assert np.all(orders[-1] > 1.9) and np.all(orders > 1.8), orders
+    # hysteresis: the tip angles of loading and unloading differ at the same tension
+    assert -np.log(1.0 - MU * P_BACK * OFFSET) / MU - np.log(1.0 + MU * P_BACK * OFFSET) / MU > 0.07
+
+
+def test_load_unload_cycle_shows_hysteresis(guided3):
+    p1 = cycle(40.0, 20)
+    history = np.column_stack((p1, np.zeros_like(p1)))
+    paths = {mu: friction_path(guided3, mu, history) for mu in (0.0, MU)}
+    assert all(path.converged for path in paths.values())
+    top = 20
+    for mu, path in paths.items():
+        up, down = path.tip_angle[:top + 1], path.tip_angle[top:][::-1]
+        gap = down - up
+        if mu == 0.0:
+            assert np.max(np.abs(gap)) < 1e-10                 # no loop without friction
+            continue
+        # unloading bends the arm more at every tension between the ends of the cycle (the
+        # gap grows like p^2 near p = 0: 6.6e-4 rad at p = 2, far above Newton's 1e-10)
+        assert np.all(gap[1:-1] > 1e-4) and gap.max() > 0.15, gap
+        assert abs(gap[0]) < 1e-10 and abs(gap[-1]) < 1e-10  # the loop closes at p = 0
+        # loading: tendon 1's guides slip toward the motor; tension falls along the cable
+        cable1 = guided3.point_tendon == 0
+        guides1 = np.flatnonzero(cable1[:-1] & cable1[1:])
+        assert np.all(path.modes[1:top + 1][:, guides1] == SLIP_IN)
+        assert np.all(np.diff(path.tensions[top][cable1]) < 0)
+        # the reversal: the first guide sticks and the tension beyond it stays at its peak
+        assert path.modes[top + 1, guides1[0]] == STICK
+        assert path.tensions[top + 1, 1] == pytest.approx(path.tensions[top, 1], rel=1e-12)
+        # unloading, once it slips back: toward the end, tension rising along the cable
+        assert np.all(path.modes[-2][guides1] == SLIP_OUT)
+        assert np.all(np.diff(path.tensions[-2][cable1]) > 0)
+
+
+def test_bad_history(guided3):
+    with pytest.raises(InputError, match="tension vectors with 2 values"):
+        friction_path(guided3, MU, [[1.0, 2.0, 3.0]])
+    with pytest.raises(InputError, match="negative"):
+        friction_path(guided3, MU, [[1.0, 0.0], [-1.0, 0.0]])
