@@ -17,10 +17,11 @@ from conftest import REPO
 MODES = (SLIP_IN, STICK, SLIP_OUT)
 
 
-@pytest.fixture(scope="module")
-def kernel():
+@pytest.fixture(scope="module", params=[None, (True, False)], ids=["force", "length"])
+def kernel(request):
+    """guided3 with both motors under force control, or the first holding its length."""
     disc = Discretisation.from_arm(load_config(REPO / "configs" / "guided3.toml"), 24)
-    return CapstanKernel.of(disc, 0.3)
+    return CapstanKernel.of(disc, 0.3, length_control=request.param)
 
 
 def bent_state(kernel, seed=0):
@@ -30,9 +31,10 @@ def bent_state(kernel, seed=0):
     disc = kernel.disc
     theta = np.concatenate(([0.0], np.cumsum(rng.normal(0.05, 0.02, disc.n_elements))))
     u = disc.consistent_state(theta) + 1e-3 * rng.normal(size=disc.size)
-    w = np.concatenate((u, rng.uniform(5.0, 10.0, kernel.n_guides)))
+    w = np.concatenate((u, rng.uniform(5.0, 10.0, kernel.size - disc.size)))
     s_ref = kernel.beyond(w) + 1e-3 * rng.normal(size=kernel.n_guides)
-    return w, np.array([12.0, 7.0]), s_ref
+    motor = np.where(kernel.length_control, kernel.cable_lengths(w) - 1e-3, [12.0, 7.0])
+    return w, motor, s_ref
 
 
 def jacobian(kernel, w, p, s_ref, modes):
@@ -74,8 +76,8 @@ def test_every_derivative_is_in_the_pattern(kernel):
 
 
 def test_mu_zero_residual_is_the_frictionless_one(kernel):
-    frictionless = CapstanKernel.of(kernel.disc, 0.0)
-    w, p, s_ref = bent_state(kernel, seed=3)
+    frictionless = CapstanKernel.of(kernel.disc, 0.0)           # force control
+    w, p, s_ref = bent_state(frictionless, seed=3)
     u = frictionless.split(w)[0]
     w0 = frictionless.frictionless_state(u, p)
     F = frictionless.residual(w0, p, s_ref)

@@ -119,8 +119,33 @@ def test_load_unload_cycle_shows_hysteresis(guided3):
         assert np.all(np.diff(path.tensions[-2][cable1]) > 0)
 
 
+def test_length_control_follows_the_force_controlled_path(guided3):
+    """Reeling cable 1 in by its motor length (the paths meet on monotone loading: every
+    guide slips toward the motor and the state is a function of the motor tension), then
+    paying it out again: the motor tension falls while the guides stick."""
+    start = np.array([4.0, 0.0])
+    lengths = friction_path(guided3, MU, [[0.0, 0.0]], start_tensions=start).cable_lengths[0, 0]
+    pull = lengths - np.linspace(0.0, 0.02, 5)[1:]                 # reel in 0.02 l = 6 mm
+    history = np.column_stack((np.r_[pull, pull[-1] + 5e-4], np.zeros(5)))
+    by_length = friction_path(guided3, MU, history, length_control=(True, False),
+                              start_tensions=start)
+    assert by_length.converged, by_length.message
+    np.testing.assert_allclose(by_length.cable_lengths[1:, 0], history[:, 0], atol=1e-10)
+    assert np.all(np.diff(by_length.p_motor[:5, 0]) > 0)            # reeling in pulls harder
+    by_force = friction_path(guided3, MU, np.column_stack((by_length.p_motor[:5, 0], np.zeros(5))))
+    np.testing.assert_allclose(by_force.states[:, :guided3.size],
+                               by_length.states[:5, :guided3.size], atol=1e-8)
+    # paying out 5e-4 l = 0.15 mm of cable again: the first guide sticks (the cable beyond
+    # it keeps its length) and the motor tension drops by 6 % (28.28 to 26.51)
+    assert by_length.modes[-1, 0] == STICK
+    assert by_length.tensions[-1, 1] == pytest.approx(by_length.tensions[-2, 1], rel=1e-12)
+    assert by_length.p_motor[-1, 0] < 0.95 * by_length.p_motor[-2, 0]
+
+
 def test_bad_history(guided3):
-    with pytest.raises(InputError, match="tension vectors with 2 values"):
+    with pytest.raises(InputError, match="motor values with 2 values"):
         friction_path(guided3, MU, [[1.0, 2.0, 3.0]])
     with pytest.raises(InputError, match="negative"):
         friction_path(guided3, MU, [[1.0, 0.0], [-1.0, 0.0]])
+    with pytest.raises(InputError, match="start_tensions"):
+        friction_path(guided3, MU, [[1.0, 0.0]], length_control=(True, False))

@@ -25,10 +25,11 @@ Each branch of the clip is a mode (SLIP_IN, STICK, SLIP_OUT); in a fixed mode
 Phi is smooth and :meth:`CapstanKernel.jacobian_values` is its exact derivative.
 
 The unknowns are w = (u, q): u the bordered state of core/guided.py (angles
-and chords) and q the tensions of every segment after a guide (the first
-segment of each tendon carries the motor tension, given).  The equations are
-the guided equilibrium with segment tensions (f_a = P_a e_a - P_{a+1} e_{a+1})
-and one Phi per guide.  With mu = 0 the clip interval is {P_a}: every tension
+and chords) and q the tensions of every segment after a guide, then those of
+the motor segments of the length-controlled tendons (a force-controlled
+motor's segment carries its given tension).  The equations are the guided
+equilibrium with segment tensions (f_a = P_a e_a - P_{a+1} e_{a+1}), one Phi
+per guide and L_i = Lbar_i per length-controlled tendon.  With mu = 0 the clip interval is {P_a}: every tension
 equals the motor's and the state is the frictionless one.
 """
 from __future__ import annotations
@@ -64,9 +65,11 @@ class CapstanKernel:
     disc: GuidedDiscretisation
     mu: np.ndarray
     scale: float = DEFAULT_SCALE
+    length_control: np.ndarray | None = None    # per tendon: its motor holds a cable length
 
     @classmethod
-    def of(cls, disc: GuidedDiscretisation, mu, scale: float = DEFAULT_SCALE) -> "CapstanKernel":
+    def of(cls, disc: GuidedDiscretisation, mu, scale: float = DEFAULT_SCALE,
+           length_control=None) -> "CapstanKernel":
         if not getattr(disc, "has_paths", False):
             raise InputError("capstan friction needs an arm whose cables run through guides")
         n_guides = int(np.count_nonzero(~disc.last_point))
@@ -75,7 +78,9 @@ class CapstanKernel:
             raise InputError(f"friction coefficient must be finite and >= 0, got {mu.tolist()}")
         if n_guides == 0:
             raise InputError("capstan friction needs at least one guide on a cable")
-        return cls(disc, mu, float(scale))
+        control = np.zeros(disc.n_tendons, bool) if length_control is None else \
+            np.broadcast_to(np.asarray(length_control, bool), (disc.n_tendons,)).copy()
+        return cls(disc, mu, float(scale), control)
 
     # --- layout -----------------------------------------------------------------------
     @cached_property
@@ -87,30 +92,54 @@ class CapstanKernel:
     def n_guides(self) -> int:
         return len(self.guides)
 
+    @cached_property
+    def first_segments(self) -> np.ndarray:
+        """The motor segment of each tendon (from its routing point)."""
+        return np.asarray(self.disc.path_starts[:-1])
+
+    @property
+    def lengths_held(self) -> np.ndarray:
+        """The tendons whose motor holds a cable length (its tension is unknown)."""
+        return np.flatnonzero(self.length_control)
+
     @property
     def size(self) -> int:
-        return self.disc.size + self.n_guides
+        return self.disc.size + self.n_guides + len(self.lengths_held)
 
     @cached_property
     def unknown_of_segment(self) -> np.ndarray:
-        """Index in q of each segment's tension, -1 for a motor segment (given)."""
+        """Index in q of each segment's tension, -1 for a force-controlled motor's
+        segment (given): the segments after the guides, then the motor segments
+        of the length-controlled tendons."""
         out = np.full(self.disc.n_points, -1)
         out[self.guides + 1] = np.arange(self.n_guides)
+        out[self.first_segments[self.lengths_held]] = self.n_guides + np.arange(
+            len(self.lengths_held))
         return out
 
     def split(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return w[:self.disc.size], w[self.disc.size:]
 
-    def segment_tensions(self, w: np.ndarray, p_motor) -> np.ndarray:
-        """P_a of every segment: the motor's on first segments, q after the guides."""
+    def segment_tensions(self, w: np.ndarray, motor) -> np.ndarray:
+        """P_a of every segment: ``motor`` (per tendon: the tension of a force-controlled
+        motor, the cable length of a length-controlled one) on the first segments of
+        force control, q on the others."""
         out = np.empty(self.disc.n_points)
-        out[self.disc.first_point] = np.asarray(p_motor, float)
-        out[self.guides + 1] = self.split(w)[1]
+        given = ~self.length_control
+        out[self.first_segments[given]] = np.asarray(motor, float)[given]
+        unknown = self.unknown_of_segment >= 0
+        out[unknown] = self.split(w)[1][self.unknown_of_segment[unknown]]
         return out
 
-    def frictionless_state(self, u: np.ndarray, p_motor) -> np.ndarray:
-        """w of a frictionless state u: every segment at its motor's tension."""
-        return np.concatenate((u, np.asarray(p_motor, float)[self.disc.point_tendon][self.guides + 1]))
+    def frictionless_state(self, u: np.ndarray, p) -> np.ndarray:
+        """w of a frictionless state u at tensions p: every segment at its motor's."""
+        p = np.asarray(p, float)
+        return np.concatenate((u, p[self.disc.point_tendon][self.guides + 1],
+                               p[self.lengths_held]))
+
+    def cable_lengths(self, w: np.ndarray) -> np.ndarray:
+        """L_i of every tendon, from the chords of w."""
+        return self.disc.cables(self.disc.split(self.split(w)[0])[1])[0]
 
     # --- geometry of the cables ------------------------------------------------------
     def beyond(self, w: np.ndarray) -> np.ndarray:
@@ -134,35 +163,37 @@ class CapstanKernel:
         return np.abs(self.turning(e))
 
     # --- the complementarity ----------------------------------------------------------
-    def _bounds(self, w, p_motor):
+    def _bounds(self, w, motor):
         seg_len, e = self.disc.segments(self.disc.split(self.split(w)[0])[1])
-        tension = self.segment_tensions(w, p_motor)
+        tension = self.segment_tensions(w, motor)
         tau = self.turning(e)
         beta = np.abs(tau)
         pa, pb = tension[self.guides], tension[self.guides + 1]
         return seg_len, e, tension, tau, pa, pb, pa * np.exp(-self.mu * beta), pa * np.exp(self.mu * beta)
 
-    def modes(self, w: np.ndarray, p_motor, s_ref: np.ndarray) -> np.ndarray:
+    def modes(self, w: np.ndarray, motor, s_ref: np.ndarray) -> np.ndarray:
         """The branch of the clip at w: SLIP_IN, STICK or SLIP_OUT per guide (ties to slip,
         so that mu = 0 is never a stick)."""
-        *_, pb, lo, hi = self._bounds(w, p_motor)
+        *_, pb, lo, hi = self._bounds(w, motor)
         trial = pb + self.scale * (self.beyond(w) - s_ref)
         return np.where(trial <= lo, SLIP_IN, np.where(trial >= hi, SLIP_OUT, STICK))
 
-    def guide_residual(self, w, p_motor, s_ref, modes) -> np.ndarray:
+    def guide_residual(self, w, motor, s_ref, modes) -> np.ndarray:
         """Phi of every guide in the given modes."""
-        *_, pb, lo, hi = self._bounds(w, p_motor)
+        *_, pb, lo, hi = self._bounds(w, motor)
         stick = -self.scale * (self.beyond(w) - s_ref)
         return np.where(modes == SLIP_IN, pb - lo, np.where(modes == SLIP_OUT, pb - hi, stick))
 
-    def residual(self, w: np.ndarray, p_motor, s_ref: np.ndarray, modes=None) -> np.ndarray:
+    def residual(self, w: np.ndarray, motor, s_ref: np.ndarray, modes=None) -> np.ndarray:
         """F(w): the guided equilibrium with segment tensions, then Phi per guide
         (``modes`` None: the modes of w, :meth:`modes`)."""
-        modes = self.modes(w, p_motor, s_ref) if modes is None else np.asarray(modes)
+        modes = self.modes(w, motor, s_ref) if modes is None else np.asarray(modes)
         u = self.split(w)[0]
-        terms = self.disc.segment_terms(u, self.segment_tensions(w, p_motor))
+        terms = self.disc.segment_terms(u, self.segment_tensions(w, motor))
+        held = self.lengths_held
         return np.concatenate((self.disc.residual(u, None, terms=terms),
-                               self.guide_residual(w, p_motor, s_ref, modes)))
+                               self.guide_residual(w, motor, s_ref, modes),
+                               self.cable_lengths(w)[held] - np.asarray(motor, float)[held]))
 
     # --- the Jacobian: the guided pattern, the q columns and the Phi rows ----------------
     @cached_property
@@ -182,6 +213,10 @@ class CapstanKernel:
             qc = [n_u + k for k in (self.unknown_of_segment[a], j) if k >= 0]
             rows.append(np.full(len(zc) + len(qc), n_u + j))
             cols.append(np.concatenate((zc, qc)))
+        for r, i in enumerate(self.lengths_held):     # dL_i / dz, and a stored zero diagonal
+            zc = disc.n_elements + np.arange(2 * disc.path_starts[i], 2 * disc.path_starts[i + 1])
+            rows.append(np.full(len(zc) + 1, n_u + self.n_guides + r))
+            cols.append(np.append(zc, n_u + self.n_guides + r))
         rows, cols = np.concatenate(rows), np.concatenate(cols)
         order = np.lexsort((cols, rows))
         return rows, cols, order, on_q
@@ -193,11 +228,11 @@ class CapstanKernel:
         indptr = np.searchsorted(rows[order], np.arange(self.size + 1)).astype(np.int32)
         return indptr, cols[order].astype(np.int32)
 
-    def jacobian_values(self, w: np.ndarray, p_motor, s_ref: np.ndarray, modes) -> np.ndarray:
+    def jacobian_values(self, w: np.ndarray, motor, s_ref: np.ndarray, modes) -> np.ndarray:
         """Entries of dF/dw in the order of :attr:`pattern`, in the fixed ``modes``."""
         disc = self.disc
         u = self.split(w)[0]
-        tension = self.segment_tensions(w, p_motor)
+        tension = self.segment_tensions(w, motor)
         t = disc.segment_terms(u, tension)
         dg = disc.segment_gradients(t.theta, (t.c, t.s))
         chord = disc.entries[0]
@@ -205,13 +240,16 @@ class CapstanKernel:
         parts = [disc.jacobian_values(u, None, t, dg)]
         # dF_theta/dP_a = grad_theta l_a = -D_a^T e_a (docs/model.md §11.3, per segment)
         parts.append(-np.sum(dg[on_q] * t.e[chord[on_q]], axis=1))
-        parts.extend(self._guide_rows(w, p_motor, np.asarray(modes)))
+        parts.extend(self._guide_rows(w, motor, np.asarray(modes)))
+        starts = disc.path_starts
+        parts.extend(np.append(t.e[starts[i]:starts[i + 1]].ravel(), 0.0)
+                     for i in self.lengths_held)
         return np.concatenate(parts)[order]
 
-    def _guide_rows(self, w, p_motor, modes) -> list[np.ndarray]:
+    def _guide_rows(self, w, motor, modes) -> list[np.ndarray]:
         """dPhi_j/d(z_a..z_last, P_a, P_{a+1}) in the column order of :attr:`_coo`."""
         disc = self.disc
-        seg_len, e, _, tau, pa, _, lo, hi = self._bounds(w, p_motor)
+        seg_len, e, _, tau, pa, _, lo, hi = self._bounds(w, motor)
         # d beta / d z: phi_a = angle of z_a, d phi_a/d z_a = e_a^perp / l_a
         sign = np.sign(tau)[:, None]
         dphi = _perp(e) / seg_len[:, None]

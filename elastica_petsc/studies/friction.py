@@ -31,7 +31,9 @@ class FrictionPath(Result):
     non-dimensional (lengths / l, p = P l^2/B)."""
 
     mu: np.ndarray              # friction coefficient of each guide
-    p_motor: np.ndarray         # (K, n) motor tensions of the history reached
+    length_control: np.ndarray  # per tendon: its motor held cable lengths (else tensions)
+    p_motor: np.ndarray         # (K, n) motor tensions (the first segments')
+    cable_lengths: np.ndarray   # (K, n) whole cable lengths L_i (what the motors paid out)
     tip: np.ndarray             # (K, 2) tip positions
     tip_angle: np.ndarray       # (K,) theta(l)
     tensions: np.ndarray        # (K, P) tension of every segment (tendon by tendon)
@@ -44,51 +46,69 @@ class FrictionPath(Result):
     message: str = ""
 
 
-def check_history(history, n_tendons: int) -> np.ndarray:
-    """A (K, n) array of motor tensions, K >= 1, each row a valid tension vector."""
+def check_history(history, n_tendons: int, length_control) -> np.ndarray:
+    """A (K, n) array, K >= 1: per tendon a tension (>= 0) or, for a length-controlled
+    one, a cable length (> 0)."""
     history = np.atleast_2d(np.asarray(history, float))
     if history.ndim != 2 or history.shape[1] != n_tendons or len(history) == 0:
-        raise InputError(f"a load history is a list of tension vectors with {n_tendons} "
-                         f"values each; got shape {np.shape(history)}")
+        raise InputError(f"a load history is a list of motor values with {n_tendons} "
+                         f"values each (one per tendon); got shape {np.shape(history)}")
     for row in history:
-        check_tensions(row, n_tendons)
+        check_tensions(np.where(length_control, 0.0, row), n_tendons)
+        if not (row[length_control] > 0).all():
+            raise InputError(f"cable lengths must be positive, got {row[length_control].tolist()}")
     return history
 
 
-def friction_path(disc: GuidedDiscretisation, mu, history, *, max_step: float = 1.0,
+def friction_path(disc: GuidedDiscretisation, mu, history, *, length_control=None,
+                  start_tensions=None, max_step: float = 1.0, max_length_step: float = 2e-3,
                   scale: float = DEFAULT_SCALE, petsc_options=None) -> FrictionPath:
-    """Follow the motor tensions ``history`` (K, n) with friction ``mu`` at the guides
-    (a scalar or one per guide), from the frictionless equilibrium at history[0];
-    increments no larger than ``max_step`` in any tension."""
-    kernel = CapstanKernel.of(disc, mu, scale)
-    history = check_history(history, disc.n_tendons)
-    start = solve_equilibrium(disc, history[0])
+    """Follow the motor ``history`` (K, n) with friction ``mu`` at the guides (a scalar or
+    one per guide): per tendon a tension or, where ``length_control`` (per tendon) is
+    True, the cable length L_i (units of l).  The path starts from the frictionless
+    equilibrium at ``start_tensions`` and reaches every row of ``history`` in turn; without
+    ``start_tensions`` (force control only) it starts at history[0].  Increments change no
+    tension by more than ``max_step`` and no length by more than ``max_length_step``."""
+    kernel = CapstanKernel.of(disc, mu, scale, length_control)
+    held = kernel.length_control
+    history = check_history(history, disc.n_tendons, held)
+    if start_tensions is None:
+        if held.any():
+            raise InputError("a path with length-controlled motors needs start_tensions (the "
+                             "frictionless state it starts from)")
+        start_tensions, history = history[0], history[1:]
+    start_tensions = check_tensions(start_tensions, disc.n_tendons)
+    start = solve_equilibrium(disc, start_tensions)
     if not start.converged:
         raise InputError(f"no frictionless equilibrium at the first tensions: {start.message}")
-    w = kernel.frictionless_state(start.u, history[0])
+    w = kernel.frictionless_state(start.u, start_tensions)
+    motor = np.where(held, kernel.cable_lengths(w), start_tensions)
     rows, counts, message, secant = [], [0, 0], "", [None, 0.0]
+    steps = np.where(held, max_length_step, max_step)
     with CapstanSolver(kernel, petsc_options=petsc_options) as solver:
-        rows.append(_record(kernel, w, history[0], kernel.beyond(w)))
-        for p_from, p_to in zip(history[:-1], history[1:]):
-            w, s_ref, message = _advance(solver, w, p_from, p_to, max_step, counts, secant)
+        rows.append(_record(kernel, w, motor, kernel.beyond(w)))
+        for target in history:
+            w, s_ref, message = _advance(solver, w, motor, target, steps, counts, secant)
             if message:
                 break
-            rows.append(_record(kernel, w, p_to, s_ref))
+            motor = target
+            rows.append(_record(kernel, w, motor, s_ref))
     stack = {key: np.array([r[key] for r in rows]) for key in rows[0] if key != "s"}
-    return FrictionPath(mu=kernel.mu, increments=counts[0], iterations=counts[1],
-                        converged=not message, message=message, **stack)
+    return FrictionPath(mu=kernel.mu, length_control=held, increments=counts[0],
+                        iterations=counts[1], converged=not message, message=message, **stack)
 
 
-def _advance(solver: CapstanSolver, w, p_from, p_to, max_step: float, counts, secant):
-    """w at p_to from w at p_from in increments (halved on failure): (w, the cable
-    beyond each guide at the start of the last increment, message).  Each Newton
+def _advance(solver: CapstanSolver, w, p_from, p_to, max_step: np.ndarray, counts, secant):
+    """w at the motor values p_to from w at p_from in increments of at most ``max_step``
+    (per tendon), halved on failure: (w, the cable beyond each guide at the start of
+    the last increment, message).  Each Newton
     solve starts from the secant predictor w + (step / last step) dw of the last
-    accepted increment (``secant``: [dw, its tension step], updated), so that the
+    accepted increment (``secant``: [dw, its step in units of max_step], updated), so that the
     guides' slip continues in its direction and the modes are right from the
     first iterate (from w itself every trial value is a tie between the modes)."""
     kernel = solver.kernel
-    span = float(np.max(np.abs(p_to - p_from)))
-    steps = max(1, int(np.ceil(span / max_step)))
+    span = float(np.max(np.abs(p_to - p_from) / max_step))
+    steps = max(1, int(np.ceil(span)))
     done, step, halvings = 0.0, 1.0 / steps, 0
     s_ref = kernel.beyond(w)
     while done < 1.0 - 1e-12:
@@ -109,17 +129,24 @@ def _advance(solver: CapstanSolver, w, p_from, p_to, max_step: float, counts, se
             step *= 0.5
             secant[0] = None
             continue
+        slack = np.flatnonzero(kernel.length_control & (kernel.segment_tensions(
+            trial, p)[kernel.first_segments] < 0))
+        if slack.size:
+            return w, s_ref, (f"cable {slack[0] + 1} would go slack at the motor values "
+                              f"{np.round(p, 6).tolist()}: slack cables are not modelled with "
+                              "friction")
         secant[:] = [trial - w, step * span]
         w, done = trial, done + step
     return w, s_ref, ""
 
 
-def _record(kernel: CapstanKernel, w, p_motor, s_before) -> dict:
+def _record(kernel: CapstanKernel, w, motor, s_before) -> dict:
     """What the path keeps of the state w (its modes in the increment that reached it,
     measured from ``s_before``)."""
     disc = kernel.disc
     theta = disc.split(kernel.split(w)[0])[0]
-    return {"p_motor": np.asarray(p_motor, float), "tip": disc.node_positions(theta)[-1],
-            "tip_angle": theta[-1], "tensions": kernel.segment_tensions(w, p_motor),
-            "modes": kernel.modes(w, p_motor, s_before), "wrap": kernel.wrap_angles(w),
+    tensions = kernel.segment_tensions(w, motor)
+    return {"p_motor": tensions[kernel.first_segments], "cable_lengths": kernel.cable_lengths(w),
+            "tip": disc.node_positions(theta)[-1], "tip_angle": theta[-1], "tensions": tensions,
+            "modes": kernel.modes(w, motor, s_before), "wrap": kernel.wrap_angles(w),
             "states": w, "s": kernel.beyond(w)}
