@@ -42,11 +42,11 @@ import numpy as np
 from .errors import InputError
 from .guided import GuidedDiscretisation
 
-DEFAULT_SCALE = 100.0
-SLIP_IN, STICK, SLIP_OUT = -1, 0, 1
 # c of Phi (units B/l^3: tension per length of slip).  The solution does not depend on
 # it; Newton's first modes do: c dS must outweigh the tension's change of one increment
-# (c = 30..1000 all converged in 3-13 iterations per increment; c = 1 needed 30-60).
+# (docs/model.md §26.3: c = 30..1000 took 65-74 iterations on a path where c = 1 took 247).
+DEFAULT_SCALE = 100.0
+SLIP_IN, STICK, SLIP_OUT = -1, 0, 1
 MODE_NAMES = {SLIP_IN: "slip toward the motor", STICK: "stick", SLIP_OUT: "slip toward the end"}
 
 
