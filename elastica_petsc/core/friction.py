@@ -75,7 +75,8 @@ class CapstanKernel:
         n_guides = int(np.count_nonzero(~disc.last_point))
         mu = np.broadcast_to(np.asarray(mu, float), (n_guides,)).copy()
         if not np.isfinite(mu).all() or (mu < 0).any():
-            raise InputError(f"friction coefficient must be finite and >= 0, got {mu.tolist()}")
+            bad = mu[~(np.isfinite(mu) & (mu >= 0))][0]
+            raise InputError(f"friction coefficient must be finite and >= 0, got {bad:g}")
         if n_guides == 0:
             raise InputError("capstan friction needs at least one guide on a cable")
         control = np.zeros(disc.n_tendons, bool) if length_control is None else \

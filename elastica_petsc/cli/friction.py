@@ -1,0 +1,103 @@
+"""``elastica-petsc friction``: a load-unload cycle of one motor with capstan friction
+at the guides (docs/model.md §26)."""
+from __future__ import annotations
+
+import sys
+
+from . import common
+
+MODE_SIGNS = {-1: "<", 0: "=", 1: ">"}
+
+
+def add_parser(sub) -> None:
+    parser = sub.add_parser(
+        "friction", help="load-unload cycle of a motor with capstan friction at the guides",
+        description="Follow one motor's tension from 0 to --peak-N and back in --steps "
+                    "increments each way (the other motors hold --hold-N, default 0) with "
+                    "Coulomb friction --mu where the cables wrap their guides: at every guide "
+                    "the cable sticks or slips (capstan law T_out = T_in e^(mu beta)), one "
+                    "tension per cable segment (docs/model.md §26). Prints the tip against the "
+                    "motor tension on both branches and the hysteresis (the largest gap between "
+                    "unloading and loading). Needs an arm whose cables run through guides.")
+    parser.add_argument("--mu", type=float, required=True,
+                        help="friction coefficient at every guide (>= 0; 0 is frictionless)")
+    parser.add_argument("--peak-N", type=float, required=True, metavar="P",
+                        help="the motor tension at the top of the cycle, N")
+    parser.add_argument("--tendon", type=int, default=1, metavar="K",
+                        help="the motor that is cycled (1-based, default 1)")
+    parser.add_argument("--hold-N", type=float, nargs="+", metavar="P",
+                        help="the tensions of the other motors, N, one per tendon (the cycled "
+                             "tendon's value is ignored; default 0)")
+    parser.add_argument("--steps", type=int, default=20, metavar="K",
+                        help="increments of the history each way (default 20)")
+    common.add_arm_options(parser)
+    common.add_output_options(parser)
+    parser.set_defaults(run=run)
+
+
+def history_N(args, arm):
+    """The cycle's rows of motor tensions, N (checked)."""
+    import numpy as np
+
+    from ..core import inputs
+    from ..core.errors import InputError
+
+    n_tendons = arm.n_tendons
+    if not 1 <= args.tendon <= n_tendons:
+        raise InputError(f"--tendon {args.tendon}: the arm has tendons 1..{n_tendons}")
+    inputs.positive(args.peak_N, "--peak-N", "N",
+                    at_most=inputs.MAX_TENSION * arm.force_scale_N)
+    if args.steps < 1:
+        raise InputError(f"--steps must be at least 1, got {args.steps}")
+    hold = np.zeros(n_tendons) if args.hold_N is None else np.asarray(
+        inputs.tensions(args.hold_N, n_tendons, "--hold-N", "N", arm.force_scale_N), float)
+    up = np.linspace(0.0, args.peak_N, args.steps + 1)
+    cycle = np.concatenate((up, up[::-1][1:]))
+    rows = np.tile(hold, (len(cycle), 1))
+    rows[:, args.tendon - 1] = cycle
+    return rows
+
+
+def run(args) -> int:
+    import numpy as np
+
+    from .. import api
+
+    arm, disc = common.load_arm(args)
+    rows = history_N(args, arm)
+    common.check_outputs(args)
+    result = api.friction_path(arm, rows, mu=args.mu, elements=disc.n_elements)
+    summary = result.summary()
+    k = args.tendon - 1
+    y, top = result.tip_mm[:, 1], args.steps
+    gaps = y[top:][::-1] - y[:top + 1] if result.converged else np.zeros(1)
+    summary["largest_gap_mm"] = float(np.max(np.abs(gaps)))
+    if args.json:
+        common.print_json(args.command, summary)
+    else:
+        print(_table(result, k))
+        print(f"hysteresis: the tip's y differs between unloading and loading by up to "
+              f"{summary['largest_gap_mm']:.3f} mm (mu = {args.mu:g})")
+    if args.out:
+        result.save(args.out, overwrite=args.overwrite)
+    if args.plot and result.converged:
+        from ..plots.friction import plot_hysteresis
+        paths = {args.mu: result.path}
+        if args.mu != 0.0:
+            paths[0.0] = api.friction_path(arm, rows, mu=0.0, elements=disc.n_elements).path
+        plot_hysteresis(arm, disc, paths, args.plot, tendon=k)
+    if not result.converged:
+        print(f"elastica-petsc: friction path failed: {result.message}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _table(result, k: int) -> str:
+    """One line per row: motor tension, tip, and every guide's mode
+    (< slip toward the motor, = stick, > slip toward the end)."""
+    lines = [f"{'P' + str(k + 1) + ' [N]':>9} {'tip x [mm]':>11} {'tip y [mm]':>11}  guides "
+             "(< slip toward the motor, = stick, > slip toward the end)"]
+    for p, tip, modes in zip(result.motor_tensions_N[:, k], result.tip_mm, result.modes):
+        lines.append(f"{p:9.3f} {tip[0]:11.3f} {tip[1]:11.3f}  "
+                     + "".join(MODE_SIGNS[int(m)] for m in modes))
+    return "\n".join(lines)

@@ -1,0 +1,48 @@
+"""``elastica-petsc friction`` (docs/model.md §26): a load-unload cycle on
+configs/guided3.toml with its table, the hysteresis line, --out read back and
+--plot, and bad input in one line with exit status 2."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+
+import elastica_petsc as ep
+from conftest import REPO
+
+GUIDED3 = str(REPO / "configs" / "guided3.toml")
+
+
+def cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "elastica_petsc.cli", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd, timeout=120)
+
+
+def test_cycle_table_hysteresis_out_and_plot(tmp_path):
+    out, png = tmp_path / "f.h5", tmp_path / "f.png"
+    run = cli("friction", "--config", GUIDED3, "--mu", 0.3, "--peak-N", 22, "--steps", 4,
+              "--elements", 48, "--out", out, "--plot", png)
+    assert run.returncode == 0, run.stderr
+    lines = run.stdout.splitlines()
+    assert len(lines) == 1 + 9 + 1                       # header, 2 x 4 + 1 rows, hysteresis
+    assert lines[1].split()[0] == "0.000" and lines[5].split()[0] == "22.000"
+    assert lines[5].split()[3] == "<<<>>>"              # loading: cable 1 slips toward its motor
+    assert "=" in lines[6].split()[3]                    # the reversal: a guide sticks
+    gap = float(lines[-1].split("up to ")[1].split()[0])
+    assert gap > 5.0
+    result = ep.read(out)
+    assert isinstance(result, ep.FrictionResult) and result.converged
+    np.testing.assert_allclose(result.motor_tensions_N[:, 0], [0, 5.5, 11, 16.5, 22, 16.5, 11, 5.5, 0],
+                               atol=1e-12)
+    assert png.stat().st_size > 10_000
+
+
+def test_bad_input_is_one_line_and_status_2():
+    for args, words in ((["--config", GUIDED3, "--mu", -0.1, "--peak-N", 5], "friction coefficient"),
+                        (["--mu", 0.1, "--peak-N", 5], "guides"),
+                        (["--config", GUIDED3, "--mu", 0.1, "--peak-N", 0], "--peak-N"),
+                        (["--config", GUIDED3, "--mu", 0.1, "--peak-N", 5, "--tendon", 3], "--tendon")):
+        run = cli("friction", *args)
+        assert run.returncode == 2, (args, run.stderr)
+        assert run.stderr.count("\n") == 1 and words in run.stderr, run.stderr
