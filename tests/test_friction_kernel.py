@@ -92,3 +92,19 @@ def test_refused_inputs(kernel, paper_arm):
         CapstanKernel.of(kernel.disc, -0.1)
     with pytest.raises(InputError, match="through guides"):
         CapstanKernel.of(Discretisation.from_arm(paper_arm), 0.2)
+
+
+def test_solver_contract(kernel):
+    """CapstanSolver (solvers/friction.py) follows docs/model.md §18: a checked prefix,
+    prefixed objects, code options under it, options given later applied at the next solve."""
+    from elastica_petsc.solvers.friction import CapstanSolver
+
+    with pytest.raises(InputError, match="options prefix"):
+        CapstanSolver(kernel, options_prefix="fric")
+    w, motor, _ = bent_state(kernel, seed=4)
+    with CapstanSolver(kernel, options_prefix="cap_", petsc_options={"snes_max_it": 1}) as solver:
+        assert solver.J.getOptionsPrefix() == solver.x.getOptionsPrefix() == "cap_"
+        _, its, reason, ok = solver.increment(w, motor, kernel.beyond(w))
+        assert its == 1 and not ok and reason == "DIVERGED_MAX_IT"
+        solver.options.update({"snes_max_it": 3})
+        assert solver.increment(w, motor, kernel.beyond(w))[1] == 3
