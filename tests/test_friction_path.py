@@ -6,7 +6,10 @@
   in slip toward the end, to -ln(1 - mu p d)/mu (tension P e^{-+mu theta(s)} along the
   backbone), converging at rate n^-2; the segment tensions are P e^{-mu sum beta};
 - a load-unload cycle of configs/guided3.toml: hysteresis of the tip against the motor
-  tension, with the guides sticking at the reversal, and none with mu = 0.
+  tension, with the guides sticking at the reversal, and none with mu = 0;
+- the energy balance of a cycle: the motor's work -oint P_1 dL_1 equals the dissipation
+  sum_a oint (P_{a+1} - P_a) dS_a at the guides (O(step^2) in the increments), and every
+  guide dissipates >= 0 in every increment (maximal dissipation, the second law).
 """
 from __future__ import annotations
 
@@ -15,7 +18,7 @@ import pytest
 
 from elastica_petsc.core.errors import InputError
 from elastica_petsc.core.fem import Discretisation
-from elastica_petsc.core.friction import SLIP_IN, SLIP_OUT, STICK
+from elastica_petsc.core.friction import SLIP_IN, SLIP_OUT, STICK, CapstanKernel
 from elastica_petsc.core.model import Arm, Guide, Tendon, load_config
 from elastica_petsc.solvers.equilibrium import EquilibriumSolver
 from elastica_petsc.studies.friction import friction_path
@@ -117,6 +120,30 @@ def test_load_unload_cycle_shows_hysteresis(guided3):
         # unloading, once it slips back: toward the end, tension rising along the cable
         assert np.all(path.modes[-2][guides1] == SLIP_OUT)
         assert np.all(np.diff(path.tensions[-2][cable1]) > 0)
+
+
+def test_a_cycle_dissipates_the_motor_work_at_the_guides(guided3):
+    """-P_1 dL_1 - dU = sum_a (P_{a+1} - P_a) dS_a exactly (docs/model.md §26.4): over a closed
+    cycle U returns, so the motor's work is the guides' dissipation.  Both by the trapezoid
+    rule over the increments (one per history step); the gap falls at order 2."""
+    kernel = CapstanKernel.of(guided3, MU)
+    gaps = []
+    for steps in (20, 40):
+        up = np.linspace(0.0, 40.0, steps + 1)
+        p1 = np.r_[up, up[::-1][1:]]
+        path = friction_path(guided3, MU, np.column_stack((p1, 0 * p1)), max_step=40.0 / steps)
+        assert path.converged and path.increments == 2 * steps
+        beyond = np.array([kernel.beyond(w) for w in path.states])
+        jump = path.tensions[:, kernel.guides + 1] - path.tensions[:, kernel.guides]
+        slip = np.diff(beyond, axis=0)
+        # backward Euler: the end-of-increment tensions dissipate >= 0 at every guide
+        assert np.min(jump[1:] * slip) > -1e-11
+        dissipated = np.sum(0.5 * (jump[1:] + jump[:-1]) * slip)
+        work = -np.sum(0.5 * (path.p_motor[1:, 0] + path.p_motor[:-1, 0])
+                       * np.diff(path.cable_lengths[:, 0]))
+        assert dissipated > 0.08                      # 0.090 B/l: 15 mJ per cycle
+        gaps.append(abs(work - dissipated) / dissipated)
+    assert gaps[1] < 1e-3 and np.log2(gaps[0] / gaps[1]) > 1.8, gaps
 
 
 def test_length_control_follows_the_force_controlled_path(guided3):
