@@ -77,18 +77,20 @@ class FrictionResult(Result):
 
 
 @_takes_petsc_options
-def friction_path(arm: Arm, history, *, mu, length_control=None, start_tensions_N=None,
+def friction_path(arm: Arm, history, *, mu=None, length_control=None, start_tensions_N=None,
                   elements: int | None = None, max_step_N: float | None = None) -> FrictionResult:
     """Follow the motors through ``history`` (K rows, one value per tendon: its motor
     tension in N, or for a tendon with ``length_control`` True its cable length in mm)
-    with Coulomb friction ``mu`` (a scalar, or one per guide) where the cables wrap the
-    guides: capstan stick and slip at every guide (docs/model.md §26).  The path starts
+    with Coulomb friction ``mu`` (a scalar, or one per guide; default the arm's
+    ``[[tendon]] friction_coefficient``) where the cables wrap the guides: capstan stick
+    and slip at every guide (docs/model.md §26).  The path starts
     from the frictionless equilibrium at ``start_tensions_N`` (default: history[0], with
     every motor under force control).  ``max_step_N``: the largest tension change of one
     increment (default B/l^2, one non-dimensional unit)."""
+    from ..core.friction import guide_friction
     from ..studies.friction import friction_path as follow
 
-    disc = _mesh(arm, elements)
+    disc = _mesh(arm, elements, friction=True)
     if not disc.has_paths:
         raise InputError("friction acts at guides: give the arm's cables guides "
                          "([[tendon]] guides = [...])")
@@ -104,5 +106,6 @@ def friction_path(arm: Arm, history, *, mu, length_control=None, start_tensions_
     step = 1.0 if max_step_N is None else float(max_step_N) / arm.force_scale_N
     if not step > 0:
         raise InputError(f"max_step_N must be positive, got {max_step_N}")
+    mu = guide_friction(arm) if mu is None else mu
     return FrictionResult(arm, follow(disc, mu, scaled, length_control=held,
                                       start_tensions=start, max_step=step))

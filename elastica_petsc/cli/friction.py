@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import sys
 
+import numpy as np
+
+from ..core.errors import InputError
 from . import common
 
 MODE_SIGNS = {-1: "<", 0: "=", 1: ">"}
@@ -19,8 +22,10 @@ def add_parser(sub) -> None:
                     "tension per cable segment (docs/model.md §26). Prints the tip against the "
                     "motor tension on both branches and the hysteresis (the largest gap between "
                     "unloading and loading). Needs an arm whose cables run through guides.")
-    parser.add_argument("--mu", type=float, required=True,
-                        help="friction coefficient at every guide (>= 0; 0 is frictionless)")
+    parser.add_argument("--mu", type=float, nargs="+", metavar="MU",
+                        help="friction coefficient at every guide, or one per guide (each "
+                             "cable's guides from its motor, tendon by tendon); >= 0, 0 is "
+                             "frictionless (default: each [[tendon]] friction_coefficient)")
     parser.add_argument("--peak-N", type=float, required=True, metavar="P",
                         help="the motor tension at the top of the cycle, N")
     parser.add_argument("--tendon", type=int, default=1, metavar="K",
@@ -37,10 +42,7 @@ def add_parser(sub) -> None:
 
 def history_N(args, arm):
     """The cycle's rows of motor tensions, N (checked)."""
-    import numpy as np
-
     from ..core import inputs
-    from ..core.errors import InputError
 
     n_tendons = arm.n_tendons
     if not 1 <= args.tendon <= n_tendons:
@@ -59,14 +61,18 @@ def history_N(args, arm):
 
 
 def run(args) -> int:
-    import numpy as np
-
     from .. import api
 
-    arm, disc = common.load_arm(args)
+    from ..core.friction import guide_friction
+
+    arm, disc = common.load_arm(args, friction=True)
     rows = history_N(args, arm)
     common.check_outputs(args)
-    result = api.friction_path(arm, rows, mu=args.mu, elements=disc.n_elements)
+    mu = guide_friction(arm) if args.mu is None else np.asarray(args.mu, float)
+    if mu.size not in (1, len(guide_friction(arm))):
+        raise InputError(f"--mu: give one coefficient or one per guide "
+                         f"({len(guide_friction(arm))}), got {mu.size}")
+    result = api.friction_path(arm, rows, mu=mu, elements=disc.n_elements)
     summary = result.summary()
     k = args.tendon - 1
     y, top = result.tip_mm[:, 1], args.steps
@@ -77,19 +83,24 @@ def run(args) -> int:
     else:
         print(_table(result, k))
         print(f"hysteresis: the tip's y differs between unloading and loading by up to "
-              f"{summary['largest_gap_mm']:.3f} mm (mu = {args.mu:g})")
+              f"{summary['largest_gap_mm']:.3f} mm (mu = {_mu_text(result.path.mu)})")
     if args.out:
         result.save(args.out, overwrite=args.overwrite)
     if args.plot and result.converged:
         from ..plots.friction import plot_hysteresis
-        paths = {args.mu: result.path}
-        if args.mu != 0.0:
+        paths = {float(np.max(result.path.mu)): result.path}
+        if np.any(result.path.mu != 0.0):
             paths[0.0] = api.friction_path(arm, rows, mu=0.0, elements=disc.n_elements).path
         plot_hysteresis(arm, disc, paths, args.plot, tendon=k)
     if not result.converged:
         print(f"elastica-petsc: friction path failed: {result.message}", file=sys.stderr)
         return 1
     return 0
+
+
+def _mu_text(mu) -> str:
+    """One coefficient, or the list when the guides differ."""
+    return f"{mu[0]:g}" if np.all(mu == mu[0]) else ", ".join(f"{m:g}" for m in mu)
 
 
 def _table(result, k: int) -> str:

@@ -50,6 +50,25 @@ SLIP_IN, STICK, SLIP_OUT = -1, 0, 1
 MODE_NAMES = {SLIP_IN: "slip toward the motor", STICK: "stick", SLIP_OUT: "slip toward the end"}
 
 
+def guide_friction(arm) -> np.ndarray:
+    """The configured friction coefficient of every guide (``[[tendon]]
+    friction_coefficient``), in the kernel's order: each cable's guides from its motor,
+    tendon by tendon."""
+    return np.array([t.friction_coefficient for t in arm.tendons for _ in t.guides], float)
+
+
+def check_frictionless(arm, study: str) -> None:
+    """Refuse an arm configured with friction at its guides for a study that models
+    frictionless guides (all but the friction load path: docs/model.md §26.5)."""
+    for i, tendon in enumerate(arm.tendons, start=1):
+        if tendon.friction_coefficient > 0:
+            raise InputError(
+                f"tendon[{i}].friction_coefficient = {tendon.friction_coefficient:g}: {study} "
+                "models frictionless guides (friction has no potential: no stability, control "
+                "or maps with it); friction is followed only by `elastica-petsc friction` / "
+                "ep.friction_path, or set the coefficient to 0")
+
+
 def _perp(v: np.ndarray) -> np.ndarray:
     return np.column_stack((-v[:, 1], v[:, 0]))
 
