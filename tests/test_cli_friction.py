@@ -42,7 +42,9 @@ def test_bad_input_is_one_line_and_status_2():
     for args, words in ((["--config", GUIDED3, "--mu", -0.1, "--peak-N", 5], "friction coefficient"),
                         (["--mu", 0.1, "--peak-N", 5], "guides"),
                         (["--config", GUIDED3, "--mu", 0.1, "--peak-N", 0], "--peak-N"),
-                        (["--config", GUIDED3, "--mu", 0.1, "--peak-N", 5, "--tendon", 3], "--tendon")):
+                        (["--config", GUIDED3, "--mu", 0.1, "--peak-N", 5, "--tendon", 3], "--tendon"),
+                        (["--config", GUIDED3, "--mu", 0.1, "--peak-N", 5, "--cable-stiffness-kN",
+                          -1], "--cable-stiffness-kN")):
         run = cli("friction", *args)
         assert run.returncode == 2, (args, run.stderr)
         assert run.stderr.count("\n") == 1 and words in run.stderr, run.stderr

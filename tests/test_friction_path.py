@@ -169,6 +169,29 @@ def test_length_control_follows_the_force_controlled_path(guided3):
     assert by_length.p_motor[-1, 0] < 0.95 * by_length.p_motor[-2, 0]
 
 
+def test_elastic_cables_tend_to_the_inextensible_path():
+    """configs/guided.toml, cable 2 cycled against cable 1 at 5 N, mu = 0.6: guides of both
+    cables stick over shared spans (statically indeterminate with inextensible cables, see
+    test_friction_kernel.py).  With a cable compliance B/(EA l^2) the path converges to the
+    inextensible one at order 1 (tip and tensions)."""
+    arm = load_config(REPO / "configs" / "guided.toml")
+    disc = Discretisation.from_arm(arm, 48)
+    up = np.linspace(0.0, 30.0, 16)
+    cycle = np.r_[up, up[::-1][1:]]
+    history = np.column_stack((np.full(cycle.size, 5.0), cycle)) / arm.force_scale_N
+    base = friction_path(disc, 0.6, history)
+    assert base.converged and np.any(base.modes[:, :5] == STICK)
+    tips, tensions = [], []
+    for compliance in (1e-4, 1e-5, 1e-6):
+        path = friction_path(disc, 0.6, history, compliance=compliance)
+        assert path.converged
+        tips.append(np.abs(path.tip - base.tip).max())
+        tensions.append(np.abs(path.tensions - base.tensions).max())
+    for gaps in (tips, tensions):
+        orders = np.log10(np.array(gaps[:-1]) / np.array(gaps[1:]))
+        assert np.all(orders > 0.8), (gaps, orders)
+
+
 def test_bad_history(guided3):
     with pytest.raises(InputError, match="motor values with 2 values"):
         friction_path(guided3, MU, [[1.0, 2.0, 3.0]])

@@ -78,7 +78,8 @@ class FrictionResult(Result):
 
 @_takes_petsc_options
 def friction_path(arm: Arm, history, *, mu=None, length_control=None, start_tensions_N=None,
-                  elements: int | None = None, max_step_N: float | None = None) -> FrictionResult:
+                  elements: int | None = None, max_step_N: float | None = None,
+                  cable_stiffness_N: float | None = None) -> FrictionResult:
     """Follow the motors through ``history`` (K rows, one value per tendon: its motor
     tension in N, or for a tendon with ``length_control`` True its cable length in mm)
     with Coulomb friction ``mu`` (a scalar, or one per guide; default the arm's
@@ -86,7 +87,9 @@ def friction_path(arm: Arm, history, *, mu=None, length_control=None, start_tens
     and slip at every guide (docs/model.md §26).  The path starts
     from the frictionless equilibrium at ``start_tensions_N`` (default: history[0], with
     every motor under force control).  ``max_step_N``: the largest tension change of one
-    increment (default B/l^2, one non-dimensional unit)."""
+    increment (default B/l^2, one non-dimensional unit).  ``cable_stiffness_N``: the
+    cables' axial stiffness EA, their stretch where they stick (default inextensible;
+    needed where cables stick on both sides of one span, docs/model.md §26.6)."""
     from ..core.friction import guide_friction
     from ..studies.friction import friction_path as follow
 
@@ -107,5 +110,10 @@ def friction_path(arm: Arm, history, *, mu=None, length_control=None, start_tens
     if not step > 0:
         raise InputError(f"max_step_N must be positive, got {max_step_N}")
     mu = guide_friction(arm) if mu is None else mu
+    compliance = 0.0
+    if cable_stiffness_N is not None:
+        from ..core.inputs import positive
+        compliance = arm.force_scale_N / positive(cable_stiffness_N, "cable_stiffness_N", "N")
     return FrictionResult(arm, follow(disc, mu, scaled, length_control=held,
-                                      start_tensions=start, max_step=step))
+                                      start_tensions=start, max_step=step,
+                                      compliance=compliance))

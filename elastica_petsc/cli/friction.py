@@ -33,6 +33,10 @@ def add_parser(sub) -> None:
     parser.add_argument("--hold-N", type=float, nargs="+", metavar="P",
                         help="the tensions of the other motors, N, one per tendon (the cycled "
                              "tendon's value is ignored; default 0)")
+    parser.add_argument("--cable-stiffness-kN", type=float, metavar="EA",
+                        help="the cables' axial stiffness EA, kN: their stretch where they "
+                             "stick (default inextensible; needed where cables stick on both "
+                             "sides of one span: their tensions are otherwise indeterminate)")
     parser.add_argument("--steps", type=int, default=20, metavar="K",
                         help="increments of the history each way (default 20)")
     common.add_arm_options(parser)
@@ -62,17 +66,21 @@ def history_N(args, arm):
 
 def run(args) -> int:
     from .. import api
+    from ..core import inputs
 
     from ..core.friction import guide_friction
 
     arm, disc = common.load_arm(args, friction=True)
     rows = history_N(args, arm)
+    if args.cable_stiffness_kN is not None:
+        inputs.positive(args.cable_stiffness_kN, "--cable-stiffness-kN", "kN")
     common.check_outputs(args)
     mu = guide_friction(arm) if args.mu is None else np.asarray(args.mu, float)
     if mu.size not in (1, len(guide_friction(arm))):
         raise InputError(f"--mu: give one coefficient or one per guide "
                          f"({len(guide_friction(arm))}), got {mu.size}")
-    result = api.friction_path(arm, rows, mu=mu, elements=disc.n_elements)
+    result = api.friction_path(arm, rows, mu=mu, elements=disc.n_elements,
+                               cable_stiffness_N=_stiffness_N(args))
     summary = result.summary()
     k = args.tendon - 1
     y, top = result.tip_mm[:, 1], args.steps
@@ -90,12 +98,18 @@ def run(args) -> int:
         from ..plots.friction import plot_hysteresis
         paths = {float(np.max(result.path.mu)): result.path}
         if np.any(result.path.mu != 0.0):
-            paths[0.0] = api.friction_path(arm, rows, mu=0.0, elements=disc.n_elements).path
+            paths[0.0] = api.friction_path(arm, rows, mu=0.0, elements=disc.n_elements,
+                                           cable_stiffness_N=_stiffness_N(args)).path
         plot_hysteresis(arm, disc, paths, args.plot, tendon=k)
     if not result.converged:
         print(f"elastica-petsc: friction path failed: {result.message}", file=sys.stderr)
         return 1
     return 0
+
+
+def _stiffness_N(args):
+    """--cable-stiffness-kN in newtons (None: inextensible cables)."""
+    return None if args.cable_stiffness_kN is None else 1e3 * args.cable_stiffness_kN
 
 
 def _mu_text(mu) -> str:

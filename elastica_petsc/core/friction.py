@@ -36,6 +36,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
@@ -48,6 +49,14 @@ from .guided import GuidedDiscretisation
 DEFAULT_SCALE = 100.0
 SLIP_IN, STICK, SLIP_OUT = -1, 0, 1
 MODE_NAMES = {SLIP_IN: "slip toward the motor", STICK: "stick", SLIP_OUT: "slip toward the end"}
+
+
+class IncrementStart(NamedTuple):
+    """The state an increment starts from, that its slip is measured against."""
+
+    beyond: np.ndarray     # S_a of every guide
+    tensions: np.ndarray   # P of every segment
+    lengths: np.ndarray    # l of every segment
 
 
 def guide_friction(arm) -> np.ndarray:
@@ -85,10 +94,11 @@ class CapstanKernel:
     mu: np.ndarray
     scale: float = DEFAULT_SCALE
     length_control: np.ndarray | None = None    # per tendon: its motor holds a cable length
+    compliance: float = 0.0     # B/(EA l^2) of the cables: their stretch where they stick
 
     @classmethod
     def of(cls, disc: GuidedDiscretisation, mu, scale: float = DEFAULT_SCALE,
-           length_control=None) -> "CapstanKernel":
+           length_control=None, compliance: float = 0.0) -> "CapstanKernel":
         if not getattr(disc, "has_paths", False):
             raise InputError("capstan friction needs an arm whose cables run through guides")
         n_guides = int(np.count_nonzero(~disc.last_point))
@@ -100,7 +110,9 @@ class CapstanKernel:
             raise InputError("capstan friction needs at least one guide on a cable")
         control = np.zeros(disc.n_tendons, bool) if length_control is None else \
             np.broadcast_to(np.asarray(length_control, bool), (disc.n_tendons,)).copy()
-        return cls(disc, mu, float(scale), control)
+        if not (np.isfinite(compliance) and compliance >= 0):
+            raise InputError(f"cable compliance must be finite and >= 0, got {compliance!r}")
+        return cls(disc, mu, float(scale), control, float(compliance))
 
     # --- layout -----------------------------------------------------------------------
     @cached_property
@@ -162,15 +174,36 @@ class CapstanKernel:
         return self.disc.cables(self.disc.split(self.split(w)[0])[1])[0]
 
     # --- geometry of the cables ------------------------------------------------------
-    def beyond(self, w: np.ndarray) -> np.ndarray:
-        """S_a of every guide: the cable length from guide a to its end, sum_{b>a} l_b."""
-        seg_len = self.disc.segments(self.disc.split(self.split(w)[0])[1])[0]
-        after = np.empty_like(seg_len)
+    def _after(self, per_segment: np.ndarray) -> np.ndarray:
+        """sum_{b>a} of a per-segment quantity over the same cable, at every guide a."""
+        after = np.empty_like(per_segment)
         starts = self.disc.path_starts
         for i in range(self.disc.n_tendons):
-            part = seg_len[starts[i]:starts[i + 1]]
+            part = per_segment[starts[i]:starts[i + 1]]
             after[starts[i]:starts[i + 1]] = np.cumsum(part[::-1])[::-1] - part
         return after[self.guides]
+
+    def segment_lengths(self, w: np.ndarray) -> np.ndarray:
+        return self.disc.segments(self.disc.split(self.split(w)[0])[1])[0]
+
+    def beyond(self, w: np.ndarray) -> np.ndarray:
+        """S_a of every guide: the cable length from guide a to its end, sum_{b>a} l_b."""
+        return self._after(self.segment_lengths(w))
+
+    def start_of(self, w: np.ndarray, motor) -> IncrementStart:
+        """What an increment from the state w (at the motor values ``motor``) measures from."""
+        return IncrementStart(self.beyond(w), self.segment_tensions(w, motor),
+                              self.segment_lengths(w))
+
+    def slip(self, w: np.ndarray, motor, start: IncrementStart) -> np.ndarray:
+        """The cable material drawn through each guide toward its end since ``start``:
+        dS_a less the stretch of the material beyond the guide under the change of
+        tension, sum_{b>a} l_b (P_b - P_b^start) B/(EA l^2) (docs/model.md §26.6)."""
+        moved = self.beyond(w) - start.beyond
+        if self.compliance == 0.0:
+            return moved
+        change = self.segment_tensions(w, motor) - start.tensions
+        return moved - self.compliance * self._after(start.lengths * change)
 
     def turning(self, e: np.ndarray) -> np.ndarray:
         """Signed angle from e_a to e_{a+1} at each guide (its modulus is beta_a)."""
@@ -191,28 +224,28 @@ class CapstanKernel:
         pa, pb = tension[self.guides], tension[self.guides + 1]
         return seg_len, e, tension, tau, pa, pb, pa * np.exp(-self.mu * beta), pa * np.exp(self.mu * beta)
 
-    def modes(self, w: np.ndarray, motor, s_ref: np.ndarray) -> np.ndarray:
+    def modes(self, w: np.ndarray, motor, start: IncrementStart) -> np.ndarray:
         """The branch of the clip at w: SLIP_IN, STICK or SLIP_OUT per guide (ties to slip,
         so that mu = 0 is never a stick)."""
         *_, pb, lo, hi = self._bounds(w, motor)
-        trial = pb + self.scale * (self.beyond(w) - s_ref)
+        trial = pb + self.scale * self.slip(w, motor, start)
         return np.where(trial <= lo, SLIP_IN, np.where(trial >= hi, SLIP_OUT, STICK))
 
-    def guide_residual(self, w, motor, s_ref, modes) -> np.ndarray:
+    def guide_residual(self, w, motor, start: IncrementStart, modes) -> np.ndarray:
         """Phi of every guide in the given modes."""
         *_, pb, lo, hi = self._bounds(w, motor)
-        stick = -self.scale * (self.beyond(w) - s_ref)
+        stick = -self.scale * self.slip(w, motor, start)
         return np.where(modes == SLIP_IN, pb - lo, np.where(modes == SLIP_OUT, pb - hi, stick))
 
-    def residual(self, w: np.ndarray, motor, s_ref: np.ndarray, modes=None) -> np.ndarray:
+    def residual(self, w: np.ndarray, motor, start: IncrementStart, modes=None) -> np.ndarray:
         """F(w): the guided equilibrium with segment tensions, then Phi per guide
         (``modes`` None: the modes of w, :meth:`modes`)."""
-        modes = self.modes(w, motor, s_ref) if modes is None else np.asarray(modes)
+        modes = self.modes(w, motor, start) if modes is None else np.asarray(modes)
         u = self.split(w)[0]
         terms = self.disc.segment_terms(u, self.segment_tensions(w, motor))
         held = self.lengths_held
         return np.concatenate((self.disc.residual(u, None, terms=terms),
-                               self.guide_residual(w, motor, s_ref, modes),
+                               self.guide_residual(w, motor, start, modes),
                                self.cable_lengths(w)[held] - np.asarray(motor, float)[held]))
 
     # --- the Jacobian: the guided pattern, the q columns and the Phi rows ----------------
@@ -230,7 +263,7 @@ class CapstanKernel:
         for j, a in enumerate(self.guides):                           # dPhi_j / d(z, q)
             last = disc.path_starts[disc.point_tendon[a] + 1]
             zc = disc.n_elements + np.arange(2 * a, 2 * last)
-            qc = [n_u + k for k in (self.unknown_of_segment[a], j) if k >= 0]
+            qc = [n_u + k for k in self.unknown_of_segment[a:last] if k >= 0]
             rows.append(np.full(len(zc) + len(qc), n_u + j))
             cols.append(np.concatenate((zc, qc)))
         for r, i in enumerate(self.lengths_held):     # dL_i / dz, and a stored zero diagonal
@@ -248,7 +281,8 @@ class CapstanKernel:
         indptr = np.searchsorted(rows[order], np.arange(self.size + 1)).astype(np.int32)
         return indptr, cols[order].astype(np.int32)
 
-    def jacobian_values(self, w: np.ndarray, motor, s_ref: np.ndarray, modes) -> np.ndarray:
+    def jacobian_values(self, w: np.ndarray, motor, start: IncrementStart,
+                        modes) -> np.ndarray:
         """Entries of dF/dw in the order of :attr:`pattern`, in the fixed ``modes``."""
         disc = self.disc
         u = self.split(w)[0]
@@ -260,14 +294,14 @@ class CapstanKernel:
         parts = [disc.jacobian_values(u, None, t, dg)]
         # dF_theta/dP_a = grad_theta l_a = -D_a^T e_a (docs/model.md §11.3, per segment)
         parts.append(-np.sum(dg[on_q] * t.e[chord[on_q]], axis=1))
-        parts.extend(self._guide_rows(w, motor, np.asarray(modes)))
+        parts.extend(self._guide_rows(w, motor, start, np.asarray(modes)))
         starts = disc.path_starts
         parts.extend(np.append(t.e[starts[i]:starts[i + 1]].ravel(), 0.0)
                      for i in self.lengths_held)
         return np.concatenate(parts)[order]
 
-    def _guide_rows(self, w, motor, modes) -> list[np.ndarray]:
-        """dPhi_j/d(z_a..z_last, P_a, P_{a+1}) in the column order of :attr:`_coo`."""
+    def _guide_rows(self, w, motor, start: IncrementStart, modes) -> list[np.ndarray]:
+        """dPhi_j/d(z_a..z_last, P_a..P_last) in the column order of :attr:`_coo`."""
         disc = self.disc
         seg_len, e, _, tau, pa, _, lo, hi = self._bounds(w, motor)
         # d beta / d z: phi_a = angle of z_a, d phi_a/d z_a = e_a^perp / l_a
@@ -278,9 +312,10 @@ class CapstanKernel:
             last = disc.path_starts[disc.point_tendon[a] + 1]
             dz = np.zeros((last - a, 2))
             q_own = [] if self.unknown_of_segment[a] < 0 else [0.0]
-            if modes[j] == STICK:                     # Phi = -c (S_a - S_ref)
+            if modes[j] == STICK:                     # Phi = -c (dS_a - stretch beyond a)
                 dz[1:] = -self.scale * e[a + 1:last]
-                out.append(np.concatenate((dz.ravel(), q_own, [0.0])))
+                stretch = self.scale * self.compliance * start.lengths[a + 1:last]
+                out.append(np.concatenate((dz.ravel(), q_own, stretch)))
                 continue
             bound = lo[j] if modes[j] == SLIP_IN else hi[j]
             rate = modes[j] * self.mu[j]              # Phi = P_{a+1} - P_a exp(rate beta)
@@ -288,5 +323,5 @@ class CapstanKernel:
             dz[1] = -bound * rate * sign[j] * dphi[a + 1]
             q_own = [] if not q_own else [-bound / pa[j] if pa[j] != 0.0 else
                                           -np.exp(rate * abs(tau[j]))]
-            out.append(np.concatenate((dz.ravel(), q_own, [1.0])))
+            out.append(np.concatenate((dz.ravel(), q_own, [1.0], np.zeros(last - a - 2))))
         return out

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from petsc4py import PETSc
 
-from ..core.friction import CapstanKernel
+from ..core.friction import CapstanKernel, IncrementStart
 from .linalg import use_bordered_lu
 from .options import SolverOptions, check_comm
 from .reasons import SNES_REASONS
@@ -39,8 +39,8 @@ class CapstanSolver:
     petsc_options : options without the prefix (nested dicts flatten); the
         command line wins.
 
-    The motor tensions and the reference lengths of the current increment
-    (``_p``, ``_s_ref``) are the context of the SNES callbacks.
+    The motor values and the start of the current increment (``_p``, ``_start``)
+    are the context of the SNES callbacks.
     """
 
     def __init__(self, kernel: CapstanKernel, *, comm=None, options_prefix: str = "fric_",
@@ -50,7 +50,7 @@ class CapstanSolver:
         self.kernel = kernel
         n = kernel.size
         self._p = np.zeros(kernel.disc.n_tendons)
-        self._s_ref = np.zeros(kernel.n_guides)
+        self._start = None
         indptr, indices = kernel.pattern
         # J keeps these arrays (no copy): the Jacobian callback writes in place
         self._values = np.zeros(len(indices))
@@ -71,21 +71,22 @@ class CapstanSolver:
         self.snes = snes
 
     def _form_function(self, snes, X, F) -> None:
-        F.setArray(self.kernel.residual(X.getArray(readonly=True), self._p, self._s_ref))
+        F.setArray(self.kernel.residual(X.getArray(readonly=True), self._p, self._start))
 
     def _form_jacobian(self, snes, X, J, P) -> None:
         w = X.getArray(readonly=True)
-        modes = self.kernel.modes(w, self._p, self._s_ref)
-        self._values[:] = self.kernel.jacobian_values(w, self._p, self._s_ref, modes)
+        modes = self.kernel.modes(w, self._p, self._start)
+        self._values[:] = self.kernel.jacobian_values(w, self._p, self._start, modes)
         P.assemble()
 
-    def increment(self, w0: np.ndarray, p_motor, s_ref: np.ndarray) -> tuple[np.ndarray, int, str, bool]:
-        """The state at motor tensions ``p_motor`` from ``w0`` (the last state), the
-        cable beyond each guide measured from ``s_ref`` (its length at the last
+    def increment(self, w0: np.ndarray, motor, start: IncrementStart
+                  ) -> tuple[np.ndarray, int, str, bool]:
+        """The state at the motor values ``motor`` from the guess ``w0``, the slip at
+        each guide measured from ``start`` (:meth:`CapstanKernel.start_of` the last
         state): (w, iterations, PETSc's reason, converged)."""
         self.options.refresh(self.snes)
-        self._p = np.asarray(p_motor, float)
-        self._s_ref = np.asarray(s_ref, float)
+        self._p = np.asarray(motor, float)
+        self._start = start
         self.x.setArray(w0)
         self.snes.solve(None, self.x)
         reason = self.snes.getConvergedReason()

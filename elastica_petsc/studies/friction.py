@@ -62,14 +62,17 @@ def check_history(history, n_tendons: int, length_control) -> np.ndarray:
 
 def friction_path(disc: GuidedDiscretisation, mu, history, *, length_control=None,
                   start_tensions=None, max_step: float = 1.0, max_length_step: float = 2e-3,
-                  scale: float = DEFAULT_SCALE, petsc_options=None) -> FrictionPath:
+                  compliance: float = 0.0, scale: float = DEFAULT_SCALE,
+                  petsc_options=None) -> FrictionPath:
     """Follow the motor ``history`` (K, n) with friction ``mu`` at the guides (a scalar or
     one per guide): per tendon a tension or, where ``length_control`` (per tendon) is
     True, the cable length L_i (units of l).  The path starts from the frictionless
     equilibrium at ``start_tensions`` and reaches every row of ``history`` in turn; without
     ``start_tensions`` (force control only) it starts at history[0].  Increments change no
-    tension by more than ``max_step`` and no length by more than ``max_length_step``."""
-    kernel = CapstanKernel.of(disc, mu, scale, length_control)
+    tension by more than ``max_step`` and no length by more than ``max_length_step``.
+    ``compliance``: B/(EA l^2) of the cables, their stretch where they stick (0:
+    inextensible; docs/model.md §26.6)."""
+    kernel = CapstanKernel.of(disc, mu, scale, length_control, compliance)
     held = kernel.length_control
     history = check_history(history, disc.n_tendons, held)
     if start_tensions is None:
@@ -86,22 +89,22 @@ def friction_path(disc: GuidedDiscretisation, mu, history, *, length_control=Non
     rows, counts, message, secant = [], [0, 0], "", [None, 0.0]
     steps = np.where(held, max_length_step, max_step)
     with CapstanSolver(kernel, petsc_options=petsc_options) as solver:
-        rows.append(_record(kernel, w, motor, kernel.beyond(w)))
+        rows.append(_record(kernel, w, motor, kernel.start_of(w, motor)))
         for target in history:
-            w, s_ref, message = _advance(solver, w, motor, target, steps, counts, secant)
+            w, start, message = _advance(solver, w, motor, target, steps, counts, secant)
             if message:
                 break
             motor = target
-            rows.append(_record(kernel, w, motor, s_ref))
-    stack = {key: np.array([r[key] for r in rows]) for key in rows[0] if key != "s"}
+            rows.append(_record(kernel, w, motor, start))
+    stack = {key: np.array([r[key] for r in rows]) for key in rows[0]}
     return FrictionPath(mu=kernel.mu, length_control=held, increments=counts[0],
                         iterations=counts[1], converged=not message, message=message, **stack)
 
 
 def _advance(solver: CapstanSolver, w, p_from, p_to, max_step: np.ndarray, counts, secant):
     """w at the motor values p_to from w at p_from in increments of at most ``max_step``
-    (per tendon), halved on failure: (w, the cable beyond each guide at the start of
-    the last increment, message).  Each Newton
+    (per tendon), halved on failure: (w, the start of the last increment
+    (:class:`IncrementStart`), message).  Each Newton
     solve starts from the secant predictor w + (step / last step) dw of the last
     accepted increment (``secant``: [dw, its step in units of max_step], updated), so that the
     guides' slip continues in its direction and the modes are right from the
@@ -110,43 +113,54 @@ def _advance(solver: CapstanSolver, w, p_from, p_to, max_step: np.ndarray, count
     span = float(np.max(np.abs(p_to - p_from) / max_step))
     steps = max(1, int(np.ceil(span)))
     done, step, halvings = 0.0, 1.0 / steps, 0
-    s_ref = kernel.beyond(w)
+    start = kernel.start_of(w, p_from)
     while done < 1.0 - 1e-12:
         step = min(step, 1.0 - done)
         p = p_from + (done + step) * (p_to - p_from)
-        s_ref = kernel.beyond(w)
+        start = kernel.start_of(w, p_from + done * (p_to - p_from))
         guess = w.copy()
         if secant[0] is not None and secant[1] > 0.0:
             guess += (step * span / secant[1]) * secant[0]
-        trial, its, reason, ok = solver.increment(guess, p, s_ref)
+        trial, its, reason, ok = solver.increment(guess, p, start)
         counts[0] += 1
         counts[1] += its
         if not ok:
             halvings += 1
             if halvings > MAX_HALVINGS:
-                return w, s_ref, (f"the increment to motor tensions {np.round(p, 6).tolist()} did "
-                                  f"not converge ({reason}) after {MAX_HALVINGS} halvings")
+                return w, start, (f"the increment to motor tensions {np.round(p, 6).tolist()} did "
+                                  f"not converge ({reason}) after {MAX_HALVINGS} halvings"
+                                  + _singular_hint(kernel, reason))
             step *= 0.5
             secant[0] = None
             continue
         slack = np.flatnonzero(kernel.length_control & (kernel.segment_tensions(
             trial, p)[kernel.first_segments] < 0))
         if slack.size:
-            return w, s_ref, (f"cable {slack[0] + 1} would go slack at the motor values "
+            return w, start, (f"cable {slack[0] + 1} would go slack at the motor values "
                               f"{np.round(p, 6).tolist()}: slack cables are not modelled with "
                               "friction")
         secant[:] = [trial - w, step * span]
         w, done = trial, done + step
-    return w, s_ref, ""
+    return w, start, ""
 
 
-def _record(kernel: CapstanKernel, w, motor, s_before) -> dict:
+def _singular_hint(kernel: CapstanKernel, reason: str) -> str:
+    """Why the linear solve may fail: inextensible cables stuck on both sides of one span
+    (docs/model.md §26.6)."""
+    if reason != "DIVERGED_LINEAR_SOLVE" or kernel.compliance > 0:
+        return ""
+    return ("; the Jacobian is singular: with inextensible cables the tensions of cables "
+            "that stick on both sides of one span are statically indeterminate; give the "
+            "cables' axial stiffness (cable_stiffness_N, --cable-stiffness-kN)")
+
+
+def _record(kernel: CapstanKernel, w, motor, start) -> dict:
     """What the path keeps of the state w (its modes in the increment that reached it,
-    measured from ``s_before``)."""
+    measured from ``start``)."""
     disc = kernel.disc
     theta = disc.split(kernel.split(w)[0])[0]
     tensions = kernel.segment_tensions(w, motor)
     return {"p_motor": tensions[kernel.first_segments], "cable_lengths": kernel.cable_lengths(w),
             "tip": disc.node_positions(theta)[-1], "tip_angle": theta[-1], "tensions": tensions,
-            "modes": kernel.modes(w, motor, s_before), "wrap": kernel.wrap_angles(w),
-            "states": w, "s": kernel.beyond(w)}
+            "modes": kernel.modes(w, motor, start), "wrap": kernel.wrap_angles(w),
+            "states": w}

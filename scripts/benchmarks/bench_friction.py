@@ -37,13 +37,13 @@ def per_iteration(n: int, repeats: int) -> tuple[float, float, int, int]:
     assert path.converged, path.message
     kernel = CapstanKernel.of(disc, 0.3)
     w = path.states[-1]
-    s_ref = kernel.beyond(w)
+    start = kernel.start_of(w, P_FROM)
     with CapstanSolver(kernel) as solver, EquilibriumSolver(disc) as plain:
         u0 = plain.solve(P_FROM).u
-        _, its_f, _, ok = solver.increment(w, P_TO, s_ref)
+        _, its_f, _, ok = solver.increment(w, P_TO, start)
         _, its_p, reason = plain.newton(u0, P_TO)
         assert ok and reason.startswith("CONVERGED")
-        friction = median_time(lambda: solver.increment(w, P_TO, s_ref), repeats,
+        friction = median_time(lambda: solver.increment(w, P_TO, start), repeats,
                                warmup=True, clock=time.process_time) / its_f
         frictionless = median_time(lambda: plain.newton(u0, P_TO), repeats, warmup=True,
                                    clock=time.process_time) / its_p
