@@ -6,7 +6,6 @@ import sys
 
 import numpy as np
 
-from ..core.errors import InputError
 from . import common
 
 MODE_SIGNS = {-1: "<", 0: "=", 1: ">"}
@@ -76,9 +75,6 @@ def run(args) -> int:
         inputs.positive(args.cable_stiffness_kN, "--cable-stiffness-kN", "kN")
     common.check_outputs(args)
     mu = guide_friction(arm) if args.mu is None else np.asarray(args.mu, float)
-    if mu.size not in (1, len(guide_friction(arm))):
-        raise InputError(f"--mu: give one coefficient or one per guide "
-                         f"({len(guide_friction(arm))}), got {mu.size}")
     result = api.friction_path(arm, rows, mu=mu, elements=disc.n_elements,
                                cable_stiffness_N=_stiffness_N(args))
     summary = result.summary()

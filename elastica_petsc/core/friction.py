@@ -29,8 +29,10 @@ and chords) and q the tensions of every segment after a guide, then those of
 the motor segments of the length-controlled tendons (a force-controlled
 motor's segment carries its given tension).  The equations are the guided
 equilibrium with segment tensions (f_a = P_a e_a - P_{a+1} e_{a+1}), one Phi
-per guide and L_i = Lbar_i per length-controlled tendon.  With mu = 0 the clip interval is {P_a}: every tension
-equals the motor's and the state is the frictionless one.
+per guide and L_i = Lbar_i per length-controlled tendon.  With mu = 0 the clip
+interval is {P_a}: every tension equals the motor's and the state is the
+frictionless one.  Optionally the cables stretch where they stick (compliance
+B/(EA l^2)): the slip is then the material's, dS_a less the stretch beyond a.
 """
 from __future__ import annotations
 
@@ -48,7 +50,6 @@ from .guided import GuidedDiscretisation
 # (docs/model.md §26.3: c = 30..1000 took 65-74 iterations on a path where c = 1 took 247).
 DEFAULT_SCALE = 100.0
 SLIP_IN, STICK, SLIP_OUT = -1, 0, 1
-MODE_NAMES = {SLIP_IN: "slip toward the motor", STICK: "stick", SLIP_OUT: "slip toward the end"}
 
 
 class IncrementStart(NamedTuple):
@@ -102,7 +103,11 @@ class CapstanKernel:
         if not getattr(disc, "has_paths", False):
             raise InputError("capstan friction needs an arm whose cables run through guides")
         n_guides = int(np.count_nonzero(~disc.last_point))
-        mu = np.broadcast_to(np.asarray(mu, float), (n_guides,)).copy()
+        mu = np.atleast_1d(np.asarray(mu, float))
+        if mu.size not in (1, n_guides):
+            raise InputError(f"give one friction coefficient or one per guide ({n_guides}), "
+                             f"got {mu.size}")
+        mu = np.broadcast_to(mu.ravel(), (n_guides,)).copy()
         if not np.isfinite(mu).all() or (mu < 0).any():
             bad = mu[~(np.isfinite(mu) & (mu >= 0))][0]
             raise InputError(f"friction coefficient must be finite and >= 0, got {bad:g}")
