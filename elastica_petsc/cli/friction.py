@@ -46,6 +46,7 @@ def add_parser(sub) -> None:
 def history_N(args, arm):
     """The cycle's rows of motor tensions, N (checked)."""
     from ..core import inputs
+    from ..core.errors import InputError
 
     n_tendons = arm.n_tendons
     if not 1 <= args.tendon <= n_tendons:
