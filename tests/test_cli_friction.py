@@ -33,18 +33,23 @@ def test_cycle_table_hysteresis_out_and_plot(tmp_path):
     assert gap > 5.0
     result = ep.read(out)
     assert isinstance(result, ep.FrictionResult) and result.converged
-    np.testing.assert_allclose(result.motor_tensions_N[:, 0], [0, 5.5, 11, 16.5, 22, 16.5, 11, 5.5, 0],
-                               atol=1e-12)
+    np.testing.assert_allclose(result.motor_tensions_N[:, 0],
+                               [0, 5.5, 11, 16.5, 22, 16.5, 11, 5.5, 0], atol=1e-12)
     assert png.stat().st_size > 10_000
 
 
 def test_bad_input_is_one_line_and_status_2():
-    for args, words in ((["--config", GUIDED3, "--mu", -0.1, "--peak-N", 5], "friction coefficient"),
-                        (["--mu", 0.1, "--peak-N", 5], "guides"),
-                        (["--config", GUIDED3, "--mu", 0.1, "--peak-N", 0], "--peak-N"),
-                        (["--config", GUIDED3, "--mu", 0.1, "--peak-N", 5, "--tendon", 3], "--tendon"),
-                        (["--config", GUIDED3, "--mu", 0.1, "--peak-N", 5, "--cable-stiffness-kN",
-                          -1], "--cable-stiffness-kN")):
+    cases = ((["--mu", -0.1], "friction coefficient"), (["--mu", 0.1, 0.2], "one per guide"),
+             (["--peak-N", 0], "--peak-N"), (["--tendon", 3], "--tendon"),
+             (["--cable-stiffness-kN", -1], "--cable-stiffness-kN"))
+    for extra, words in cases:
+        args = ["--config", GUIDED3, "--mu", 0.1, "--peak-N", 5] + extra      # the last wins
         run = cli("friction", *args)
+        assert run.returncode == 2, (args, run.stderr)
+        assert run.stderr.count("\n") == 1 and words in run.stderr, run.stderr
+    for args, words in ((["friction", "--mu", 0.1, "--peak-N", 5], "guides"),
+                        (["solve", "--config", REPO / "configs" / "guided3_friction.toml",
+                          "--tensions", 1, 1], "models frictionless guides")):
+        run = cli(*args)
         assert run.returncode == 2, (args, run.stderr)
         assert run.stderr.count("\n") == 1 and words in run.stderr, run.stderr

@@ -222,12 +222,15 @@ class CapstanKernel:
 
     # --- the complementarity ----------------------------------------------------------
     def _bounds(self, w, motor):
+        """Segment lengths and directions, tensions, signed turns, P_a and P_{a+1} at each
+        guide and the interval [P_a e^{-mu beta}, P_a e^{mu beta}]."""
         seg_len, e = self.disc.segments(self.disc.split(self.split(w)[0])[1])
         tension = self.segment_tensions(w, motor)
         tau = self.turning(e)
         beta = np.abs(tau)
         pa, pb = tension[self.guides], tension[self.guides + 1]
-        return seg_len, e, tension, tau, pa, pb, pa * np.exp(-self.mu * beta), pa * np.exp(self.mu * beta)
+        lo, hi = pa * np.exp(-self.mu * beta), pa * np.exp(self.mu * beta)
+        return seg_len, e, tension, tau, pa, pb, lo, hi
 
     def modes(self, w: np.ndarray, motor, start: IncrementStart) -> np.ndarray:
         """The branch of the clip at w: SLIP_IN, STICK or SLIP_OUT per guide (ties to slip,
