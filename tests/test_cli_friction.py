@@ -3,6 +3,7 @@ configs/guided3.toml with its table, the hysteresis line, --out read back and
 --plot, and bad input in one line with exit status 2."""
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 
@@ -27,8 +28,8 @@ def test_cycle_table_hysteresis_out_and_plot(tmp_path):
     lines = run.stdout.splitlines()
     assert len(lines) == 1 + 9 + 1                       # header, 2 x 4 + 1 rows, hysteresis
     assert lines[1].split()[0] == "0.000" and lines[5].split()[0] == "22.000"
-    assert lines[5].split()[3] == "<<<>>>"              # loading: cable 1 slips toward its motor
-    assert "=" in lines[6].split()[3]                    # the reversal: a guide sticks
+    assert lines[5].split()[4] == "<<<>>>"              # loading: cable 1 slips toward its motor
+    assert "=" in lines[6].split()[4]                    # the reversal: a guide sticks
     gap = float(lines[-1].split("up to ")[1].split()[0])
     assert gap > 5.0
     result = ep.read(out)
@@ -36,6 +37,20 @@ def test_cycle_table_hysteresis_out_and_plot(tmp_path):
     np.testing.assert_allclose(result.motor_tensions_N[:, 0],
                                [0, 5.5, 11, 16.5, 22, 16.5, 11, 5.5, 0], atol=1e-12)
     assert png.stat().st_size > 10_000
+
+
+def test_a_history_of_both_motors(tmp_path):
+    """--history: the rows of a tension-history CSV (as simulate --history) in order."""
+    csv = tmp_path / "h.csv"
+    csv.write_text("time_s,tension_1_N,tension_2_N\n0,0,0\n1,10,0\n2,10,8\n")
+    run = cli("friction", "--config", GUIDED3, "--mu", 0.3, "--history", csv, "--elements", 48,
+              "--json")
+    assert run.returncode == 0, run.stderr
+    data = json.loads(run.stdout)
+    assert data["motor_tensions_N"] == [[0.0, 0.0], [10.0, 0.0], [10.0, 8.0]]
+    assert "largest_gap_mm" not in data and data["converged"]
+    assert data["modes"][1][:3] == [-1, -1, -1]          # cable 1 reeled in: slip toward it
+    assert 0 in data["modes"][2][:3]                     # cable 2 pulls back: a guide sticks
 
 
 def test_bad_input_is_one_line_and_status_2():

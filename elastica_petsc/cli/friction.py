@@ -1,5 +1,5 @@
-"""``elastica-petsc friction``: a load-unload cycle of one motor with capstan friction
-at the guides (docs/model.md §26)."""
+"""``elastica-petsc friction``: a load-unload cycle of one motor, or a history of motor
+tensions, with capstan friction at the guides (docs/model.md §26)."""
 from __future__ import annotations
 
 import sys
@@ -20,13 +20,20 @@ def add_parser(sub) -> None:
                     "the cable sticks or slips (capstan law T_out = T_in e^(mu beta)), one "
                     "tension per cable segment (docs/model.md §26). Prints the tip against the "
                     "motor tension on both branches and the hysteresis (the largest gap between "
-                    "unloading and loading). Needs an arm whose cables run through guides.")
+                    "unloading and loading). With --history CSV instead: any history of motor "
+                    "tensions (columns time_s, tension_1_N, ... as `simulate --history`; the rows "
+                    "in order, time ignored). Needs an arm whose cables run through guides.")
     parser.add_argument("--mu", type=float, nargs="+", metavar="MU",
                         help="friction coefficient at every guide, or one per guide (each "
                              "cable's guides from its motor, tendon by tendon); >= 0, 0 is "
                              "frictionless (default: each [[tendon]] friction_coefficient)")
-    parser.add_argument("--peak-N", type=float, required=True, metavar="P",
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--peak-N", type=float, metavar="P",
                         help="the motor tension at the top of the cycle, N")
+    source.add_argument("--history", metavar="CSV",
+                        help="motor tensions row by row instead of a cycle (time_s, "
+                             "tension_1_N, tension_2_N, ...), from the frictionless state of "
+                             "the first row")
     parser.add_argument("--tendon", type=int, default=1, metavar="K",
                         help="the motor that is cycled (1-based, default 1)")
     parser.add_argument("--hold-N", type=float, nargs="+", metavar="P",
@@ -44,11 +51,16 @@ def add_parser(sub) -> None:
 
 
 def history_N(args, arm):
-    """The cycle's rows of motor tensions, N (checked)."""
+    """The rows of motor tensions, N (checked): the --history file's, or the cycle's."""
     from ..core import inputs
     from ..core.errors import InputError
 
     n_tendons = arm.n_tendons
+    if args.history is not None:
+        from ..core.drive import read_tension_history
+        if args.plot:
+            raise InputError("--plot draws the cycle of --peak-N (not a --history)")
+        return read_tension_history(args.history, n_tendons)[1]
     if not 1 <= args.tendon <= n_tendons:
         raise InputError(f"--tendon {args.tendon}: the arm has tendons 1..{n_tendons}")
     inputs.positive(args.peak_N, "--peak-N", "N",
@@ -80,15 +92,17 @@ def run(args) -> int:
                                cable_stiffness_N=_stiffness_N(args))
     summary = result.summary()
     k = args.tendon - 1
-    y, top = result.tip_mm[:, 1], args.steps
-    gaps = y[top:][::-1] - y[:top + 1] if result.converged else np.zeros(1)
-    summary["largest_gap_mm"] = float(np.max(np.abs(gaps)))
+    if args.history is None:
+        y, top = result.tip_mm[:, 1], args.steps
+        gaps = y[top:][::-1] - y[:top + 1] if result.converged else np.zeros(1)
+        summary["largest_gap_mm"] = float(np.max(np.abs(gaps)))
     if args.json:
         common.print_json(args.command, summary)
     else:
-        print(_table(result, k))
-        print(f"hysteresis: the tip's y differs between unloading and loading by up to "
-              f"{summary['largest_gap_mm']:.3f} mm (mu = {_mu_text(result.path.mu)})")
+        print(_table(result))
+        if args.history is None:
+            print(f"hysteresis: the tip's y differs between unloading and loading by up to "
+                  f"{summary['largest_gap_mm']:.3f} mm (mu = {_mu_text(result.path.mu)})")
     if args.out:
         result.save(args.out, overwrite=args.overwrite)
     if args.plot and result.converged:
@@ -114,12 +128,14 @@ def _mu_text(mu) -> str:
     return f"{mu[0]:g}" if np.all(mu == mu[0]) else ", ".join(f"{m:g}" for m in mu)
 
 
-def _table(result, k: int) -> str:
-    """One line per row: motor tension, tip, and every guide's mode
+def _table(result) -> str:
+    """One line per row: the motor tensions, the tip, and every guide's mode
     (< slip toward the motor, = stick, > slip toward the end)."""
-    lines = [f"{'P' + str(k + 1) + ' [N]':>9} {'tip x [mm]':>11} {'tip y [mm]':>11}  guides "
+    n = result.motor_tensions_N.shape[1]
+    lines = ["".join(f"{f'P{i + 1} [N]':>9}" for i in range(n))
+             + f" {'tip x [mm]':>11} {'tip y [mm]':>11}  guides "
              "(< slip toward the motor, = stick, > slip toward the end)"]
-    for p, tip, modes in zip(result.motor_tensions_N[:, k], result.tip_mm, result.modes):
-        lines.append(f"{p:9.3f} {tip[0]:11.3f} {tip[1]:11.3f}  "
+    for p, tip, modes in zip(result.motor_tensions_N, result.tip_mm, result.modes):
+        lines.append("".join(f"{v:9.3f}" for v in p) + f" {tip[0]:11.3f} {tip[1]:11.3f}  "
                      + "".join(MODE_SIGNS[int(m)] for m in modes))
     return "\n".join(lines)
