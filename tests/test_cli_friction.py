@@ -7,6 +7,7 @@ import json
 import subprocess
 import sys
 
+import h5py
 import numpy as np
 
 import elastica_petsc as ep
@@ -32,6 +33,10 @@ def test_cycle_table_hysteresis_out_and_plot(tmp_path):
     assert "=" in lines[6].split()[4]                    # the reversal: a guide sticks
     gap = float(lines[-1].split("up to ")[1].split()[0])
     assert gap > 5.0
+    with h5py.File(out, "r") as fh:                      # units and provenance (io/friction.py)
+        assert fh.attrs["kind"] == "friction" and "config_json" in fh.attrs
+        assert fh["tip_mm"].attrs["units"] == "mm" and fh["modes"].shape == (9, 6)
+        np.testing.assert_array_equal(fh["modes"][4, :3], [-1, -1, -1])
     result = ep.read(out)
     assert isinstance(result, ep.FrictionResult) and result.converged
     np.testing.assert_allclose(result.motor_tensions_N[:, 0],

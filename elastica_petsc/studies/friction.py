@@ -32,6 +32,7 @@ class FrictionPath(Result):
 
     mu: np.ndarray              # friction coefficient of each guide
     length_control: np.ndarray  # per tendon: its motor held cable lengths (else tensions)
+    compliance: float           # B/(EA l^2) of the cables where they stick (0: inextensible)
     p_motor: np.ndarray         # (K, n) motor tensions (the first segments')
     cable_lengths: np.ndarray   # (K, n) whole cable lengths L_i (what the motors paid out)
     tip: np.ndarray             # (K, 2) tip positions
@@ -97,7 +98,8 @@ def friction_path(disc: GuidedDiscretisation, mu, history, *, length_control=Non
             motor = target
             rows.append(_record(kernel, w, motor, start))
     stack = {key: np.array([r[key] for r in rows]) for key in rows[0]}
-    return FrictionPath(mu=kernel.mu, length_control=held, increments=counts[0],
+    return FrictionPath(mu=kernel.mu, length_control=held, compliance=kernel.compliance,
+                        increments=counts[0],
                         iterations=counts[1], converged=not message, message=message, **stack)
 
 
