@@ -46,7 +46,7 @@ def plot_hysteresis(arm: Arm, disc, paths: dict, path: str | Path, tendon: int =
             axis.plot(p_N[up], y[up], "-", color=colour, lw=1.6, label=f"mu = {mu:g}, loading")
             axis.plot(p_N[down], y[down], "--", color=colour, lw=1.6,
                       label=f"mu = {mu:g}, unloading")
-        stuck = np.flatnonzero(np.any(fp.modes[:, guides] == STICK, axis=1))
+        stuck = 1 + np.flatnonzero(np.any(fp.modes[1:, guides] == STICK, axis=1))  # not the start
         if stuck.size:
             loop.plot(p_N[stuck], (y_mm - free)[stuck], "o", mfc="none", color=colour, ms=6,
                       label=f"mu = {mu:g}: a guide of cable {tendon + 1} sticks")

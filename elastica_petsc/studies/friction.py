@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import InputError
-from ..core.friction import DEFAULT_SCALE, CapstanKernel
+from ..core.friction import DEFAULT_SCALE, STICK, CapstanKernel
 from ..core.guided import GuidedDiscretisation
 from ..core.results import Result
 from ..solvers.equilibrium import check_tensions, solve_equilibrium
@@ -38,7 +38,7 @@ class FrictionPath(Result):
     tip: np.ndarray             # (K, 2) tip positions
     tip_angle: np.ndarray       # (K,) theta(l)
     tensions: np.ndarray        # (K, P) tension of every segment (tendon by tendon)
-    modes: np.ndarray           # (K, G) SLIP_IN / STICK / SLIP_OUT of every guide
+    modes: np.ndarray           # (K, G) SLIP_IN / STICK / SLIP_OUT of every guide (row 0: STICK)
     wrap: np.ndarray            # (K, G) turning angle beta of the cable at every guide
     states: np.ndarray = field(repr=False)    # (K, size) w = (angles, chords, q)
     increments: int = 0         # Newton solves, halvings included
@@ -90,7 +90,7 @@ def friction_path(disc: GuidedDiscretisation, mu, history, *, length_control=Non
     rows, counts, message, secant = [], [0, 0], "", [None, 0.0]
     steps = np.where(held, max_length_step, max_step)
     with CapstanSolver(kernel, petsc_options=petsc_options) as solver:
-        rows.append(_record(kernel, w, motor, kernel.start_of(w, motor)))
+        rows.append(_record(kernel, w, motor, None))
         for target in history:
             w, start, message = _advance(solver, w, motor, target, steps, counts, secant)
             if message:
@@ -158,11 +158,13 @@ def _singular_hint(kernel: CapstanKernel, reason: str) -> str:
 
 def _record(kernel: CapstanKernel, w, motor, start) -> dict:
     """What the path keeps of the state w (its modes in the increment that reached it,
-    measured from ``start``)."""
+    measured from ``start``; None: the start of the path, every guide at rest, STICK)."""
     disc = kernel.disc
     theta = disc.split(kernel.split(w)[0])[0]
     tensions = kernel.segment_tensions(w, motor)
     return {"p_motor": tensions[kernel.first_segments], "cable_lengths": kernel.cable_lengths(w),
             "tip": disc.node_positions(theta)[-1], "tip_angle": theta[-1], "tensions": tensions,
-            "modes": kernel.modes(w, motor, start), "wrap": kernel.wrap_angles(w),
+            "modes": (np.full(kernel.n_guides, STICK) if start is None
+                      else kernel.modes(w, motor, start)),
+            "wrap": kernel.wrap_angles(w),
             "states": w}

@@ -49,7 +49,7 @@ def main() -> None:
         top = args.steps
         gap = y[top:][::-1] - y[:top + 1]
         area = np.trapz(gap, p_N[:top + 1])
-        stuck = np.flatnonzero(np.any(fp.modes[:, guides] == STICK, axis=1))
+        stuck = 1 + np.flatnonzero(np.any(fp.modes[1:, guides] == STICK, axis=1))
         print(f"mu = {mu:g}: converged {fp.converged}, {fp.increments} increments, "
               f"{fp.iterations} Newton iterations, {seconds:.2f} s; tip y at the peak "
               f"{y[top]:.2f} mm; largest gap (unloading - loading) {gap.max():.3f} mm at "
