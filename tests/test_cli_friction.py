@@ -9,6 +9,7 @@ import sys
 
 import h5py
 import numpy as np
+import pytest
 
 import elastica_petsc as ep
 from conftest import REPO
@@ -21,6 +22,7 @@ def cli(*args, cwd=None):
                           capture_output=True, text=True, cwd=cwd, timeout=120)
 
 
+@pytest.mark.slow                 # a subprocess that plots and computes two cycles
 def test_cycle_table_hysteresis_out_and_plot(tmp_path):
     out, png = tmp_path / "f.h5", tmp_path / "f.png"
     run = cli("friction", "--config", GUIDED3, "--mu", 0.3, "--peak-N", 22, "--steps", 4,
@@ -58,6 +60,7 @@ def test_a_history_of_both_motors(tmp_path):
     assert 0 in data["modes"][2][:3]                     # cable 2 pulls back: a guide sticks
 
 
+@pytest.mark.slow                 # seven subprocesses
 def test_bad_input_is_one_line_and_status_2():
     cases = ((["--mu", -0.1], "friction coefficient"), (["--mu", 0.1, 0.2], "one per guide"),
              (["--peak-N", 0], "--peak-N"), (["--tendon", 3], "--tendon"),
