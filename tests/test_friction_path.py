@@ -192,6 +192,14 @@ def test_elastic_cables_tend_to_the_inextensible_path():
         assert np.all(orders > 0.8), (gaps, orders)
 
 
+def test_a_start_that_cannot_be_reached_is_a_result(guided3):
+    """No frictionless equilibrium at the first tensions (cable 1 collapses onto a guide long
+    before p = 2000): converged False with the reason, no rows, not an exception."""
+    path = friction_path(guided3, MU, [[2000.0, 0.0], [10.0, 0.0]])
+    assert not path.converged and "no frictionless equilibrium" in path.message
+    assert path.tip.shape == (0, 2) and path.modes.shape == (0, 6)
+
+
 def test_bad_history(guided3):
     with pytest.raises(InputError, match="motor values with 2 values"):
         friction_path(guided3, MU, [[1.0, 2.0, 3.0]])

@@ -84,7 +84,8 @@ def friction_path(disc: GuidedDiscretisation, mu, history, *, length_control=Non
     start_tensions = check_tensions(start_tensions, disc.n_tendons)
     start = solve_equilibrium(disc, start_tensions)
     if not start.converged:
-        raise InputError(f"no frictionless equilibrium at the first tensions: {start.message}")
+        return _no_path(kernel, f"no frictionless equilibrium at the first tensions: "
+                                f"{start.message}")
     w = kernel.frictionless_state(start.u, start_tensions)
     motor = np.where(held, kernel.cable_lengths(w), start_tensions)
     rows, counts, message, secant = [], [0, 0], "", [None, 0.0]
@@ -144,6 +145,18 @@ def _advance(solver: CapstanSolver, w, p_from, p_to, max_step: np.ndarray, count
         secant[:] = [trial - w, step * span]
         w, done = trial, done + step
     return w, start, ""
+
+
+def _no_path(kernel: CapstanKernel, message: str) -> FrictionPath:
+    """A path that could not start: no rows, not converged, ``message`` says why."""
+    disc, n = kernel.disc, kernel.disc.n_tendons
+    empty = {"p_motor": (0, n), "cable_lengths": (0, n), "tip": (0, 2), "tip_angle": (0,),
+             "tensions": (0, disc.n_points), "modes": (0, kernel.n_guides),
+             "wrap": (0, kernel.n_guides), "states": (0, kernel.size)}
+    arrays = {key: np.zeros(shape, int if key == "modes" else float)
+              for key, shape in empty.items()}
+    return FrictionPath(mu=kernel.mu, length_control=kernel.length_control,
+                        compliance=kernel.compliance, converged=False, message=message, **arrays)
 
 
 def _singular_hint(kernel: CapstanKernel, reason: str) -> str:
