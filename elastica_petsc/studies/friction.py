@@ -100,23 +100,22 @@ def friction_path(disc: GuidedDiscretisation, mu, history, *, length_control=Non
             rows.append(_record(kernel, w, motor, start))
     stack = {key: np.array([r[key] for r in rows]) for key in rows[0]}
     return FrictionPath(mu=kernel.mu, length_control=held, compliance=kernel.compliance,
-                        increments=counts[0],
-                        iterations=counts[1], converged=not message, message=message, **stack)
+                        increments=counts[0], iterations=counts[1], converged=not message,
+                        message=message, **stack)
 
 
 def _advance(solver: CapstanSolver, w, p_from, p_to, max_step: np.ndarray, counts, secant):
     """w at the motor values p_to from w at p_from in increments of at most ``max_step``
     (per tendon), halved on failure: (w, the start of the last increment
-    (:class:`IncrementStart`), message).  Each Newton
-    solve starts from the secant predictor w + (step / last step) dw of the last
-    accepted increment (``secant``: [dw, its step in units of max_step], updated), so that the
-    guides' slip continues in its direction and the modes are right from the
-    first iterate (from w itself every trial value is a tie between the modes)."""
+    (:class:`~elastica_petsc.core.friction.IncrementStart`), message).  Each Newton solve
+    starts from the secant predictor w + (step / last step) dw of the last accepted
+    increment (``secant``: [dw, its step in units of max_step], updated), so that the
+    guides' slip continues in its direction and the modes are right from the first
+    iterate (from w itself every trial value is a tie between the modes)."""
     kernel = solver.kernel
     span = float(np.max(np.abs(p_to - p_from) / max_step))
     steps = max(1, int(np.ceil(span)))
     done, step, halvings = 0.0, 1.0 / steps, 0
-    start = kernel.start_of(w, p_from)
     while done < 1.0 - 1e-12:
         step = min(step, 1.0 - done)
         p = p_from + (done + step) * (p_to - p_from)
@@ -130,8 +129,8 @@ def _advance(solver: CapstanSolver, w, p_from, p_to, max_step: np.ndarray, count
         if not ok:
             halvings += 1
             if halvings > MAX_HALVINGS:
-                return w, start, (f"the increment to motor tensions {np.round(p, 6).tolist()} did "
-                                  f"not converge ({reason}) after {MAX_HALVINGS} halvings"
+                return w, start, (f"the increment to the motor values {np.round(p, 6).tolist()} "
+                                  f"did not converge ({reason}) after {MAX_HALVINGS} halvings"
                                   + _singular_hint(kernel, reason))
             step *= 0.5
             secant[0] = None
