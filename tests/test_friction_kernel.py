@@ -17,11 +17,12 @@ from conftest import REPO
 MODES = (SLIP_IN, STICK, SLIP_OUT)
 
 
-@pytest.fixture(scope="module", params=[(None, 0.0), ((True, False), 0.0), (None, 0.01)],
-                ids=["force", "length", "elastic"])
+@pytest.fixture(scope="module", params=[(None, 0.0), ((True, False), 0.0), (None, 0.01),
+                                        ((True, False), 0.01)],
+                ids=["force", "length", "elastic", "elastic-length"])
 def kernel(request):
-    """guided3 with both motors under force control, or the first holding its length, or
-    with cables that stretch where they stick (compliance B/(EA l^2) = 0.01)."""
+    """guided3 with both motors under force control, or the first holding its length,
+    with inextensible or elastic cables (compliance B/(EA l^2) = 0.01)."""
     disc = Discretisation.from_arm(load_config(REPO / "configs" / "guided3.toml"), 24)
     control, compliance = request.param
     return CapstanKernel.of(disc, 0.3, length_control=control, compliance=compliance)
@@ -37,9 +38,7 @@ def bent_state(kernel, seed=0):
     w = np.concatenate((u, rng.uniform(5.0, 10.0, kernel.size - disc.size)))
     motor = np.where(kernel.length_control, kernel.cable_lengths(w) - 1e-3, [12.0, 7.0])
     start = kernel.start_of(w, motor)
-    start = start._replace(beyond=start.beyond + 1e-3 * rng.normal(size=kernel.n_guides),
-                           tensions=start.tensions + rng.normal(size=disc.n_points),
-                           lengths=start.lengths * rng.uniform(0.9, 1.1, disc.n_points))
+    start = start._replace(material=start.material + 1e-3 * rng.normal(size=kernel.n_guides))
     return w, motor, start
 
 

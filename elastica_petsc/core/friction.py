@@ -31,8 +31,10 @@ motor's segment carries its given tension).  The equations are the guided
 equilibrium with segment tensions (f_a = P_a e_a - P_{a+1} e_{a+1}), one Phi
 per guide and L_i = Lbar_i per length-controlled tendon.  With mu = 0 the clip
 interval is {P_a}: every tension equals the motor's and the state is the
-frictionless one.  Optionally the cables stretch where they stick (compliance
-B/(EA l^2)): the slip is then the material's, dS_a less the stretch beyond a.
+frictionless one.  Optionally the cables are elastic (compliance eps = B/(EA l^2)):
+segment b then holds the unstretched material l_b / (1 + eps P_b), the slip at a guide
+is the change of the material beyond it and a length-controlled motor holds its
+cable's material (docs/model.md §26.6); eps = 0 is the inextensible cable above.
 """
 from __future__ import annotations
 
@@ -53,11 +55,10 @@ SLIP_IN, STICK, SLIP_OUT = -1, 0, 1
 
 
 class IncrementStart(NamedTuple):
-    """The state an increment starts from, that its slip is measured against."""
+    """What the slip of an increment is measured against: the cable material beyond
+    every guide at its start (S_a for inextensible cables)."""
 
-    beyond: np.ndarray     # S_a of every guide
-    tensions: np.ndarray   # P of every segment
-    lengths: np.ndarray    # l of every segment
+    material: np.ndarray
 
 
 def guide_friction(arm) -> np.ndarray:
@@ -95,7 +96,7 @@ class CapstanKernel:
     mu: np.ndarray
     scale: float = DEFAULT_SCALE
     length_control: np.ndarray | None = None    # per tendon: its motor holds a cable length
-    compliance: float = 0.0     # B/(EA l^2) of the cables: their stretch where they stick
+    compliance: float = 0.0     # eps = B/(EA l^2) of the cables (0: inextensible)
 
     @classmethod
     def of(cls, disc: GuidedDiscretisation, mu, scale: float = DEFAULT_SCALE,
@@ -195,20 +196,27 @@ class CapstanKernel:
         """S_a of every guide: the cable length from guide a to its end, sum_{b>a} l_b."""
         return self._after(self.segment_lengths(w))
 
+    def _stretch(self, w: np.ndarray, motor) -> np.ndarray:
+        """1 + eps P_b of every segment: its length over its unstretched material."""
+        return 1.0 + self.compliance * self.segment_tensions(w, motor)
+
+    def material(self, w: np.ndarray, motor) -> np.ndarray:
+        """The unstretched cable material of every segment, l_b / (1 + eps P_b)."""
+        return self.segment_lengths(w) / self._stretch(w, motor)
+
+    def cable_material(self, w: np.ndarray, motor) -> np.ndarray:
+        """The material of every cable (what a length-controlled motor holds; L_i when
+        inextensible)."""
+        return np.add.reduceat(self.material(w, motor), list(self.disc.path_starts[:-1]))
+
     def start_of(self, w: np.ndarray, motor) -> IncrementStart:
         """What an increment from the state w (at the motor values ``motor``) measures from."""
-        return IncrementStart(self.beyond(w), self.segment_tensions(w, motor),
-                              self.segment_lengths(w))
+        return IncrementStart(self._after(self.material(w, motor)))
 
     def slip(self, w: np.ndarray, motor, start: IncrementStart) -> np.ndarray:
-        """The cable material drawn through each guide toward its end since ``start``:
-        dS_a less the stretch of the material beyond the guide under the change of
-        tension, sum_{b>a} l_b (P_b - P_b^start) B/(EA l^2) (docs/model.md §26.6)."""
-        moved = self.beyond(w) - start.beyond
-        if self.compliance == 0.0:
-            return moved
-        change = self.segment_tensions(w, motor) - start.tensions
-        return moved - self.compliance * self._after(start.lengths * change)
+        """The cable material drawn through each guide toward its end since ``start``
+        (docs/model.md §26.1, §26.6)."""
+        return self._after(self.material(w, motor)) - start.material
 
     def turning(self, e: np.ndarray) -> np.ndarray:
         """Signed angle from e_a to e_{a+1} at each guide (its modulus is beta_a)."""
@@ -254,7 +262,7 @@ class CapstanKernel:
         held = self.lengths_held
         return np.concatenate((self.disc.residual(u, None, terms=terms),
                                self.guide_residual(w, motor, start, modes),
-                               self.cable_lengths(w)[held] - np.asarray(motor, float)[held]))
+                               self.cable_material(w, motor)[held] - np.asarray(motor, float)[held]))
 
     # --- the Jacobian: the guided pattern, the q columns and the Phi rows ----------------
     @cached_property
@@ -274,10 +282,12 @@ class CapstanKernel:
             qc = [n_u + k for k in self.unknown_of_segment[a:last] if k >= 0]
             rows.append(np.full(len(zc) + len(qc), n_u + j))
             cols.append(np.concatenate((zc, qc)))
-        for r, i in enumerate(self.lengths_held):     # dL_i / dz, and a stored zero diagonal
-            zc = disc.n_elements + np.arange(2 * disc.path_starts[i], 2 * disc.path_starts[i + 1])
-            rows.append(np.full(len(zc) + 1, n_u + self.n_guides + r))
-            cols.append(np.append(zc, n_u + self.n_guides + r))
+        for r, i in enumerate(self.lengths_held):     # dL_i / d(z, q): every segment's
+            lo, hi = disc.path_starts[i], disc.path_starts[i + 1]
+            zc = disc.n_elements + np.arange(2 * lo, 2 * hi)
+            qc = [n_u + k for k in self.unknown_of_segment[lo:hi] if k >= 0]
+            rows.append(np.full(len(zc) + len(qc), n_u + self.n_guides + r))
+            cols.append(np.concatenate((zc, qc)))
         rows, cols = np.concatenate(rows), np.concatenate(cols)
         order = np.lexsort((cols, rows))
         return rows, cols, order, on_q
@@ -302,14 +312,21 @@ class CapstanKernel:
         parts = [disc.jacobian_values(u, None, t, dg)]
         # dF_theta/dP_a = grad_theta l_a = -D_a^T e_a (docs/model.md §11.3, per segment)
         parts.append(-np.sum(dg[on_q] * t.e[chord[on_q]], axis=1))
-        parts.extend(self._guide_rows(w, motor, start, np.asarray(modes)))
+        stretch = self._stretch(w, motor)
+        # d material_b = e_b . dz_b / (1 + eps P_b) - eps l_b dP_b / (1 + eps P_b)^2
+        dm_dz = t.e / stretch[:, None]
+        dm_dp = -self.compliance * t.seg_len / stretch ** 2
+        parts.extend(self._guide_rows(w, motor, np.asarray(modes), dm_dz, dm_dp))
         starts = disc.path_starts
-        parts.extend(np.append(t.e[starts[i]:starts[i + 1]].ravel(), 0.0)
-                     for i in self.lengths_held)
+        for i in self.lengths_held:
+            lo, hi = starts[i], starts[i + 1]
+            unknown = self.unknown_of_segment[lo:hi] >= 0
+            parts.append(np.concatenate((dm_dz[lo:hi].ravel(), dm_dp[lo:hi][unknown])))
         return np.concatenate(parts)[order]
 
-    def _guide_rows(self, w, motor, start: IncrementStart, modes) -> list[np.ndarray]:
-        """dPhi_j/d(z_a..z_last, P_a..P_last) in the column order of :attr:`_coo`."""
+    def _guide_rows(self, w, motor, modes, dm_dz, dm_dp) -> list[np.ndarray]:
+        """dPhi_j/d(z_a..z_last, P_a..P_last) in the column order of :attr:`_coo`
+        (``dm_dz``, ``dm_dp``: the derivatives of each segment's material)."""
         disc = self.disc
         seg_len, e, _, tau, pa, _, lo, hi = self._bounds(w, motor)
         # d beta / d z: phi_a = angle of z_a, d phi_a/d z_a = e_a^perp / l_a
@@ -320,10 +337,10 @@ class CapstanKernel:
             last = disc.path_starts[disc.point_tendon[a] + 1]
             dz = np.zeros((last - a, 2))
             q_own = [] if self.unknown_of_segment[a] < 0 else [0.0]
-            if modes[j] == STICK:                     # Phi = -c (dS_a - stretch beyond a)
-                dz[1:] = -self.scale * e[a + 1:last]
-                stretch = self.scale * self.compliance * start.lengths[a + 1:last]
-                out.append(np.concatenate((dz.ravel(), q_own, stretch)))
+            if modes[j] == STICK:                     # Phi = -c (material beyond a - start)
+                dz[1:] = -self.scale * dm_dz[a + 1:last]
+                out.append(np.concatenate((dz.ravel(), q_own,
+                                           -self.scale * dm_dp[a + 1:last])))
                 continue
             bound = lo[j] if modes[j] == SLIP_IN else hi[j]
             rate = modes[j] * self.mu[j]              # Phi = P_{a+1} - P_a exp(rate beta)

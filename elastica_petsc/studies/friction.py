@@ -87,7 +87,7 @@ def friction_path(disc: GuidedDiscretisation, mu, history, *, length_control=Non
         return _no_path(kernel, f"no frictionless equilibrium at the first tensions: "
                                 f"{start.message}")
     w = kernel.frictionless_state(start.u, start_tensions)
-    motor = np.where(held, kernel.cable_lengths(w), start_tensions)
+    motor = np.where(held, kernel.cable_material(w, start_tensions), start_tensions)
     rows, counts, message, secant = [], [0, 0], "", [None, 0.0]
     steps = np.where(held, max_length_step, max_step)
     with CapstanSolver(kernel, petsc_options=petsc_options) as solver:
