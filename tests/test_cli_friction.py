@@ -76,3 +76,24 @@ def test_bad_input_is_one_line_and_status_2():
         run = cli(*args)
         assert run.returncode == 2, (args, run.stderr)
         assert run.stderr.count("\n") == 1 and words in run.stderr, run.stderr
+
+
+@pytest.mark.slow                 # plans a trace first
+def test_replay_of_a_traced_schedule(tmp_path):
+    """--replay: the motors hold the cable lengths of a `trace --schedule` file.  With
+    mu = 0 and inextensible cables the tip follows the plan; elastic cables (EA = 39 kN,
+    needed with friction here: the antagonists hold their lengths over one span,
+    docs/model.md §26.6) leave it by their stretch, and friction by several times more."""
+    plan = cli("trace", "--config", GUIDED3, "--shape", "line", "--center", 250, 100, "--end",
+               250, 110, "--step", 2, "--schedule", "plan.csv", "--elements", 48, "--quiet",
+               cwd=tmp_path)
+    assert plan.returncode == 0, plan.stderr
+    deviation = {}
+    for mu, elastic in ((0.0, []), (0.0, ["--cable-stiffness-kN", 39]),
+                        (0.3, ["--cable-stiffness-kN", 39])):
+        run = cli("friction", "--config", GUIDED3, "--mu", mu, "--replay", "plan.csv",
+                  "--elements", 48, "--json", *elastic, cwd=tmp_path)
+        assert run.returncode == 0, run.stderr
+        deviation[mu, bool(elastic)] = json.loads(run.stdout)["plan_deviation_mm"]
+    assert deviation[0.0, False] < 1e-6, deviation
+    assert deviation[0.3, True] > 3 * deviation[0.0, True] > 0, deviation

@@ -22,7 +22,10 @@ def add_parser(sub) -> None:
                     "motor tension on both branches and the hysteresis (the largest gap between "
                     "unloading and loading). With --history CSV instead: any history of motor "
                     "tensions (columns time_s, tension_1_N, ... as `simulate --history`; the rows "
-                    "in order, time ignored). Needs an arm whose cables run through guides.")
+                    "in order, time ignored). With --replay CSV: replay a motor schedule of "
+                    "`trace --schedule` with every motor holding its cable length, from the "
+                    "frictionless state at the tensions of its row 0, and compare the tip with "
+                    "the planned one. Needs an arm whose cables run through guides.")
     parser.add_argument("--mu", type=float, nargs="+", metavar="MU",
                         help="friction coefficient at every guide, or one per guide (each "
                              "cable's guides from its motor, tendon by tendon); >= 0, 0 is "
@@ -34,6 +37,9 @@ def add_parser(sub) -> None:
                         help="motor tensions row by row instead of a cycle (time_s, "
                              "tension_1_N, tension_2_N, ...), from the frictionless state of "
                              "the first row")
+    source.add_argument("--replay", metavar="CSV",
+                        help="cable lengths row by row (a `trace --schedule` file: length_1_mm, "
+                             "..., and tension_1_N, ... in row 0 for the start)")
     parser.add_argument("--tendon", type=int, default=1, metavar="K",
                         help="the motor that is cycled (1-based, default 1)")
     parser.add_argument("--hold-N", type=float, nargs="+", metavar="P",
@@ -56,10 +62,10 @@ def history_N(args, arm):
     from ..core.errors import InputError
 
     n_tendons = arm.n_tendons
+    if args.peak_N is None and args.plot:
+        raise InputError("--plot draws the cycle of --peak-N (not a --history or --replay)")
     if args.history is not None:
         from ..core.drive import read_tension_history
-        if args.plot:
-            raise InputError("--plot draws the cycle of --peak-N (not a --history)")
         return read_tension_history(args.history, n_tendons)[1]
     if not 1 <= args.tendon <= n_tendons:
         raise InputError(f"--tendon {args.tendon}: the arm has tendons 1..{n_tendons}")
@@ -76,6 +82,19 @@ def history_N(args, arm):
     return rows
 
 
+def schedule_rows(args, arm):
+    """(cable lengths of rows 1.. [mm], start tensions [N], planned tips [mm] or None)
+    of a --replay file."""
+    from ..core.drive import read_schedule
+    from ..core.errors import InputError
+
+    rows = read_schedule(args.replay, arm.n_tendons)
+    if rows.lengths_mm is None or rows.start_tensions_N is None:
+        raise InputError(f"{args.replay}: --replay needs the cable lengths (length_1_mm, ...) "
+                         "and the tensions of row 0 (tension_1_N, ...): a `trace --schedule` file")
+    return rows.lengths_mm[1:], rows.start_tensions_N, rows.tips_mm
+
+
 def run(args) -> int:
     from .. import api
     from ..core import inputs
@@ -83,16 +102,24 @@ def run(args) -> int:
     from ..core.friction import guide_friction
 
     arm, disc = common.load_arm(args, friction=True)
-    rows = history_N(args, arm)
+    planned, start_N = None, None
+    if args.replay is not None:
+        rows, start_N, planned = schedule_rows(args, arm)
+    else:
+        rows = history_N(args, arm)
     if args.cable_stiffness_kN is not None:
         inputs.positive(args.cable_stiffness_kN, "--cable-stiffness-kN", "kN")
     common.check_outputs(args)
     mu = guide_friction(arm) if args.mu is None else np.asarray(args.mu, float)
     result = api.friction_path(arm, rows, mu=mu, elements=disc.n_elements,
-                               cable_stiffness_N=_stiffness_N(args))
+                               cable_stiffness_N=_stiffness_N(args),
+                               length_control=args.replay is not None, start_tensions_N=start_N)
     summary = result.summary()
     k = args.tendon - 1
-    if args.history is None:
+    if planned is not None and len(result.tip_mm):
+        gap = np.hypot(*(result.tip_mm - planned[:len(result.tip_mm)]).T)
+        summary["plan_deviation_mm"] = float(gap.max())
+    if args.peak_N is not None:
         y, top = result.tip_mm[:, 1], args.steps
         gaps = y[top:][::-1] - y[:top + 1] if result.converged else np.zeros(1)
         summary["largest_gap_mm"] = float(np.max(np.abs(gaps)))
@@ -100,9 +127,12 @@ def run(args) -> int:
         common.print_json(args.command, summary)
     else:
         print(_table(result))
-        if args.history is None:
+        if args.peak_N is not None:
             print(f"hysteresis: the tip's y differs between unloading and loading by up to "
                   f"{summary['largest_gap_mm']:.3f} mm (mu = {_mu_text(result.path.mu)})")
+        if "plan_deviation_mm" in summary:
+            print(f"the tip leaves the planned path by up to {summary['plan_deviation_mm']:.3f} mm "
+                  f"(mu = {_mu_text(result.path.mu)})")
     if args.out:
         result.save(args.out, overwrite=args.overwrite)
     if args.plot and result.converged:

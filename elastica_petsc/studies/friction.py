@@ -159,13 +159,15 @@ def _no_path(kernel: CapstanKernel, message: str) -> FrictionPath:
 
 
 def _singular_hint(kernel: CapstanKernel, reason: str) -> str:
-    """Why the linear solve may fail: inextensible cables stuck on both sides of one span
-    (docs/model.md §26.6)."""
-    if reason != "DIVERGED_LINEAR_SOLVE" or kernel.compliance > 0:
+    """Why Newton may fail: with inextensible cables, antagonistic cables that stick on
+    both sides of one span, or hold their lengths there, make the tensions (nearly)
+    indeterminate (docs/model.md §26.6)."""
+    if reason not in ("DIVERGED_LINEAR_SOLVE", "DIVERGED_DTOL") or kernel.compliance > 0:
         return ""
-    return ("; the Jacobian is singular: with inextensible cables the tensions of cables "
-            "that stick on both sides of one span are statically indeterminate; give the "
-            "cables' axial stiffness (cable_stiffness_N, --cable-stiffness-kN)")
+    return ("; with inextensible cables the tensions of antagonistic cables that stick, or "
+            "hold their lengths, on both sides of one span are (nearly) indeterminate and the "
+            "Jacobian (nearly) singular; give the cables' axial stiffness (cable_stiffness_N, "
+            "--cable-stiffness-kN)")
 
 
 def _record(kernel: CapstanKernel, w, motor, start) -> dict:
