@@ -1,5 +1,6 @@
-"""``elastica-petsc friction``: a load-unload cycle of one motor, or a history of motor
-tensions, with capstan friction at the guides (docs/model.md §26)."""
+"""``elastica-petsc friction``: a load-unload cycle of one motor, a history of motor
+tensions or the replay of a motor schedule, with capstan friction at the guides
+(docs/model.md §26)."""
 from __future__ import annotations
 
 import sys
@@ -46,9 +47,11 @@ def add_parser(sub) -> None:
                         help="the tensions of the other motors, N, one per tendon (the cycled "
                              "tendon's value is ignored; default 0)")
     parser.add_argument("--cable-stiffness-kN", type=float, metavar="EA",
-                        help="the cables' axial stiffness EA, kN: their stretch where they "
-                             "stick (default inextensible; needed where cables stick on both "
-                             "sides of one span: their tensions are otherwise indeterminate)")
+                        help="the cables' axial stiffness EA, kN (default inextensible): a "
+                             "sticking guide or a length-controlled motor then holds the cable's "
+                             "unstretched material; needed where antagonistic cables stick or "
+                             "hold their lengths on both sides of one span (their tensions are "
+                             "otherwise indeterminate)")
     parser.add_argument("--steps", type=int, default=20, metavar="K",
                         help="increments of the history each way (default 20)")
     common.add_arm_options(parser)
@@ -62,8 +65,6 @@ def history_N(args, arm):
     from ..core.errors import InputError
 
     n_tendons = arm.n_tendons
-    if args.peak_N is None and args.plot:
-        raise InputError("--plot draws the cycle of --peak-N (not a --history or --replay)")
     if args.history is not None:
         from ..core.drive import read_tension_history
         return read_tension_history(args.history, n_tendons)[1]
@@ -101,7 +102,11 @@ def run(args) -> int:
 
     from ..core.friction import guide_friction
 
+    from ..core.errors import InputError
+
     arm, disc = common.load_arm(args, friction=True)
+    if args.peak_N is None and args.plot:
+        raise InputError("--plot draws the cycle of --peak-N (not a --history or --replay)")
     planned, start_N = None, None
     if args.replay is not None:
         rows, start_N, planned = schedule_rows(args, arm)
