@@ -1,7 +1,7 @@
 """Quasi-static load paths with capstan friction at the guides (docs/model.md §26).
 
-:func:`friction_path` follows a history of motor tensions (force control) in
-increments from the frictionless equilibrium at its first point; each
+:func:`friction_path` follows a history of the motors (tensions, or cable lengths for
+the length-controlled ones) in increments from a frictionless equilibrium; each
 increment solves the equilibrium with the stick/slip complementarity of every
 guide (:class:`~elastica_petsc.solvers.friction.CapstanSolver`), measured from
 the state the increment starts at, so a guide that sticks keeps the cable
