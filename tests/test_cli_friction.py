@@ -1,4 +1,4 @@
-"""``elastica-petsc friction`` (docs/model.md §26): a load-unload cycle on
+"""``elastica-petsc friction`` (docs/model.md §27): a load-unload cycle on
 configs/guided3.toml with its table, the hysteresis line, --out read back and
 --plot, and bad input in one line with exit status 2."""
 from __future__ import annotations
@@ -83,7 +83,7 @@ def test_replay_of_a_traced_schedule(tmp_path):
     """--replay: the motors hold the cable lengths of a `trace --schedule` file.  With
     mu = 0 and inextensible cables the tip follows the plan; elastic cables (EA = 39 kN,
     needed with friction here: the antagonists hold their lengths over one span,
-    docs/model.md §26.6) leave it by their stretch, and friction by several times more."""
+    docs/model.md §27.6) leave it by their stretch, and friction by several times more."""
     plan = cli("trace", "--config", GUIDED3, "--shape", "line", "--center", 250, 100, "--end",
                250, 110, "--step", 2, "--schedule", "plan.csv", "--elements", 48, "--quiet",
                cwd=tmp_path)

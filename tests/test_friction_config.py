@@ -1,4 +1,4 @@
-"""``[[tendon]] friction_coefficient`` (docs/model.md §26): read, written back, checked;
+"""``[[tendon]] friction_coefficient`` (docs/model.md §27): read, written back, checked;
 used by the friction path, refused by every study that models frictionless guides."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Kernel of capstan friction at the guides (core/friction.py, docs/model.md §26):
+"""Kernel of capstan friction at the guides (core/friction.py, docs/model.md §27):
 the residual and its Jacobian in each fixed stick/slip mode (Taylor remainders of
 order 2, every derivative inside the stored pattern), the reduction to the
 frictionless kernel, and the inputs refused."""
@@ -120,7 +120,7 @@ def test_antagonists_that_stick_are_statically_indeterminate():
     (0-150 mm), opposite offsets.  With every guide sticking, the two cables' stuck segments
     over one span constrain the same rotation: the Jacobian loses rank (2, the spans shared
     by stuck segments of both cables), its tensions are indeterminate.  A cable compliance
-    B/(EA l^2) > 0 (docs/model.md §26.6) restores the rank."""
+    B/(EA l^2) > 0 (docs/model.md §27.6) restores the rank."""
     from elastica_petsc.solvers.equilibrium import solve_equilibrium
 
     disc = Discretisation.from_arm(load_config(REPO / "configs" / "guided.toml"), 48)

@@ -1,4 +1,4 @@
-"""Load paths with capstan friction at the guides (studies/friction.py, docs/model.md §26):
+"""Load paths with capstan friction at the guides (studies/friction.py, docs/model.md §27):
 
 - mu = 0 gives the frictionless equilibria of the same tensions to round-off;
 - the capstan closed form: a cable through n guides at offset d along the arm, loaded
@@ -123,7 +123,7 @@ def test_load_unload_cycle_shows_hysteresis(guided3):
 
 
 def test_a_cycle_dissipates_the_motor_work_at_the_guides(guided3):
-    """-P_1 dL_1 - dU = sum_a (P_{a+1} - P_a) dS_a exactly (docs/model.md §26.4): over a closed
+    """-P_1 dL_1 - dU = sum_a (P_{a+1} - P_a) dS_a exactly (docs/model.md §27.4): over a closed
     cycle U returns, so the motor's work is the guides' dissipation.  Both by the trapezoid
     rule over the increments (one per history step); the gap falls at order 2."""
     kernel = CapstanKernel.of(guided3, MU)

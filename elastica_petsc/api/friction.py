@@ -1,5 +1,5 @@
 """Quasi-static load paths with capstan friction at the guides, in mm and N
-(docs/model.md §26): :func:`friction_path` and its :class:`FrictionResult`."""
+(docs/model.md §27): :func:`friction_path` and its :class:`FrictionResult`."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -84,12 +84,12 @@ def friction_path(arm: Arm, history, *, mu=None, length_control=None, start_tens
     tension in N, or for a tendon with ``length_control`` True its cable length in mm)
     with Coulomb friction ``mu`` (a scalar, or one per guide; default the arm's
     ``[[tendon]] friction_coefficient``) where the cables wrap the guides: capstan stick
-    and slip at every guide (docs/model.md §26).  The path starts
+    and slip at every guide (docs/model.md §27).  The path starts
     from the frictionless equilibrium at ``start_tensions_N`` (default: history[0], with
     every motor under force control).  ``max_step_N``: the largest tension change of one
     increment (default B/l^2, one non-dimensional unit).  ``cable_stiffness_N``: the
     cables' axial stiffness EA, their stretch where they stick (default inextensible;
-    needed where cables stick on both sides of one span, docs/model.md §26.6)."""
+    needed where cables stick on both sides of one span, docs/model.md §27.6)."""
     from ..core.friction import guide_friction
     from ..studies.friction import friction_path as follow
 

@@ -1,6 +1,6 @@
 """``elastica-petsc friction``: a load-unload cycle of one motor, a history of motor
 tensions or the replay of a motor schedule, with capstan friction at the guides
-(docs/model.md §26)."""
+(docs/model.md §27)."""
 from __future__ import annotations
 
 import sys
@@ -19,7 +19,7 @@ def add_parser(sub) -> None:
                     "increments each way (the other motors hold --hold-N, default 0) with "
                     "Coulomb friction --mu where the cables wrap their guides: at every guide "
                     "the cable sticks or slips (capstan law T_out = T_in e^(mu beta)), one "
-                    "tension per cable segment (docs/model.md §26). Prints the tip against the "
+                    "tension per cable segment (docs/model.md §27). Prints the tip against the "
                     "motor tension on both branches and the hysteresis (the largest gap between "
                     "unloading and loading). With --history CSV instead: any history of motor "
                     "tensions (columns time_s, tension_1_N, ... as `simulate --history`; the rows "

@@ -1,5 +1,5 @@
 """Capstan friction at the guides: one tension per cable segment, stick and slip
-at every guide as a complementarity problem (docs/model.md §26).  Numpy only,
+at every guide as a complementarity problem (docs/model.md §27).  Numpy only,
 non-dimensional (l = 1, B = 1, p = P l^2/B).
 
 Segment a of a tendon joins point a (a guide or the end) to its predecessor
@@ -34,7 +34,7 @@ interval is {P_a}: every tension equals the motor's and the state is the
 frictionless one.  Optionally the cables are elastic (compliance eps = B/(EA l^2)):
 segment b then holds the unstretched material l_b / (1 + eps P_b), the slip at a guide
 is the change of the material beyond it and a length-controlled motor holds its
-cable's material (docs/model.md §26.6); eps = 0 is the inextensible cable above.
+cable's material (docs/model.md §27.6); eps = 0 is the inextensible cable above.
 """
 from __future__ import annotations
 
@@ -49,7 +49,7 @@ from .guided import GuidedDiscretisation
 
 # c of Phi (units B/l^3: tension per length of slip).  The solution does not depend on
 # it; Newton's first modes do: c dS must outweigh the tension's change of one increment
-# (docs/model.md §26.3: c = 30..1000 took 65-74 iterations on a path where c = 1 took 247).
+# (docs/model.md §27.3: c = 30..1000 took 65-74 iterations on a path where c = 1 took 247).
 DEFAULT_SCALE = 100.0
 SLIP_IN, STICK, SLIP_OUT = -1, 0, 1
 
@@ -70,7 +70,7 @@ def guide_friction(arm) -> np.ndarray:
 
 def check_frictionless(arm, study: str) -> None:
     """Refuse an arm configured with friction at its guides for a study that models
-    frictionless guides (all but the friction load path: docs/model.md §26.5)."""
+    frictionless guides (all but the friction load path: docs/model.md §27.5)."""
     for i, tendon in enumerate(arm.tendons, start=1):
         if tendon.friction_coefficient > 0:
             raise InputError(
@@ -215,7 +215,7 @@ class CapstanKernel:
 
     def slip(self, w: np.ndarray, motor, start: IncrementStart) -> np.ndarray:
         """The cable material drawn through each guide toward its end since ``start``
-        (docs/model.md §26.1, §26.6)."""
+        (docs/model.md §27.1, §27.6)."""
         return self._after(self.material(w, motor)) - start.material
 
     def turning(self, e: np.ndarray) -> np.ndarray:

@@ -295,7 +295,7 @@ class GuidedDiscretisation(Discretisation):
 
     def segment_terms(self, u: np.ndarray, p_seg) -> PathTerms:
         """The terms of (u, p) with a tension per segment ``p_seg`` (P,) instead of one
-        per tendon (capstan friction at the guides, core/friction.py, docs/model.md §26):
+        per tendon (capstan friction at the guides, core/friction.py, docs/model.md §27):
         f_a = P_a e_a - P_{a+1} e_{a+1}; ``p`` of the terms is then undefined (NaN)."""
         return self._terms(u, np.full(self.n_tendons, np.nan), np.asarray(p_seg, float))
 

@@ -41,7 +41,7 @@ class Tendon:
     route_mm: tuple[float, float]
     attach_offset_mm: float = 0.0
     guides: tuple[Guide, ...] = ()
-    # Coulomb coefficient where the cable wraps its guides (capstan; docs/model.md §26):
+    # Coulomb coefficient where the cable wraps its guides (capstan; docs/model.md §27):
     # only the friction load path models it, every other study refuses it (core/friction.py)
     friction_coefficient: float = 0.0
 

@@ -1,5 +1,5 @@
 """The file of ``elastica-petsc friction --out`` / ``FrictionResult.save`` (docs/model.md
-§26): per row of the load path the motors, the tip, every segment's tension and every
+§27): per row of the load path the motors, the tip, every segment's tension and every
 guide's mode and wrap angle, in mm, N and degrees."""
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """The hysteresis of a load-unload cycle with capstan friction at the guides
-(docs/model.md §26): the tip against the motor tension, loading and unloading,
+(docs/model.md §27): the tip against the motor tension, loading and unloading,
 with the stick phases marked, and the arm at one tension on both branches."""
 from __future__ import annotations
 

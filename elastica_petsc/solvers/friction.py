@@ -1,5 +1,5 @@
 """One increment of a load path with capstan friction at the guides: semismooth
-Newton on PETSc SNES (docs/model.md §26).
+Newton on PETSc SNES (docs/model.md §27).
 
 :class:`CapstanSolver` owns a SNES (Newton with line search, prefix ``fric_``)
 on the system of :class:`~elastica_petsc.core.friction.CapstanKernel`: the

@@ -1,4 +1,4 @@
-"""Quasi-static load paths with capstan friction at the guides (docs/model.md §26).
+"""Quasi-static load paths with capstan friction at the guides (docs/model.md §27).
 
 :func:`friction_path` follows a history of the motors (tensions, or cable lengths for
 the length-controlled ones) in increments from a frictionless equilibrium; each
@@ -72,7 +72,7 @@ def friction_path(disc: GuidedDiscretisation, mu, history, *, length_control=Non
     ``start_tensions`` (force control only) it starts at history[0].  Increments change no
     tension by more than ``max_step`` and no length by more than ``max_length_step``.
     ``compliance``: B/(EA l^2) of the cables, their stretch where they stick (0:
-    inextensible; docs/model.md §26.6)."""
+    inextensible; docs/model.md §27.6)."""
     kernel = CapstanKernel.of(disc, mu, scale, length_control, compliance)
     held = kernel.length_control
     history = check_history(history, disc.n_tendons, held)
@@ -161,7 +161,7 @@ def _no_path(kernel: CapstanKernel, message: str) -> FrictionPath:
 def _singular_hint(kernel: CapstanKernel, reason: str) -> str:
     """Why Newton may fail: with inextensible cables, antagonistic cables that stick on
     both sides of one span, or hold their lengths there, make the tensions (nearly)
-    indeterminate (docs/model.md §26.6)."""
+    indeterminate (docs/model.md §27.6)."""
     if reason not in ("DIVERGED_LINEAR_SOLVE", "DIVERGED_DTOL") or kernel.compliance > 0:
         return ""
     return ("; with inextensible cables the tensions of antagonistic cables that stick, or "

@@ -1,4 +1,4 @@
-"""Benchmark of capstan friction at the guides (issue 24, docs/model.md §26).
+"""Benchmark of capstan friction at the guides (issue 24, docs/model.md §27).
 
     .venv/bin/python scripts/benchmarks/bench_friction.py [--repeats 7]
 

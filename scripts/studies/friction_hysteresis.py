@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Hysteresis of a load-unload cycle with capstan friction at the guides
-(docs/model.md §26; the fast checks are tests/test_friction_path.py).
+(docs/model.md §27; the fast checks are tests/test_friction_path.py).
 
 configs/guided3.toml: tendon 1's motor tension from 0 to ``--peak`` N and back in
 ``--steps`` increments each way, tendon 2 slack, for mu = 0, 0.1 and 0.3.  Prints per
