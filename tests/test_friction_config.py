@@ -37,13 +37,18 @@ def test_bad_coefficients_are_refused(arm):
                tendons=(Tendon(300.0, (0.0, 8.0), friction_coefficient=0.2),))
 
 
-def test_friction_path_uses_the_config_and_other_studies_refuse_it(arm):
+def test_friction_path_uses_the_config_and_other_studies_refuse_it(arm, tmp_path):
     history = [[0.0, 0.0], [11.0, 0.0], [22.0, 0.0], [11.0, 0.0]]
     from_config = ep.friction_path(arm, history, elements=48)
     given = ep.friction_path(ep.Arm.from_toml(REPO / "configs" / "guided3.toml"), history,
                              mu=[0.3, 0.3, 0.3, 0.0, 0.0, 0.0], elements=48)
     np.testing.assert_array_equal(from_config.path.mu, [0.3, 0.3, 0.3, 0.0, 0.0, 0.0])
     np.testing.assert_array_equal(from_config.tip_mm, given.tip_mm)
+    back = ep.read(from_config.save(tmp_path / "f.h5"))            # saved and read back exactly
+    assert isinstance(back, ep.FrictionResult) and back.arm == arm
+    for name in ("states", "tensions", "modes", "wrap", "mu"):
+        np.testing.assert_array_equal(getattr(back.path, name), getattr(from_config.path, name))
+    assert back.summary() == from_config.summary()
     for study in (lambda: ep.solve(arm, [1.0, 1.0], elements=48),
                   lambda: ep.control(arm, [250.0, 100.0], elements=48),
                   lambda: ep.workspace(arm, spacing_mm=100.0, elements=48)):
