@@ -121,17 +121,14 @@ def test_attachment_search_spreads_its_rows_over_two_ranks(tmp_path):
     one rank only (each rank about half the row solves of one rank), and both
     ranks find the same attachment, profile sigma and fit as one rank."""
     import json
-    import os
     import shutil
     import subprocess
     import sys
 
     if shutil.which("mpiexec") is None:
         pytest.skip("needs mpiexec")
-    keep = ("OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM",
-            "OMPI_MCA_rmaps_base_oversubscribe")
-    env = {k: v for k, v in os.environ.items()
-           if k in keep or not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
+    from mpi_env import mpi_env
+    env = mpi_env()
     runs = {}
     for ranks in (1, 2):
         launch = ["mpiexec", "-n", "2"] if ranks == 2 else []
