@@ -29,7 +29,7 @@ from ..core import inputs
 from ..core.errors import InputError
 
 COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "design", "lengths",
-            "equilibria", "replay", "schedule", "simulate", "reproduce", "calibrate")
+            "equilibria", "replay", "schedule", "simulate", "reproduce", "calibrate", "friction")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed

@@ -1,5 +1,5 @@
 """The smallest eigenvalues of a sequence of neighbouring equilibria, with SLEPc
-(workspace maps; docs/model.md §2, §3 and "SLEPc along a sweep", §27).
+(workspace maps; docs/model.md §2, §3 and "SLEPc along a sweep", §29).
 
 A workspace map records, for every state reached, the two numbers of
 :class:`~.stability.StabilitySolver` that it keeps: lambda_min of

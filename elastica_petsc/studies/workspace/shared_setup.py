@@ -1,5 +1,5 @@
 """The fixed costs of a boundary-filled map, paid once for all ranks
-(docs/model.md §27).
+(docs/model.md §29).
 
 Every chunk of a boundary-filled map needs the traced W_0 boundary of its
 arm, and most ranks need the seed library of the global search
