@@ -559,4 +559,12 @@ static struct PyModuleDef module = {
     "Compiled kernels of the P1 elastica (core/fem.py, docs/model.md §20).", -1, methods,
 };
 
-PyMODINIT_FUNC PyInit_fem_kernels(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit_fem_kernels(void)
+{
+    PyObject *m = PyModule_Create(&module);
+    if (m && PyModule_AddFunctions(m, dynamics_methods) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
+}

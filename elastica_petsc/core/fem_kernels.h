@@ -1,6 +1,6 @@
 /* Shared by the compiled kernels of core/fem.py (fem_kernels.c: the elastica;
- * fem_inertia.c: the Sylvester inertia of the bordered stability matrix);
- * docs/model.md §20. */
+ * fem_inertia.c: the Sylvester inertia of the bordered stability matrix) and of
+ * core/dynamics.py (fem_dynamics.c: the arm in motion); docs/model.md §20, §26. */
 #ifndef ELASTICA_FEM_KERNELS_H
 #define ELASTICA_FEM_KERNELS_H
 #define _GNU_SOURCE             /* sincos */
@@ -20,5 +20,8 @@ int check_len(Py_buffer *b, Py_ssize_t count, Py_ssize_t item, const char *what)
 
 /* inertia(indptr, indices, values, n_angles) of the Python module (fem_inertia.c). */
 PyObject *inertia(PyObject *self, PyObject *args);
+
+/* The kernels of the arm in motion (fem_dynamics.c), added to the module at import. */
+extern PyMethodDef dynamics_methods[];
 
 #endif
