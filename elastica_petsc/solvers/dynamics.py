@@ -194,10 +194,11 @@ class DynamicsSolver:
         C = -(g[..., 0] * t.d[:, :1] + g[..., 1] * t.d[:, 1:]).T   # grad L_i, (N, n)
         Z = inv.solve(np.column_stack((Ut, C)))
         Zu, Zc = Z[:, : self.n], Z[:, self.n:]
-        cap = np.eye(self.n) + c[:, None] * (Ut.T @ Zu)
+        woodbury = np.linalg.solve(np.eye(self.n) + c[:, None] * (Ut.T @ Zu),
+                                   c[:, None] * Ut.T)       # cap^-1 diag(c) Ut^T, (n, N)
 
         def inverse(r2):           # (A + Ut diag(c) Ut^T)^{-1} r2 by Woodbury
-            return r2 - Zu @ np.linalg.solve(cap, c[:, None] * (Ut.T @ r2))
+            return r2 - Zu @ (woodbury @ r2)
 
         Y = inverse(Zc)                                      # A'^{-1} C
         taut = np.flatnonzero(self.modes == TAUT)
