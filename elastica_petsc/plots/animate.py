@@ -189,7 +189,8 @@ def _history_panel(ax, history: History):
     ax.set_xlabel("time [s]")
     ax.set_ylabel(history.ylabel)
     ax.grid(True, lw=0.3, alpha=0.6)
-    ax.legend(loc="upper right", fontsize=7)
+    ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=len(lines), fontsize=7,
+              frameon=False)                       # above the panel, off the curves
 
     def draw(k):
         now = history.frame_time_s[k]
