@@ -26,7 +26,7 @@ from itertools import combinations
 
 import numpy as np
 from . import fem_kernels
-from .fem import Discretisation, _floats
+from .fem import Discretisation
 
 # beta_1 l of the clamped-free Euler-Bernoulli beam: cos(bl) cosh(bl) = -1
 EB_BETA1 = 1.8751040687119611
@@ -50,8 +50,10 @@ def _inertial_force(theta, v, a, weights, rotary, elastic, viscous, kelvin_voigt
     """G^T D (G a' + c) + M_rot a' + kelvin_voigt L v with a' = a + viscous v and c the
     centripetal node accelerations (compiled, core/fem_dynamics.c)."""
     out = np.empty(len(weights))
-    fem_kernels.inertial_force(_floats(theta), _floats(v), _floats(a), weights, rotary,
-                               elastic, float(viscous), float(kelvin_voigt), out)
+    dense = np.ascontiguousarray
+    fem_kernels.inertial_force(dense(theta, dtype=float), dense(v, dtype=float),
+                               dense(a, dtype=float), weights, rotary, elastic, float(viscous),
+                               float(kelvin_voigt), out)
     return out
 
 
@@ -134,8 +136,9 @@ class BandedInverse:
         N = disc.n_elements
         self.ab = np.empty((2 * self.KL + self.KU + 1) * 5 * N)
         self.piv = np.empty(5 * N, np.int32)
-        info = fem_kernels.principal_factor(_floats(theta), _floats(weights), float(sigma),
-                                            _floats(band), self.ab, self.piv)
+        theta, weights, band = (np.ascontiguousarray(x, dtype=float)
+                                 for x in (theta, weights, band))
+        info = fem_kernels.principal_factor(theta, weights, float(sigma), band, self.ab, self.piv)
         if info != 0:
             raise np.linalg.LinAlgError(f"banded LU: singular pivot {info}")
         self.N = N
