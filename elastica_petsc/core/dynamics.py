@@ -145,11 +145,10 @@ class BandedInverse:
 
     def solve(self, r: np.ndarray) -> np.ndarray:
         """x for one right-hand side (N,) or several (N, k)."""
-        r = np.asarray(r, float)
-        rows = np.ascontiguousarray(r.T)                 # (k, N): one right-hand side a row
-        out = np.empty_like(rows)
-        fem_kernels.principal_solve(self.ab, self.piv, rows, out)
-        return out.T
+        r = np.ascontiguousarray(r, dtype=float)
+        out = np.empty_like(r)
+        fem_kernels.principal_solve(self.ab, self.piv, r, out)
+        return out
 
 
 def solve_lcp(W: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

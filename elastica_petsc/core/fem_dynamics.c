@@ -184,26 +184,33 @@ static Py_ssize_t band_lu(double *ab, Py_ssize_t n, int32_t *piv)
     return info;
 }
 
-/* Solve with the factors of band_lu: b (n,) overwritten (LAPACK's dgbtrs, one column). */
+/* Solve with the factors of band_lu for k right-hand sides at once (LAPACK's dgbtrs):
+ * b (n, k) row-major, overwritten; one pass over the factors for all of them. */
 static void band_lu_solve(const double *restrict ab, Py_ssize_t n, const int32_t *restrict piv,
-                          double *restrict b)
+                          Py_ssize_t k, double *restrict b)
 {
     for (Py_ssize_t j = 0; j < n; j++) {             /* L: row swaps and multipliers */
         Py_ssize_t km = KL < n - 1 - j ? KL : n - 1 - j;
-        double bj = b[piv[j]];
-        b[piv[j]] = b[j];
-        b[j] = bj;
+        double *bj = b + j * k, *bp = b + (Py_ssize_t)piv[j] * k;
+        for (Py_ssize_t c = 0; c < k; c++) {
+            double t = bp[c];
+            bp[c] = bj[c];
+            bj[c] = t;
+        }
         const double *col = ab + j * LDAB + KV;
         for (Py_ssize_t i = 1; i <= km; i++)
-            b[j + i] -= col[i] * bj;
+            for (Py_ssize_t c = 0; c < k; c++)
+                bj[i * k + c] -= col[i] * bj[c];
     }
     for (Py_ssize_t j = n - 1; j >= 0; j--) {        /* U: back substitution by columns */
         const double *col = ab + j * LDAB + KV - j;  /* col[i]: row i, column j */
-        double bj = b[j] / col[j];
-        b[j] = bj;
+        double *bj = b + j * k, inv = 1.0 / col[j];
+        for (Py_ssize_t c = 0; c < k; c++)
+            bj[c] *= inv;
         Py_ssize_t first = j - KV > 0 ? j - KV : 0;
         for (Py_ssize_t i = first; i < j; i++)
-            b[i] -= col[i] * bj;
+            for (Py_ssize_t c = 0; c < k; c++)
+                b[i * k + c] -= col[i] * bj[c];
     }
 }
 
@@ -233,8 +240,8 @@ static PyObject *principal_factor(PyObject *self, PyObject *args)
     return result;
 }
 
-/* principal_solve(ab, piv, rhs, out): the angle increments x (k, N) of the
- * factored system for k right-hand sides rhs (k, N) on the angle rows. */
+/* principal_solve(ab, piv, rhs, out): the angle increments x (N, k) of the
+ * factored system for k right-hand sides rhs (N, k) on the angle rows. */
 static PyObject *principal_solve(PyObject *self, PyObject *args)
 {
     Py_buffer ab, piv, rhs, out;
@@ -249,21 +256,18 @@ static PyObject *principal_solve(PyObject *self, PyObject *args)
     else if (!check_len(&ab, LDAB * n, sizeof(double), "ab")
              && !check_len(&rhs, k * N, sizeof(double), "rhs")
              && !check_len(&out, k * N, sizeof(double), "out")) {
-        b = malloc(sizeof(double) * n);
+        b = calloc(n * k + 1, sizeof(double));
         if (!b)
             PyErr_NoMemory();
     }
     if (b) {
         const double *r = rhs.buf;
         double *x = out.buf;
-        for (Py_ssize_t c = 0; c < k; c++) {
-            memset(b, 0, sizeof(double) * n);
-            for (Py_ssize_t j = 0; j < N; j++)
-                b[UNKNOWNS * j] = r[c * N + j];
-            band_lu_solve(ab.buf, n, piv.buf, b);
-            for (Py_ssize_t j = 0; j < N; j++)
-                x[c * N + j] = b[UNKNOWNS * j];
-        }
+        for (Py_ssize_t j = 0; j < N; j++)           /* the angle rows: unknown 5j */
+            memcpy(b + UNKNOWNS * j * k, r + j * k, sizeof(double) * k);
+        band_lu_solve(ab.buf, n, piv.buf, k, b);
+        for (Py_ssize_t j = 0; j < N; j++)
+            memcpy(x + j * k, b + UNKNOWNS * j * k, sizeof(double) * k);
         free(b);
         result = Py_None;
         Py_INCREF(result);
@@ -278,6 +282,7 @@ PyMethodDef dynamics_methods[] = {
      "inertial_force(theta, v, a, weights, rotary, elastic, viscous, kelvin_voigt, out)"},
     {"principal_factor", principal_factor, METH_VARARGS,
      "principal_factor(theta, weights, sigma, band, ab, piv) -> info"},
-    {"principal_solve", principal_solve, METH_VARARGS, "principal_solve(ab, piv, rhs, out)"},
+    {"principal_solve", principal_solve, METH_VARARGS,
+     "principal_solve(ab, piv, rhs (N, k), out (N, k))"},
     {NULL, NULL, 0, NULL},
 };
