@@ -253,9 +253,9 @@ def write_simulation(directory, result, *, name: str = "simulation") -> list[Pat
         data[f"cable_length_{i + 1}_mm"] = result.cable_lengths_mm[:, i]
     for c, kind in enumerate(("kinetic", "strain", "work")):
         data[f"{kind}_J"] = result.energy_J[:, c]
-    files.append(write_vtu(directory / f"{name}_tip.vtu", result.tip_mm,
-                           [(VTK_LINE, np.column_stack((np.arange(T - 1), np.arange(1, T))))],
-                           data))
+    cells = (VTK_LINE, np.column_stack((np.arange(T - 1), np.arange(1, T)))) if T > 1 else \
+        (VTK_VERTEX, np.zeros((1, 1), np.int64))        # a run stopped at its first step
+    files.append(write_vtu(directory / f"{name}_tip.vtu", result.tip_mm, [cells], data))
     return files
 
 
