@@ -17,7 +17,7 @@ L the elastic (Kelvin-Voigt) stiffness.  Every product with G or G^T is a
 cumulative sum: O(N).  :class:`BandedInverse` solves the Newton systems
 (sigma M + T) x = r exactly in O(N) as one banded system in the angles, the
 node displacements X = G x and the tail forces F_e = sum_{k>e} m_k X_k.
-The O(N) loops are compiled (core/fem_dynamics.c, docs/model.md §26).
+The O(N) loops are compiled (core/fem_dynamics.c, docs/model.md §29).
 """
 from __future__ import annotations
 

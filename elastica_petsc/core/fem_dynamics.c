@@ -1,5 +1,5 @@
 /* Compiled kernels of the arm in motion (core/dynamics.py, docs/model.md §16), part of
- * the module fem_kernels (docs/model.md §20, §26).
+ * the module fem_kernels (docs/model.md §20, §29).
  *
  * Non-dimensional (l = 1, rho_A = 1, B = 1), N elements of length h = 1/N, nodal
  * angles theta_0..theta_N (theta_0 = 0), element angles phi_e = (theta_e +

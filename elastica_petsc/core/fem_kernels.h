@@ -1,6 +1,6 @@
 /* Shared by the compiled kernels of core/fem.py (fem_kernels.c: the elastica;
  * fem_inertia.c: the Sylvester inertia of the bordered stability matrix) and of
- * core/dynamics.py (fem_dynamics.c: the arm in motion); docs/model.md §20, §26. */
+ * core/dynamics.py (fem_dynamics.c: the arm in motion); docs/model.md §20, §29. */
 #ifndef ELASTICA_FEM_KERNELS_H
 #define ELASTICA_FEM_KERNELS_H
 #define _GNU_SOURCE             /* sincos */
