@@ -3,14 +3,18 @@ against independent computations: node velocities by finite differences of the n
 positions, the dense matrix of the banded system, and the tension history by np.interp."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
+
+import elastica_petsc as ep_configs
 
 from elastica_petsc.core import fem_kernels
 from elastica_petsc.core.drive import TensionDrive
 from elastica_petsc.core.dynamics import BandedInverse, Inertia, elastic_band
 from elastica_petsc.core.fem import Discretisation
-from elastica_petsc.core.model import Arm
+from elastica_petsc.core.model import Arm, load_config
 
 N = 30
 
@@ -93,3 +97,23 @@ def test_tension_history_is_piecewise_linear():
         expected = [np.interp(t, drive.times, drive.values[:, i]) for i in range(2)]
         np.testing.assert_allclose(drive.tensions(t), expected, rtol=1e-15, atol=1e-15)
     np.testing.assert_array_equal(TensionDrive.constant([1.5, 2.0]).tensions(9.0), [1.5, 2.0])
+
+
+def test_motion_residual_is_force_plus_static_residual(disc):
+    """The fused kernel (one call per residual of the integrator) equals the inertial
+    force plus the static residual at the consistent state, with damping and tip mass;
+    an arm with weight (core/guided.py) takes the two-call path, gravity included."""
+    theta, v = _state(9)
+    a = np.random.default_rng(10).standard_normal(N)
+    p = np.array([2.0, 5.0])
+    inert = Inertia.build(disc, tip_mass=0.2, rotary=0.01, damping_ratio=0.1)
+    expected = inert.force(theta, v, a) + disc.residual(disc.consistent_state(theta), p)[:N]
+    np.testing.assert_allclose(inert.residual(theta, v, a, p), expected, rtol=1e-13,
+                               atol=1e-13 * np.abs(expected).max())
+    vertical = load_config(Path(ep_configs.__file__).parent / "configs" / "paper_vertical.toml")
+    heavy = Discretisation.from_arm(vertical, N)           # gravity: core/guided.py's kernel
+    straight, zero = np.zeros(N + 1), np.zeros(N)
+    weight = Inertia.build(heavy).residual(straight, zero, zero, np.zeros(2))
+    np.testing.assert_allclose(weight, heavy.residual(heavy.consistent_state(straight),
+                                                      np.zeros(2))[:N], rtol=1e-14)
+    assert np.abs(weight).max() > 1e-3           # the weight bends the straight arm

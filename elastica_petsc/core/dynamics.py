@@ -112,6 +112,24 @@ class Inertia:
         return _inertial_force(theta, v, a, self.weights, self.rotary, self.elastic,
                                self.viscous, self.kelvin_voigt)
 
+    def residual(self, theta, v, a, p) -> np.ndarray:
+        """The angle rows of the equations of motion (docs/model.md §16.1): ``force``
+        plus the static residual R(theta, p) of §8 with the cables ending at the nodes
+        x_{m_i}(theta), in one compiled call; an arm with guides, offsets or weight
+        (core/guided.py) adds its own residual to ``force``."""
+        disc = self.disc
+        if type(disc) is not Discretisation:
+            u = disc.consistent_state(theta)
+            return self.force(theta, v, a) + disc.residual(u, p)[: disc.n_elements]
+        out = np.empty(disc.n_elements)
+        dense = np.ascontiguousarray
+        fem_kernels.motion_residual(dense(theta, dtype=float), dense(v, dtype=float),
+                                    dense(a, dtype=float), dense(p, dtype=float),
+                                    dense(disc.routes, dtype=float), disc.attach_index,
+                                    self.weights, self.rotary, self.elastic,
+                                    float(self.viscous), float(self.kelvin_voigt), out)
+        return out
+
     def kinetic_energy(self, theta, v) -> float:
         """(1/2) v . M(theta) v = (1/2) sum m_k |x_k'|^2 + (1/2) v M_rot v, units B/l."""
         return float(0.5 * np.dot(v, self.mass(theta, v)))

@@ -8,6 +8,8 @@
  *
  *   inertial_force: G^T D (G a' + c) + M_rot a' + b L v,  a' = a + viscous v,
  *                   c_k = -h sum_{e<k} t_e (dphi_e/dt)^2 (centripetal);
+ *   motion_residual: that plus the static residual R(theta, p) of fem_kernels.c
+ *                   (its angle rows), the residual of the integrator in one call;
  *   principal_factor / principal_solve: the banded LU of (sigma G^T D G + T) in
  *                   the interleaved unknowns of core/dynamics.BandedInverse
  *                   (angle increment, node displacement X = G x, tail force F),
@@ -37,6 +39,58 @@ static void band_add(const double *band, const double *v, double scale, Py_ssize
     }
 }
 
+/* out += G^T D (G a' + c) + M_rot a' + kv L v, a' = a + viscous v (theta (N+1,), v, a,
+ * m, out (N,), the bands rot, el (N, 3)); work holds 4N doubles. */
+static void add_inertial(const double *theta, const double *vel, const double *acc,
+                         const double *m, const double *rot, const double *el, double viscous,
+                         double kv, Py_ssize_t N, double *work, double *o)
+{
+    double *fx = work, *fy = work + N, *nx = work + 2 * N, *ny = work + 3 * N;
+    double h = 1.0 / (double)N, ax = 0.0, ay = 0.0;
+    for (Py_ssize_t e = 0; e < N; e++) {             /* node accelerations, forward */
+        double c, s, phi = 0.5 * (theta[e] + theta[e + 1]);
+        sincos(phi, &s, &c);
+        double a_prev = e > 0 ? acc[e - 1] + viscous * vel[e - 1] : 0.0;
+        double v_prev = e > 0 ? vel[e - 1] : 0.0;
+        double phi_a = 0.5 * (a_prev + acc[e] + viscous * vel[e]);
+        double phi_v = 0.5 * (v_prev + vel[e]);
+        nx[e] = -h * s;
+        ny[e] = h * c;
+        ax += nx[e] * phi_a - h * c * phi_v * phi_v;
+        ay += ny[e] * phi_a - h * s * phi_v * phi_v;
+        fx[e] = m[e] * ax;                           /* node e + 1 */
+        fy[e] = m[e] * ay;
+    }
+    double tx = 0.0, ty = 0.0, g_next = 0.0;
+    for (Py_ssize_t e = N - 1; e >= 0; e--) {        /* tail forces, backward: G^T f */
+        tx += fx[e];
+        ty += fy[e];
+        double g = nx[e] * tx + ny[e] * ty;
+        o[e] += 0.5 * (g + g_next);
+        g_next = g;
+    }
+    for (Py_ssize_t e = 0; e < N; e++)
+        fx[e] = acc[e] + viscous * vel[e];
+    band_add(rot, fx, 1.0, N, o);
+    if (kv != 0.0)
+        band_add(el, vel, kv, N, o);
+}
+
+/* 0 if v, a, weights, out hold N doubles and the bands 3N, else -1 with a ValueError. */
+static int check_motion(Py_buffer *v, Py_buffer *a, Py_buffer *w, Py_buffer *rot,
+                        Py_buffer *el, Py_buffer *out, Py_ssize_t N)
+{
+    if (N < 1) {
+        PyErr_SetString(PyExc_ValueError, "need at least one element");
+        return -1;
+    }
+    return check_len(v, N, sizeof(double), "v") || check_len(a, N, sizeof(double), "a")
+           || check_len(w, N, sizeof(double), "weights")
+           || check_len(rot, 3 * N, sizeof(double), "rotary")
+           || check_len(el, 3 * N, sizeof(double), "elastic")
+           || check_len(out, N, sizeof(double), "out") ? -1 : 0;
+}
+
 /* inertial_force(theta, v, a, weights, rotary, elastic, viscous, kelvin_voigt, out):
  * out = G^T D (G a' + c) + M_rot a' + kelvin_voigt L v with a' = a + viscous v
  * (theta (N+1,), v, a, weights, out (N,), the bands (N, 3)); v = 0, a = w gives the
@@ -50,54 +104,69 @@ static PyObject *inertial_force(PyObject *self, PyObject *args)
         return NULL;
     PyObject *result = NULL;
     Py_ssize_t N = th.len / (Py_ssize_t)sizeof(double) - 1;
-    double *work = NULL;
-    if (N < 1)
-        PyErr_SetString(PyExc_ValueError, "need at least one element");
-    else if (!check_len(&v, N, sizeof(double), "v") && !check_len(&a, N, sizeof(double), "a")
-             && !check_len(&w, N, sizeof(double), "weights")
-             && !check_len(&rot, 3 * N, sizeof(double), "rotary")
-             && !check_len(&el, 3 * N, sizeof(double), "elastic")
-             && !check_len(&out, N, sizeof(double), "out")) {
-        work = malloc(sizeof(double) * 4 * N);
+    if (!check_motion(&v, &a, &w, &rot, &el, &out, N)) {
+        double *work = malloc(sizeof(double) * 4 * N);
         if (!work)
             PyErr_NoMemory();
-    }
-    if (work) {
-        const double *theta = th.buf, *vel = v.buf, *acc = a.buf, *m = w.buf;
-        double *o = out.buf, *fx = work, *fy = work + N, *nx = work + 2 * N, *ny = work + 3 * N;
-        double h = 1.0 / (double)N, ax = 0.0, ay = 0.0;
-        for (Py_ssize_t e = 0; e < N; e++) {         /* node accelerations, forward */
-            double c, s, phi = 0.5 * (theta[e] + theta[e + 1]);
-            sincos(phi, &s, &c);
-            double a_prev = e > 0 ? acc[e - 1] + viscous * vel[e - 1] : 0.0;
-            double v_prev = e > 0 ? vel[e - 1] : 0.0;
-            double phi_a = 0.5 * (a_prev + acc[e] + viscous * vel[e]);
-            double phi_v = 0.5 * (v_prev + vel[e]);
-            nx[e] = -h * s;
-            ny[e] = h * c;
-            ax += nx[e] * phi_a - h * c * phi_v * phi_v;
-            ay += ny[e] * phi_a - h * s * phi_v * phi_v;
-            fx[e] = m[e] * ax;                       /* node e + 1 */
-            fy[e] = m[e] * ay;
+        else {
+            memset(out.buf, 0, sizeof(double) * N);
+            add_inertial(th.buf, v.buf, a.buf, w.buf, rot.buf, el.buf, viscous, kv, N, work,
+                         out.buf);
+            free(work);
+            result = Py_None;
+            Py_INCREF(result);
         }
-        double tx = 0.0, ty = 0.0, g_next = 0.0;
-        for (Py_ssize_t e = N - 1; e >= 0; e--) {    /* tail forces, backward: G^T f */
-            tx += fx[e];
-            ty += fy[e];
-            double g = nx[e] * tx + ny[e] * ty;
-            o[e] = 0.5 * (g + g_next);
-            g_next = g;
-        }
-        for (Py_ssize_t e = 0; e < N; e++)
-            fx[e] = acc[e] + viscous * vel[e];
-        band_add(rot.buf, fx, 1.0, N, o);
-        if (kv != 0.0)
-            band_add(el.buf, vel, kv, N, o);
-        free(work);
-        result = Py_None;
-        Py_INCREF(result);
     }
     PyBuffer_Release(&th); PyBuffer_Release(&v); PyBuffer_Release(&a); PyBuffer_Release(&w);
+    PyBuffer_Release(&rot); PyBuffer_Release(&el); PyBuffer_Release(&out);
+    return result;
+}
+
+/* motion_residual(theta, v, a, p, routes, nodes, weights, rotary, elastic, viscous,
+ * kelvin_voigt, out): the angle rows of the equations of motion, inertial_force plus
+ * the static residual R(theta, p) (Eq. (9), fem_kernels.residual's angle rows) with
+ * the cables ending at the nodes x_{m_i}(theta) (docs/model.md §16.1), in one call. */
+static PyObject *motion_residual(PyObject *self, PyObject *args)
+{
+    Py_buffer th, v, a, p, routes, nodes, w, rot, el, out;
+    double viscous, kv;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*y*ddw*", &th, &v, &a, &p, &routes, &nodes,
+                          &w, &rot, &el, &viscous, &kv, &out))
+        return NULL;
+    PyObject *result = NULL;
+    Py_ssize_t N = th.len / (Py_ssize_t)sizeof(double) - 1;
+    Arm arm;
+    if (!check_motion(&v, &a, &w, &rot, &el, &out, N) && !arm_init(&arm, &routes, &nodes, N)) {
+        double *work = NULL;
+        if (!check_len(&p, arm.n, sizeof(double), "p")
+            && !(work = malloc(sizeof(double) * (4 * N + 2 * arm.n + 1))))
+            PyErr_NoMemory();
+        if (work) {
+            const double *theta = th.buf;
+            double *y = work + 4 * N, x = 0.0, yv = 0.0;
+            arm_trig(&arm, theta + 1);
+            for (Py_ssize_t e = 0; e < N; e++) {         /* the attachment nodes, Eq. (2) */
+                x += arm.h * arm.c[e];
+                yv += arm.h * arm.s[e];
+                for (Py_ssize_t i = 0; i < arm.n; i++)
+                    if (arm.nodes[i] == e + 1) {
+                        y[2 * i] = x;
+                        y[2 * i + 1] = yv;
+                    }
+            }
+            arm_cables(&arm, y);
+            arm_forces(&arm, p.buf);
+            arm_angle_rows(&arm, theta + 1, 0.0, out.buf);
+            add_inertial(theta, v.buf, a.buf, w.buf, rot.buf, el.buf, viscous, kv, N, work,
+                         out.buf);
+            free(work);
+            result = Py_None;
+            Py_INCREF(result);
+        }
+        arm_free(&arm);
+    }
+    PyBuffer_Release(&th); PyBuffer_Release(&v); PyBuffer_Release(&a); PyBuffer_Release(&p);
+    PyBuffer_Release(&routes); PyBuffer_Release(&nodes); PyBuffer_Release(&w);
     PyBuffer_Release(&rot); PyBuffer_Release(&el); PyBuffer_Release(&out);
     return result;
 }
@@ -280,6 +349,9 @@ static PyObject *principal_solve(PyObject *self, PyObject *args)
 PyMethodDef dynamics_methods[] = {
     {"inertial_force", inertial_force, METH_VARARGS,
      "inertial_force(theta, v, a, weights, rotary, elastic, viscous, kelvin_voigt, out)"},
+    {"motion_residual", motion_residual, METH_VARARGS,
+     "motion_residual(theta, v, a, p, routes, nodes, weights, rotary, elastic, viscous, "
+     "kelvin_voigt, out)"},
     {"principal_factor", principal_factor, METH_VARARGS,
      "principal_factor(theta, weights, sigma, band, ab, piv) -> info"},
     {"principal_solve", principal_solve, METH_VARARGS,

@@ -158,11 +158,10 @@ class DynamicsSolver:
         return np.linalg.norm(self.disc.routes - x, axis=1)
 
     def residual(self, t, U, V, A) -> np.ndarray:
-        N, disc = self.N, self.disc
+        N = self.N
         theta, p = self.theta_of(U), V[N:]
-        u = disc.consistent_state(theta)
         out = np.empty(N + self.n)
-        out[:N] = self.inertia.force(theta, V[:N], A[:N]) + disc.residual(u, p)[:N]
+        out[:N] = self.inertia.residual(theta, V[:N], A[:N], p)
         out[N:] = self._tendon_rows(t, theta, V[:N], p)
         return out
 
