@@ -142,10 +142,13 @@ def run(args) -> int:
     if args.out:
         write_simulation(args.out, args.overwrite, result)
     if args.vtk:
-        result.to_vtk(args.vtk)
+        with Progress(len(result.time_s), "simulate --vtk", unit="steps") as bar:
+            result.to_vtk(args.vtk, on_step=lambda done, total: bar.update(done))
     if args.animate:
         from ..plots.animate import animate_simulation
-        animate_simulation(result, args.animate, slow_motion=args.slow_motion)
+        with Progress(None, "simulate --animate", unit="frames") as bar:
+            animate_simulation(result, args.animate, slow_motion=args.slow_motion,
+                               on_frame=lambda done, total: bar.update(done, total=total))
     if args.json:
         common.print_json("simulate", data)
     else:

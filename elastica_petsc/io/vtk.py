@@ -233,18 +233,23 @@ def write_trace(directory, arm, trace, *, name: str = "trace", times_s=None,
     return files
 
 
-def write_simulation(directory, result, *, name: str = "simulation") -> list[Path]:
+def write_simulation(directory, result, *, name: str = "simulation",
+                     on_step=None) -> list[Path]:
     """A run of ``simulate`` (a SimulationResult) into ``directory``: the arm and
     its cables at every recorded step (``<name>_<K>.vtu``, as :func:`write_state`),
     ``<name>.pvd`` listing them with their time in seconds, and ``<name>_tip.vtu``:
     the tip's path as line cells with per-step ``time_s``, ``tension_i_N``,
-    ``cable_length_i_mm`` and the energies ``kinetic_J``, ``strain_J``, ``work_J``."""
+    ``cable_length_i_mm`` and the energies ``kinetic_J``, ``strain_J``, ``work_J``;
+    ``on_step(done, total)`` after each state file."""
     directory = Path(directory)
     directory.mkdir(exist_ok=True)
     T = len(result.time_s)
     digits = max(4, len(str(T - 1)))
-    files = [write_state(directory / f"{name}_{k:0{digits}d}.vtu", result.arm, state)
-             for k, state in enumerate(result.snapshots())]
+    files = []
+    for k, state in enumerate(result.snapshots()):
+        files.append(write_state(directory / f"{name}_{k:0{digits}d}.vtu", result.arm, state))
+        if on_step is not None:
+            on_step(k + 1, T)
     files.append(write_pvd(directory / f"{name}.pvd",
                            [(t, f.name) for t, f in zip(result.time_s, files)]))
     data = {"time_s": result.time_s, "step": np.arange(T)}

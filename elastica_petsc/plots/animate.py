@@ -149,10 +149,11 @@ def _nearest(times: np.ndarray, at: np.ndarray) -> np.ndarray:
 
 
 def animate_simulation(result, path, *, slow_motion: float = 1.0, fps: float = 20.0,
-                       max_frames: int = 600) -> Path:
+                       max_frames: int = 600, on_frame=None) -> Path:
     """A run of ``simulate`` as a GIF/MP4 (by suffix): the arm, its cables and the tip
     trail in real time (or ``slow_motion`` times slower), with the quasi-static path
-    of a motor schedule as the target path when there is one."""
+    of a motor schedule as the target path when there is one; ``on_frame(done, total)``
+    reports progress."""
     frames = simulation_frames(result, slow_motion=slow_motion, fps=fps, max_frames=max_frames)
     at_s, _ = frame_times(float(result.time_s[-1]), slow_motion, fps, max_frames)
     moved = result.tip_mm - result.tip_mm[0]
@@ -163,7 +164,8 @@ def animate_simulation(result, path, *, slow_motion: float = 1.0, fps: float = 2
               "schedule": "motor schedule"}
     return animate(result.arm, frames, path, targets_mm=result.planned_tip_mm,
                    title=f"Simulation ({inputs.get(result.input, result.input)}, "
-                         f"{result.elements} elements); {speed}", fps=fps, history=history)
+                         f"{result.elements} elements); {speed}", fps=fps, history=history,
+                   on_frame=on_frame)
 
 
 @dataclass(frozen=True)
@@ -204,10 +206,11 @@ def _history_panel(ax, history: History):
 
 
 def animate(arm: Arm, frames: list[Frame], path, *, targets_mm=None, title: str = "",
-            fps: float = 10.0, history: History | None = None) -> Path:
+            fps: float = 10.0, history: History | None = None, on_frame=None) -> Path:
     """Write the frames as a GIF or MP4 (by the suffix of ``path``): the arm,
     its cables to the routing points, the tip trail so far and the targets;
-    with ``history``, a time plot under it (:class:`History`)."""
+    with ``history``, a time plot under it (:class:`History`); ``on_frame(done,
+    total)`` after each frame drawn."""
     from matplotlib import animation
 
     path = Path(path)
@@ -260,17 +263,19 @@ def animate(arm: Arm, frames: list[Frame], path, *, targets_mm=None, title: str 
     try:
         shown_ms = [int(round(1000.0 * (f.duration_s or 1.0 / fps))) for f in frames]
         if path.suffix.lower() == ".gif":
-            _write_gif(fig, draw, shown_ms, path)
+            _write_gif(fig, draw, shown_ms, path, on_frame)
         else:                          # constant frame rate: the frames' mean duration
             rate = 1000.0 / float(np.mean(shown_ms))
             movie = animation.FuncAnimation(fig, draw, frames=len(frames), blit=False)
-            movie.save(path, writer=animation.FFMpegWriter(fps=rate), dpi=DPI)
+            movie.save(path, writer=animation.FFMpegWriter(fps=rate), dpi=DPI,
+                       progress_callback=None if on_frame is None else
+                       (lambda k, total: on_frame(k + 1, total)))
     finally:
         plt.close(fig)
     return path
 
 
-def _write_gif(fig, draw, shown_ms: list[int], path: Path) -> None:
+def _write_gif(fig, draw, shown_ms: list[int], path: Path, on_frame=None) -> None:
     """Blitted frames into an animated GIF with Pillow: the static picture
     (axes, routing points, targets) is drawn once, each frame redraws only
     the moving artists (5x faster than redrawing the figure twice per frame
@@ -291,6 +296,8 @@ def _write_gif(fig, draw, shown_ms: list[int], path: Path) -> None:
             fig.draw_artist(artist)
         rgb = np.asarray(canvas.buffer_rgba())[..., :3]
         images.append(Image.fromarray(rgb.copy()))      # Pillow picks a palette per frame
+        if on_frame is not None:
+            on_frame(k + 1, len(shown_ms))
     images[0].save(path, save_all=True, append_images=images[1:], loop=0,
                    duration=shown_ms, optimize=False)
 

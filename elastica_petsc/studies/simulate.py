@@ -73,20 +73,23 @@ class SimulationResult(Result):
             yield Equilibrium(disc, p[k], disc.consistent_state(self.theta[k]), True,
                               "in motion", 0, 0)
 
-    def to_vtk(self, directory) -> list:
+    def to_vtk(self, directory, *, on_step=None) -> list:
         """ParaView files in ``directory``, as ``simulate --vtk`` writes them:
         ``simulation.pvd`` (the arm and its cables at every recorded step, time in s)
-        and ``simulation_tip.vtu`` (the tip's path with per-step fields)."""
+        and ``simulation_tip.vtu`` (the tip's path with per-step fields);
+        ``on_step(done, total)`` after each step's file."""
         from ..io.vtk import write_simulation
 
-        return write_simulation(directory, self)
+        return write_simulation(directory, self, on_step=on_step)
 
-    def animate(self, path, *, slow_motion: float = 1.0, fps: float = 20.0):
+    def animate(self, path, *, slow_motion: float = 1.0, fps: float = 20.0, on_frame=None):
         """A GIF/MP4 of the run (by the suffix of ``path``), in real time or
-        ``slow_motion`` times slower, as ``simulate --animate`` writes it."""
+        ``slow_motion`` times slower, as ``simulate --animate`` writes it;
+        ``on_frame(done, total)`` after each frame."""
         import elastica_petsc             # the plots layer sits above this one
 
-        return elastica_petsc.animate_simulation(self, path, slow_motion=slow_motion, fps=fps)
+        return elastica_petsc.animate_simulation(self, path, slow_motion=slow_motion, fps=fps,
+                                                 on_frame=on_frame)
 
     @property
     def real_time_factor(self) -> float:
