@@ -295,7 +295,9 @@ def _write_gif(fig, draw, shown_ms: list[int], path: Path, on_frame=None) -> Non
         for artist in draw(k):
             fig.draw_artist(artist)
         rgb = np.asarray(canvas.buffer_rgba())[..., :3]
-        images.append(Image.fromarray(rgb.copy()))      # Pillow picks a palette per frame
+        # a palette of its own per frame, made now: 1 byte per pixel kept, not 3 (what
+        # Pillow's GIF writer would do to an RGB frame at the end, with all of them held)
+        images.append(Image.fromarray(rgb).convert("P", palette=Image.Palette.ADAPTIVE))
         if on_frame is not None:
             on_frame(k + 1, len(shown_ms))
     images[0].save(path, save_all=True, append_images=images[1:], loop=0,
