@@ -158,11 +158,10 @@ class DynamicsSolver:
         return np.linalg.norm(self.disc.routes - x, axis=1)
 
     def residual(self, t, U, V, A) -> np.ndarray:
-        N, disc = self.N, self.disc
+        N = self.N
         theta, p = self.theta_of(U), V[N:]
-        u = disc.consistent_state(theta)
         out = np.empty(N + self.n)
-        out[:N] = self.inertia.force(theta, V[:N], A[:N]) + disc.residual(u, p)[:N]
+        out[:N] = self.inertia.residual(theta, V[:N], A[:N], p)
         out[N:] = self._tendon_rows(t, theta, V[:N], p)
         return out
 
@@ -194,10 +193,11 @@ class DynamicsSolver:
         C = -(g[..., 0] * t.d[:, :1] + g[..., 1] * t.d[:, 1:]).T   # grad L_i, (N, n)
         Z = inv.solve(np.column_stack((Ut, C)))
         Zu, Zc = Z[:, : self.n], Z[:, self.n:]
-        cap = np.eye(self.n) + c[:, None] * (Ut.T @ Zu)
+        woodbury = np.linalg.solve(np.eye(self.n) + c[:, None] * (Ut.T @ Zu),
+                                   c[:, None] * Ut.T)       # cap^-1 diag(c) Ut^T, (n, N)
 
         def inverse(r2):           # (A + Ut diag(c) Ut^T)^{-1} r2 by Woodbury
-            return r2 - Zu @ np.linalg.solve(cap, c[:, None] * (Ut.T @ r2))
+            return r2 - Zu @ (woodbury @ r2)
 
         Y = inverse(Zc)                                      # A'^{-1} C
         taut = np.flatnonzero(self.modes == TAUT)
