@@ -164,7 +164,7 @@ class AugmentedSystem:
     def augment(self, u, p, mu: float | None = None) -> np.ndarray:
         z = np.empty(self.size)
         z[: self.nu], z[self.ip:self.imu] = u, p
-        z[self.imu] = self.deflation.factor_and_gradient(np.asarray(u)[: self.disc.n_elements])[0] \
+        z[self.imu] = self.deflation.factor(np.asarray(u)[: self.disc.n_elements]) \
             if mu is None else mu
         return z
 
@@ -212,7 +212,7 @@ class AugmentedSystem:
     def residual(self, z) -> np.ndarray:
         F, g = self.equations(z)
         mu = z[self.imu]
-        M, _ = self.deflation.factor_and_gradient(z[: self.disc.n_elements])
+        M = self.deflation.factor(z[: self.disc.n_elements])
         return np.concatenate((mu * F, mu * g if self.mode == "length" else g, [mu - M]))
 
     def jacobian_values(self, z) -> np.ndarray:
@@ -254,7 +254,7 @@ class AugmentedSystem:
         z0 = np.array(z0, float)
         if self.mode == "length":
             z0[self.ip:self.imu] = np.maximum(z0[self.ip:self.imu], 0.0)
-        M, _ = self.deflation.factor_and_gradient(z0[: self.disc.n_elements])
+        M = self.deflation.factor(z0[: self.disc.n_elements])
         z0[self.imu] = M
         if not np.isfinite(M) or M > 1e12:       # the start sits on a deflated root
             return z0, 0, "START_ON_DEFLATED_ROOT", False
