@@ -9,13 +9,15 @@ REV is put in a temporary directory (``git archive``, this checkout's compiled
 kernels copied beside it).  Each command runs with ``--json`` in REV and here,
 interleaved, ``--repeat`` times: median wall time and median CPU time (user +
 system of the child), the ratios before/after, and whether the JSON outputs
-are equal (the states, polygons, areas and counts, as printed).  The load
+are equal (the states, polygons, areas and counts, as printed; the run time
+"seconds" left out).  The load
 average is printed (the machine is shared).
 """
 from __future__ import annotations
 
 import argparse
 import glob
+import json
 import os
 import shutil
 import statistics
@@ -28,6 +30,46 @@ HERE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 COMMANDS = {"lengths --all L = (147.1, 472.5) mm": ["lengths", "--lengths", "147.1", "472.5",
                                                     "--all", "--json"],
             "boundary (paper's arm)": ["boundary", "--json"]}
+
+
+NODES = r"""
+import pickle, sys
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+from elastica_petsc.core.model import load_config
+from elastica_petsc.studies.boundary import trace_boundary
+r = trace_boundary(load_config(None), restricted=True)
+curves = [c for reg in r.regions.values() for c in reg.curves] + list(r.fold_curves)
+nodes = np.array([np.concatenate((q.w, q.t, [q.det_sign, q.tip_det]))
+                  for c in curves for q in c.points])
+sys.stdout.buffer.write(pickle.dumps((nodes, r.areas_mm2, r.solves)))
+"""
+
+
+def same_nodes(trees: dict) -> str:
+    """Whether the traced boundary's nodes (w, t, det sign, tip-map test of every
+    point of every curve), areas and solve counts are bit-identical in the trees."""
+    import pickle
+
+    import numpy as np
+
+    got = [pickle.loads(subprocess.run([sys.executable, "-c", NODES, tree], check=True,
+                                       cwd=tempfile.gettempdir(), capture_output=True).stdout)
+           for tree in trees.values()]
+    (a, area_a, n_a), (b, area_b, n_b) = got
+    same = a.shape == b.shape and np.array_equal(a, b, equal_nan=True)
+    return (f"boundary: {len(a)} and {len(b)} nodes, "
+            f"{'bit-identical' if same else 'NOT bit-identical'}; areas {area_a} / {area_b}; "
+            f"solves {n_a} / {n_b}")
+
+
+def comparable(out: str) -> str:
+    """The JSON output without its run time (key "seconds")."""
+    def strip(x):
+        if isinstance(x, dict):
+            return {k: strip(v) for k, v in x.items() if k != "seconds"}
+        return [strip(v) for v in x] if isinstance(x, list) else x
+    return json.dumps(strip(json.loads(out)), sort_keys=True)
 
 
 def run(tree: str, argv: list[str]) -> tuple[float, float, str]:
@@ -67,8 +109,9 @@ def main() -> None:
                 for which, tree in trees.items():
                     wall, cpu, out = run(tree, argv)
                     times.setdefault((name, which), []).append((wall, cpu))
-                    outputs.setdefault((name, which), set()).add(out)
+                    outputs.setdefault((name, which), set()).add(comparable(out))
             load.append(os.getloadavg()[0])
+        nodes_note = same_nodes(trees)
     print(f"load average {min(load):.2f}-{max(load):.2f}; median of {args.repeat} fresh "
           "processes, interleaved\n")
     print("| command | before wall [s] | after wall [s] | ratio | before CPU [s] | "
@@ -82,6 +125,8 @@ def main() -> None:
             and len(outputs[(name, "after")]) == 1
         print(f"| {name} | {bw:.2f} | {aw:.2f} | {bw / aw:.2f} | {bc:.2f} | {ac:.2f} | "
               f"{bc / ac:.2f} | {'yes' if same else 'NO'} |")
+    print()
+    print(nodes_note)
 
 
 if __name__ == "__main__":
