@@ -113,10 +113,11 @@ class Deflation:
 
     def _factor(self, theta: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
         q, sigma = self.power, self.shift
-        diff = theta[None, :] - self._roots()                      # (K, N)
-        s = np.maximum(self.h * np.sum(diff * diff, axis=1), _TINY)
+        diff = theta - self._roots()                               # (K, N)
+        # ndarray.sum: the same reduction as np.sum without its Python wrapper
+        s = np.maximum(self.h * (diff * diff).sum(axis=1), _TINY)
         # log(s^(-q/2) + sigma) = -(q/2) log s + log(1 + sigma s^(q/2))
-        log_M = float(np.sum(-(q / 2.0) * np.log(s) + np.log1p(sigma * s ** (q / 2.0))))
+        log_M = float((-(q / 2.0) * np.log(s) + np.log1p(sigma * s ** (q / 2.0))).sum())
         if log_M > _LOG_MAX:
             return math.inf, diff, s
         return math.exp(log_M), diff, s
