@@ -15,6 +15,15 @@ the time a rank spends after its last chunk until the command returns
 (rank 0: receiving, the last checkpoint), and the end of the process as the
 launcher sees it.  Per rank: busy time in chunks, idle time; median of
 ``--repeat`` runs of the whole command's wall time, interleaved over R.
+
+Each mark also records the rank's CPU (process) time, which a loaded machine
+inflates far less than wall time: from it the script estimates what an idle
+machine's wall times would be (the launcher's own start not counted): on one
+rank the sum of its CPU, on R ranks the slowest rank's start, the slowest
+rank's fixed costs, the chunks' CPU of all ranks over R (the chunks are handed
+out dynamically: bench_chunk_schedule.py) and the slowest rank's rest; and
+the bound (Amdahl) that the one-rank run's start-up and end put on the speed-up.
+These are estimates, marked as such in the output, not measurements.
 """
 from __future__ import annotations
 
@@ -36,9 +45,9 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 CHILD = r"""
 import json, os, sys, time
 launch = float(os.environ["BENCH_LAUNCH"])
-events = [("python", time.time() - launch, None)]
+events = [("python", time.time() - launch, None, time.process_time())]
 def mark(name, extra=None):
-    events.append((name, time.time() - launch, extra))
+    events.append((name, time.time() - launch, extra, time.process_time()))
 sys.path.insert(0, HERE)
 from elastica_petsc.cli import main
 from elastica_petsc.studies import chunks
@@ -103,12 +112,12 @@ def summary(wall: float, events: dict) -> list[str]:
     lines = []
     for rank, ev in sorted(events.items()):
         at = {}
-        for name, t, _ in ev:
+        for name, t, _, _ in ev:
             at.setdefault(name, t)
-        chunks = [(t, x) for name, t, x in ev if name.startswith("chunk")]
+        chunks = [(t, x) for name, t, x, _ in ev if name.startswith("chunk")]
         busy = sum(chunks[i + 1][0] - chunks[i][0] for i in range(0, len(chunks) - 1, 2))
-        undecided = sum(x for name, t, x in ev if name == "chunk end" and x and x > 0)
-        waits = [t for name, t, _ in ev if name.startswith("wait")]
+        undecided = sum(x for name, t, x, _ in ev if name == "chunk end" and x and x > 0)
+        waits = [t for name, t, _, _ in ev if name.startswith("wait")]
         wait = sum(waits[i + 1] - waits[i] for i in range(0, len(waits) - 1, 2))
         first = chunks[0][0] if chunks else float("nan")
         last = chunks[-1][0] if chunks else float("nan")
@@ -128,13 +137,28 @@ def phases(wall: float, events: dict) -> dict:
     on one rank the trace and the library are paid inside it), ``end`` (to the
     process's end as the launcher sees it) and ``map`` (the in-process map:
     fixed costs to the end of the chunk engine on rank 0, file written)."""
-    def first(name):
-        return {r: next(t for n, t, _ in ev if n == name) for r, ev in events.items()}
-    chunk_times = [t for ev in events.values() for n, t, _ in ev if n.startswith("chunk")]
+    def first(name, cpu=False):
+        return {r: next(c if cpu else t for n, t, _, c in ev if n == name)
+                for r, ev in events.items()}
+    chunk_times = [t for ev in events.values() for n, t, _, _ in ev if n.startswith("chunk")]
+    chunk_cpu = sum(c1 - c0 for ev in events.values()
+                    for (n0, _, _, c0), (n1, _, _, c1) in zip(ev, ev[1:])
+                    if n0 == "chunk start" and n1 == "chunk end")
+    start_cpu, end_cpu = first("setup start", True), first("main end", True)
+    setup_cpu = {r: first("setup end", True)[r] - start_cpu[r] for r in events}
+    last_cpu = {r: end_cpu[r] - first("setup end", True)[r] for r in events}
     setup_start, setup_end = max(first("setup start").values()), max(first("setup end").values())
     return {"start": setup_start, "setup": setup_end - setup_start,
             "chunks": max(chunk_times) - min(chunk_times), "end": wall - max(chunk_times),
-            "map": first("run end")[0] - first("setup start")[0], "wall": wall}
+            "map": first("run end")[0] - first("setup start")[0], "wall": wall,
+            # CPU seconds (process time of each rank; waiting polls with sleeps): before the
+            # fixed costs (slowest rank), the fixed costs (slowest rank), the chunks (all
+            # ranks together), and after the fixed costs outside the chunks (slowest rank)
+            "cpu start": max(start_cpu.values()), "cpu setup": max(setup_cpu.values()),
+            "cpu chunks": chunk_cpu,
+            "cpu rest": max(last_cpu[r] - sum(
+                c1 - c0 for (n0, _, _, c0), (n1, _, _, c1) in zip(ev, ev[1:])
+                if n0 == "chunk start" and n1 == "chunk end") for r, ev in events.items())}
 
 
 def main() -> None:
@@ -160,14 +184,15 @@ def main() -> None:
                     for rank, ev in sorted(events.items()):
                         print(f"   rank {rank}: " + ", ".join(
                             f"{n} {t:.2f}" + (f" ({x})" if x is not None else "")
-                            for n, t, x in ev))
+                            for n, t, x, _ in ev))
             load.append(os.getloadavg()[0])
     print(f"\nload average {min(load):.2f}-{max(load):.2f}; median of {args.repeat}, interleaved")
     med = {r: statistics.median(w) for r, w in walls.items()}
     for r in args.ranks:
         print(f"{r} rank(s): whole command {med[r]:.2f} s (runs "
               + ", ".join(f"{w:.2f}" for w in walls[r]) + ")")
-    names = ("start", "setup", "chunks", "end", "map", "wall")
+    names = ("start", "setup", "chunks", "end", "map", "wall", "cpu start", "cpu setup",
+             "cpu chunks", "cpu rest")
     print("\n| ranks | " + " | ".join(f"{n} [s]" for n in names) + " |")
     print("|---" * (len(names) + 1) + "|")
     table = {r: {n: statistics.median(p[n] for p in parts[r]) for n in names}
@@ -179,6 +204,19 @@ def main() -> None:
             if r > 1:
                 print(f"speed-up 1 -> {r} ranks: whole command {med[1] / med[r]:.2f}, "
                       f"in-process map {table[1]['map'] / table[r]['map']:.2f}")
+                one, many = table[1], table[r]
+                serial = one["cpu start"] + one["cpu rest"]
+                t1 = serial + one["cpu chunks"]
+                tr = many["cpu start"] + many["cpu setup"] + many["cpu chunks"] / r + \
+                    many["cpu rest"]
+                print(f"from CPU times (an idle machine's wall, launcher not counted): "
+                      f"1 rank {t1:.2f} s, {r} ranks {tr:.2f} s, speed-up {t1 / tr:.2f}; "
+                      f"not divided on 1 rank: {serial:.2f} s of {t1:.2f} s (bound "
+                      f"{t1 / (serial + (t1 - serial) / r):.2f})")
+                m1 = one["cpu chunks"] + one["cpu rest"]
+                mr = many["cpu setup"] + many["cpu chunks"] / r + many["cpu rest"]
+                print(f"from CPU times, in-process (fixed costs, chunks, file, summary): "
+                      f"1 rank {m1:.2f} s, {r} ranks {mr:.2f} s, speed-up {m1 / mr:.2f}")
 
 
 if __name__ == "__main__":
