@@ -174,7 +174,7 @@ def _main(argv: list[str] | None) -> int:
         return 2
     from ..solvers import runtime
     # PETSc errors become one line here (main), not PETSc's error stack on stderr
-    runtime.init(parser.prog, petsc_options)
+    runtime.init(parser.prog, petsc_options, os.environ)
     from ..ui import progress
     # PETSc traps SIGPIPE and aborts MPI; a closed pipe (| head) should end quietly.
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)

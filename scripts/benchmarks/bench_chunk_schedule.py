@@ -49,7 +49,7 @@ def main() -> None:
     args = ap.parse_args()
 
     from elastica_petsc.solvers import runtime
-    runtime.init("bench", [])
+    runtime.init("bench", [], os.environ)
     from elastica_petsc.core.fem import Discretisation
     from elastica_petsc.core.model import load_config
     from elastica_petsc.solvers.reach import beyond_reach

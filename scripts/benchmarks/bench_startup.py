@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Start-up of a command with and without Open MPI's settings of solvers/runtime.py
-(SINGLETON_MCA for one rank, SINGLE_NODE_MCA under ``mpiexec -n 2``):
+(ONE_NODE_MCA for one rank and under ``mpiexec -n 2``):
 ``elastica-petsc control`` to the Fig. 2 target, fresh processes, interleaved,
 median of ``--repeat``.  "Without" sets PMI_SIZE=1 for one rank (Open MPI
 ignores it; runtime.init then leaves MPI's defaults alone, as under another
@@ -37,16 +37,16 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=7)
     args = ap.parse_args()
-    from elastica_petsc.solvers.runtime import SINGLE_NODE_MCA, SINGLETON_MCA
+    from elastica_petsc.solvers.runtime import ONE_NODE_MCA
 
-    base = {k: v for k, v in os.environ.items() if k not in SINGLETON_MCA}
+    base = {k: v for k, v in os.environ.items() if k not in ONE_NODE_MCA}
     base.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                 OMPI_MCA_rmaps_base_oversubscribe="1")
     cases = {   # what: (command, environment with the settings, without)
         "control, one rank": (CONTROL, base, dict(base, PMI_SIZE="1")),
-        "MPI_Init, one rank": (MPI_ONLY, dict(base, **SINGLETON_MCA), base),
+        "MPI_Init, one rank": (MPI_ONLY, dict(base, **ONE_NODE_MCA), base),
         "control, mpiexec -n 2": (MPIEXEC + CONTROL, base, dict(base, **DEFAULTS)),
-        "MPI_Init, mpiexec -n 2": (MPIEXEC + MPI_ONLY, dict(base, **SINGLE_NODE_MCA), base),
+        "MPI_Init, mpiexec -n 2": (MPIEXEC + MPI_ONLY, dict(base, **ONE_NODE_MCA), base),
     }
     load = [os.getloadavg()[0]]
     times = {}
