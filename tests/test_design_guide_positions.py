@@ -106,3 +106,24 @@ def test_cli_one_line_errors(args, message, tmp_path):
                           cwd=tmp_path, capture_output=True, text=True, timeout=60)
     assert done.returncode == 2, done.stderr
     assert message in json.loads(done.stdout)["message"]
+
+
+def test_cli_area_design_json_matches_the_schema(tmp_path):
+    """``--json`` of an area design that varies a guide: the point fields, checked
+    against the schema (tests/schema_check.py)."""
+    from importlib import resources
+
+    from schema_check import errors
+
+    schema = json.loads((resources.files("elastica_petsc") / "schema" / "output.schema.json")
+                        .read_text())
+    done = subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "design", "--config",
+                           str(GUIDED), "--elements", str(ELEMENTS), "--vary", "tendon1.guide1.s",
+                           "--objective", "area", "--tension-max-N", "27.8",
+                           "--resample-cells", "4", "--json", "--quiet"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode in (0, 1), done.stderr
+    data = json.loads(done.stdout)
+    assert errors(data, schema, schema) == []
+    assert data["point_variables"] == ["tendon1.guide1.s"]
+    assert data["points_before_mm"] == [50.0] and data["points_after_mm"][0] % 25.0 == 0.0
