@@ -91,6 +91,15 @@ def test_bad_guide_names_and_positions():
             run_sweep(arm, ELEMENTS, [parse_axis(axes, 2)], P_MAX, progress=False)
 
 
+def test_two_guides_of_one_cable_swept_together_are_ordered_per_design():
+    arm = load_config(GUIDED)
+    axes = [parse_axis("tendon1.guide1.s=50:75:25", 2), parse_axis("tendon1.guide2.s=75:75:25", 2)]
+    sweep = run_sweep(arm, ELEMENTS, axes, P_MAX, progress=False)
+    assert sweep.values["error"][0] == b"" and sweep.values["area"][0] > 0
+    assert b"one point" in sweep.values["error"][1]          # both guides at 75 mm
+    assert sweep.best() == 0
+
+
 @pytest.mark.parametrize("args, message", [
     (["--sweep", "tendon1.guide6.s=25:50:25"], "tendon 1 has guides 1..5"),
     (["--sweep", "tendon2.guide1.s=0:25:25"], "must lie in (0, 50) mm"),

@@ -155,6 +155,9 @@ def _write(args, arm, summary: dict, lines) -> None:
 def _step_line(s: dict) -> str:
     """Iterations and TAO's reason, or that the optimiser took no step."""
     counts = f"{s['iterations']} iterations, {s['evaluations']} evaluations, {s['seconds']:.1f} s"
+    if s["iterations"] == 0 and s.get("point_variables") and not s["tao_reason"]:
+        return f"  {counts}: a node-by-node search of {', '.join(s['point_variables'])} only " \
+               "(no gradient variables, so no TAO step)"
     if s["iterations"] == 0:
         return f"  {counts}: the optimiser took no step (TAO stopped at the start: " \
                f"{s['tao_reason']}), so there is no optimised design to report"

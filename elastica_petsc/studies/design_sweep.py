@@ -124,7 +124,9 @@ def design_arm(arm: Arm, axes, values) -> Arm:
 def sweep_grid(arm: Arm, elements: int, axes) -> Grid:
     """The designs (Cartesian product, first axis slowest), one per chunk;
     attachments and guides must fall on mesh nodes, inside the arm and in
-    order along their cable (checked here, before any work)."""
+    order along their cable (checked here, before any work; where two points
+    of one cable are swept together, their order is checked per design and a
+    design out of order is recorded as an error, not evaluated)."""
     if not axes:
         raise DesignError("--sweep: name at least one axis, e.g. tendon2.route.y=20:60:10")
     names = [a.name for a in axes]
@@ -137,11 +139,26 @@ def sweep_grid(arm: Arm, elements: int, axes) -> Grid:
         point = node_point(a.name, arm, "--sweep")
         if point is None:
             continue
+        joint = [b for b in axes if b is not a and b.node_point() is not None
+                 and b.tendon == a.tendon]
         for v in a.values:
+            if joint:         # order against the other swept points: per design (design_arm)
+                _on_arm_node(arm, elements, a, v)
+                continue
             point.check(arm, v, "--sweep")
             Discretisation.from_arm(design_arm(arm, [a], [v]), elements)
     meta = {"axes": [{"name": a.name, "values": list(a.values)} for a in axes]}
     return Grid("design-sweep", points, tuple(np.array([k]) for k in range(len(points))), meta)
+
+
+def _on_arm_node(arm: Arm, elements: int, axis: Axis, s_mm: float) -> None:
+    """A one-line error unless 0 < s_mm <= l on a node of the mesh."""
+    from ..core.guided import on_node
+
+    if not 0.0 < s_mm <= arm.length_mm * (1 + 1e-12):
+        raise DesignError(f"--sweep {axis.name}: s = {s_mm:g} mm lies outside the arm "
+                          f"(need 0 < s <= l = {arm.length_mm:g} mm)")
+    on_node(s_mm / arm.length_mm, elements, f"--sweep {axis.name}:", arm.length_mm)
 
 
 def sweep_fields() -> dict:
