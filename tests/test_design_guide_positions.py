@@ -1,5 +1,5 @@
 """Guide arc lengths as design variables on mesh nodes (issue 24, docs/model.md
-§32): ``design --sweep tendonK.guideJ.s=...`` returns the areas `boundary`
+§33): ``design --sweep tendonK.guideJ.s=...`` returns the areas `boundary`
 reports for the arms with that guide moved by hand, the area objective's node
 search over ``tendon1.guide1.s`` never loses area and ends on a node, and bad
 names, missing guides and guides out of order are one-line errors (exit 2)."""

@@ -1,5 +1,5 @@
 """Points of a cable on the arm's mesh nodes as design variables (issues 13, 24;
-docs/model.md §32): the end attachment ``tendonK.attach`` and the arc length of
+docs/model.md §33): the end attachment ``tendonK.attach`` and the arc length of
 guide J, ``tendonK.guideJ.s`` (J from 1 at the motor end), in mm.
 
 Both sit on mesh nodes (:meth:`Discretisation.from_arm`), so they are varied
