@@ -42,9 +42,10 @@ from .design_nodes import node_point
 from .chunks import ChunkResults, Grid, Stop, agree, check_out, empty_fields, run
 from .traced_area import traced_area
 
-KINDS = ("route.x", "route.y", "attach", "offset",  # offset: the cable's guides and end
-         "guide.s")                                 # at one offset (docs/model.md §11)
-GUIDE_S = re.compile(r"guide(\d+)\.s$")           # tendonK.guideJ.s: guide J's arc length
+# offset: the cable's guides and end at one offset (docs/model.md §11); guide.s:
+# tendonK.guideJ.s, guide J's arc length (studies/design_nodes.py)
+KINDS = ("route.x", "route.y", "attach", "offset", "guide.s")
+GUIDE_S = re.compile(r"guide(\d+)\.s$")
 
 
 @dataclass(frozen=True)
