@@ -43,7 +43,7 @@ def test_parse_vary_and_bounds():
     assert parse_vary(["tendon2.route", "tendon1.route"], 2) == [1, 0]
     for bad, message in ((["tendon3.route"], "tendons 1..2"), (["tendon1.attach"], "attachment"),
                          (["arm.length"], "tendonK.route"), (["tendon1.route"] * 2, "twice"),
-                         (["tendon1.route.x"], "tendonK.route or tendonK.attach")):
+                         (["tendon1.route.x"], "tendonK.route, tendonK.attach or tendonK.guideJ.s")):
         with pytest.raises(DesignError, match=message):
             parse_vary(bad, 2)
     lo, hi = route_bounds(load_config(), [0, 1], 100.0, 10.0)

@@ -64,7 +64,8 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
                 iterations: int = 15, resample_cells: int | None = 32,
                 elements: int | None = None, max_seconds: float | None = None):
     """Routing points (mm; ``vary`` may add ``"tendonK.attach"``: attachment
-    arc lengths on mesh nodes, by a pattern search, and guide offsets
+    arc lengths on mesh nodes, by a pattern search, as are guide arc lengths
+    ``"tendonK.guideJ.s"`` (kept in order along the cable), and guide offsets
     ``"tendonK.offset"``/``"tendonK.guideJ.offset"``, mm) maximising the area A
     [mm^2] of the workspace W_0 within 0 <= P_i <= ``tension_max_N`` (tips of stable equilibria connected
     to the straight arm by quasi-static loading; the motor limit of Eq. (22)):
@@ -87,7 +88,7 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
 
     elements = _mesh(arm, elements).n_elements
     names, offsets = split_offset_names(list(vary), arm)         # guide offsets, mm
-    tendons, attaches = (parse_design_variables(names, arm.n_tendons) if names
+    tendons, attaches = (parse_design_variables(names, arm.n_tendons, arm) if names
                          else ([], []))
     p_max = _tension_max(arm, tension_max_N)
     inputs.design_options(DESIGN_NAMES, reach_mm=reach_mm, iterations=iterations,
@@ -105,8 +106,8 @@ def design_sweep(arm: Arm, axes, *, tension_max_N: float = 10.0, path_mm=None,
                  out: str | Path | None = None, overwrite: bool = False, resume: bool = False,
                  comm=None, elements: int | None = None, progress: bool = False):
     """Evaluate a grid of designs: ``axes`` are strings
-    ``"tendonK.route.x|route.y|attach|offset=START:STOP:STEP"`` (mm; attachments on
-    mesh nodes).  Per design: the area [mm^2] of W_0 within 0 <= P_i <=
+    ``"tendonK.route.x|route.y|attach|guideJ.s|offset=START:STOP:STEP"`` (mm;
+    attachments and guide arc lengths on mesh nodes, in order along the cable).  Per design: the area [mm^2] of W_0 within 0 <= P_i <=
     ``tension_max_N`` (as :func:`design_area`) and, with ``path_mm``, the
     path's misfit [mm^2] and targets reached.  In this process alone (``comm``
     None), or collectively on every rank of ``comm``; ``progress=True``: a

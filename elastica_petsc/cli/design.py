@@ -19,7 +19,8 @@ def add_parser(sub) -> None:
                     "BLMVM and exact gradients. --objective path:CSV: every target of the path "
                     "in W_0 (sum over targets of min_p |x_t - x_d|^2/2, Danskin's gradient). "
                     "--objective area: the area of W_0 within 0 <= P_i <= --tension-max "
-                    "(attachments, tendonK.attach, by a pattern search over mesh nodes) "
+                    "(attachments, tendonK.attach, and guide arc lengths, tendonK.guideJ.s, by a "
+                    "pattern search over mesh nodes) "
                     "(on its traced boundary, the area `boundary` reports for that motor limit; "
                     "gradient the boundary integral of the normal tip derivative), confirmed by an "
                     "independent tension-grid re-sampling of both arms. --sweep: evaluate the "
@@ -28,7 +29,9 @@ def add_parser(sub) -> None:
                     "the straight arm by quasi-static loading with all P_i >= 0.")
     parser.add_argument("--vary", nargs="+", metavar="tendonK.route",
                         help="design variables of the optimiser, e.g. tendon1.route "
-                             "tendon2.route (and, for --objective area, tendon1.attach; "
+                             "tendon2.route (and, for --objective area, on mesh nodes by a "
+                             "pattern search: tendon1.attach, or tendonK.guideJ.s, the arc "
+                             "length of guide J of tendon K; "
                              "guide offsets in mm: tendonK.offset, every "
                              "guide and the end of tendon K at one offset, or "
                              "tendonK.guideJ.offset)")
@@ -36,9 +39,10 @@ def add_parser(sub) -> None:
                         help="area, or path:FILE.csv (targets x_mm,y_mm) to be made reachable")
     parser.add_argument("--sweep", nargs="+", metavar="AXIS=START:STOP:STEP",
                         help="grid of designs instead of an optimisation; AXIS is "
-                             "tendonK.route.x, tendonK.route.y, tendonK.attach (mm; "
-                             "attachments on mesh nodes) or tendonK.offset (mm: the offset "
-                             "of the cable's guides and end point)")
+                             "tendonK.route.x, tendonK.route.y, tendonK.attach, "
+                             "tendonK.guideJ.s (mm; attachments and guide arc lengths on "
+                             "mesh nodes, in order along the cable) or tendonK.offset (mm: "
+                             "the offset of the cable's guides and end point)")
     common.add_tension_option(parser, "--tension-max",
                               help=f"motor limit of the area objective (default "
                                    f"{DEFAULT_TENSION_MAX_N:g} N)")
@@ -151,6 +155,9 @@ def _write(args, arm, summary: dict, lines) -> None:
 def _step_line(s: dict) -> str:
     """Iterations and TAO's reason, or that the optimiser took no step."""
     counts = f"{s['iterations']} iterations, {s['evaluations']} evaluations, {s['seconds']:.1f} s"
+    if s["iterations"] == 0 and s.get("point_variables") and not s["tao_reason"]:
+        return f"  {counts}: a node-by-node search of {', '.join(s['point_variables'])} only " \
+               "(no gradient variables, so no TAO step)"
     if s["iterations"] == 0:
         return f"  {counts}: the optimiser took no step (TAO stopped at the start: " \
                f"{s['tao_reason']}), so there is no optimised design to report"
@@ -219,7 +226,8 @@ def _run_area(args) -> int:
     from ..studies.design_offsets import split_offset_names
 
     names, offsets = split_offset_names(args.vary, arm)       # guide offsets (issue 24)
-    tendons, attaches = parse_design_variables(names, disc.n_tendons) if names else ([], [])
+    tendons, attaches = (parse_design_variables(names, disc.n_tendons, arm) if names
+                         else ([], []))
     with Progress(None, "design", unit="evaluations") as bar:
         result = design_for_area(arm, tendons, _tension_max(args, arm),
                                  elements=disc.n_elements, attaches=attaches,
@@ -310,6 +318,9 @@ def area_lines(s: dict) -> list[str]:
     for k, (x, y) in enumerate(zip(s["attach_before_mm"], s["attach_after_mm"]), start=1):
         if x != y:
             lines.append(f"  s_{k} (attachment): {x:g} -> {y:g} mm")
+    lines += [f"  {name}: {a:g} -> {b:g} mm" for name, a, b in
+              zip(s.get("point_variables", ()), s.get("points_before_mm", ()),
+                  s.get("points_after_mm", ())) if ".guide" in name]
     lines += _offset_lines(s)
     if s["fold_sign_changes_after"] or s["fold_sign_changes_before"]:
         lines.append(f"  note: det(d x_t/d p) changes sign {s['fold_sign_changes_before']} -> "

@@ -97,6 +97,17 @@ def _offset_summary(result) -> dict:
             "offsets_after_mm": [v.value_mm(result.arm_after) for v in offsets]}
 
 
+def _point_summary(result) -> dict:
+    """The points on mesh nodes an area design searched (attachments, guide arc
+    lengths; studies/design_nodes.py), before and after (mm); empty if none."""
+    points = result.points
+    if not points:
+        return {}
+    return {"point_variables": [p.name for p in points],
+            "points_before_mm": [p.value_mm(result.arm_before) for p in points],
+            "points_after_mm": [p.value_mm(result.arm_after) for p in points]}
+
+
 def area_summary(r, elements: int | None = None) -> dict:
     """The JSON summary of an area design (mm, mm^2, N)."""
     def sampled(s):
@@ -118,7 +129,7 @@ def area_summary(r, elements: int | None = None) -> dict:
         "routes_after_mm": [list(t.route_mm) for t in r.arm_after.tendons],
         "attach_before_mm": [t.attach_mm for t in r.arm_before.tendons],
         "attach_after_mm": [t.attach_mm for t in r.arm_after.tendons],
-        **_offset_summary(r),
+        **_offset_summary(r), **_point_summary(r),
         "iterations": r.iterations, "evaluations": len(r.history), "seconds": r.seconds,
         "tao_reason": r.reason,
     }

@@ -24,10 +24,8 @@ on its side (the cable never starts across the straight arm).  A margin: the
 optimisation runs on a circle-like path scaled by ``margin`` about its
 centroid (a path a little larger than the task), and stops when f = 0.
 
-Not implemented: the smallest peak tension once the path is reachable, the
-area objective (the W_0 polygon is a lower bound where the tip map folds,
-see :mod:`elastica_petsc.studies.boundary`), attachment points as design
-variables, sweeps over designs.
+Attachments and guide arc lengths sit on mesh nodes: they are varied by the
+area objective's pattern search and by sweeps (studies/design_nodes.py), not here.
 """
 from __future__ import annotations
 
@@ -50,45 +48,51 @@ class DesignError(InputError):
     """A design request that cannot be carried out (one line for the user)."""
 
 
-def parse_design_variables(names, n_tendons: int) -> tuple[list[int], list[int]]:
-    """``tendonK.route`` / ``tendonK.attach`` -> (route tendons, attachment
-    tendons), 0-based indices in order, no repeats."""
-    routes, attaches = [], []
+def parse_design_variables(names, n_tendons: int, arm: Arm | None = None
+                           ) -> tuple[list[int], list]:
+    """``tendonK.route`` -> route tendons (0-based), ``tendonK.attach`` /
+    ``tendonK.guideJ.s`` -> points on mesh nodes (:class:`~.design_nodes.NodePoint`,
+    checked against ``arm``), in order, no repeats."""
+    from .design_nodes import NAME, node_point
+
+    routes, points = [], []
     for name in names:
         head, _, what = name.partition(".")
-        if not head.startswith("tendon") or not head[6:].isdigit() or what not in ("route",
-                                                                                    "attach"):
-            raise DesignError(f"--vary {name!r}: expected tendonK.route or tendonK.attach "
-                              "(or a guide offset, tendonK.offset or tendonK.guideJ.offset), "
-                              "e.g. tendon1.route")
+        if not head.startswith("tendon") or not head[6:].isdigit() or (
+                what != "route" and (NAME.match(name) is None or arm is None)):
+            raise DesignError(f"--vary {name!r}: expected tendonK.route, tendonK.attach or "
+                              "tendonK.guideJ.s (or a guide offset, tendonK.offset or "
+                              "tendonK.guideJ.offset), e.g. tendon1.route")
         k = int(head[6:])
         if not 1 <= k <= n_tendons:
             raise DesignError(f"--vary {name!r}: the arm has tendons 1..{n_tendons}")
-        chosen = routes if what == "route" else attaches
-        if k - 1 in chosen:
+        chosen, item = (routes, k - 1) if what == "route" else (points,
+                                                                node_point(name, arm, "--vary"))
+        if item in chosen:
             raise DesignError(f"--vary {name!r} given twice")
-        chosen.append(k - 1)
-    if not routes and not attaches:
+        chosen.append(item)
+    if not routes and not points:
         raise DesignError("--vary: name at least one design variable, e.g. tendon2.route")
-    return routes, attaches
+    return routes, points
 
 
 def parse_vary(names, n_tendons: int) -> list[int]:
     """Routing points only (the path objective): ``tendonK.route`` -> K-1."""
-    routes, attaches = parse_design_variables(names, n_tendons)
-    if attaches:
-        k = attaches[0] + 1
-        raise DesignError(f"--vary tendon{k}.attach: attachment points sit on mesh nodes, so "
-                          "the path objective's gradient optimiser does not vary them; use "
-                          f"--objective area or --sweep tendon{k}.attach=START:STOP:STEP")
-    return routes
+    from .design_nodes import NAME
+
+    for name in names:
+        if NAME.match(name):
+            raise DesignError(f"--vary {name}: attachments and guide positions sit on mesh "
+                              "nodes, so the path objective's gradient optimiser does not vary "
+                              f"them; use --objective area or --sweep {name}=START:STOP:STEP")
+    return parse_design_variables(names, n_tendons)[0]
 
 
 def with_attachment(arm: Arm, tendon: int, s_mm: float) -> Arm:
-    """The arm with tendon ``tendon``'s attachment at arc length ``s_mm``."""
-    new = list(arm.tendons)
-    new[tendon] = dataclasses.replace(new[tendon], attach_mm=float(s_mm))   # guides kept
-    return dataclasses.replace(arm, tendons=tuple(new))
+    """The arm with tendon ``tendon``'s attachment at arc length ``s_mm`` (guides kept)."""
+    from .design_nodes import NodePoint
+
+    return NodePoint(tendon).placed(arm, s_mm)
 
 
 def with_routes(arm: Arm, tendons, q_mm) -> Arm:

@@ -170,6 +170,7 @@ class AreaDesign(Result):
     iterations: int
     seconds: float
     offsets: tuple = ()             # OffsetVariable (design_offsets.py), after the routes
+    points: tuple = ()              # NodePoint (design_nodes.py): searched on mesh nodes
 
     @property
     def confirmed(self) -> bool | None:
@@ -187,24 +188,25 @@ class AreaDesign(Result):
         return area_summary(self)
 
 
-def search_attachments(arm: Arm, attaches, evaluate, *, elements: int, reach_mm: float):
-    """Attachment arc lengths on mesh nodes: a pattern search (move one
-    attachment by one node, keep the move if the design is feasible and the
-    area grows, until no move helps), within +- ``reach_mm`` of the start and
-    on (0, l].  ``evaluate(arm) -> TracedArea``.  Returns (arm, its TracedArea)."""
-    from .design import with_attachment
-
+def search_points(arm: Arm, points, evaluate, *, elements: int, reach_mm: float):
+    """Points of the cables on mesh nodes (:class:`~.design_nodes.NodePoint`:
+    attachments, guide arc lengths): a pattern search (move one point by one
+    node, keep the move if the design is feasible and the area grows, until
+    no move helps), within +- ``reach_mm`` of the start, inside the arm and
+    strictly between the point's neighbours on its cable path
+    (:meth:`~.design_nodes.NodePoint.admits`).  ``evaluate(arm) -> TracedArea``.
+    Returns (arm, its TracedArea)."""
     h = arm.length_mm / elements
-    start = {i: arm.tendons[i].attach_mm for i in attaches}
+    start = {p: p.value_mm(arm) for p in points}
     best = evaluate(arm)
     moved = True
     while moved:
         moved = False
-        for i, step in ((i, step) for i in attaches for step in (h, -h)):
-            s = arm.tendons[i].attach_mm + step
-            if not (h - 1e-9 <= s <= arm.length_mm + 1e-9 and abs(s - start[i]) <= reach_mm):
+        for p, step in ((p, step) for p in points for step in (h, -h)):
+            s = p.value_mm(arm) + step
+            if not (p.admits(arm, s) and abs(s - start[p]) <= reach_mm):
                 continue
-            candidate = with_attachment(arm, i, s)
+            candidate = p.placed(arm, s)
             a = evaluate(candidate)
             if a.feasible and a.area_mm2 > best.area_mm2:
                 arm, best, moved = candidate, a, True
@@ -221,8 +223,9 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
     workspace within 0 <= p_i <= ``p_max`` (= P_max l^2/B; module docstring),
     by TAO BLMVM with the exact gradient dA/dq, within the bounds of
     :func:`~elastica_petsc.studies.design.route_bounds`; before that, the
-    attachment arc lengths of ``attaches`` on mesh nodes
-    (:func:`search_attachments`).  ``offsets``: guide offsets
+    points of ``attaches`` on mesh nodes (attachments and guide arc lengths,
+    :class:`~.design_nodes.NodePoint`; an int i means tendon i's attachment;
+    :func:`search_points`).  ``offsets``: guide offsets
     (:class:`~.design_offsets.OffsetVariable`, mm, within
     :func:`~.design_offsets.offset_bounds`) varied with the routing points,
     their gradient from the same loop (docs/model.md §26).  Then both arms are re-sampled
@@ -238,8 +241,12 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
 
     if not (np.isfinite(p_max) and p_max > 0):
         raise DesignError(f"--tension-max must be a positive force, got p = {p_max}")
+    from .design_nodes import NodePoint
+
     t0 = time.perf_counter()
     elements = Discretisation.from_arm(arm, elements).n_elements
+    attaches = [NodePoint(p) if isinstance(p, int) else p for p in attaches]
+    guides_varied = any(p.guide is not None for p in attaches)
     history, best, first, seen = [], {}, [], {}
     warm = WarmStart()                  # each design starts from the last one's states
 
@@ -256,6 +263,8 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
                         "routes_mm": [list(t.route_mm) for t in candidate.tendons],
                         **({"offsets_mm": [v.value_mm(candidate) for v in offsets]}
                            if offsets else {}),
+                        **({"guides_s_mm": [[g.s_mm for g in t.guides]
+                                            for t in candidate.tendons]} if guides_varied else {}),
                         "area_mm2": a.area_mm2 if a.traced else None,
                         "gradient": a.gradient.tolist() if a.traced else None,
                         "feasible": a.feasible, "converged": a.converged,
@@ -271,10 +280,11 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
     designed, reason, iterations = arm, "", 0
     if not evaluate(arm).feasible:               # nothing to start from: no optimiser, no checks
         return AreaDesign(arm, arm, list(tendons), p_max, first[0], first[0], None, None,
-                          history, INFEASIBLE_START, 0, time.perf_counter() - t0, tuple(offsets))
+                          history, INFEASIBLE_START, 0, time.perf_counter() - t0, tuple(offsets),
+                          tuple(attaches))
     if attaches:
-        designed, _ = search_attachments(arm, attaches, evaluate, elements=elements,
-                                         reach_mm=reach_mm)
+        designed, _ = search_points(arm, attaches, evaluate, elements=elements,
+                                    reach_mm=reach_mm)
     if tendons or offsets:
         reason, iterations = _optimise_routes(designed, tendons, evaluate, history,
                                               reach_mm=reach_mm, clearance_mm=clearance_mm,
@@ -290,7 +300,7 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
                   for a in (arm, after_arm)]
     return AreaDesign(arm, after_arm, list(tendons), p_max, first[0], best.get("area", first[0]),
                       *checks, history, reason, iterations, time.perf_counter() - t0,
-                      tuple(offsets))
+                      tuple(offsets), tuple(attaches))
 
 
 def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm, scale_mm,

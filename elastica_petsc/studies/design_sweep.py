@@ -1,10 +1,13 @@
 """``design --sweep``: the objectives over a grid of designs, over MPI ranks (issue 13).
 
 A sweep axis is ``tendonK.route.x``, ``tendonK.route.y`` (routing point
-coordinates, mm) or ``tendonK.attach`` (attachment arc length, mm; it must
-fall on a mesh node, as every attachment does: see
-:meth:`Discretisation.from_arm`), each given as START:STOP:STEP (mm, STOP
-included).  The grid is their Cartesian product.  Every design gets:
+coordinates, mm), ``tendonK.attach`` (attachment arc length, mm) or
+``tendonK.guideJ.s`` (arc length of guide J, mm) -- these two must fall on
+mesh nodes, as every attachment and guide does (see
+:meth:`Discretisation.from_arm`), inside the arm and strictly between their
+neighbours on the cable path (studies/design_nodes.py) -- or
+``tendonK.offset``, each given as START:STOP:STEP (mm, STOP included).  The
+grid is their Cartesian product.  Every design gets:
 
 * the area objective of :mod:`elastica_petsc.studies.design_area`: the area
   A of the workspace W_0 ∩ {0 <= P_i <= P_max} (mm^2, on its traced boundary:
@@ -23,6 +26,7 @@ equals its interrupted-and-resumed twin and does not depend on the ranks.
 from __future__ import annotations
 
 import itertools
+import re
 import time
 from dataclasses import dataclass
 
@@ -34,11 +38,14 @@ from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm
 from .design import DesignError, path_misfit
+from .design_nodes import node_point
 from .chunks import ChunkResults, Grid, Stop, agree, check_out, empty_fields, run
 from .traced_area import traced_area
 
-KINDS = ("route.x", "route.y", "attach", "offset")   # offset: the cable's guides and end
-                                                    # at one offset (docs/model.md §11)
+# offset: the cable's guides and end at one offset (docs/model.md §11); guide.s:
+# tendonK.guideJ.s, guide J's arc length (studies/design_nodes.py)
+KINDS = ("route.x", "route.y", "attach", "offset", "guide.s")
+GUIDE_S = re.compile(r"guide(\d+)\.s$")
 
 
 @dataclass(frozen=True)
@@ -48,19 +55,31 @@ class Axis:
     tendon: int
     kind: str
     values: tuple
+    guide: int | None = None        # kind "guide.s": the guide (0-based)
 
     @property
     def name(self) -> str:
+        if self.kind == "guide.s":
+            return f"tendon{self.tendon + 1}.guide{self.guide + 1}.s"
         return f"tendon{self.tendon + 1}.{self.kind}"
+
+    def node_point(self):
+        """The :class:`~.design_nodes.NodePoint` of an attach or guide.s axis, else None."""
+        from .design_nodes import NodePoint
+
+        return NodePoint(self.tendon, self.guide) if self.kind in ("attach", "guide.s") else None
 
 
 def parse_axis(text: str, n_tendons: int) -> Axis:
     """``tendonK.route.y=0:40:5`` -> Axis (one-line DesignError otherwise)."""
     name, eq, spec = text.partition("=")
     head, _, kind = name.partition(".")
+    guide = GUIDE_S.match(kind)
+    if guide is not None:
+        kind = "guide.s"
     if not eq or not head.startswith("tendon") or not head[6:].isdigit() or kind not in KINDS:
-        raise DesignError(f"--sweep {text!r}: expected tendonK.route.x|route.y|attach|offset="
-                          "START:STOP:STEP (mm), e.g. tendon2.route.y=20:60:10")
+        raise DesignError(f"--sweep {text!r}: expected tendonK.route.x|route.y|attach|guideJ.s|"
+                          "offset=START:STOP:STEP (mm), e.g. tendon2.route.y=20:60:10")
     k = int(head[6:])
     if not 1 <= k <= n_tendons:
         raise DesignError(f"--sweep {text!r}: the arm has tendons 1..{n_tendons}")
@@ -73,7 +92,8 @@ def parse_axis(text: str, n_tendons: int) -> Axis:
     count = int(np.floor((stop - start) / step + 1e-9)) + 1
     if count > 1000:
         raise DesignError(f"--sweep {text!r}: {count} values; at most 1000 per axis")
-    return Axis(k - 1, kind, tuple(start + step * np.arange(count)))
+    return Axis(k - 1, kind, tuple(start + step * np.arange(count)),
+                None if guide is None else int(guide.group(1)) - 1)
 
 
 def design_arm(arm: Arm, axes, values) -> Arm:
@@ -83,8 +103,10 @@ def design_arm(arm: Arm, axes, values) -> Arm:
     tendons = list(arm.tendons)
     for axis, v in zip(axes, values):
         t = tendons[axis.tendon]
-        if axis.kind == "attach":
-            t = dataclasses.replace(t, attach_mm=float(v))
+        point = axis.node_point()
+        if point is not None:                    # attachment or guide arc length
+            t = point.placed(dataclasses.replace(arm, tendons=tuple(tendons)),
+                             v).tendons[axis.tendon]
         elif axis.kind == "offset":              # every guide and the end point, signed as given
             t = dataclasses.replace(t, attach_offset_mm=float(v), guides=tuple(
                 dataclasses.replace(g, offset_mm=float(v)) for g in t.guides))
@@ -93,12 +115,19 @@ def design_arm(arm: Arm, axes, values) -> Arm:
             route["xy".index(axis.kind[-1])] = float(v)
             t = dataclasses.replace(t, route_mm=tuple(route))
         tendons[axis.tendon] = t
-    return dataclasses.replace(arm, tendons=tuple(tendons))
+    designed = dataclasses.replace(arm, tendons=tuple(tendons))
+    for axis, v in zip(axes, values):        # two points of one cable swept together
+        if axis.node_point() is not None:
+            axis.node_point().check(designed, v, "design")
+    return designed
 
 
 def sweep_grid(arm: Arm, elements: int, axes) -> Grid:
     """The designs (Cartesian product, first axis slowest), one per chunk;
-    attachments must fall on mesh nodes (checked here, before any work)."""
+    attachments and guides must fall on mesh nodes, inside the arm and in
+    order along their cable (checked here, before any work; where two points
+    of one cable are swept together, their order is checked per design and a
+    design out of order is recorded as an error, not evaluated)."""
     if not axes:
         raise DesignError("--sweep: name at least one axis, e.g. tendon2.route.y=20:60:10")
     names = [a.name for a in axes]
@@ -108,11 +137,29 @@ def sweep_grid(arm: Arm, elements: int, axes) -> Grid:
     if len(points) > 100_000:
         raise DesignError(f"--sweep: {len(points)} designs; at most 100,000")
     for a in axes:
-        if a.kind == "attach":
-            for v in a.values:
-                Discretisation.from_arm(design_arm(arm, [a], [v]), elements)
+        point = node_point(a.name, arm, "--sweep")
+        if point is None:
+            continue
+        joint = [b for b in axes if b is not a and b.node_point() is not None
+                 and b.tendon == a.tendon]
+        for v in a.values:
+            if joint:         # order against the other swept points: per design (design_arm)
+                _on_arm_node(arm, elements, a, v)
+                continue
+            point.check(arm, v, "--sweep")
+            Discretisation.from_arm(design_arm(arm, [a], [v]), elements)
     meta = {"axes": [{"name": a.name, "values": list(a.values)} for a in axes]}
     return Grid("design-sweep", points, tuple(np.array([k]) for k in range(len(points))), meta)
+
+
+def _on_arm_node(arm: Arm, elements: int, axis: Axis, s_mm: float) -> None:
+    """A one-line error unless 0 < s_mm <= l on a node of the mesh."""
+    from ..core.guided import on_node
+
+    if not 0.0 < s_mm <= arm.length_mm * (1 + 1e-12):
+        raise DesignError(f"--sweep {axis.name}: s = {s_mm:g} mm lies outside the arm "
+                          f"(need 0 < s <= l = {arm.length_mm:g} mm)")
+    on_node(s_mm / arm.length_mm, elements, f"--sweep {axis.name}:", arm.length_mm)
 
 
 def sweep_fields() -> dict:
@@ -158,8 +205,8 @@ class SweepSampler:
             if stop():
                 return None
             t0 = time.perf_counter()
-            arm = design_arm(self.arm, self.axes, values)
             try:
+                arm = design_arm(self.arm, self.axes, values)
                 a = traced_area(arm, (), self.p_max, elements=self.elements)
                 out["area"][k], out["area_converged"][k] = a.area_mm2, a.converged
                 out["cables_clear"][k], out["det_sign_changes"][k] = a.cables_clear, \
