@@ -72,13 +72,13 @@ class CableComplementarity:
         gap = self.drive.lengths(t) - self.geo.cable_lengths(self.geo.theta_of(U))
         self.start = StepStart(t, U.copy(), V.copy(), gap)
 
-    def rows(self, t_alpha, U, V) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def rows(self, t_alpha, U, V, af: float, dt: float):
         """(phi, taut, s): the complementarity rows at the Newton iterate (U, V) at the
-        alpha point t_alpha, which branch each follows (taut: -w) and the scales s."""
-        N, s, af = self.geo.N, self.start, self.alpha_f
-        dt = (t_alpha - s.t) / af
+        alpha point t_alpha of a step dt with parameter ``af`` (alpha_f), which branch
+        each follows (taut: -w) and the scales s."""
+        N, s = self.geo.N, self.start
         U1, V1 = s.U + (U - s.U) / af, s.V + (V - s.V) / af       # step-end values
-        w = (self.drive.rates(s.t + dt)
+        w = (self.drive.rates(t_alpha + (1.0 - af) * dt)
              - self.geo.grad_lengths(self.geo.theta_of(U1)) @ V1[:N]
              + (np.maximum(s.gap, 0.0) + DRIFT_PULL * np.minimum(s.gap, 0.0)) / dt)
         scale = self.delassus * dt
@@ -91,5 +91,5 @@ class CableComplementarity:
         point, 0 exactly where the slack branch holds (the row -s p = 0)."""
         s, af = self.start, self.alpha_f
         U, V = s.U + af * (U1 - s.U), s.V + af * (V1 - s.V)
-        _, taut, _ = self.rows(s.t + af * (t1 - s.t), U, V)
+        _, taut, _ = self.rows(s.t + af * (t1 - s.t), U, V, af, t1 - s.t)
         return np.where(taut, V[self.geo.N:], 0.0), taut

@@ -61,6 +61,7 @@ from petsc4py import PETSc
 from ..core.drive import LengthDrive, TensionDrive
 from ..core.dynamics import BandedInverse, Inertia, elastic_band
 from ..core.fem import Discretisation
+from .alpha2_start import START_UP, Alpha2Params
 from .cable_steps import CableComplementarity
 from .options import SolverOptions, check_comm
 from .reasons import TS_REASONS, reason_name
@@ -145,6 +146,8 @@ class DynamicsSolver:
         self.attach = list(disc.attach_nodes)
         self.modes = np.full(self.n, FORCE)
         self.drive, self.cables = None, None
+        self._alpha2 = Alpha2Params()
+        self.stage = (0.5, dt0)          # alpha_f and step of the stage under way
 
     # --- model pieces -------------------------------------------------------------
     def theta_of(self, U: np.ndarray) -> np.ndarray:
@@ -165,7 +168,7 @@ class DynamicsSolver:
         out = np.empty(N + self.n)
         out[:N] = self.inertia.force(theta, V[:N], A[:N]) + disc.residual(u, p)[:N]
         if self.cables is not None:          # length control: the complementarity rows
-            out[N:] = self.cables.rows(t, U, V)[0]
+            out[N:] = self.cables.rows(t, U, V, *self.stage)[0]
         else:
             out[N:] = p - self.drive.tensions(t)
         return out
@@ -198,8 +201,8 @@ class DynamicsSolver:
         if self.cables is not None:
             # slack branch -s p: dp = -r / s; taut branch -w, d w / d x = -(shift_v /
             # alpha_f) C^T x (step-end velocities from the alpha point)
-            _, taut, s = self.cables.rows(t, U, V)
-            gain, row_scale = -1.0 / s, self.cables.alpha_f
+            _, taut, s = self.cables.rows(t, U, V, *self.stage)
+            gain, row_scale = -1.0 / s, self.stage[0]
         taut, known = np.flatnonzero(taut), np.flatnonzero(~taut)
         S = C[:, taut].T @ Y[:, taut]
 
@@ -228,6 +231,14 @@ class DynamicsSolver:
             "ts_alpha_radius", float(self.options.options["ts_alpha_radius"]))
         return 1.0 / (1.0 + radius)
 
+    def _set_stage(self, ts) -> float:
+        """The stage under way: its alpha_f and step for the cables' rows; returns the
+        factor of the acceleration (2 in TSALPHA2's start-up, :mod:`.alpha2_start`)."""
+        params = self._alpha2.params(ts)
+        alpha_f = self.alpha_f if params is None else params[1]
+        self.stage = (alpha_f, ts.getTimeStep())
+        return 1.0 if params is None or params != START_UP else 2.0
+
     # --- the TS ----------------------------------------------------------------------
     def _make_ts(self, t0, t_end, U0, V0, record):
         comm = self.comm
@@ -239,12 +250,14 @@ class DynamicsSolver:
         F = PETSc.Vec().createSeq(size, comm=comm)
 
         def i2function(ts_, t, U, V, A, Fv):
+            factor = self._set_stage(ts_)
             Fv.setArray(self.residual(t, U.getArray(readonly=True), V.getArray(readonly=True),
-                                      A.getArray(readonly=True)))
+                                      factor * A.getArray(readonly=True)))
 
         def i2jacobian(ts_, t, U, V, A, shift_v, shift_a, J, P):
+            factor = self._set_stage(ts_)
             self._factor(U.getArray(readonly=True), V.getArray(readonly=True), shift_v,
-                         shift_a, t)
+                         factor * shift_a, t)
 
         J = PETSc.Mat().createPython([size, size], _Operator(), comm=comm)
         J.setUp()
