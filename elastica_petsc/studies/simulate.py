@@ -141,6 +141,10 @@ def simulate(arm: Arm, *, elements: int | None = None, initial_tensions_N=None, 
     """
     tau = time_scale_s(arm)
     disc = Discretisation.from_arm(arm, elements)
+    if type(disc) is not Discretisation:
+        raise InputError("simulate handles arms with straight cables and no weight only: "
+                         "cable guides, offset cable ends and gravity are not in the dynamics "
+                         "yet (docs/model.md §16.6)")
     n = disc.n_tendons
     given = [x is not None for x in (tensions_N, history_csv, schedule_csv)]
     if sum(given) != 1:
