@@ -1,0 +1,124 @@
+"""The quasi-static limit of `simulate` on the Fig. 3a schedule (issue 22, docs/model.md §16.7).
+
+Writes the Fig. 3a motor schedule (`trace --shape paper-triangle --schedule`, its time
+column at the suggested tracing speed), plays it at several speeds (the time column
+divided by a speed factor: 0.01 is 100 times slower, 4 is 4 times faster) through
+`simulate` on the same mesh, and reports the tip's deviation from the schedule's
+quasi-static tip columns (linear in time between rows): its maximum over the run,
+over the path phase, and at the end.  Saves a figure of deviation against time and
+of the maxima against speed.  The step: first period / --steps-per-period, but at
+least the schedule's mean row spacing / --steps-per-row (so the 100 times slower run
+takes a few thousand steps: the unresolved vibration is then damped by rho_inf = 0.5,
+which is the quasi-static limit of the scheme; say so when quoting it).
+
+    python scripts/studies/quasi_static_limit.py [--speeds 0.01 1 2 4] [--elements 180]
+        [--steps-per-period 50] [--steps-per-row 2] [--png docs/quasi_static_limit.png]
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import elastica_petsc as ep
+from elastica_petsc.core.model import Arm
+
+
+def write_schedule(folder: Path, elements: int) -> Path:
+    path = folder / "fig3a.csv"
+    subprocess.run([sys.executable, "-m", "elastica_petsc.cli", "trace", "--shape",
+                    "paper-triangle", "--elements", str(elements), "--schedule", str(path),
+                    "--quiet", "--overwrite"], check=True, capture_output=True)
+    return path
+
+
+def played_at(schedule: Path, speed: float, folder: Path) -> tuple[Path, int]:
+    """A copy of the schedule whose time column is divided by ``speed``; its row count."""
+    with open(schedule, newline="") as fh:
+        rows = list(csv.reader(fh))
+    j = rows[0].index("time_s")
+    for r in rows[1:]:
+        r[j] = repr(float(r[j]) / speed)
+    out = folder / f"fig3a_x{speed:g}.csv"
+    with open(out, "w", newline="") as fh:
+        csv.writer(fh).writerows(rows)
+    return out, len(rows) - 1
+
+
+def run(arm, schedule, speed, folder, args):
+    path, n_rows = played_at(schedule, speed, folder)
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    t_rows = np.array([float(r["time_s"]) for r in rows])
+    path_start = t_rows[[r["phase"] == "path" for r in rows].index(True)]
+    f1_hz = 1.83                                # the straight arm's first frequency
+    dt = max(1.0 / (f1_hz * args.steps_per_period), t_rows[-1] / n_rows / args.steps_per_row)
+    wall = time.perf_counter()
+    res = ep.simulate(arm, schedule_csv=str(path), elements=args.elements, dt_s=dt)
+    wall = time.perf_counter() - wall
+    dev = np.linalg.norm(res.tip_mm - res.planned_tip_mm, axis=1)
+    on_path = res.time_s >= path_start
+    return {"speed": speed, "duration_s": float(res.time_s[-1]), "dt_s": dt,
+            "steps": int(res.steps), "completed": bool(res.completed), "wall_s": round(wall, 1),
+            "switches": len(res.events), "max_deviation_mm": float(dev.max()),
+            "max_deviation_path_mm": float(dev[on_path].max()),
+            "end_deviation_mm": float(dev[-1]), "min_tension_N": float(res.tensions_N.min())
+            }, (res.time_s / res.time_s[-1], dev)
+
+
+def plot(results, curves, png):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for r, (s, dev) in zip(results, curves):
+        a.semilogy(s, np.maximum(dev, 1e-6), lw=0.8, label=f"x{r['speed']:g}")
+    a.axhline(0.05, color="k", ls=":", lw=0.8)
+    a.set_xlabel("time / duration of the schedule")
+    a.set_ylabel("tip deviation from the quasi-static trace [mm]")
+    a.legend(title="speed")
+    v = [r["speed"] for r in results]
+    b.loglog(v, [r["max_deviation_mm"] for r in results], "o-", label="max over the run")
+    b.loglog(v, [r["max_deviation_path_mm"] for r in results], "s-", label="max on the path")
+    b.loglog(v, [max(r["end_deviation_mm"], 1e-6) for r in results], "^-", label="at the end")
+    b.axhline(0.05, color="k", ls=":", lw=0.8)
+    b.set_xlabel("speed / suggested speed (8.8 mm/s)")
+    b.set_ylabel("tip deviation [mm]")
+    b.legend()
+    fig.suptitle("Fig. 3a schedule played by `simulate` (paper's arm, undamped, rho_inf = 0.5)")
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--speeds", type=float, nargs="+", default=[0.01, 1.0, 2.0, 4.0])
+    ap.add_argument("--elements", type=int, default=180)
+    ap.add_argument("--steps-per-period", type=int, default=50)
+    ap.add_argument("--steps-per-row", type=float, default=2.0)
+    ap.add_argument("--png", default="docs/quasi_static_limit.png")
+    args = ap.parse_args()
+    arm = Arm.paper()
+    results, curves = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        schedule = write_schedule(folder, args.elements)
+        for speed in args.speeds:
+            r, c = run(arm, schedule, speed, folder, args)
+            print(json.dumps(r), flush=True)
+            results.append(r)
+            curves.append(c)
+    plot(results, curves, args.png)
+    print(f"figure: {args.png}")
+
+
+if __name__ == "__main__":
+    main()
