@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import ctypes
 
-from .options import _petsc_library
+from .options import petsc_library
 
 START_UP = (1.0, 1.0, 1.0, 0.5)      # TSAlpha_Restart's backward-Euler parameters
 _DOUBLE4 = [ctypes.POINTER(ctypes.c_double)] * 4
@@ -31,7 +31,7 @@ class Alpha2Params:
     (None where the PETSc library cannot be reached: then no correction)."""
 
     def __init__(self):
-        lib = _petsc_library()
+        lib = petsc_library()
         self._get = None if lib is None else getattr(lib, "TSAlpha2GetParams", None)
         if self._get is not None:
             self._get.argtypes = [ctypes.c_void_p] + _DOUBLE4
