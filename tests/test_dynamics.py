@@ -242,7 +242,7 @@ def test_cli_bad_schedule_and_duration_and_mass(tmp_path):
 @pytest.mark.slow
 def test_cable_goes_slack_once_when_paid_out_fast(arm):
     """Length control: tendon 2 holds the arm bent (p = 5), then pays out 0.05 l in 0.3 tau,
-    faster than the arm can follow: one slack event (TSEvent on the consistent tension),
+    faster than the arm can follow: one slack switch (decided in the step, §16.6),
     no chattering, tensions >= 0, and afterwards the cable is longer than its span while
     the tip swings freely."""
     from elastica_petsc.core.drive import LengthDrive

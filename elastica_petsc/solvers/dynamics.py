@@ -9,27 +9,24 @@ for the alpha method's recursions).  The second-order residual (TSALPHA2,
 
     F_theta = M(theta) theta'' + c(theta, theta') + (a M + b L) theta' + R(theta, p)
     F_p_i   = p_i - pbar_i(t)                (force control)
-            = grad L_i . theta' - Lbar_i'(t) (taut cable: the tension is a multiplier)
-            = p_i                            (slack cable)
+            = max(-w_i, -s_i p_i)            (length control, :mod:`.cable_steps`)
 
 with the kernels of :mod:`elastica_petsc.core.dynamics` and R the static
 residual of docs/model.md §8 (so every load the static model has is in the
-dynamics).  A taut cable's constraint is imposed on the velocities (index
-2): then a step of any size starts from velocities that satisfy it, and the
-tension stays bounded as the step shrinks (at an event, say); imposed on the
-positions (index 3) the multiplier of a step dt grows like 1/dt.  Its
-length drifts by O(dt^2) (the rule integrates the rate; not yet reported).
+dynamics).  Under length control the cables' complementarity (slack or taut,
+impacts) is decided inside every step by a semismooth row on the step's mean
+tension and step-end gap rate (:mod:`.cable_steps`, docs/model.md §16.6).
 Time integration: generalized-alpha for second-order systems (TSALPHA2) in
 PETSc's parametrisation by the spectral radius rho_inf at infinite step
 (``radius``; 1, the default: the implicit midpoint member, no numerical
-dissipation; docs/model.md §16.4 on why alpha_f = 1 is not used).  Fixed
+dissipation), its start-up acceleration corrected (:mod:`.alpha2_start`).  Fixed
 equal steps by default, or (``adaptive``) TSAdapt ``basic`` on the alpha
 method's local error estimate of the angles (the tension impulses are
 left out of the norm).  Newton: SNES with KSP ``preonly`` and a PC that
 solves the principal part of the Jacobian exactly in O(N):
 
     J ~ [[sigma M + shift_V b L + K(theta, p),  shift_V C],   C = [grad L_i]
-         [shift_V C_taut^T or identity rows              ]]
+         [(shift_V / alpha_f) C_taut^T or diagonal rows   ]]
 
 (sigma = shift_A + a shift_V; K = T + W diag(p/L) W^T the static tangent of
 §2; the derivatives of M(theta) theta'' and of the velocity terms with respect
@@ -39,15 +36,9 @@ system (:class:`~elastica_petsc.core.dynamics.BandedInverse`), the tendon
 terms a Woodbury correction of rank n, the taut cables an n x n Schur
 complement: O(n N) per factorisation and per solve.
 
-Slack and taut cables (length control): TSEvent watches p_i of taut cables
-(going through 0 downwards: the cable goes slack) and the gap
-Lbar_i(t) - |r_i - x_i| of slack ones (through 0 downwards: it tightens).
-At an event the integration stops, the cable's mode switches and the
-integration restarts from the event's state.  A cable that tightens stops
-the attachment's motion along it at once: the velocities jump by the
-plastic impulse theta'+ = theta'- - M^{-1} C lambda with C^T theta'+ =
-Lbar' for the taut cables (M^{-1} is the banded solve with T = 0).
-Options prefix ``sim_`` (``-sim_ts_monitor``, ``-sim_snes_monitor``,
+Under length control each cable's row follows its branch at every Newton
+iterate (taut rows in the Schur complement, slack rows diagonal): a
+semismooth Newton method.  Options prefix ``sim_`` (``-sim_ts_monitor``, ``-sim_snes_monitor``,
 ``-sim_ts_adapt_monitor``, ...).
 """
 from __future__ import annotations
@@ -122,7 +113,7 @@ class DynamicsSolver:
     ``lag_jacobian``: the PC (principal Jacobian and its banded LU) is
     refreshed every this many Newton iterations, across steps
     (``-snes_lag_jacobian_persists``), with fixed steps and force control only
-    (adaptive steps and TSEvent's shortened ones refresh it every iteration);
+    (adaptive steps and length control refresh it every iteration);
     ``max_steps``: cap on accepted steps.  ``comm``, ``options_prefix``
     (``sim_``), ``petsc_options``: the contract of :mod:`.options`.
     """
