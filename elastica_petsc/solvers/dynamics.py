@@ -353,7 +353,7 @@ class DynamicsSolver:
             ts.destroy()
             for obj in objs:
                 obj.destroy()
-        traj.completed = reason > 0 and t >= t_end * (1 - 1e-12)
+        traj.completed = bool(reason > 0 and t >= t_end * (1 - 1e-12))
         traj.reason = _reason(reason)
         return traj
 
