@@ -171,3 +171,24 @@ def test_bounded_faces_deepest_points():
         assert np.ravel_multi_index(ij, om.labels.shape) == first
         assert area == pytest.approx(cells.sum() * om.cell**2)
         assert 30.0 < area < 50.0                        # half the square, less the walls
+
+
+def test_monotone_slopes_reproduce_lines_and_do_not_overshoot():
+    """The slopes of the node values' cubic Hermite interpolation along a curve
+    (``faces.loop_polygon(..., monotone=True)``): linear values are reproduced
+    exactly on uneven spacings, and a step stays within its two levels."""
+    from elastica_petsc.core.geometry import monotone_slopes
+
+    lengths = np.array([0.5, 2.0, 1.0, 0.25])
+    s = np.concatenate(([0.0], np.cumsum(lengths)))
+    line = np.column_stack((3.0 * s - 1.0, -0.5 * s))
+    assert np.allclose(monotone_slopes(line, lengths), [[3.0, -0.5]] * 5, rtol=0, atol=1e-14)
+    step = np.array([0.0, 0.0, 1.0, 1.0, 1.0])
+    m = monotone_slopes(step, lengths)
+    t = np.linspace(0, 1, 101)
+    for k, L in enumerate(lengths):
+        h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
+        h01, h11 = -2 * t**3 + 3 * t**2, t**3 - t**2
+        v = h00 * step[k] + h10 * L * m[k] + h01 * step[k + 1] + h11 * L * m[k + 1]
+        assert np.all(v >= -1e-15) and np.all(v <= 1 + 1e-15)
+        assert np.all(np.diff(v) >= -1e-15)

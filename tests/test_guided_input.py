@@ -135,3 +135,20 @@ def test_guide_radius_is_independent_of_the_strip_width(tmp_path):
         warnings.simplefilter("error")
         arm = load_config(path)
     assert arm.guide_radius_mm == 10.0 and arm.width_mm == 4.0
+
+
+def test_width_deprecation_printed_once_under_mpiexec(tmp_path):
+    """Every rank reads the config and warns; rank 0 alone prints the line."""
+    import os
+    import shutil
+    if shutil.which("mpiexec") is None:
+        pytest.skip("no mpiexec")
+    path = tmp_path / "arm.toml"
+    path.write_text(OLD_ARM + TENDON)
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1")
+    run = subprocess.run(["mpiexec", "-n", "2", sys.executable, "-m", "elastica_petsc.cli",
+                          "solve", "--config", str(path), "--tensions", "1", "--elements", "12"],
+                         capture_output=True, text=True, timeout=120, env=env)
+    assert run.returncode == 0, run.stderr
+    assert run.stderr.count("elastica-petsc: warning: arm.width_mm = 20") == 1, run.stderr

@@ -57,6 +57,8 @@ RUNS = [
                    *E, *Q], {0, 1}),
     ("simulate", ["simulate", "--initial-tensions-N", "0", "0.05", "--tensions-N", "0", "0",
                   "--duration", "0.2", *E, *Q], {0}),
+    ("friction", ["friction", "--config", str(ROOT / "configs" / "guided3.toml"), "--mu", "0.3",
+                  "--peak-N", "10", "--steps", "3", "--elements", "24"], {0}),
     # exit status 5: stopped by --max-seconds (TIME_LIMIT), a budget spent at the first question
     ("control-time-limit", ["control", "--target", "380", "-100", "--max-seconds", "1e-9", *E],
      {5}),

@@ -43,8 +43,9 @@ from .designs import DESIGN_NAMES, design, design_area, design_sweep
 from .files import read, save
 from .calibration import calibrate
 from .motion import simulate
+from .friction import FrictionResult, friction_path
 
 __all__ = ["State", "solve", "stability", "frequencies", "lengths", "length_equilibria",
            "equilibria", "control", "trace", "schedule", "MIN_SPACING_MM", "workspace",
            "boundary", "design", "DESIGN_NAMES", "design_area", "design_sweep", "save", "read",
-           "calibrate", "simulate"]
+           "calibrate", "simulate", "friction_path", "FrictionResult"]

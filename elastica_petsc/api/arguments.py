@@ -40,8 +40,13 @@ def takes_petsc_options(study):
     return with_options
 
 
-def mesh(arm: Arm, elements: int | None) -> Discretisation:
-    """The arm's mesh with ``elements`` (checked; None: the arm's own)."""
+def mesh(arm: Arm, elements: int | None, friction: bool = False) -> Discretisation:
+    """The arm's mesh with ``elements`` (checked; None: the arm's own); an arm with
+    friction at its guides only for the friction path (``friction``)."""
+    from ..core.friction import check_frictionless
+
+    if not friction:
+        check_frictionless(check_arm(arm), "this study")
     return Discretisation.from_arm(check_arm(arm), inputs.elements(elements, "elements"))
 
 

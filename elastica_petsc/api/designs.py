@@ -64,7 +64,8 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
                 iterations: int = 15, resample_cells: int | None = 32,
                 elements: int | None = None, max_seconds: float | None = None):
     """Routing points (mm; ``vary`` may add ``"tendonK.attach"``: attachment
-    arc lengths on mesh nodes, by a pattern search) maximising the area A
+    arc lengths on mesh nodes, by a pattern search, and guide offsets
+    ``"tendonK.offset"``/``"tendonK.guideJ.offset"``, mm) maximising the area A
     [mm^2] of the workspace W_0 within 0 <= P_i <= ``tension_max_N`` (tips of stable equilibria connected
     to the straight arm by quasi-static loading; the motor limit of Eq. (22)):
     A is the area of its traced boundary (as :func:`boundary` measures it for
@@ -82,15 +83,20 @@ def design_area(arm: Arm, *, vary=("tendon1.route", "tendon2.route"),
     from ..studies.design import parse_design_variables
     from ..studies.design_area import design_for_area
 
+    from ..studies.design_offsets import split_offset_names
+
     elements = _mesh(arm, elements).n_elements
-    tendons, attaches = parse_design_variables(list(vary), arm.n_tendons)
+    names, offsets = split_offset_names(list(vary), arm)         # guide offsets, mm
+    tendons, attaches = (parse_design_variables(names, arm.n_tendons) if names
+                         else ([], []))
     p_max = _tension_max(arm, tension_max_N)
     inputs.design_options(DESIGN_NAMES, reach_mm=reach_mm, iterations=iterations,
                           resample_cells=resample_cells)
     budget = TimeBudget(check_max_seconds(max_seconds))
     result = design_for_area(arm, tendons, p_max, elements=elements, attaches=attaches,
                              reach_mm=reach_mm, max_iterations=iterations,
-                             resample_cells=resample_cells, stop=budget.expired)
+                             resample_cells=resample_cells, stop=budget.expired,
+                             offsets=offsets)
     return dataclasses.replace(result, reason=TIME_LIMIT) if budget.reached else result
 
 

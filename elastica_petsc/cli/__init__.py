@@ -29,7 +29,7 @@ from ..core import inputs
 from ..core.errors import InputError
 
 COMMANDS = ("solve", "control", "trace", "stability", "workspace", "boundary", "design", "lengths",
-            "equilibria", "replay", "schedule", "simulate", "reproduce", "calibrate")
+            "equilibria", "replay", "schedule", "simulate", "reproduce", "calibrate", "friction")
 
 EPILOG = """\
 PETSc options: any option starting with a single dash that is not listed
@@ -150,7 +150,8 @@ def _show_deprecations() -> None:
 
     def show(message, category, *args, **kwargs):
         if issubclass(category, InputDeprecation):
-            print(f"elastica-petsc: warning: {message}", file=sys.stderr)
+            if _is_root():          # every rank reads the same input: one line per run
+                print(f"elastica-petsc: warning: {message}", file=sys.stderr)
         else:
             shown(message, category, *args, **kwargs)
     show.elastica_petsc = True
@@ -249,6 +250,11 @@ def _first_to_say(err: InputError) -> bool:
 
     if not isinstance(err, CollectiveInputError):
         return True
+    return _is_root()
+
+
+def _is_root() -> bool:
+    """Rank 0 of COMM_WORLD (True without mpiexec)."""
     from mpi4py import MPI
     return MPI.COMM_WORLD.rank == 0
 

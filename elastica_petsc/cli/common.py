@@ -86,15 +86,19 @@ def add_order_option(parser: argparse.ArgumentParser) -> None:
                              "then tendon 1 (default: all tendons proportionally from zero)")
 
 
-def load_arm(args) -> tuple[Arm, "Discretisation"]:
-    """The configured arm and its mesh (``--config``, ``--elements``)."""
+def load_arm(args, friction: bool = False) -> tuple[Arm, "Discretisation"]:
+    """The configured arm and its mesh (``--config``, ``--elements``); an arm with
+    friction at its guides only for the friction command (``friction``)."""
     from ..core.fem import Discretisation
+    from ..core.friction import check_frictionless
 
     from ..core import inputs
 
     if args.elements != "auto":
         inputs.elements(args.elements, "--elements")       # before reading the config
     arm = load_config(args.config)
+    if not friction:
+        check_frictionless(arm, f"`{args.command}`")
     newton_forms(args, arm)
     if args.elements == "auto":
         from ..core.fem import nearest_element_count

@@ -28,8 +28,8 @@ def add_parser(sub) -> None:
                     "the straight arm by quasi-static loading with all P_i >= 0.")
     parser.add_argument("--vary", nargs="+", metavar="tendonK.route",
                         help="design variables of the optimiser, e.g. tendon1.route "
-                             "tendon2.route (and, for --objective area, tendon1.attach; for "
-                             "--objective path, guide offsets in mm: tendonK.offset, every "
+                             "tendon2.route (and, for --objective area, tendon1.attach; "
+                             "guide offsets in mm: tendonK.offset, every "
                              "guide and the end of tendon K at one offset, or "
                              "tendonK.guideJ.offset)")
     parser.add_argument("--objective", metavar="area|path:CSV",
@@ -216,14 +216,17 @@ def _run_area(args) -> int:
     arm, disc = common.load_arm(args)
     if disc.n_tendons != 2:
         raise InputError("--objective area needs exactly two tendons")
-    tendons, attaches = parse_design_variables(args.vary, disc.n_tendons)
+    from ..studies.design_offsets import split_offset_names
+
+    names, offsets = split_offset_names(args.vary, arm)       # guide offsets (issue 24)
+    tendons, attaches = parse_design_variables(names, disc.n_tendons) if names else ([], [])
     with Progress(None, "design", unit="evaluations") as bar:
         result = design_for_area(arm, tendons, _tension_max(args, arm),
                                  elements=disc.n_elements, attaches=attaches,
                                  reach_mm=args.reach, clearance_mm=args.clearance,
                                  max_iterations=args.iterations,
                                  resample_cells=args.resample_cells, progress=bar,
-                                 stop=args.budget.expired)
+                                 stop=args.budget.expired, offsets=offsets)
     from ..io.summaries import area_summary
 
     from ..studies.design_area import infeasibility
@@ -307,6 +310,7 @@ def area_lines(s: dict) -> list[str]:
     for k, (x, y) in enumerate(zip(s["attach_before_mm"], s["attach_after_mm"]), start=1):
         if x != y:
             lines.append(f"  s_{k} (attachment): {x:g} -> {y:g} mm")
+    lines += _offset_lines(s)
     if s["fold_sign_changes_after"] or s["fold_sign_changes_before"]:
         lines.append(f"  note: det(d x_t/d p) changes sign {s['fold_sign_changes_before']} -> "
                      f"{s['fold_sign_changes_after']} times along the loop: a fold of the tip "
@@ -372,6 +376,13 @@ def sweep_lines(s: dict) -> list[str]:
     return lines
 
 
+def _offset_lines(s: dict) -> list[str]:
+    """The guide offsets a design varied, before and after (mm)."""
+    return [f"  {name}: {a:.2f} -> {b:.2f} mm"
+            for name, a, b in zip(s.get("offset_variables", ()), s.get("offsets_before_mm", ()),
+                                  s.get("offsets_after_mm", ()))]
+
+
 def _lines(s: dict) -> list[str]:
     lines = [f"design (path of {s['targets']} targets, {s['elements']} elements): reached "
              f"{s['reached_before']} -> {s['reached_after']} "
@@ -382,9 +393,7 @@ def _lines(s: dict) -> list[str]:
              f"on the path: {s['smallest_tension_after_N']:.3f} N"]
     for k, (a, b) in enumerate(zip(s["routes_before_mm"], s["routes_after_mm"]), start=1):
         lines.append(f"  r_{k}: ({a[0]:.2f}, {a[1]:.2f}) -> ({b[0]:.2f}, {b[1]:.2f}) mm")
-    for name, a, b in zip(s.get("offset_variables", ()), s.get("offsets_before_mm", ()),
-                          s.get("offsets_after_mm", ())):
-        lines.append(f"  {name}: {a:.2f} -> {b:.2f} mm")
+    lines += _offset_lines(s)
     if s["outcome"] == TIME_LIMIT:
         lines.append("  --max-seconds stopped the optimiser (TIME_LIMIT): the best design so "
                      "far, not an improvement of the task")

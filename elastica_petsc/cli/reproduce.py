@@ -57,6 +57,8 @@ def run(args) -> int:
         if comm.rank == 0:
             check_output_folder(args.out, args.overwrite)
         arm = load_config(args.config)
+        from ..core.friction import check_frictionless
+        check_frictionless(arm, "`reproduce`")
         load_config(alu)                    # refused now, not after the other experiments
         seconds = common.checkpoint_seconds()
     except InputError as err:

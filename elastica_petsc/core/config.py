@@ -41,6 +41,8 @@ SCHEMA: dict[str, dict[str, tuple[type | tuple, object, str]]] = {
         "route_mm": (list, REQUIRED, "routing point r_i = [x, y] [mm] (the motor end)"),
         "attach_offset_mm": (float, 0.0, "end point's offset along the left normal [mm]"),
         "guides": (list, [], "guides from the motor end: [{s_mm = .., offset_mm = ..}, ...]"),
+        "friction_coefficient": (float, 0.0, "Coulomb coefficient mu where the cable wraps its "
+                                 "guides (only the friction command models it)"),
     },
     "guide": {
         "s_mm": (float, REQUIRED, "arc length of the guide [mm], 0 < s <= l"),
@@ -194,7 +196,8 @@ def config_values(data: dict) -> dict:
         guides = tuple(_section(g, "guide", f"tendon[{i}].guides[{j}]")
                        for j, g in enumerate(values["guides"], start=1))
         tendons.append({"attach_mm": values["attach_mm"], "route_mm": route,
-                        "attach_offset_mm": values["attach_offset_mm"], "guides": guides})
+                        "attach_offset_mm": values["attach_offset_mm"], "guides": guides,
+                        "friction_coefficient": values["friction_coefficient"]})
     return {"arm": arm, "tendons": tendons,
             "motor": _section(data.get("motor", {}), "motor", "motor"),
             "limits": _section(data.get("limits", {}), "limits", "limits"),
@@ -224,4 +227,6 @@ def _tendon_dict(t: dict) -> dict:
         out["attach_offset_mm"] = t["attach_offset_mm"]
     if t["guides"]:
         out["guides"] = [dict(g) for g in t["guides"]]
+    if t.get("friction_coefficient", 0.0) != 0.0:
+        out["friction_coefficient"] = t["friction_coefficient"]
     return out

@@ -205,10 +205,13 @@ def union_area_gradient(nodes: np.ndarray, velocity: np.ndarray,
     return np.einsum("k,k,kq->q", outward, length, vn)
 
 
-def hermite_densify(tip, velocity, per_segment: int = 8) -> np.ndarray:
+def hermite_densify(tip, velocity, per_segment: int = 8, parameters: bool = False):
     """Cubic Hermite curve through the nodes with their tip velocities d x_t/ds
     (per unit of the curve's arclength parameter), ``per_segment`` points each
-    (a segment with a zero chord or velocity keeps only its end node)."""
+    (a segment with a zero chord or velocity keeps only its end node).  With
+    ``parameters`` also returns, per dense point, its segment k and its
+    Hermite parameter s in [0, 1] (the point is node k at s = 0, node k + 1
+    at s = 1), to interpolate values given at the nodes."""
     tip, velocity = np.asarray(tip, float), np.asarray(velocity, float)
     a, b = tip[:-1], tip[1:]
     chord = np.linalg.norm(b - a, axis=1)
@@ -224,7 +227,37 @@ def hermite_densify(tip, velocity, per_segment: int = 8) -> np.ndarray:
              + h11[None] * mb[:, None])                          # (segments, per_segment, 2)
     keep = np.where(smooth[:, None], True, np.arange(per_segment)[None] == per_segment - 1)
     curve[~smooth, -1] = b[~smooth]
-    return np.vstack((tip[:1], curve[keep]))
+    dense = np.vstack((tip[:1], curve[keep]))
+    if not parameters:
+        return dense
+    segment = np.broadcast_to(np.arange(len(a))[:, None], keep.shape)[keep]
+    param = np.broadcast_to(s[:, 0][None], keep.shape)[keep]
+    return dense, (np.concatenate(([0], segment)), np.concatenate(([0.0], param)))
+
+
+def monotone_slopes(values: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """Slopes d values/d s at the nodes of a polyline whose segments have the
+    ``lengths`` (s: its length parameter), per component of ``values`` (nodes,
+    ...): the weighted harmonic mean of the two neighbouring secants
+    (Fritsch-Butland, as in PCHIP), 0 where they differ in sign (a node at an
+    extremum), the one secant at the ends.  A cubic Hermite interpolant with
+    these slopes is monotone between nodes: it does not overshoot where
+    values change steeply (near a cable collapse or the fold of M)."""
+    values = np.asarray(values, float)
+    out = np.zeros_like(values)
+    if len(values) < 2:
+        return out
+    shape = (-1,) + (1,) * (values.ndim - 1)
+    L = np.asarray(lengths, float).reshape(shape)
+    d = np.divide(np.diff(values, axis=0), L, out=np.zeros_like(values[1:]), where=L > 0)
+    out[0], out[-1] = d[0], d[-1]
+    a, b = d[:-1], d[1:]
+    w1, w2 = 2 * L[1:] + L[:-1], L[1:] + 2 * L[:-1]
+    ok = a * b > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        harmonic = (w1 + w2) / (w1 / np.where(ok, a, 1.0) + w2 / np.where(ok, b, 1.0))
+    out[1:-1] = np.where(ok, harmonic, 0.0)
+    return out
 
 
 def triangles_union_area(triangles: np.ndarray, h: float) -> float:

@@ -51,6 +51,7 @@ class PathTerms(NamedTuple):
     moment: np.ndarray       # delta_a f_a . t(theta_m): the offsets' moments (residual's sign)
     moment_slope: np.ndarray  # its derivative in theta_m: delta_a f_a . n(theta_m)
     node_cs: tuple           # cos, sin of theta at the points' nodes
+    p_seg: np.ndarray        # tension of each segment (the tendon's, or per segment: friction)
 
 
 def on_node(s: float, n: int, what: str, length_mm: float) -> int:
@@ -292,14 +293,21 @@ class GuidedDiscretisation(Discretisation):
         self.__dict__["_last_terms"] = (key, t)
         return t
 
-    def _terms(self, u: np.ndarray, p) -> PathTerms:
+    def segment_terms(self, u: np.ndarray, p_seg) -> PathTerms:
+        """The terms of (u, p) with a tension per segment ``p_seg`` (P,) instead of one
+        per tendon (capstan friction at the guides, core/friction.py, docs/model.md §27):
+        f_a = P_a e_a - P_{a+1} e_{a+1}; ``p`` of the terms is then undefined (NaN)."""
+        return self._terms(u, np.full(self.n_tendons, np.nan), np.asarray(p_seg, float))
+
+    def _terms(self, u: np.ndarray, p, p_seg=None) -> PathTerms:
         theta, y = self.split(u)
         y = y.copy()                       # kept with the terms: not a view of u
         seg_len, e = self.segments(y)
         p = np.asarray(p, float)
-        pull = p[self.point_tendon][:, None] * e
+        p_seg = p[self.point_tendon] if p_seg is None else p_seg
+        pull = p_seg[:, None] * e
         f = pull.copy()
-        f[self._inner - 1] -= pull[self._inner]             # f_a = p (e_a - e_{a+1})
+        f[self._inner - 1] -= pull[self._inner]             # f_a = P_a e_a - P_{a+1} e_{a+1}
         c, s = self.trig(theta)
         # F_e = sum of f_a over the points beyond element e: reverse cumulative sums
         force = np.empty((self.n_elements, 2))
@@ -313,7 +321,7 @@ class GuidedDiscretisation(Discretisation):
                              self.n_elements)
         slope = np.bincount(self._deposit, self.point_offsets * (f[:, 1] * cm - f[:, 0] * sm),
                             self.n_elements)
-        return PathTerms(theta, y, seg_len, e, f, c, s, p, force, moment, slope, (cm, sm))
+        return PathTerms(theta, y, seg_len, e, f, c, s, p, force, moment, slope, (cm, sm), p_seg)
 
     def residual(self, u: np.ndarray, p, tip_moment: float = 0.0,
                  terms: PathTerms | None = None) -> np.ndarray:
@@ -375,7 +383,7 @@ class GuidedDiscretisation(Discretisation):
         dg = self.segment_gradients(t.theta, (t.c, t.s)) if g is None else g
         lever, e_perp = self._levers(t, dg)
         chord = self.entries[0]
-        lever *= -t.p[self.point_tendon][chord] / t.seg_len[chord]
+        lever *= -t.p_seg[chord] / t.seg_len[chord]
         band_slots, band, cols, rows, corner = self._jacobian_slots
         values = np.zeros(len(self.pattern[1]))
         values[band_slots] = self.band(t.theta, None, t.p, t).ravel()[band]
@@ -395,7 +403,7 @@ class GuidedDiscretisation(Discretisation):
     def _stiffness_entries(self, t: PathTerms) -> np.ndarray:
         """W at the stored entries (M,): sqrt(p/L_a) D_a . e_a^perp."""
         w = self._levers(t, self.segment_gradients(t.theta, (t.c, t.s)))[0]
-        weights = np.sqrt(np.maximum(t.p[self.point_tendon], 0.0) / t.seg_len)
+        weights = np.sqrt(np.maximum(t.p_seg, 0.0) / t.seg_len)
         return w * weights[self.entries[0]]
 
     def stability_values(self, u: np.ndarray, p) -> np.ndarray:

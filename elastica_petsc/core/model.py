@@ -41,6 +41,9 @@ class Tendon:
     route_mm: tuple[float, float]
     attach_offset_mm: float = 0.0
     guides: tuple[Guide, ...] = ()
+    # Coulomb coefficient where the cable wraps its guides (capstan; docs/model.md §27):
+    # only the friction load path models it, every other study refuses it (core/friction.py)
+    friction_coefficient: float = 0.0
 
     @property
     def routed_straight(self) -> bool:
@@ -224,6 +227,7 @@ def validate(arm: Arm) -> None:
                 f"{key}.attach_mm = {tendon.attach_mm} lies beyond the arm's length "
                 f"{arm.length_mm} mm (need 0 < s_i <= l)")
         _validate_path(arm, tendon, key)
+        _validate_friction(tendon, key)
         if len(tendon.route_mm) != 2 or not all(
                 isinstance(c, (int, float)) and math.isfinite(c) for c in tendon.route_mm):
             raise ModelError(f"{key}.route_mm must be two numbers [x, y] in mm")
@@ -301,6 +305,16 @@ def _validate_path(arm: Arm, tendon: Tendon, key: str) -> None:
     for j, (s0, d0, w0) in enumerate(points):
         for s1, d1, w1 in points[j + 1:]:
             _distinct(arm, (s0, d0, w0), (s1, d1, w1))
+
+
+def _validate_friction(tendon: Tendon, key: str) -> None:
+    """A friction coefficient >= 0, and > 0 only where the cable has guides to wrap."""
+    mu = tendon.friction_coefficient
+    if not (_finite(mu) and mu >= 0):
+        raise ModelError(f"{key}.friction_coefficient must be a number >= 0, got {mu!r}")
+    if mu > 0 and not tendon.guides:
+        raise ModelError(f"{key}.friction_coefficient = {mu:g}: the cable has no guides to rub "
+                         "on (friction acts where a cable wraps a guide)")
 
 
 def guide_radius_mm(arm: Arm) -> float:

@@ -14,6 +14,7 @@ from .hdf5 import (atomic_h5, provenance, put, write_attrs, write_control, write
 from .boundary import write_boundary_layout
 from .calibration import calibration_layout
 from .simulation import simulation_layout
+from .friction import friction_layout
 from .records import RESULT_GROUP, encode
 
 
@@ -84,7 +85,8 @@ def _boundary_layout(fh, result) -> None:
 LAYOUTS = {"State": ("equilibrium", _state_layout),
            "BoundaryResult": ("boundary", _boundary_layout),
            "SimulationResult": ("simulation", simulation_layout),
-           "CalibrationResult": ("calibration", calibration_layout)}
+           "CalibrationResult": ("calibration", calibration_layout),
+           "FrictionResult": ("friction", friction_layout)}
 
 
 def result_arm(result):

@@ -88,7 +88,7 @@ def path_design_summary(result, elements: int | None = None) -> dict:
 
 
 def _offset_summary(result) -> dict:
-    """Guide offsets varied by a path design (studies/design_offsets.py), mm."""
+    """Guide offsets varied by a path or area design (studies/design_offsets.py), mm."""
     offsets = getattr(result, "offsets", None)
     if not offsets:
         return {}
@@ -118,6 +118,7 @@ def area_summary(r, elements: int | None = None) -> dict:
         "routes_after_mm": [list(t.route_mm) for t in r.arm_after.tendons],
         "attach_before_mm": [t.attach_mm for t in r.arm_before.tendons],
         "attach_after_mm": [t.attach_mm for t in r.arm_after.tendons],
+        **_offset_summary(r),
         "iterations": r.iterations, "evaluations": len(r.history), "seconds": r.seconds,
         "tao_reason": r.reason,
     }

@@ -29,6 +29,12 @@ class Constraint:
         """dc/dr_i at fixed w, (2,): zero unless c involves the routing points."""
         return np.zeros(2)
 
+    def parameter_gradient(self, w: np.ndarray, residual, k: int) -> np.ndarray:
+        """dc/dq at fixed w, (k,), for a parameter q that enters F alone
+        (``residual(w)`` = dF/dq, (size, k)): zero unless c involves F's
+        derivatives (the fold of M, :class:`~.folds.Fold`)."""
+        return np.zeros(k)
+
 
 class TensionBound(Constraint):
     """Face of the tension domain: p_i = bound (0 below, p_crit above, Eq. (22))."""

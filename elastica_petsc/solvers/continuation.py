@@ -76,7 +76,8 @@ from .reasons import converged_reason
 
 __all__ = ["BorderedAIJ", "BorderedPattern", "CableCollapse", "Constraint", "ContinuationError",
            "Curve", "CurvePoint", "CurveTracer", "Fold", "FoldSystem", "Manifold",
-           "PIVOTING_LU", "StateLevel", "TensionBound", "TensionRay", "TipFold", "TraceCounts",
+           "OffsetParameter", "RouteParameter", "PIVOTING_LU", "StateLevel", "TensionBound",
+           "TensionRay", "TipFold", "TraceCounts",
            "permutation_sign", "use_pivoting_lu"]
 
 
@@ -127,6 +128,38 @@ class _Correction:
     def __init__(self, rows):
         self.rows = rows
         self.fnorms = []
+
+
+class RouteParameter:
+    """The routing point r_i of tendon i as a design parameter (k = 2) of
+    :meth:`CurveTracer.parameter_velocities`."""
+
+    def __init__(self, manifold: Manifold, i: int):
+        self.mf, self.i = manifold, i
+
+    def residual(self, w: np.ndarray) -> np.ndarray:
+        return self.mf.route_derivative(w, self.i)
+
+    def constraint_gradient(self, constraint: Constraint, w: np.ndarray) -> np.ndarray:
+        return constraint.route_gradient(w, self.i)
+
+
+class OffsetParameter:
+    """The offset delta (units of l) of the arm points ``points`` of a cable
+    through guides, moved together (:class:`~elastica_petsc.core.guided.GuidedDiscretisation`
+    order), as a design parameter (k = 1) of :meth:`CurveTracer.parameter_velocities`:
+    dF/ddelta = sum of ``offset_derivative`` over the points (docs/model.md §11.7);
+    a constraint depends on it only through F (:meth:`Constraint.parameter_gradient`)."""
+
+    def __init__(self, manifold: Manifold, points):
+        self.mf, self.points = manifold, list(points)
+
+    def residual(self, w: np.ndarray) -> np.ndarray:
+        u, p = self.mf.split(w)
+        return sum(self.mf.disc.offset_derivative(u, p, a) for a in self.points)[:, None]
+
+    def constraint_gradient(self, constraint: Constraint, w: np.ndarray) -> np.ndarray:
+        return constraint.parameter_gradient(w, self.residual, 1)
 
 
 class CurveTracer:
@@ -258,6 +291,16 @@ class CurveTracer:
         Fourth, ``inward`` = side * T tau, the tip's motion as the state
         leaves the curve into the constraint's admissible side.  One sparse
         LU (scipy SuperLU, partial pivoting) gives all four."""
+        t, _, sign, tip_det, inward = self.tangents(w, constraint, orient)
+        return t, sign, tip_det, inward
+
+    def tangents(self, w: np.ndarray, constraint: Constraint, orient: np.ndarray) -> tuple:
+        """:meth:`tangent`'s (t, tau, sign det B, tip_det, inward) with tau, the
+        direction in M that leaves the curve with dc = 1 and orient^T D tau = 0.
+        At a corner where ``orient`` is D^-1 times the gradient of the other
+        constraint, tau is the tangent of that other curve (both rows of B are
+        its constraints' then): the corner's tangent for the curve that ends
+        there, from the same LU."""
         mf = self.mf
         values = self.A.pattern.values(mf.jacobian_values(w), mf.load_columns(w),
                                        np.array([constraint.gradient(w), mf.metric * orient]))
@@ -271,7 +314,7 @@ class CurveTracer:
         T = mf.tip_gradient(w)
         n = mf.size
         tip_det = sign * float(np.linalg.det(np.column_stack((T @ tau[:n], T @ t[:n]))))
-        return t, sign, tip_det, constraint.side * (T @ tau[:n])
+        return t, tau, sign, tip_det, constraint.side * (T @ tau[:n])
 
     def point(self, w, t, det_sign, iterations, tip_det: float = np.nan,
               tip_inward=None) -> CurvePoint:
@@ -306,17 +349,27 @@ class CurveTracer:
     def route_velocities(self, w: np.ndarray, rows, tendons) -> list[np.ndarray]:
         """:meth:`route_velocity` for each tendon of ``tendons``: one matrix
         filled and factored, 2 right-hand sides per tendon."""
+        return self.parameter_velocities(w, rows, [RouteParameter(self.mf, i) for i in tendons])
+
+    def parameter_velocities(self, w: np.ndarray, rows, parameters) -> list[np.ndarray]:
+        """dw/dq, (m, k), for each parameter block q of ``parameters`` (k of
+        them each: :class:`RouteParameter`, or any object with ``residual(w)``
+        = dF/dq (size, k) and ``constraint_gradient(c, w)`` = dc/dq (k,) at
+        fixed w), as :meth:`route_velocity` does for r_i: one matrix filled
+        and factored for all."""
         grads = [row if isinstance(row, np.ndarray) else row.gradient(w) for row in rows]
         self._fill(w, np.array(grads))
         self.ksp.setOperators(self.A.mat)
         rv, sol, out = self.x.duplicate(), self.x.duplicate(), []
-        for i in tendons:
-            rhs = [self.mf.route_derivative(w, i)]
-            rhs += [np.zeros((1, 2)) if isinstance(row, np.ndarray)
-                    else row.route_gradient(w, i)[None, :] for row in rows]
+        for q in parameters:
+            dF = q.residual(w)
+            k_cols = dF.shape[1]
+            rhs = [dF] + [np.zeros((1, k_cols)) if isinstance(row, np.ndarray)
+                          else np.reshape(q.constraint_gradient(row, w), (1, k_cols))
+                          for row in rows]
             b = -np.vstack(rhs)
-            dw = np.empty((self.mf.m, 2))
-            for k in range(2):
+            dw = np.empty((self.mf.m, k_cols))
+            for k in range(k_cols):
                 rv.setArray(b[:, k])
                 self.ksp.solve(rv, sol)
                 dw[:, k] = sol.getArray(readonly=True)

@@ -111,15 +111,19 @@ class Fold(Constraint):
         self.sys.set_vectors(self.sys.sigma_gradient(w)[2])
 
     def route_gradient(self, w, i):
-        """d sigma/dr_i = -psi^T (d^2 F/du dr_i) v: the central difference in the
-        direction v of psi^T dF/dr_i (as for d sigma/dw)."""
+        """d sigma/dr_i (:meth:`parameter_gradient` of dF/dr_i)."""
+        return self.parameter_gradient(w, lambda ws: self.sys.mf.route_derivative(ws, i), 2)
+
+    def parameter_gradient(self, w, residual, k):
+        """d sigma/dq = -psi^T (d^2 F/du dq) v: the central difference in the
+        direction v of psi^T dF/dq (as for d sigma/dw); ``residual(w)`` = dF/dq."""
         system, mf = self.sys, self.sys.mf
         v, _ = system._solve(w, False)
         psi, _ = system._solve(w, True)
         eps = 1e-6 / max(np.linalg.norm(v), 1e-300)
         u, p = mf.split(w)
         shifted = [np.concatenate((u + sign * eps * v, p)) for sign in (1.0, -1.0)]
-        a, b = (psi @ mf.route_derivative(ws, i) for ws in shifted)
+        a, b = (psi @ residual(ws) for ws in shifted)
         return -(a - b) / (2 * eps)
 
 

@@ -58,9 +58,9 @@ def parse_design_variables(names, n_tendons: int) -> tuple[list[int], list[int]]
         head, _, what = name.partition(".")
         if not head.startswith("tendon") or not head[6:].isdigit() or what not in ("route",
                                                                                     "attach"):
-            raise DesignError(f"--vary {name!r}: expected tendonK.route or tendonK.attach, "
-                              "e.g. tendon1.route (guide offsets, tendonK.offset or "
-                              "tendonK.guideJ.offset, are variables of the path objective)")
+            raise DesignError(f"--vary {name!r}: expected tendonK.route or tendonK.attach "
+                              "(or a guide offset, tendonK.offset or tendonK.guideJ.offset), "
+                              "e.g. tendon1.route")
         k = int(head[6:])
         if not 1 <= k <= n_tendons:
             raise DesignError(f"--vary {name!r}: the arm has tendons 1..{n_tendons}")
@@ -114,6 +114,27 @@ def route_bounds(arm: Arm, tendons, reach_mm: float, clearance_mm: float):
         raise DesignError(f"a routing point lies within {clearance_mm:g} mm of the arm's line "
                           "y = 0: move it off the arm first")
     return lo, hi
+
+
+def design_vector(arm: Arm, tendons, offsets, reach_mm: float, clearance_mm: float):
+    """(q0, lo, hi, designed) of a design by routing points and offsets: the
+    start q0 (mm: the routing points of ``tendons``, then the offsets of
+    ``offsets``), its bounds (:func:`route_bounds`,
+    :func:`~.design_offsets.offset_bounds`) and ``designed(q)``, the arm of a
+    design vector."""
+    from .design_offsets import offset_bounds, with_offsets
+
+    n_routes = 2 * len(tendons)
+    q0 = np.concatenate([np.asarray(arm.tendons[i].route_mm, float) for i in tendons]
+                        + [[v.value_mm(arm) for v in offsets]])
+    bounds = [route_bounds(arm, tendons, reach_mm, clearance_mm),
+              offset_bounds(arm, offsets, reach_mm)]
+    lo, hi = (np.concatenate([b[k] for b in bounds]) for k in (0, 1))
+
+    def designed(q):
+        return with_offsets(with_routes(arm, tendons, q[:n_routes]), offsets, q[n_routes:])
+
+    return q0, lo, hi, designed
 
 
 @dataclass
@@ -214,18 +235,8 @@ def design_for_path(arm: Arm, tendons, targets_mm, *, elements: int | None = Non
     optimisation there (a time budget, core/budget.py)."""
     if margin < 1.0:
         raise DesignError(f"--margin must be at least 1, got {margin}")
-    from .design_offsets import offset_bounds, with_offsets
-
     t0 = time.perf_counter()
-    n_routes = 2 * len(tendons)
-    q0 = np.concatenate([np.asarray(arm.tendons[i].route_mm, float) for i in tendons]
-                        + [[v.value_mm(arm) for v in offsets]])
-    bounds = [route_bounds(arm, tendons, reach_mm, clearance_mm),
-              offset_bounds(arm, offsets, reach_mm)]
-    lo, hi = (np.concatenate([b[k] for b in bounds]) for k in (0, 1))
-
-    def designed(q):
-        return with_offsets(with_routes(arm, tendons, q[:n_routes]), offsets, q[n_routes:])
+    q0, lo, hi, designed = design_vector(arm, tendons, offsets, reach_mm, clearance_mm)
     design_path = scaled_path(targets_mm, margin)
     history, best = [], {}
 

@@ -169,6 +169,7 @@ class AreaDesign(Result):
     reason: str
     iterations: int
     seconds: float
+    offsets: tuple = ()             # OffsetVariable (design_offsets.py), after the routes
 
     @property
     def confirmed(self) -> bool | None:
@@ -215,13 +216,16 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
                     attaches=(), reach_mm: float = 100.0, clearance_mm: float = 10.0,
                     max_iterations: int = 15, scale_mm: float = 10.0,
                     resample_cells: int | None = 32, options_prefix: str = "design_",
-                    progress=None, stop=None) -> AreaDesign:
+                    progress=None, stop=None, offsets=()) -> AreaDesign:
     """Routing points (mm) of ``tendons`` (0-based) maximising the area A of the
     workspace within 0 <= p_i <= ``p_max`` (= P_max l^2/B; module docstring),
     by TAO BLMVM with the exact gradient dA/dq, within the bounds of
     :func:`~elastica_petsc.studies.design.route_bounds`; before that, the
     attachment arc lengths of ``attaches`` on mesh nodes
-    (:func:`search_attachments`).  Then both arms are re-sampled
+    (:func:`search_attachments`).  ``offsets``: guide offsets
+    (:class:`~.design_offsets.OffsetVariable`, mm, within
+    :func:`~.design_offsets.offset_bounds`) varied with the routing points,
+    their gradient from the same loop (docs/model.md §26).  Then both arms are re-sampled
     independently (:func:`resampled_area`, ``resample_cells`` cells per
     tension axis; None skips it) and the gain is ``confirmed`` only if the
     re-sampled areas differ by more than their errors.  ``progress(evaluations,
@@ -240,16 +244,18 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
     warm = WarmStart()                  # each design starts from the last one's states
 
     def evaluate(candidate):
-        key = tuple((t.attach_mm, *t.route_mm) for t in candidate.tendons)
+        key = candidate.tendons                  # attachments, routes, guides and offsets
         if key in seen:                          # TAO's first call is the start, evaluated
             return seen[key]
         # the start in full (its report); later designs stop at a failed check
         a = seen[key] = traced_area(candidate, tendons, p_max, elements=elements, warm=warm,
-                                    skip_infeasible=bool(first))
+                                    skip_infeasible=bool(first), offsets=offsets)
         if not first:
             first.append(a)
         history.append({"attach_mm": [t.attach_mm for t in candidate.tendons],
                         "routes_mm": [list(t.route_mm) for t in candidate.tendons],
+                        **({"offsets_mm": [v.value_mm(candidate) for v in offsets]}
+                           if offsets else {}),
                         "area_mm2": a.area_mm2 if a.traced else None,
                         "gradient": a.gradient.tolist() if a.traced else None,
                         "feasible": a.feasible, "converged": a.converged,
@@ -265,15 +271,16 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
     designed, reason, iterations = arm, "", 0
     if not evaluate(arm).feasible:               # nothing to start from: no optimiser, no checks
         return AreaDesign(arm, arm, list(tendons), p_max, first[0], first[0], None, None,
-                          history, INFEASIBLE_START, 0, time.perf_counter() - t0)
+                          history, INFEASIBLE_START, 0, time.perf_counter() - t0, tuple(offsets))
     if attaches:
         designed, _ = search_attachments(arm, attaches, evaluate, elements=elements,
                                          reach_mm=reach_mm)
-    if tendons:
+    if tendons or offsets:
         reason, iterations = _optimise_routes(designed, tendons, evaluate, history,
                                               reach_mm=reach_mm, clearance_mm=clearance_mm,
                                               scale_mm=scale_mm, max_iterations=max_iterations,
-                                              options_prefix=options_prefix, stop=stop)
+                                              options_prefix=options_prefix, stop=stop,
+                                              offsets=offsets)
     after_arm = best.get("arm", arm)
     checks = [None, None]
     if resample_cells and not (stop is not None and stop()):
@@ -282,22 +289,23 @@ def design_for_area(arm: Arm, tendons, p_max: float, *, elements: int | None = N
         checks = [resampled_area(a, p_max, elements=elements, cells=resample_cells)
                   for a in (arm, after_arm)]
     return AreaDesign(arm, after_arm, list(tendons), p_max, first[0], best.get("area", first[0]),
-                      *checks, history, reason, iterations, time.perf_counter() - t0)
+                      *checks, history, reason, iterations, time.perf_counter() - t0,
+                      tuple(offsets))
 
 
 def _optimise_routes(arm, tendons, evaluate, history, *, reach_mm, clearance_mm, scale_mm,
-                     max_iterations, options_prefix, stop=None):
-    """TAO BLMVM on the routing points of ``tendons`` (f = -A/A_0); an
-    infeasible design (a node unreachable, or a cable across the arm) returns
-    f = 1, so that the (Armijo) line search backs off."""
+                     max_iterations, options_prefix, stop=None, offsets=()):
+    """TAO BLMVM on the routing points of ``tendons`` and the guide offsets
+    ``offsets`` (f = -A/A_0); an infeasible design (a node unreachable, or a
+    cable across the arm) returns f = 1, so that the (Armijo) line search
+    backs off."""
     from ..solvers.minimise import minimise_bounded
-    from .design import route_bounds, with_routes
+    from .design import design_vector
 
-    q0 = np.concatenate([arm.tendons[i].route_mm for i in tendons]).astype(float)
-    lo, hi = route_bounds(arm, tendons, reach_mm, clearance_mm)
+    q0, lo, hi, designed = design_vector(arm, tendons, offsets, reach_mm, clearance_mm)
 
     def objective(q):
-        a = evaluate(with_routes(arm, tendons, q))
+        a = evaluate(designed(q))
         scale = history[0]["area_mm2"]                     # f = -A/A_0, O(1)
         if not a.feasible:
             return 1.0, np.zeros_like(a.gradient)

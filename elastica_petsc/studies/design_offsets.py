@@ -1,4 +1,4 @@
-"""Guide offsets as design variables of the path objective (issue 24; docs/model.md
+"""Guide offsets as design variables of the path and area objectives (issue 24;
 §11.7).
 
 A variable is ``tendonK.offset`` (one common offset delta of every guide and the

@@ -17,7 +17,8 @@ the boundary integral of the normal velocity of the loop's nodes
 points).  The node polygon of a fixed loop in tension space (the previous
 objective: the image of the box's boundary at 24 nodes per edge) cut the
 curved inner edge with straight chords: on the paper's arm at 10 N it gave
-59,436 mm^2 against 58,330 mm^2 from ``boundary`` and a gradient 15 % off
+59,436 mm^2 against 58,330 mm^2 from ``boundary`` (58,250 since the corners'
+tangents, docs/model.md §26; 58,254 converged) and a gradient 15 % off
 finite differences of ``boundary``; the traced loop agrees with ``boundary``
 by construction and its gradient with finite differences of ``boundary``
 to 2 % (within 1.3 % on the paper's arm; tests/test_traced_area.py, docs/model.md §17.3).
@@ -45,7 +46,7 @@ class TracedArea:
     """The area objective of one design (module doc), mm and mm^2."""
 
     area_mm2: float
-    gradient: np.ndarray        # dA/dq [mm^2/mm], 2 per varied tendon
+    gradient: np.ndarray        # dA/dq [mm^2/mm], 2 per varied tendon, then 1 per offset
     loop_mm: np.ndarray         # tips at the traced loop's nodes (M, 2)
     det_sign_changes: int       # sign changes of det(d x_t/d p) along the traced loop
     closed: bool                # the walk around the region closed
@@ -96,9 +97,12 @@ def limited(arm: Arm, p_max: float) -> Arm:
 
 
 def traced_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
-                warm: WarmStart | None = None, skip_infeasible: bool = False) -> TracedArea:
+                warm: WarmStart | None = None, skip_infeasible: bool = False,
+                offsets=()) -> TracedArea:
     """A(q) and dA/dq (module doc) for the routing points of ``tendons``
-    (0-based) of a two-tendon ``arm`` within 0 <= p_i <= ``p_max``.
+    (0-based) of a two-tendon ``arm`` within 0 <= p_i <= ``p_max``, then for
+    the guide offsets ``offsets`` (:class:`~.design_offsets.OffsetVariable`,
+    mm^2 per mm; docs/model.md §26).
 
     ``warm``: the states of the previous design (updated with this one's),
     the Newton guesses of the clearance check.  ``skip_infeasible``: the
@@ -109,19 +113,21 @@ def traced_area(arm: Arm, tendons, p_max: float, *, elements: int | None = None,
 
     arm = limited(arm, p_max)
     disc = Discretisation.from_arm(arm, elements)
+    n_q = 2 * len(tendons) + len(offsets)          # the gradient's length
     tensions = box_loop(p_max, CHECK_NODES_PER_EDGE)
     solved, clear, checked = _clearance(disc, tensions, warm, stop_at_failure=skip_infeasible)
     if skip_infeasible and not (solved.all() and clear.all()):
-        return TracedArea(np.nan, np.full(2 * len(tendons), np.nan), np.zeros((0, 2)), 0, False,
+        return TracedArea(np.nan, np.full(n_q, np.nan), np.zeros((0, 2)), 0, False,
                           tensions, solved, clear, traced=False, node_checked=checked)
     traced = trace_boundary(arm, disc, restricted=False, tip_folds=False,
-                            route_gradients=tuple(tendons))
+                            route_gradients=tuple(tendons),
+                            offset_gradients=[v.points(arm) for v in offsets])
     region = traced.regions["W0"]
     points = [pt for curve in region.curves for pt in curve.points]
     tests = np.array([pt.tip_det for pt in points])
     signs = np.sign(tests[np.isfinite(tests) & (tests != 0.0)])
     changes = int(np.sum(signs != np.roll(signs, 1))) if len(signs) > 1 else 0
-    gradient = traced.area_gradients.get("W0", np.full(2 * len(tendons), np.nan))
+    gradient = traced.area_gradients.get("W0", np.full(n_q, np.nan))
     return TracedArea(float(traced.areas_mm2["W0"]), np.asarray(gradient, float),
                       np.array([pt.tip for pt in points]) * arm.length_mm, changes,
                       bool(region.closed), tensions, solved, clear)

@@ -2,11 +2,11 @@
 an earlier revision, interleaved, median of repeats.
 
     python scripts/benchmarks/bench_boundary.py [--repeats 5] [--before main] [--map MAP.h5]
-                                               [--refine 8]
+                                               [--refine 8] [--config configs/aluminium.toml]
 
 Each measurement is a fresh process that traces once to warm up (imports,
 PETSc start-up) and then times a second trace_boundary of the paper's arm
-(180 elements): wall and CPU seconds, and the continuation solves (each a
+(180 elements; or the arm of --config): wall and CPU seconds, and the continuation solves (each a
 nonlinear solve of the extended system).  Cases: the W_0 loop alone
 (tip_folds=False), W_0 with the tip-map folds and the scan rays (the
 default, and the boundary tip control uses as proof), and W_0 plus the
@@ -33,7 +33,7 @@ SNIPPET = r"""
 import json, sys, time
 from elastica_petsc.core.model import load_config
 from elastica_petsc.studies.boundary import trace_boundary
-arm = load_config()
+arm = load_config(sys.argv[2] or None)
 kw = json.loads(sys.argv[1])
 trace_boundary(arm, **kw)
 w0, c0 = time.perf_counter(), time.process_time()
@@ -47,10 +47,10 @@ CASES = {"W0 loop only": {"restricted": False, "tip_folds": False},
          "W0 + folds + restricted": {"restricted": True}}
 
 
-def measure(root: str, kwargs: dict) -> dict:
+def measure(root: str, kwargs: dict, config: str = "") -> dict:
     env = dict(os.environ, PYTHONPATH=root)
-    out = subprocess.run([sys.executable, "-c", SNIPPET, json.dumps(kwargs)], cwd=root, env=env,
-                         capture_output=True, text=True, check=True)
+    out = subprocess.run([sys.executable, "-c", SNIPPET, json.dumps(kwargs), config], cwd=root,
+                         env=env, capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -98,7 +98,9 @@ def main() -> None:
                     help="also compare this tree's default trace with one whose step limits "
                          "are divided by REFINE (e.g. 8): relative area differences and "
                          "Hausdorff distances of the curves (mm)")
+    ap.add_argument("--config", default="", help="an arm's TOML (default: the paper's arm)")
     args = ap.parse_args()
+    config = os.path.abspath(args.config) if args.config else ""
     print(f"load average: {os.getloadavg()}")
     with tempfile.TemporaryDirectory() as tmp:
         roots = {"before": extract(args.before, tmp), "after": HERE}
@@ -107,7 +109,7 @@ def main() -> None:
             runs = {"before": [], "after": []}
             for _ in range(args.repeats):
                 for label, root in roots.items():           # interleaved
-                    runs[label].append(measure(root, kwargs))
+                    runs[label].append(measure(root, kwargs, config))
             rows[case] = runs
     print(f"load average after: {os.getloadavg()}")
     print(f"{'case':26s} {'':6s} {'wall s':>8s} {'cpu s':>8s} {'solves':>7s} {'area mm^2':>10s}")

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.geometry import hermite_densify, ray_hits, segments_distance, winding_number
+from ...core.geometry import (hermite_densify, monotone_slopes, ray_hits, segments_distance,
+                              winding_number)
 from ...solvers.continuation import Curve
 from .walker import RegionBoundary
 
@@ -184,26 +185,24 @@ def classify_faces(result: "BoundaryResult") -> list[dict]:
 
 
 def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
-                 node_values: np.ndarray | None = None):
-    """The tip image of the loop, densified per curve by :func:`hermite_densify`,
-    in mm (closing point dropped).  With ``node_values`` (one row per node, in
-    the order of :meth:`RegionBoundary.nodes`) also returns them interpolated
-    linearly (in the Hermite parameter) at the dense points."""
+                 node_values: np.ndarray | None = None, monotone: bool = False):
+    """The tip image of the loop, densified per curve by :func:`hermite_densify`
+    (every piece, the one into the corner at a curve's end too: the corner
+    carries its curve's tangent, ``Walker._corner_tangent``), in mm (closing
+    point dropped).  With ``node_values`` (one row per node, in the order of
+    :meth:`RegionBoundary.nodes`) also returns them interpolated at the dense
+    points: linearly in the Hermite parameter, or with ``monotone`` by cubic
+    Hermite interpolation along each curve's chord lengths with
+    :func:`monotone_slopes` (docs/model.md §26.2)."""
     pieces, values, start = [], [], 0
     for curve in region.curves:
         tip = np.array([pt.tip for pt in curve.points])
         vel = np.array([pt.tip_velocity for pt in curve.points])
-        # corners carry the previous curve's tangent: no Hermite into a corner
-        dense = hermite_densify(tip[:-1], vel[:-1], per_segment) if len(tip) > 2 else tip[:1]
-        pieces.append(np.vstack((dense, tip[-1:])))
+        dense, (seg, s) = hermite_densify(tip, vel, per_segment, parameters=True)
+        pieces.append(dense)
         if node_values is not None:
             nv = node_values[start:start + len(tip)]
-            s = np.linspace(0, 1, per_segment + 1)[1:]
-            rows = [nv[:1]]
-            for k in range(len(tip) - 2):
-                rows.append(nv[k][None] + np.multiply.outer(s, nv[k + 1] - nv[k]))
-            rows.append(nv[-1:])
-            values.append(np.concatenate(rows))
+            values.append(_interpolate(nv, tip, seg, s, monotone))
         start += len(tip)
     poly = np.vstack(pieces) * length_mm
     keep = np.concatenate(([True], np.linalg.norm(np.diff(poly, axis=0), axis=1) > 1e-9))
@@ -214,10 +213,25 @@ def loop_polygon(region: RegionBoundary, length_mm: float, per_segment: int = 8,
     return poly[keep], np.concatenate(values)[keep]
 
 
+def _interpolate(nv: np.ndarray, tip: np.ndarray, seg: np.ndarray, s: np.ndarray,
+                 monotone: bool) -> np.ndarray:
+    """Node values ``nv`` of one curve at the dense points (segment ``seg``,
+    Hermite parameter ``s``): linear in s, or monotone cubic Hermite in the
+    chord length (:func:`monotone_slopes`)."""
+    nxt = np.minimum(seg + 1, len(nv) - 1)
+    sh = s.reshape((-1,) + (1,) * (nv.ndim - 1))
+    if not monotone or len(nv) < 2:
+        return nv[seg] + sh * (nv[nxt] - nv[seg])
+    lengths = np.linalg.norm(np.diff(tip, axis=0), axis=1)
+    m = monotone_slopes(nv, lengths)
+    L = lengths[np.minimum(seg, len(lengths) - 1)].reshape(sh.shape)
+    h00, h10 = 2 * sh**3 - 3 * sh**2 + 1, sh**3 - 2 * sh**2 + sh
+    h01, h11 = -2 * sh**3 + 3 * sh**2, sh**3 - sh**2
+    return h00 * nv[seg] + h10 * L * m[seg] + h01 * nv[nxt] + h11 * L * m[nxt]
+
+
 def curve_polyline(curve: Curve, length_mm: float) -> np.ndarray:
     """Tip image of one curve in mm, Hermite-densified (:func:`hermite_densify`)."""
     tip = np.array([pt.tip for pt in curve.points])
     vel = np.array([pt.tip_velocity for pt in curve.points])
-    if len(tip) < 3:
-        return tip * length_mm
-    return np.vstack((hermite_densify(tip[:-1], vel[:-1]), tip[-1:])) * length_mm
+    return hermite_densify(tip, vel) * length_mm

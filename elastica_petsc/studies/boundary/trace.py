@@ -14,7 +14,7 @@ from ...core.errors import InputError
 from ...core.fem import Discretisation
 from ...core.geometry import self_intersections, union_area, union_area_gradient
 from ...core.model import Arm
-from ...solvers.continuation import CurveTracer, TraceCounts
+from ...solvers.continuation import CurveTracer, OffsetParameter, RouteParameter, TraceCounts
 from .faces import classify_faces, curve_polyline, loop_polygon
 from .result import BoundaryResult
 from .walker import (DS0, SCAN_TIP_STEP, FoldTracer, RegionBoundary, Walker, constraints_for, scan_rays,
@@ -25,19 +25,21 @@ class BoundaryError(InputError):
     """An arm whose boundary this method cannot trace (e.g. not two tendons)."""
 
 
-def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, tendons,
+def _area_gradient(walker: Walker, region: RegionBoundary, start_rows, parameters,
                    length_mm: float) -> np.ndarray:
-    """d|A|/d(r_i x, r_i y) for each tendon i in ``tendons`` [mm^2 per mm]."""
+    """d|A|/dq for each parameter block of ``parameters`` (routing points
+    (r_i x, r_i y), guide offsets) [mm^2 per mm]."""
     grads = []
-    for velocity in walker.route_velocities(region, start_rows, tendons):  # (nodes, 2, 2)
-        poly, dense_velocity = loop_polygon(region, length_mm, node_values=velocity)
+    for velocity in walker.parameter_velocities(region, start_rows, parameters):  # (nodes, 2, k)
+        poly, dense_velocity = loop_polygon(region, length_mm, node_values=velocity,
+                                            monotone=True)
         grads.append(union_area_gradient(poly, dense_velocity))          # mm^2 per mm
     return np.concatenate(grads)
 
 
 def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: bool = True,
-                   tip_folds: bool = True, route_gradients=(), progress=None,
-                   refine: float = 1.0) -> BoundaryResult:
+                   tip_folds: bool = True, route_gradients=(), offset_gradients=(),
+                   progress=None, refine: float = 1.0) -> BoundaryResult:
     """The boundary of W_0 (and of the restricted workspace) of a two-tendon arm.
 
     Returns polygons in mm and areas in mm^2 (module docstring for the
@@ -50,6 +52,10 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
     d area / d(r_x, r_y) per tendon, in mm^2 per mm, from the boundary
     integral of the normal velocity of the loop's nodes (exact for the node
     polygon; the area itself is that of the Hermite-densified polygon).
+    ``offset_gradients``: guide offsets, each a list of the arm points
+    (:class:`~elastica_petsc.core.guided.GuidedDiscretisation` order) whose
+    offset it moves together; their derivatives follow the routes' in
+    ``area_gradients[name]``, in mm^2 per mm (docs/model.md §26).
     ``progress(solves, note)``, if given, is called after every continuation
     step (the number of solves is not known in advance).  ``refine``: every
     step limit (tip step, step length, first step, the scan's) divided by it,
@@ -87,9 +93,11 @@ def trace_boundary(arm: Arm, disc: Discretisation | None = None, *, restricted: 
                     scan = scan_rays(walker, w0, fold_curves,
                                      max_tip_step=SCAN_TIP_STEP / refine)
                     scan_solves = counts.solves - before
-                if route_gradients and region.closed:
+                parameters = ([RouteParameter(tracer.mf, i) for i in route_gradients]
+                              + [OffsetParameter(tracer.mf, a) for a in offset_gradients])
+                if parameters and region.closed:
                     gradients[name] = _area_gradient(walker, region, cons[1::-1],
-                                                     route_gradients, arm.length_mm)
+                                                     parameters, arm.length_mm)
             finally:
                 walker.destroy()
             regions[name] = region
