@@ -75,12 +75,10 @@ def run(arm, schedule, speed, folder, args):
                                for c in (0, 1)])
     dev = np.linalg.norm(sim_tip - tips[played], axis=1)
     on_path = t_rows[played] >= path_start
-    if not on_path.any():
-        on_path = np.ones_like(on_path)
     return {"speed": speed, "duration_s": float(res.time_s[-1]), "dt_s": dt,
             "steps": int(res.steps), "completed": bool(res.completed), "wall_s": round(wall, 1),
             "switches": len(res.events), "max_deviation_mm": float(dev.max()),
-            "max_deviation_path_mm": float(dev[on_path].max()),
+            "max_deviation_path_mm": float(dev[on_path].max()) if on_path.any() else None,
             "end_deviation_mm": float(dev[-1]), "min_tension_N": float(res.tensions_N.min())
             }, (t_rows[played] / t_rows[-1], dev)
 
@@ -92,15 +90,18 @@ def plot(results, curves, png):
 
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
     for r, (s, dev) in zip(results, curves):
-        a.semilogy(s, np.maximum(dev, 1e-6), lw=0.8, label=f"x{r['speed']:g}")
+        part = "" if r["speed"] >= 1 else " (its first seconds)"
+        a.semilogy(s, np.maximum(dev, 1e-6), lw=0.8, label=f"x{r['speed']:g}{part}")
     a.axhline(0.05, color="k", ls=":", lw=0.8)
     a.set_xlabel("time / duration of the schedule at its speed")
     a.set_ylabel("tip deviation from the quasi-static trace [mm]")
     a.legend(title="speed")
-    v = [r["speed"] for r in results]
-    b.loglog(v, [r["max_deviation_mm"] for r in results], "o-", label="max over the run")
-    b.loglog(v, [r["max_deviation_path_mm"] for r in results], "s-", label="max on the path")
-    b.loglog(v, [max(r["end_deviation_mm"], 1e-6) for r in results], "^-", label="at the end")
+    v = np.array([r["speed"] for r in results])
+    for key, mark, label in (("max_deviation_mm", "o", "max over the run"),
+                             ("max_deviation_path_mm", "s", "max on the path"),
+                             ("end_deviation_mm", "^", "at the last row played")):
+        y = np.array([np.nan if r[key] is None else max(r[key], 1e-8) for r in results])
+        b.loglog(v, y, mark, label=label)
     b.axhline(0.05, color="k", ls=":", lw=0.8)
     b.set_xlabel("speed / suggested speed (8.8 mm/s)")
     b.set_ylabel("tip deviation [mm]")
