@@ -149,3 +149,32 @@ def test_cli_refuses_an_arm_the_dynamics_does_not_model(tmp_path):
              "--out", "v.h5", cwd=tmp_path)
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "gravity" in r.stderr, r.stderr
     assert not (tmp_path / "v.h5").exists()
+
+
+def test_steps_longer_than_the_vibration_do_not_stretch_a_cable(arm, monkeypatch):
+    """The velocity-level law admits steps whose end has a cable stretched (a spurious
+    solution when the step is longer than the vibration): such a step is taken again with
+    a quarter of the step.  Re-tensioning played 10 times slower with steps of 1 tau (a
+    first period is 1.8 tau): without the check cable 1 ends a step 2.7e-3 l too long."""
+    import elastica_petsc.solvers.cable_steps as cable_steps
+
+    disc = Discretisation.from_arm(arm, 24)
+    eq = solve_equilibrium(disc, np.array([5.0, 0.0]))
+    times = 10 * np.array([0.0, 0.5, 0.8, 1.5, 3.0, 4.0])
+    L = np.tile(eq.cable_lengths + [0.0, 0.01], (6, 1))
+    L[2:4, 0] += 0.05
+    drive = LengthDrive(times, L)
+
+    def stretch(tol):
+        monkeypatch.setattr(cable_steps, "PENETRATION_TOL", tol)
+        sim = DynamicsSolver(disc, Inertia.build(disc, damping_ratio=0.05), dt0=1.0,
+                             adaptive=False, radius=0.5)
+        tr = sim.run(eq.theta, np.zeros(24), np.asarray(eq.p), drive, [TAUT, SLACK], 40.0)
+        assert tr.completed
+        gaps = [drive.lengths(t)[0] - Lk[0] for t, Lk in zip(tr.time, tr.lengths)]
+        return -min(gaps), tr.rejected
+
+    tol = cable_steps.PENETRATION_TOL
+    unchecked, _ = stretch(1e9)
+    checked, retaken = stretch(tol)
+    assert unchecked > 2e-3 and checked <= tol and retaken > 0

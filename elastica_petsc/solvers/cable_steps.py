@@ -42,6 +42,8 @@ import numpy as np
 # eps: a closed gap (a taut cable stretched by the O(dt^2) drift of its length) is
 # pulled back at the rate eps g / dt, in about 1 / eps steps
 DRIFT_PULL = 0.05
+# a cable stretched by more than this (l) in one step: the step is taken again, shorter
+PENETRATION_TOL = 1e-3
 
 
 @dataclass(frozen=True)
@@ -85,6 +87,13 @@ class CableComplementarity:
         sp = scale * V[N:]
         taut = w <= sp
         return np.where(taut, -w, -sp), taut, scale
+
+    def penetrated(self, t1: float, U1: np.ndarray) -> bool:
+        """Whether a cable's gap at the step's end (t1, U1) fell below -PENETRATION_TOL
+        and below its start's (module doc: the velocity-level law does not forbid a
+        penetration within a step; steps longer than the vibration find them)."""
+        gap = self.drive.lengths(t1) - self.geo.cable_lengths(self.geo.theta_of(U1))
+        return bool(np.any((gap < -PENETRATION_TOL) & (gap < self.start.gap)))
 
     def mean_tensions(self, t1: float, U1: np.ndarray, V1: np.ndarray):
         """(p, taut) of the step that ended at (t1, U1, V1): its tensions at the alpha

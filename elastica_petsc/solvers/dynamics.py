@@ -292,6 +292,7 @@ class DynamicsSolver:
         ts.setMonitor(record)
         if self.cables is not None:
             ts.setPreStep(self._begin_step(ts, t_end))
+            ts.setPostStep(self._check_step)
         self.options.label(F, J, U, V)
         self.options.apply(ts)
         return ts, (U, V, F, J, atol, rtol)
@@ -309,6 +310,18 @@ class DynamicsSolver:
             U, V = (v.getArray(readonly=True) for v in ts_.getSolution2())
             self.cables.begin(t, U, V)
         return prestep
+
+    def _check_step(self, ts):
+        """TS post-step: a step whose end has a cable stretched past
+        ``PENETRATION_TOL`` beyond its start is taken again with a quarter of the
+        step (:mod:`.cable_steps`: a spurious solution of a step too long for the
+        vibration); counted as a rejection."""
+        U = ts.getSolution2()[0].getArray(readonly=True)
+        if self.cables.penetrated(ts.getTime(), U):
+            dt = ts.getTime() - self.cables.start.t
+            ts.rollBack()
+            ts.setTimeStep(0.25 * dt)
+            self._rollbacks += 1
 
     def run(self, theta0, omega0, p0, drive, modes, t_end: float, *,
             on_step=None, trajectory: Trajectory | None = None) -> Trajectory:
@@ -334,6 +347,7 @@ class DynamicsSolver:
             # step's shift or branch stalls Newton, so it is refreshed at every iteration
             self.options.update({"snes_lag_jacobian": 1})
         traj = trajectory if trajectory is not None else Trajectory()
+        self._rollbacks = 0
         self._record(traj, 0.0, U0, V0, np.asarray(p0, float))
         ts, objs = self._make_ts(0.0, t_end, U0, V0, self._monitor(traj, on_step))
         try:
@@ -346,7 +360,7 @@ class DynamicsSolver:
                 traj.steps += ts.getStepNumber()
                 return traj
             traj.steps += ts.getStepNumber()
-            traj.rejected += ts.getStepRejections()
+            traj.rejected += ts.getStepRejections() + self._rollbacks
             traj.snes_failures += ts.getSNESFailures()
             t = ts.getTime()
         finally:
