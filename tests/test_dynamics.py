@@ -292,28 +292,6 @@ def test_dynamics_config_section(tmp_path):
             load_config(path)
 
 
-def test_solve_lcp_is_the_complementarity_solution():
-    """w = q + W lam >= 0, lam >= 0, lam . w = 0 for random SPD W (the cables' impact and
-    tension problems, docs/model.md §16.3), against a projected Gauss-Seidel solve."""
-    from elastica_petsc.core.dynamics import solve_lcp
-
-    rng = np.random.default_rng(5)
-    for k in (1, 2, 3, 4):
-        for _ in range(20):
-            A = rng.standard_normal((k, k))
-            W = A @ A.T + 0.1 * np.eye(k)
-            q = rng.standard_normal(k)
-            lam, w = solve_lcp(W, q)
-            assert np.all(lam >= 0) and np.all(w >= 0)
-            assert np.allclose(w, q + W @ lam, atol=1e-10)
-            assert abs(lam @ w) < 1e-10
-            ref = np.zeros(k)                       # projected Gauss-Seidel (converges: W SPD)
-            for _ in range(5000):
-                for i in range(k):
-                    ref[i] = max(0.0, ref[i] - (q[i] + W[i] @ ref) / W[i, i])
-            assert np.allclose(lam, ref, atol=1e-7)
-
-
 def test_length_drive_plays_from_rest_to_rest():
     """A schedule's cables start and stop at rest (zero speed at the first and last rows,
     C^1 in between, through every row): no impact at the start of a `trace` schedule."""
