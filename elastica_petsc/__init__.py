@@ -62,6 +62,8 @@ _EXPORTS = {
     "EquilibriumSolver": ".solvers.equilibrium",
     "TipController": ".solvers.control", "LengthSolver": ".solvers.lengths",
     "StabilitySolver": ".solvers.stability",
+    # animations of results (GIF/MP4)
+    "animate_simulation": ".plots.animate",
 }
 __all__ = list(_EXPORTS)
 

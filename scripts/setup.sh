@@ -26,14 +26,22 @@ lists=("$here/scripts/system-packages.txt")
 mapfile -t packages < <(cat "${lists[@]}" | grep -v '^\s*#' | grep -v '^\s*$')
 
 missing=(); sudo_cmd=""; [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
-for pkg in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
-done
+installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
+for pkg in "${packages[@]}"; do installed "$pkg" || missing+=("$pkg"); done
+# Debian 12's python3-scipy depends on python3-pythran (and so on a compiler and headers,
+# about 470 MB) but does not import it: the container's layer installs a stand-in first.
+if ((runtime && ${#missing[@]})) && ! installed python3-pythran; then
+  standin="$(mktemp -u /tmp/elastica-petsc-no-pythran.XXXXXX).deb"
+  bash "$here/scripts/pythran-standin.sh" "$standin"
+  $sudo_cmd dpkg -i "$standin" >/dev/null && rm -f "$standin"
+fi
 if ((${#missing[@]})); then
   echo "setup: installing Debian packages: ${missing[*]}" >&2
   $sudo_cmd apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-  ((runtime)) && $sudo_cmd rm -rf /var/lib/apt/lists/*
+  # the container's layer keeps neither the package lists nor the downloaded .deb files
+  # (a base image without the official image's apt clean-up hook kept 305 MB of them)
+  if ((runtime)); then $sudo_cmd apt-get clean; $sudo_cmd rm -rf /var/lib/apt/lists/*; fi
 fi
 # Without petsc-dev/slepc-dev nothing registers /usr/lib/petsc and /usr/lib/slepc, the
 # folders petsc4py.pth and slepc4py.pth add to sys.path: register them as those packages do.

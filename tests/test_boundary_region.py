@@ -49,3 +49,41 @@ def test_a_box_map_is_not_compared():
     status = np.ones(len(grid.points), int)
     out = compare_with_samples(CIRCLE, grid.points, status, 10.0, region=grid.meta["region"])
     assert "area_in_region_mm2" not in out
+
+
+def test_half_disc_area_counts_faces_covered_twice_as_the_membership_does():
+    """compare_map over the half-disc takes W_0 as assembled: a face of winding
+    number 0 covered twice (N = 2) counts in the samples' membership
+    (BoundaryResult.contains) and in the area in y >= 0 alike.  The paper arm
+    has no such face, so its hole around r_1 (winding 0, N = 0) is declared
+    covered twice here: the area in y >= 0 grows by that face's part in y >= 0,
+    measured independently by counting a fine lattice of points that
+    ``contains`` adds."""
+    import dataclasses
+
+    from elastica_petsc.core.fem import Discretisation
+    from elastica_petsc.core.model import load_config
+    from elastica_petsc.studies.boundary.compare import compare_map
+    from elastica_petsc.studies.boundary.trace import traced_w0
+
+    arm = load_config()
+    real = traced_w0(arm, Discretisation.from_arm(arm, 30))
+    hole, = [f for f in real.faces if f["winding"] == 0 and f["area_mm2"] > 1e4]
+    assert hole["preimages"] == 0
+    faces = [dict(f, preimages=2) if f is hole else f for f in real.faces]
+    twice = dataclasses.replace(real, faces=faces)
+    grid = target_grid(arm.length_mm, 20.0, region="half-disc")
+    status = np.where(real.contains(grid.points), 1, 2)
+    areas = [compare_map(r, grid.points, status, 20.0, grid.meta["region"])["area_in_region_mm2"]
+             for r in (real, twice)]
+    h = 1.0
+    x, y = np.meshgrid(np.arange(-100.0, 650.0, h) + h / 2, np.arange(0.0, 100.0, h) + h / 2)
+    pts = np.column_stack((x.ravel(), y.ravel()))
+    added = (twice.contains(pts) & ~real.contains(pts)).reshape(x.shape)
+    assert not (added[-1].any() or added[:, 0].any() or added[:, -1].any())   # all in the box
+    lattice = float(np.sum(added)) * h * h
+    assert lattice > 1000.0                                  # the hole reaches into y >= 0
+    assert abs((areas[1] - areas[0]) - lattice) < 0.05 * lattice, (areas, lattice)
+    disc = target_grid(arm.length_mm, 20.0, region="disc").points     # the whole W_0
+    whole = compare_map(real, disc, np.ones(len(disc), int), 20.0, "disc")
+    assert whole["area_in_region_mm2"] == real.area_mm2

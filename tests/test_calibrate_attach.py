@@ -80,3 +80,70 @@ def test_calibrate_command_searches_an_attachment(tmp_path):
     assert errors(out, schema, schema) == []
     assert out["attachments"][0]["value"] == 220.0
     assert "attach_mm = 220.0" in (tmp_path / "fit.toml").read_text()
+
+
+SEARCH_UNDER_MPI = """
+import dataclasses, json, sys
+import numpy as np
+from mpi4py import MPI
+from elastica_petsc.core.calibration_params import ParameterModel
+from elastica_petsc.core.model import Arm
+from elastica_petsc.solvers.calibration import RowSolver
+from elastica_petsc.studies.calibrate_attach import calibrate_with_attachments, with_attachments
+from elastica_petsc.studies.calibration_synthetic import command_rows, synthesize
+
+arm = dataclasses.replace(Arm.paper(), elements=30)
+truth_arm = with_attachments(arm, [0], [240.0])
+rng = np.random.default_rng(3)
+P = np.column_stack((rng.uniform(1, 9, 8), rng.uniform(0.5, 5, 8)))
+truth = ParameterModel(truth_arm, ["bending_stiffness"]).start() * 1.1
+data = synthesize(truth_arm, ["bending_stiffness"], truth, command_rows(truth_arm, P, "tension"),
+                  noise_mm=0.05, seed=4)
+solves = [0]
+plain = RowSolver.solve
+def counted(self, *args, **kwargs):
+    solves[0] += 1
+    return plain(self, *args, **kwargs)
+RowSolver.solve = counted
+comm = MPI.COMM_WORLD if MPI.COMM_WORLD.size > 1 else None
+result = calibrate_with_attachments(arm, data, ["bending_stiffness", "tendon1.attach"],
+                                    elements=30, folds=0, comm=comm)
+found = result.summary()["attachments"][0]
+print(json.dumps({"rank": MPI.COMM_WORLD.rank, "solves": solves[0], "value": found["value"],
+                  "sigma": found["sigma"], "fits": result.attachments.fits,
+                  "B": float(result.fit.theta[0])}))
+"""
+
+
+@pytest.mark.mpi
+def test_attachment_search_spreads_its_rows_over_two_ranks(tmp_path):
+    """Under mpiexec -n 2 every fit of the node-by-node search solves each row on
+    one rank only (each rank about half the row solves of one rank), and both
+    ranks find the same attachment, profile sigma and fit as one rank."""
+    import json
+    import shutil
+    import subprocess
+    import sys
+
+    if shutil.which("mpiexec") is None:
+        pytest.skip("needs mpiexec")
+    from mpi_env import mpi_env
+    env = mpi_env()
+    runs = {}
+    for ranks in (1, 2):
+        launch = ["mpiexec", "-n", "2"] if ranks == 2 else []
+        done = subprocess.run(launch + [sys.executable, "-c", SEARCH_UNDER_MPI],
+                              capture_output=True, text=True, timeout=300, env=env,
+                              cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        runs[ranks] = [json.loads(line) for line in done.stdout.splitlines()]
+    one, = runs[1]
+    two = runs[2]
+    assert sorted(r["rank"] for r in two) == [0, 1]
+    assert one["value"] == 240.0 and one["fits"] >= 3
+    for r in two:
+        assert r["value"] == one["value"] and r["fits"] == one["fits"]
+        assert abs(r["sigma"] - one["sigma"]) < 1e-6 * one["sigma"]
+        assert abs(r["B"] - one["B"]) < 1e-9 * abs(one["B"])
+        assert 0.4 * one["solves"] <= r["solves"] <= 0.6 * one["solves"], (r, one)
+    assert sum(r["solves"] for r in two) == pytest.approx(one["solves"], rel=0.1)

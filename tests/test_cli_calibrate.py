@@ -3,7 +3,6 @@ input reported in one line with exit status 2 and nothing written."""
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -74,10 +73,8 @@ def test_calibrate_writes_loadable_toml_h5_plot_json(data_csv, tmp_path):
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="needs mpiexec")
 def test_rows_over_two_ranks_give_the_same_fit(data_csv, tmp_path):
     path, _ = data_csv
-    keep = ("OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM",
-            "OMPI_MCA_rmaps_base_oversubscribe")
-    env = {k: v for k, v in os.environ.items()
-           if k in keep or not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
+    from mpi_env import mpi_env
+    env = mpi_env()
     runs = []
     for launch in ([], ["mpiexec", "-n", "2"]):
         done = subprocess.run(launch + [sys.executable, "-m", "elastica_petsc.cli", "calibrate",

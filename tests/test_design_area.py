@@ -3,7 +3,6 @@ against finite differences of ``boundary``: tests/test_traced_area.py): the unio
 area of the re-sampling, the sweep's file, resume and ranks, and one-line errors."""
 from __future__ import annotations
 
-import os
 import shutil
 import subprocess
 import sys
@@ -11,6 +10,7 @@ import sys
 import h5py
 import numpy as np
 import pytest
+from mpi_env import mpi_env
 
 from elastica_petsc.core.geometry import triangles_union_area
 from elastica_petsc.core.model import load_config
@@ -79,13 +79,6 @@ def test_sweep_file_resume_and_values(tmp_path):
                   comm=MPI.COMM_SELF, progress=False)
 
 
-def _clean_env() -> dict:
-    keep = ("OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM",
-            "OMPI_MCA_rmaps_base_oversubscribe")
-    return {k: v for k, v in os.environ.items()
-            if k in keep or not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
-
-
 @pytest.mark.mpi
 @pytest.mark.skipif(shutil.which("mpiexec") is None, reason="needs mpiexec")
 def test_sweep_on_two_ranks_equals_one(tmp_path):
@@ -95,7 +88,7 @@ def test_sweep_on_two_ranks_equals_one(tmp_path):
     for ranks, name in ((1, "a.h5"), (2, "b.h5")):
         cmd = (["mpiexec", "-n", "2"] if ranks == 2 else []) + common + ["--out", name]
         done = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=300,
-                              env=_clean_env())
+                              env=mpi_env())
         assert done.returncode == 0, done.stderr
         with h5py.File(tmp_path / name, "r") as fh:
             runs.append((fh["samples/area"][()], int(fh["timing"].attrs["ranks"])))

@@ -1,7 +1,6 @@
 """Every script in examples/ runs as a user would run it, and prints the pinned numbers."""
 from __future__ import annotations
 
-import os
 import re
 import shutil
 import subprocess
@@ -9,25 +8,18 @@ import sys
 from pathlib import Path
 
 import pytest
+from mpi_env import mpi_env
 
 pytestmark = pytest.mark.slow          # left out by scripts/test.sh --fast
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
-KEEP = ("OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "OMPI_MCA_rmaps_base_oversubscribe")
-
-
-def clean_env() -> dict:
-    """The environment without what an MPI run in this process left behind
-    (a singleton's OMPI_/PMIX_ variables would make a child mpiexec fail)."""
-    return {k: v for k, v in os.environ.items()
-            if k in KEEP or not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
 
 
 def run(*cmd: str, cwd: Path) -> str:
     done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=300,
-                          env=clean_env())
+                          env=mpi_env())
     assert done.returncode == 0, done.stderr
     return done.stdout
 

@@ -51,6 +51,8 @@ def test_friction_path_uses_the_config_and_other_studies_refuse_it(arm, tmp_path
     assert back.summary() == from_config.summary()
     for study in (lambda: ep.solve(arm, [1.0, 1.0], elements=48),
                   lambda: ep.control(arm, [250.0, 100.0], elements=48),
-                  lambda: ep.workspace(arm, spacing_mm=100.0, elements=48)):
+                  lambda: ep.workspace(arm, spacing_mm=100.0, elements=48),
+                  lambda: ep.simulate(arm, tensions_N=[1.0, 1.0], duration_s=0.01,
+                                      elements=48)):
         with pytest.raises(ep.InputError, match="models frictionless guides"):
             study()

@@ -18,9 +18,11 @@ def simulate(arm: Arm, *, tensions_N=None, history_csv=None, schedule_csv=None,
     rho_inf of the alpha method (default 1 under tensions, 0.5 under a schedule).  Returns a
     ``SimulationResult`` (``time_s``, ``tip_mm``, ``x_mm``, ``tensions_N``,
     ``cable_lengths_mm``, ``energy_J``, ``summary()``); needs the arm's mass per length."""
+    from ..core.friction import check_frictionless
     from ..io.simulation import read_theta
     from ..studies.simulate import simulate as run
 
+    check_frictionless(arm, "simulate")
     return run(arm, elements=elements, initial_tensions_N=initial_tensions_N,
                order=order, from_theta=None if from_file is None else read_theta(from_file),
                tensions_N=tensions_N, history_csv=history_csv, schedule_csv=schedule_csv,

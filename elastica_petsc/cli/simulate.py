@@ -16,6 +16,9 @@ HDF5 layout (``--out``), every accepted step of the integrator::
     event_time_s, event_tendon, event_kind (slack/taut events),
     planned_tip_mm (T, 2) mm (schedule: the quasi-static tip at time_s)
 
+``--vtk DIR``: simulation.pvd (one .vtu per recorded step, time in s) and
+simulation_tip.vtu; ``--animate GIF|MP4``: the run in real time (``--slow-motion K``).
+
 Root attributes: provenance (like every file), elements, input, completed,
 reason, steps, rejected, f1_hz, wall_s, summary_json.  An interrupted run
 (Ctrl-C) writes the steps computed so far (``completed`` false), exit 130.
@@ -68,6 +71,15 @@ def add_parser(sub) -> None:
     parser.add_argument("--radius", type=float, default=None, metavar="RHO",
                         help="spectral radius at infinite step of the alpha method, in [0, 1] "
                              "(1: no numerical dissipation; default 1, with --schedule 0.5)")
+    parser.add_argument("--vtk", metavar="DIR",
+                        help="write ParaView files into this folder: simulation.pvd (the arm and "
+                             "cables at every recorded step, time in s) and simulation_tip.vtu "
+                             "(the tip's path with tensions, cable lengths and energies)")
+    parser.add_argument("--animate", metavar="GIF|MP4",
+                        help="write an animation of the arm, its cables and the tip trail, timed "
+                             "to the simulated clock (.gif with Pillow; .mp4 needs ffmpeg)")
+    parser.add_argument("--slow-motion", type=float, default=1.0, metavar="K",
+                        help="--animate: play the run K times slower than real time (default 1)")
     common.add_output_options(parser, plot=False)
     parser.set_defaults(run=run)
 
@@ -90,6 +102,8 @@ def _check(args) -> None:
         raise InputError(f"--steps-per-period must be at least 4, got {args.steps_per_period}")
     if args.radius is not None and not 0 <= args.radius <= 1:
         raise InputError(f"--radius must lie in [0, 1], got {args.radius:g}")
+    if not (math.isfinite(args.slow_motion) and args.slow_motion > 0):
+        raise InputError(f"--slow-motion must be positive, got {args.slow_motion:g}")
 
 
 def run(args) -> int:
@@ -102,7 +116,10 @@ def run(args) -> int:
     _check(args)
     arm, disc = common.load_arm(args)
     time_scale_s(arm)                       # an arm without mass: refused before anything
-    common.check_outputs(args)
+    if args.animate:
+        from ..plots.animate import check_animation_path
+        check_animation_path(args.animate, args.overwrite)
+    common.check_outputs(args, {"--animate": args.animate} if args.animate else None)
     if args.schedule_csv is None and args.duration is None:
         raise InputError("--duration is needed with --tensions-N or --history")
     from_theta = read_theta(args.from_file) if args.from_file else None
@@ -124,6 +141,14 @@ def run(args) -> int:
     data = result.summary()
     if args.out:
         write_simulation(args.out, args.overwrite, result)
+    if args.vtk:
+        with Progress(len(result.time_s), "simulate --vtk", unit="steps") as bar:
+            result.to_vtk(args.vtk, on_step=lambda done, total: bar.update(done))
+    if args.animate:
+        from ..plots.animate import animate_simulation
+        with Progress(None, "simulate --animate", unit="frames") as bar:
+            animate_simulation(result, args.animate, slow_motion=args.slow_motion,
+                               on_frame=lambda done, total: bar.update(done, total=total))
     if args.json:
         common.print_json("simulate", data)
     else:

@@ -38,6 +38,7 @@ import numpy as np
 
 # exp of more than this overflows a double: M is then reported as +inf
 _LOG_MAX = math.log(np.finfo(float).max) - 1.0
+_TINY = np.finfo(float).tiny
 
 
 class Deflation:
@@ -55,15 +56,16 @@ class Deflation:
         self.shift = float(shift)
         self.roots: list[np.ndarray] = []
         self._stack = None                      # the roots as one (K, N) array, built on use
+        self._last = None                       # (theta's bytes, (M, grad)) of the last call
 
     def add(self, theta: np.ndarray) -> None:
         """Deflate one more known solution (its free angles theta_1..theta_N)."""
         self.roots.append(np.array(theta, dtype=float, copy=True))
-        self._stack = None
+        self._stack = self._last = None
 
     def clear(self) -> None:
         self.roots.clear()
-        self._stack = None
+        self._stack = self._last = None
 
     def __len__(self) -> int:
         return len(self.roots)
@@ -89,9 +91,16 @@ class Deflation:
         root M is returned as +inf with a zero gradient, without a warning."""
         if not self.roots:
             return 1.0, np.zeros_like(theta)
+        key = np.asarray(theta, float).tobytes()
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]        # the SNES asks for the Jacobian where it just had F
+        self._last = (key, self._factor_and_gradient(theta))
+        return self._last[1]
+
+    def _factor_and_gradient(self, theta: np.ndarray) -> tuple[float, np.ndarray]:
         q, sigma = self.power, self.shift
         diff = theta[None, :] - self._roots()                      # (K, N)
-        s = np.maximum(self.h * np.sum(diff * diff, axis=1), np.finfo(float).tiny)
+        s = np.maximum(self.h * np.sum(diff * diff, axis=1), _TINY)
         # log(s^(-q/2) + sigma) = -(q/2) log s + log(1 + sigma s^(q/2))
         log_M = float(np.sum(-(q / 2.0) * np.log(s) + np.log1p(sigma * s ** (q / 2.0))))
         if log_M > _LOG_MAX:

@@ -47,8 +47,13 @@ class TensionDrive:
         return self.values.shape[1]
 
     def tensions(self, t: float) -> np.ndarray:
-        return np.array([np.interp(t, self.times, self.values[:, i])
-                         for i in range(self.n_tendons)])
+        """p(t): linear between the rows, the first/last row's before/after them (called
+        at every residual of the integrator: one search, no per-tendon loop)."""
+        k = int(np.searchsorted(self.times, t, side="right"))
+        if k == 0 or k == len(self.times):
+            return self.values[max(k - 1, 0)].copy()
+        w = (t - self.times[k - 1]) / (self.times[k] - self.times[k - 1])
+        return (1.0 - w) * self.values[k - 1] + w * self.values[k]
 
     @classmethod
     def constant(cls, p) -> "TensionDrive":

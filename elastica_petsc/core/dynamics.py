@@ -17,14 +17,14 @@ L the elastic (Kelvin-Voigt) stiffness.  Every product with G or G^T is a
 cumulative sum: O(N).  :class:`BandedInverse` solves the Newton systems
 (sigma M + T) x = r exactly in O(N) as one banded system in the angles, the
 node displacements X = G x and the tail forces F_e = sum_{k>e} m_k X_k.
+The O(N) loops are compiled (core/fem_dynamics.c, docs/model.md §30).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import lapack
-
+from . import fem_kernels
 from .fem import Discretisation
 
 # beta_1 l of the clamped-free Euler-Bernoulli beam: cos(bl) cosh(bl) = -1
@@ -38,30 +38,22 @@ def node_masses(disc: Discretisation, tip_mass: float = 0.0) -> np.ndarray:
     return m
 
 
-def _normals(disc: Discretisation, theta: np.ndarray) -> np.ndarray:
-    """h n_e of each element, (N, 2)."""
-    phi = disc.element_angles(theta)
-    return disc.h * np.column_stack((-np.sin(phi), np.cos(phi)))
-
-
-def node_velocities(disc: Discretisation, theta: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """x_k' of nodes 1..N, (N, 2): G v (the midpoint rule of Eq. (2) differentiated)."""
-    vt = np.concatenate(([0.0], v))
-    return np.cumsum(_normals(disc, theta) * disc.element_angles(vt)[:, None], axis=0)
-
-
-def transpose_apply(disc: Discretisation, theta: np.ndarray, forces: np.ndarray) -> np.ndarray:
-    """G^T f for nodal vectors f (N, 2) of nodes 1..N: the generalized force
-    sum_k f_k . dx_k/dtheta_j, by a reverse cumulative sum (tail forces)."""
-    tail = np.cumsum(forces[::-1], axis=0)[::-1]          # tail[e] = sum over nodes k > e
-    g = np.einsum("ec,ec->e", _normals(disc, theta), tail)
-    return 0.5 * (g + np.append(g[1:], 0.0))
-
-
 def mass_apply(disc: Discretisation, theta: np.ndarray, v: np.ndarray,
                weights: np.ndarray) -> np.ndarray:
-    """G^T D G v (translational kinetic mass times v) in O(N)."""
-    return transpose_apply(disc, theta, weights[:, None] * node_velocities(disc, theta, v))
+    """G^T D G v (translational kinetic mass times v) in O(N) (compiled)."""
+    zero = np.zeros((disc.n_elements, 3))
+    return _inertial_force(theta, np.zeros(disc.n_elements), v, weights, zero, zero, 0.0, 0.0)
+
+
+def _inertial_force(theta, v, a, weights, rotary, elastic, viscous, kelvin_voigt):
+    """G^T D (G a' + c) + M_rot a' + kelvin_voigt L v with a' = a + viscous v and c the
+    centripetal node accelerations (compiled, core/fem_dynamics.c)."""
+    out = np.empty(len(weights))
+    dense = np.ascontiguousarray
+    fem_kernels.inertial_force(dense(theta, dtype=float), dense(v, dtype=float),
+                               dense(a, dtype=float), weights, rotary, elastic, float(viscous),
+                               float(kelvin_voigt), out)
+    return out
 
 
 def rotary_band(disc: Discretisation, inertia: float) -> np.ndarray:
@@ -86,14 +78,6 @@ def elastic_band(disc: Discretisation) -> np.ndarray:
     return band
 
 
-def band_apply(band: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Tridiagonal (lower, diag, upper) times v."""
-    out = band[:, 1] * v
-    out[1:] += band[1:, 0] * v[:-1]
-    out[:-1] += band[:-1, 2] * v[1:]
-    return out
-
-
 @dataclass(frozen=True)
 class Inertia:
     """Mass and damping data of one discretised arm (non-dimensional)."""
@@ -103,6 +87,7 @@ class Inertia:
     rotary: np.ndarray         # (N, 3) band of M_rot
     viscous: float             # a: viscous damping a M theta'
     kelvin_voigt: float        # b: Kelvin-Voigt damping b L theta'
+    elastic: np.ndarray        # (N, 3) band of L (elastic_band)
 
     @classmethod
     def build(cls, disc: Discretisation, *, tip_mass: float = 0.0, rotary: float = 0.0,
@@ -113,41 +98,52 @@ class Inertia:
         a share ``kelvin_voigt_fraction`` of zeta_1 from b (docs/model.md §16)."""
         zeta, f = float(damping_ratio), float(kelvin_voigt_fraction)
         return cls(disc, node_masses(disc, tip_mass), rotary_band(disc, rotary),
-                   2.0 * zeta * (1.0 - f) * omega1, 2.0 * zeta * f / omega1)
+                   2.0 * zeta * (1.0 - f) * omega1, 2.0 * zeta * f / omega1,
+                   elastic_band(disc))
 
     def mass(self, theta, v) -> np.ndarray:
         """M(theta) v = G^T D G v + M_rot v."""
-        return mass_apply(self.disc, theta, v, self.weights) + band_apply(self.rotary, v)
+        return _inertial_force(theta, np.zeros(len(v)), v, self.weights, self.rotary,
+                               self.elastic, 0.0, 0.0)
 
     def force(self, theta, v, a) -> np.ndarray:
         """Inertial plus damping force M a + c(theta, v) + a M v + b L v."""
+        return _inertial_force(theta, v, a, self.weights, self.rotary, self.elastic,
+                               self.viscous, self.kelvin_voigt)
+
+    def residual(self, theta, v, a, p) -> np.ndarray:
+        """The angle rows of the equations of motion (docs/model.md §16.1): ``force``
+        plus the static residual R(theta, p) of §8 with the cables ending at the nodes
+        x_{m_i}(theta), in one compiled call; an arm with guides, offsets or weight
+        (core/guided.py) adds its own residual to ``force``."""
         disc = self.disc
-        phi_v = disc.element_angles(np.concatenate(([0.0], v)))
-        phi = disc.element_angles(theta)
-        centripetal = -disc.h * np.column_stack((np.cos(phi), np.sin(phi))) * phi_v[:, None] ** 2
-        acc = node_velocities(disc, theta, a + self.viscous * v) + np.cumsum(centripetal, axis=0)
-        out = transpose_apply(disc, theta, self.weights[:, None] * acc)
-        out += band_apply(self.rotary, a + self.viscous * v)
-        if self.kelvin_voigt:
-            out += self.kelvin_voigt * band_apply(elastic_band(disc), v)
+        if type(disc) is not Discretisation:
+            u = disc.consistent_state(theta)
+            return self.force(theta, v, a) + disc.residual(u, p)[: disc.n_elements]
+        out = np.empty(disc.n_elements)
+        dense = np.ascontiguousarray
+        fem_kernels.motion_residual(dense(theta, dtype=float), dense(v, dtype=float),
+                                    dense(a, dtype=float), dense(p, dtype=float),
+                                    dense(disc.routes, dtype=float), disc.attach_index,
+                                    self.weights, self.rotary, self.elastic,
+                                    float(self.viscous), float(self.kelvin_voigt), out)
         return out
 
     def kinetic_energy(self, theta, v) -> float:
-        """(1/2) sum m_k |x_k'|^2 + (1/2) v M_rot v, units B/l."""
-        xdot = node_velocities(self.disc, theta, v)
-        return float(0.5 * np.sum(self.weights * np.sum(xdot**2, axis=1))
-                     + 0.5 * v @ band_apply(self.rotary, v))
+        """(1/2) v . M(theta) v = (1/2) sum m_k |x_k'|^2 + (1/2) v M_rot v, units B/l."""
+        return float(0.5 * np.dot(v, self.mass(theta, v)))
 
 
 class BandedInverse:
-    """Exact O(N) solve of (sigma G^T D G + T) x = r for a tridiagonal T.
+    """Exact O(N) solve of (sigma G^T D G + T) x = r for a tridiagonal T (compiled,
+    core/fem_dynamics.c).
 
     Unknowns per element j = 0..N-1, interleaved (base 5j): the angle
     increment x_{j+1}, the node displacement X_{j+1} = sum_{e<=j} (h/2) n_e
     (x_e + x_{e+1}) and the tail force F_j = sum_{k>j} m_k X_k, so that
     G^T D G x at node k is sum_{e in {k-1,k}} (h/2) n_e . F_e.  Every row couples
-    unknowns at most 7 below and 9 above its own: LAPACK's banded LU with
-    partial pivoting (dgbtrf), O(N) to factor and to solve.
+    unknowns at most 7 below and 9 above its own: a banded LU with partial
+    pivoting (LAPACK's dgbtf2/dgbtrs in C), O(N) to factor and to solve.
     """
 
     KL, KU = 7, 9
@@ -155,46 +151,19 @@ class BandedInverse:
     def __init__(self, disc: Discretisation, theta: np.ndarray, weights: np.ndarray,
                  sigma: float, band: np.ndarray):
         N = disc.n_elements
-        n = 5 * N
-        kl, ku = self.KL, self.KU
-        ab = np.zeros((2 * kl + ku + 1, n))
-        half_n = 0.5 * _normals(disc, theta)                 # (h/2) n_e, (N, 2)
-        j = np.arange(N)
-
-        def put(rows, cols, vals):
-            ab[kl + ku + rows - cols, cols] = vals
-
-        r = 5 * j                                            # angle rows, node k = j + 1
-        for c in (0, 1):
-            put(r, r + 3 + c, sigma * half_n[:, c])          # F_j (element k-1)
-            put(r[:-1], r[:-1] + 8 + c, sigma * half_n[1:, c])   # F_{j+1} (element k)
-        put(r, r, band[:, 1])
-        put(r[1:], r[1:] - 5, band[1:, 0])
-        put(r[:-1], r[:-1] + 5, band[:-1, 2])
-        for c in (0, 1):                                     # X_{j+1} definitions
-            rx = 5 * j + 1 + c
-            put(rx, rx, np.ones(N))
-            put(rx[1:], rx[1:] - 5, -np.ones(N - 1))
-            put(rx, 5 * j, -half_n[:, c])                    # x_{j+1}
-            put(rx[1:], 5 * j[1:] - 5, -half_n[1:, c])       # x_j
-            rf = 5 * j + 3 + c                               # F_j definitions
-            put(rf, rf, np.ones(N))
-            put(rf[:-1], rf[:-1] + 5, -np.ones(N - 1))
-            put(rf, 5 * j + 1 + c, -weights)
-        self.lu, self.piv, info = lapack.dgbtrf(ab, kl, ku)
+        self.ab = np.empty((2 * self.KL + self.KU + 1) * 5 * N)
+        self.piv = np.empty(5 * N, np.int32)
+        theta, weights, band = (np.ascontiguousarray(x, dtype=float)
+                                 for x in (theta, weights, band))
+        info = fem_kernels.principal_factor(theta, weights, float(sigma), band, self.ab, self.piv)
         if info != 0:
             raise np.linalg.LinAlgError(f"banded LU: singular pivot {info}")
         self.N = N
 
     def solve(self, r: np.ndarray) -> np.ndarray:
         """x for one right-hand side (N,) or several (N, k)."""
-        r = np.asarray(r, float)
-        cols = 1 if r.ndim == 1 else r.shape[1]
-        rhs = np.zeros((5 * self.N, cols))
-        rhs[0::5] = r.reshape(self.N, cols)
-        x, info = lapack.dgbtrs(self.lu, self.KL, self.KU, rhs, self.piv)
-        if info != 0:
-            raise np.linalg.LinAlgError(f"banded solve: illegal argument {-info}")
-        out = x[0::5]
-        return out[:, 0] if r.ndim == 1 else out
+        r = np.ascontiguousarray(r, dtype=float)
+        out = np.empty_like(r)
+        fem_kernels.principal_solve(self.ab, self.piv, r, out)
+        return out
 

@@ -12,17 +12,6 @@
  */
 #include "fem_kernels.h"
 
-/* One arm's mesh and tendon data plus per-element work arrays. */
-typedef struct {
-    Py_ssize_t N, n;            /* elements, tendons */
-    double h;
-    const double *routes;       /* (n, 2) */
-    const int64_t *nodes;       /* (n,) attachment nodes m_i */
-    double *c, *s;              /* cos, sin phi_e (N) */
-    double *fx, *fy;            /* tendon force beyond element e (N) */
-    double *len, *dx, *dy;      /* cable lengths and unit directions (n) */
-} Arm;
-
 int check_len(Py_buffer *b, Py_ssize_t count, Py_ssize_t item, const char *what)
 {
     if (b->len != count * item) {
@@ -34,7 +23,7 @@ int check_len(Py_buffer *b, Py_ssize_t count, Py_ssize_t item, const char *what)
 }
 
 /* Set up the arm from routes (n, 2) and nodes (n,), N elements; allocates the work arrays. */
-static int arm_init(Arm *a, Py_buffer *routes, Py_buffer *nodes, Py_ssize_t N)
+int arm_init(Arm *a, Py_buffer *routes, Py_buffer *nodes, Py_ssize_t N)
 {
     a->n = nodes->len / (Py_ssize_t)sizeof(int64_t);
     a->N = N;
@@ -68,10 +57,10 @@ static int arm_init(Arm *a, Py_buffer *routes, Py_buffer *nodes, Py_ssize_t N)
     return 0;
 }
 
-static void arm_free(Arm *a) { free(a->c); }
+void arm_free(Arm *a) { free(a->c); }
 
 /* cos and sin of the element angles of theta_1..theta_N (theta_0 = 0). */
-static void arm_trig(Arm *a, const double *angles)
+void arm_trig(Arm *a, const double *angles)
 {
     double left = 0.0;
     for (Py_ssize_t e = 0; e < a->N; e++) {
@@ -81,7 +70,7 @@ static void arm_trig(Arm *a, const double *angles)
 }
 
 /* Cable lengths L_i = |r_i - y_i| and directions d_i = (r_i - y_i) / L_i (Eq. (3)). */
-static void arm_cables(Arm *a, const double *y)
+void arm_cables(Arm *a, const double *y)
 {
     for (Py_ssize_t i = 0; i < a->n; i++) {
         double cx = a->routes[2 * i] - y[2 * i], cy = a->routes[2 * i + 1] - y[2 * i + 1];
@@ -93,7 +82,7 @@ static void arm_cables(Arm *a, const double *y)
 }
 
 /* F_e = sum over tendons with e < m_i of p_i d_i: the tendon forces beyond element e. */
-static void arm_forces(Arm *a, const double *p)
+void arm_forces(Arm *a, const double *p)
 {
     memset(a->fx, 0, sizeof(double) * 2 * a->N);      /* fx and fy are adjacent */
     for (Py_ssize_t i = 0; i < a->n; i++) {
@@ -107,11 +96,29 @@ static void arm_forces(Arm *a, const double *p)
 }
 
 /* Trig, cables and forces of the state u at tensions p. */
-static void arm_state(Arm *a, const double *u, const double *p)
+void arm_state(Arm *a, const double *u, const double *p)
 {
     arm_trig(a, u);
     arm_cables(a, u + a->N);
     arm_forces(a, p);
+}
+
+/* The angle rows f (N,) of the residual at the state of arm_state (angles th =
+ * theta_1..theta_N): (theta_{k+1} - theta_k) - (theta_{k+2} - theta_{k+1}) over h,
+ * minus the load integral (h/2) t_e x F_e of the elements on both sides (Eq. (9)). */
+void arm_angle_rows(const Arm *a, const double *th, double tip_moment, double *f)
+{
+    Py_ssize_t N = a->N;
+    double h = a->h, prev = 0.0;
+    for (Py_ssize_t k = 0; k < N; k++) {
+        double jump = th[k] - prev;
+        double q = 0.5 * h * (a->c[k] * a->fy[k] - a->s[k] * a->fx[k]);
+        f[k] = jump / h - q;
+        if (k > 0)
+            f[k - 1] -= jump / h + q;
+        prev = th[k];
+    }
+    f[N - 1] -= tip_moment;
 }
 
 /* The tridiagonal part T of the tangent, (N, 3) = (lower, diag, upper) per row:
@@ -165,18 +172,7 @@ static PyObject *residual(PyObject *self, PyObject *args)
             const double *th = u.buf;
             double *f = out.buf, h = a.h;
             arm_state(&a, th, p.buf);
-            /* (theta_{k+1} - theta_k) - (theta_{k+2} - theta_{k+1}) over h, minus the
-             * load integral (h/2) t_e x F_e of the elements on both sides (Eq. (9)) */
-            double prev = 0.0;
-            for (Py_ssize_t k = 0; k < N; k++) {
-                double jump = th[k] - prev;
-                double q = 0.5 * h * (a.c[k] * a.fy[k] - a.s[k] * a.fx[k]);
-                f[k] = jump / h - q;
-                if (k > 0)
-                    f[k - 1] -= jump / h + q;
-                prev = th[k];
-            }
-            f[N - 1] -= tip_moment;
+            arm_angle_rows(&a, th, tip_moment, f);
             /* y_i - X_i(theta), X_i = h sum_{e < m_i} t_e (Eq. (2)) */
             double x = 0.0, yv = 0.0;
             /* tendons in any order: accumulate the prefix sums once, in node order */
@@ -559,4 +555,12 @@ static struct PyModuleDef module = {
     "Compiled kernels of the P1 elastica (core/fem.py, docs/model.md §20).", -1, methods,
 };
 
-PyMODINIT_FUNC PyInit_fem_kernels(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit_fem_kernels(void)
+{
+    PyObject *m = PyModule_Create(&module);
+    if (m && PyModule_AddFunctions(m, dynamics_methods) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
+}

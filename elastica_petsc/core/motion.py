@@ -33,7 +33,12 @@ only lower u and repeat until nothing moves, so the result satisfies every
 bound: the forward/backward velocity-profile algorithm of time-optimal path
 following with per-axis speed and acceleration limits.  Each u_k is as large
 as its own caps and its neighbours allow; the total time is compared with the
-lower bound sum_k 1 / cap_k (speeds only) in tests/test_motion.py.
+lower bound sum_k 1 / cap_k (speeds only) in tests/test_motion.py.  The bound
+c grows as the neighbour slows (A_i / (2 u_m)), so slowing a short move can
+let its neighbours run faster, which the passes (they only lower u) miss:
+where an acceleration limit binds, :func:`.motion_chain.chain_speeds` finds
+the shortest schedule over a grid of speeds by dynamic programming along the
+chain of moves, and it replaces the passes' schedule when shorter.
 """
 from __future__ import annotations
 
@@ -43,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
+from .motion_chain import chain_speeds
 
 RELATIVE_TOLERANCE = 1e-9      # of a limit, for rates recomputed from rounded floats
 _MAX_PASSES = 400
@@ -192,16 +198,36 @@ def retime(positions_steps, limits: MotorLimits, *, tips_mm=None,
     dq = np.diff(q, axis=0)
     dtip = (np.zeros(len(dq)) if tips_mm is None
             else np.linalg.norm(np.diff(np.asarray(tips_mm, float), axis=0), axis=1))
-    u, labels = _caps(dq, dtip, limits, speed_mm_s)
-    speed_bound_s = float(np.sum(1.0 / u))
-    u = u.copy()
+    caps, cap_labels = _caps(dq, dtip, limits, speed_mm_s)
+    speed_bound_s = float(np.sum(1.0 / caps))
+    u, labels = caps.copy(), cap_labels.copy()
     forward, backward = range(len(u)), range(len(u) - 1, -1, -1)
     for _ in range(_MAX_PASSES):
         moved = _pass(u, labels, dq, limits.accel_steps_s2, forward, -1)
         moved = _pass(u, labels, dq, limits.accel_steps_s2, backward, +1) or moved
         if not moved:
             break
+    if np.any(np.isfinite(limits.accel_steps_s2)) and np.any(u < caps * (1 - 1e-12)):
+        chain = chain_speeds(dq, caps, u, limits.accel_steps_s2)   # motion_chain docstring
+        shorter = np.sum(1.0 / chain) < np.sum(1.0 / u) * (1 - 1e-12)
+        if shorter and not check(q, 1.0 / chain, limits):     # playable, checked again
+            u = chain
+            labels = np.where(u >= caps * (1 - 1e-9), cap_labels,
+                              _binding_accel(dq, u, limits.accel_steps_s2)).astype(object)
     return Timing(1.0 / u, labels, speed_bound_s)
+
+
+def _binding_accel(dq, u, accel) -> np.ndarray:
+    """Per move, ``accel_I`` of the motor whose acceleration limit at either end
+    of the move is nearest to binding (the move's speed is below its cap)."""
+    r = dq * u[:, None]
+    rates = np.vstack([np.zeros(dq.shape[1]), r, np.zeros(dq.shape[1])])
+    span = 0.5 * (np.concatenate(([0.0], 1.0 / u)) + np.concatenate((1.0 / u, [0.0])))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        use = np.abs(np.diff(rates, axis=0)) / span[:, None] / accel[None, :]
+    use = np.nan_to_num(use, nan=0.0)
+    worst = np.maximum(use[:-1], use[1:])                 # the two rows around each move
+    return np.array([f"accel_{i + 1}" for i in np.argmax(worst, axis=1)], dtype=object)
 
 
 def step_events(positions_steps, time_s, motor: int) -> np.ndarray:

@@ -24,7 +24,6 @@ import itertools
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import lsq_linear
 
 from .errors import InputError
 
@@ -105,6 +104,8 @@ def closest_in_box(A, c, lo, hi) -> tuple[np.ndarray, float]:
     """The step in the box that best meets the linearised constraints:
     argmin |A^T d + c| over lo <= d <= hi (bounded least squares, scipy),
     and the residual |A^T d + c| it leaves."""
+    from scipy.optimize import lsq_linear      # here: scipy.optimize costs ~0.1 s to import
+
     A, c = np.asarray(A, float), np.asarray(c, float)
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     d = lo.copy()

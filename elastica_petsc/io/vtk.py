@@ -19,6 +19,8 @@ beside them; booleans as UInt8 0/1 (VTK has no boolean type).
   index, and ``<name>_path.vtu``: the tips joined by line cells, with per-point
   ``target_x_mm``, ``reached``, ``tip_error_mm``, ``tension_i_N``,
   ``tension_i_p``, ``cable_length_i_mm``, ``time_s``.
+* :func:`write_simulation` — a run of ``simulate``: one state file per recorded
+  step, ``simulation.pvd`` with their times in seconds, and ``simulation_tip.vtu``.
 * :func:`write_workspace` — a workspace map (HDF5 of ``elastica-petsc
   workspace``): every sample as a vertex, plus a quad for every lattice
   cell whose four corners were sampled, with every per-sample field as point
@@ -228,6 +230,37 @@ def write_trace(directory, arm, trace, *, name: str = "trace", times_s=None,
     files.append(write_vtu(directory / f"{name}_path.vtu", trace.tips_mm,
                            [(VTK_LINE, np.column_stack((np.arange(K - 1), np.arange(1, K))))],
                            data))
+    return files
+
+
+def write_simulation(directory, result, *, name: str = "simulation",
+                     on_step=None) -> list[Path]:
+    """A run of ``simulate`` (a SimulationResult) into ``directory``: the arm and
+    its cables at every recorded step (``<name>_<K>.vtu``, as :func:`write_state`),
+    ``<name>.pvd`` listing them with their time in seconds, and ``<name>_tip.vtu``:
+    the tip's path as line cells with per-step ``time_s``, ``tension_i_N``,
+    ``cable_length_i_mm`` and the energies ``kinetic_J``, ``strain_J``, ``work_J``;
+    ``on_step(done, total)`` after each state file."""
+    directory = Path(directory)
+    directory.mkdir(exist_ok=True)
+    T = len(result.time_s)
+    digits = max(4, len(str(T - 1)))
+    files = []
+    for k, state in enumerate(result.snapshots()):
+        files.append(write_state(directory / f"{name}_{k:0{digits}d}.vtu", result.arm, state))
+        if on_step is not None:
+            on_step(k + 1, T)
+    files.append(write_pvd(directory / f"{name}.pvd",
+                           [(t, f.name) for t, f in zip(result.time_s, files)]))
+    data = {"time_s": result.time_s, "step": np.arange(T)}
+    for i in range(result.tensions_N.shape[1]):
+        data[f"tension_{i + 1}_N"] = result.tensions_N[:, i]
+        data[f"cable_length_{i + 1}_mm"] = result.cable_lengths_mm[:, i]
+    for c, kind in enumerate(("kinetic", "strain", "work")):
+        data[f"{kind}_J"] = result.energy_J[:, c]
+    cells = (VTK_LINE, np.column_stack((np.arange(T - 1), np.arange(1, T)))) if T > 1 else \
+        (VTK_VERTEX, np.zeros((1, 1), np.int64))        # a run stopped at its first step
+    files.append(write_vtu(directory / f"{name}_tip.vtu", result.tip_mm, [cells], data))
     return files
 
 

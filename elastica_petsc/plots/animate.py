@@ -5,6 +5,8 @@
 * :func:`animate_control` — the arm through the iterations of one tip-control
   solve (Fig. 2 as a movie): the equilibrium (Eq. (9)) at each iterate of the
   tensions, re-solved warm-started from the previous iterate.
+* :func:`animate_simulation` — a run of ``simulate`` (the arm in motion), frames
+  timed to the simulated clock (real time, or ``slow_motion`` times slower).
 
 GIF is written with Pillow (matplotlib's ``PillowWriter``); MP4 needs the
 ``ffmpeg`` program on PATH (:func:`check_animation_path` says so before any
@@ -68,6 +70,18 @@ def _pick(count: int, max_frames: int) -> np.ndarray:
     return np.unique(np.linspace(0, count - 1, min(count, max_frames)).round().astype(int))
 
 
+def frame_times(end_s: float, slow_motion: float, fps: float, max_frames: int):
+    """(times [s] of the frames in the run shown, display time of each [s]) for a run
+    of ``end_s`` played ``slow_motion`` times slower than real time: one frame every
+    1/``fps`` s of playback, longer if more than ``max_frames`` would be needed."""
+    if not slow_motion > 0:
+        raise InputError(f"--slow-motion must be positive, got {slow_motion}")
+    play_s = end_s * slow_motion
+    show_s = max(1.0 / fps, play_s / max(max_frames - 1, 1))    # each frame's display
+    count = int(np.ceil(play_s / show_s - 1e-9)) + 1
+    return np.minimum(np.arange(count) * show_s, play_s) / slow_motion, show_s
+
+
 def trace_frames(arm: Arm, trace, max_frames: int = 150, approach=None, times_s=None,
                  slow_motion: float = 1.0, fps: float = 10.0) -> list[Frame]:
     """Frames of a traced path (``trace.results`` needed: trace with
@@ -83,12 +97,7 @@ def trace_frames(arm: Arm, trace, max_frames: int = 150, approach=None, times_s=
     rows = [(name, k, t) for name, t in parts for k in range(t.n_points)]
     timed = times_s is not None and len(times_s) == len(rows) and np.all(np.isfinite(times_s))
     if timed:
-        if not slow_motion > 0:
-            raise InputError(f"--slow-motion must be positive, got {slow_motion}")
-        play_s = float(times_s[-1]) * slow_motion
-        show_s = max(1.0 / fps, play_s / max(max_frames - 1, 1))    # each frame's display
-        count = int(np.ceil(play_s / show_s - 1e-9)) + 1
-        at_s = np.minimum(np.arange(count) * show_s, play_s) / slow_motion   # schedule time
+        at_s, show_s = frame_times(float(times_s[-1]), slow_motion, fps, max_frames)
         picks = np.clip(np.searchsorted(times_s, at_s * (1 + 1e-12), side="right") - 1, 0,
                         len(rows) - 1)
     else:
@@ -117,16 +126,104 @@ def control_frames(controller, result) -> list[Frame]:
     return frames
 
 
+def simulation_frames(result, *, slow_motion: float = 1.0, fps: float = 20.0,
+                      max_frames: int = 600) -> list[Frame]:
+    """Frames of a run of ``simulate`` (a SimulationResult) timed to its clock,
+    ``slow_motion`` times slower than real time (:func:`frame_times`): each shows the
+    recorded step nearest to its time, captioned with the time and the tensions."""
+    t = result.time_s
+    at_s, show_s = frame_times(float(t[-1]), slow_motion, fps, max_frames)
+    frames = []
+    for j, state in enumerate(result.snapshots(_nearest(t, at_s))):
+        frame = _frame(result.arm, state, f"t = {at_s[j]:.2f} s:  {_tensions(result.arm, state.p)}")
+        frames.append(replace(frame, duration_s=show_s))
+    return frames
+
+
+def _nearest(times: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """Index of the entry of the increasing ``times`` nearest to each of ``at``."""
+    if len(times) == 1:
+        return np.zeros(len(at), int)
+    k = np.clip(np.searchsorted(times, at), 1, len(times) - 1)
+    return np.where(at - times[k - 1] <= times[k] - at, k - 1, k)
+
+
+def animate_simulation(result, path, *, slow_motion: float = 1.0, fps: float = 20.0,
+                       max_frames: int = 600, on_frame=None) -> Path:
+    """A run of ``simulate`` as a GIF/MP4 (by suffix): the arm, its cables and the tip
+    trail in real time (or ``slow_motion`` times slower), with the quasi-static path
+    of a motor schedule as the target path when there is one; ``on_frame(done, total)``
+    reports progress."""
+    frames = simulation_frames(result, slow_motion=slow_motion, fps=fps, max_frames=max_frames)
+    at_s, _ = frame_times(float(result.time_s[-1]), slow_motion, fps, max_frames)
+    moved = result.tip_mm - result.tip_mm[0]
+    history = History(result.time_s, moved, ("tip x - x(0)", "tip y - y(0)"),
+                      "tip displacement [mm]", at_s)
+    speed = "real time" if slow_motion == 1 else f"{slow_motion:g}x slower than real time"
+    inputs = {"tensions": "constant tensions", "history": "tension history",
+              "schedule": "motor schedule"}
+    return animate(result.arm, frames, path, targets_mm=result.planned_tip_mm,
+                   title=f"Simulation ({inputs.get(result.input, result.input)}, "
+                         f"{result.elements} elements); {speed}", fps=fps, history=history,
+                   on_frame=on_frame)
+
+
+@dataclass(frozen=True)
+class History:
+    """A time plot under the arm: ``values`` (T, k) against ``time_s`` (T,) drawn up to
+    each frame's time ``frame_time_s`` (one per frame), with a cursor there."""
+
+    time_s: np.ndarray
+    values: np.ndarray
+    labels: tuple
+    ylabel: str
+    frame_time_s: np.ndarray
+
+
+def _history_panel(ax, history: History):
+    """Draw the axes of ``history``; returns draw(k) -> the artists moved for frame k."""
+    t, v = history.time_s, history.values
+    lines = [ax.plot([], [], lw=1.2, label=label)[0] for label in history.labels]
+    cursor = ax.axvline(history.frame_time_s[0], color="0.4", lw=0.8)
+    pad = 0.05 * max(float(np.ptp(v)), 1e-9)
+    ax.set_xlim(t[0], t[-1] if t[-1] > t[0] else t[0] + 1.0)
+    ax.set_ylim(float(v.min()) - pad, float(v.max()) + pad)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(history.ylabel)
+    ax.grid(True, lw=0.3, alpha=0.6)
+    ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=len(lines), fontsize=7,
+              frameon=False)                       # above the panel, off the curves
+
+    def draw(k):
+        now = history.frame_time_s[k]
+        j = int(np.searchsorted(t, now * (1 + 1e-12), side="right"))
+        for c, line in enumerate(lines):
+            line.set_data(t[:j], v[:j, c])
+        cursor.set_xdata([now, now])
+        return [*lines, cursor]
+
+    return draw
+
+
 def animate(arm: Arm, frames: list[Frame], path, *, targets_mm=None, title: str = "",
-            fps: float = 10.0) -> Path:
+            fps: float = 10.0, history: History | None = None, on_frame=None) -> Path:
     """Write the frames as a GIF or MP4 (by the suffix of ``path``): the arm,
-    its cables to the routing points, the tip trail so far and the targets."""
+    its cables to the routing points, the tip trail so far and the targets;
+    with ``history``, a time plot under it (:class:`History`); ``on_frame(done,
+    total)`` after each frame drawn."""
     from matplotlib import animation
 
     path = Path(path)
     if not frames:
         raise InputError("nothing to animate (no frames)")
-    fig, ax = figure(figsize=(6.4, 5.2))
+    if history is None:
+        fig, ax = figure(figsize=(6.4, 5.2))
+        draw_history = None
+    else:
+        fig, (ax, hax) = figure(nrows=2, figsize=(6.4, 5.2),
+                                gridspec_kw={"height_ratios": (3, 2), "hspace": 0.45})
+        fig.subplots_adjust(bottom=0.17, top=0.93)
+        draw_history = _history_panel(hax, history)
     draw_setting(ax, arm)
     routes = arm.routes() * arm.length_mm
     if targets_mm is not None:
@@ -159,23 +256,26 @@ def animate(arm: Arm, frames: list[Frame], path, *, targets_mm=None, title: str 
         for c, line in zip(cables, f.cables_mm):
             c.set_data(line[:, 0], line[:, 1])
         caption.set_text(f.caption)
-        return [arm_line, tip, trail, caption, *cables]
+        more = [] if draw_history is None else draw_history(k)
+        return [arm_line, tip, trail, caption, *cables, *more]
 
     import matplotlib.pyplot as plt
     try:
         shown_ms = [int(round(1000.0 * (f.duration_s or 1.0 / fps))) for f in frames]
         if path.suffix.lower() == ".gif":
-            _write_gif(fig, draw, shown_ms, path)
+            _write_gif(fig, draw, shown_ms, path, on_frame)
         else:                          # constant frame rate: the frames' mean duration
             rate = 1000.0 / float(np.mean(shown_ms))
             movie = animation.FuncAnimation(fig, draw, frames=len(frames), blit=False)
-            movie.save(path, writer=animation.FFMpegWriter(fps=rate), dpi=DPI)
+            movie.save(path, writer=animation.FFMpegWriter(fps=rate), dpi=DPI,
+                       progress_callback=None if on_frame is None else
+                       (lambda k, total: on_frame(k + 1, total)))
     finally:
         plt.close(fig)
     return path
 
 
-def _write_gif(fig, draw, shown_ms: list[int], path: Path) -> None:
+def _write_gif(fig, draw, shown_ms: list[int], path: Path, on_frame=None) -> None:
     """Blitted frames into an animated GIF with Pillow: the static picture
     (axes, routing points, targets) is drawn once, each frame redraws only
     the moving artists (5x faster than redrawing the figure twice per frame
@@ -195,7 +295,11 @@ def _write_gif(fig, draw, shown_ms: list[int], path: Path) -> None:
         for artist in draw(k):
             fig.draw_artist(artist)
         rgb = np.asarray(canvas.buffer_rgba())[..., :3]
-        images.append(Image.fromarray(rgb.copy()))      # Pillow picks a palette per frame
+        # a palette of its own per frame, made now: 1 byte per pixel kept, not 3 (what
+        # Pillow's GIF writer would do to an RGB frame at the end, with all of them held)
+        images.append(Image.fromarray(rgb).convert("P", palette=Image.Palette.ADAPTIVE))
+        if on_frame is not None:
+            on_frame(k + 1, len(shown_ms))
     images[0].save(path, save_all=True, append_images=images[1:], loop=0,
                    duration=shown_ms, optimize=False)
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import figure, save
+from .common import draw_routes, figure, save
 
 REGION_STYLE = {"W0": ("tab:blue", "-", "W_0 boundary (continuation)"),
                 "restricted": ("tab:purple", "--", "restricted workspace boundary")}
@@ -22,12 +22,7 @@ def plot_boundary(data: dict, path, *, arm_length_mm: float, routes_mm: np.ndarr
         a = np.linspace(0, 2 * np.pi, 400)
         ax.plot(arm_length_mm * np.cos(a), arm_length_mm * np.sin(a), "k--", lw=0.8,
                 label=f"rigid link of length l = {arm_length_mm:g} mm")
-        ax.plot(routes_mm[:, 0], routes_mm[:, 1], "k^", ms=6, ls="none", zorder=10,
-                label="routing points r_" + ", r_".join(str(i) for i in
-                                                        range(1, len(routes_mm) + 1)))
-        for i, r in enumerate(routes_mm, start=1):          # drawn over the curves, named
-            ax.annotate(f"r_{i}", r, xytext=(5, -3), textcoords="offset points", fontsize=9,
-                        zorder=10)
+        draw_routes(ax, routes_mm, zorder=10)           # drawn over the curves, named
     if "W0" in data["regions"]:
         shade_w0(ax, data["regions"]["W0"], arm_length_mm / 300)     # holes (around r_1) white
     if "W0" in data["regions"] and samples is None:

@@ -48,6 +48,20 @@ def draw_setting(ax, arm: Arm) -> None:
                 label=f"routing point r{i + 1}")
 
 
+def draw_routes(ax, routes_mm, zorder: float = 7) -> None:
+    """The routing points as black triangles named r_1, r_2, ... (one legend entry),
+    white-edged and with a white halo behind the names: legible over samples and curves."""
+    from matplotlib.patheffects import withStroke
+
+    routes_mm = np.asarray(routes_mm, float)
+    ax.plot(routes_mm[:, 0], routes_mm[:, 1], "k^", ms=8, ls="none", mec="white", mew=0.6,
+            zorder=zorder, label="routing points r_" + ", r_".join(
+                str(i) for i in range(1, len(routes_mm) + 1)))
+    for i, r in enumerate(routes_mm, start=1):
+        ax.annotate(f"r_{i}", r, xytext=(5, -3), textcoords="offset points", fontsize=9,
+                    zorder=zorder, path_effects=[withStroke(linewidth=3, foreground="white")])
+
+
 def finish_geometry(ax, title: str) -> None:
     """Equal aspect, labels in mm, and the legend below the axes, off the drawing."""
     ax.set_aspect("equal")

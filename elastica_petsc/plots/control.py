@@ -168,8 +168,11 @@ def plot_curvature(arm: Arm, trace, path) -> None:
             same[0].append(int(k))
         else:
             shown.append(([int(k)], eq))
+    # states drawn later are thinner: a curve drawn over an earlier, nearly equal one
+    # (two path points of similar shape) leaves it visible as a band on both sides
+    widths = 1.4 + 1.0 * np.arange(len(shown))[::-1]
     for j, (names, eq) in enumerate(shown):
-        line, = ax.plot(s_mid, eq.curvature, lw=1.6, zorder=2 + j,
+        line, = ax.plot(s_mid, eq.curvature, lw=widths[j], zorder=2 + j,
                         label=" = ".join(f"point {k}" for k in names)
                         + (" (the path is closed)" if len(names) > 1 else ""))
         piecewise = np.empty(disc.n_elements)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import figure, save
+from .common import figure, legend_below, save
 
 
 def plot_area_design(result, path) -> None:
@@ -24,7 +24,12 @@ def plot_area_design(result, path) -> None:
         ax.plot(closed[:, 0], closed[:, 1], "-", color=colour, lw=1.5,
                 label=f"{label}: loop area {area.area_mm2:.0f} mm^2{text}")
         routes = np.array([t.route_mm for t in arm.tendons])
-        ax.plot(routes[:, 0], routes[:, 1], "^", color=colour, ms=7, ls="none")
+        ax.plot(routes[:, 0], routes[:, 1], "^", color=colour, ms=7, ls="none",
+                label=f"routing points {label}")
+        for i, r in enumerate(routes, start=1):       # r_i named: the triangles look alike
+            left = label == "before"                  # before on the left, after on the right
+            ax.annotate(f"r_{i}", r, xytext=(-6 if left else 6, -3), textcoords="offset points",
+                        fontsize=8, color=colour, ha="right" if left else "left")
     ax.plot([0, result.arm_before.length_mm], [0, 0], "k-", lw=0.8, label="straight arm")
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
@@ -32,7 +37,7 @@ def plot_area_design(result, path) -> None:
     verdict = "confirmed" if result.confirmed else "NOT confirmed"
     ax.set_title(f"W_0 within 0 <= P_i <= {result.p_max * result.arm_before.force_scale_N:.3g} N"
                  f" (gain {verdict} by re-sampling)", fontsize=10)
-    ax.legend(fontsize=7, loc="lower left")
+    legend_below(ax, ncol=1, fontsize=7)             # below the axes: it hides no loop
     ok = [h["area_mm2"] if h["feasible"] else np.nan for h in result.history]
     hx.plot(np.arange(1, len(ok) + 1), ok, "o", ms=3, color="tab:blue", label="feasible")
     bad = [(k + 1, h["area_mm2"]) for k, h in enumerate(result.history)
@@ -47,6 +52,6 @@ def plot_area_design(result, path) -> None:
                 label="rejected by the clearance check (not traced)")
     hx.set_xlabel("evaluation")
     hx.set_ylabel("loop area [mm^2]")
-    hx.legend(fontsize=7)
+    legend_below(hx, ncol=1, fontsize=7)             # nor the rejected marks on the axis
     save(fig, path)
 

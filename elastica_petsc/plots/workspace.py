@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import figure, save
+from .common import draw_routes, figure, save
 from ..io.workspace import share_of
 from ..studies.workspace import Status, reason_counts
 
@@ -110,11 +110,7 @@ def plot_samples(data: dict, ax, paths=None) -> None:
             # one marker size for every class: only colour and shape tell them apart
             ax.plot(pts[:, 0], pts[:, 1], marker, color=colour, ms=MARKER_SIZE, ls="none",
                     label=f"{label} ({count})")
-    routes = data["routes_mm"]
-    ax.plot(routes[:, 0], routes[:, 1], "k^", ms=6, ls="none",
-            label="routing points r_" + ", r_".join(str(i) for i in range(1, len(routes) + 1)))
-    for i, r in enumerate(routes, start=1):
-        ax.annotate(f"r_{i}", r, xytext=(5, -3), textcoords="offset points", fontsize=9)
+    draw_routes(ax, data["routes_mm"])
     _rigid_link(ax, data["length_mm"], whole=bool(np.any(where[:, 1] < 0)))
     _paths_overlay(ax, paths)
     ax.plot(0, 0, "ks", ms=6)

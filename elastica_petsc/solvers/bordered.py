@@ -55,8 +55,9 @@ class BorderedPattern:
         self.n = size + k
         self._transpose = None
 
-    def values(self, base_values, columns, rows) -> np.ndarray:
-        out = np.empty(self.csr[0][-1])
+    def values(self, base_values, columns, rows, out: np.ndarray | None = None) -> np.ndarray:
+        """The CSR values of [[A, C], [R]] (into ``out`` if given)."""
+        out = np.empty(self.csr[0][-1]) if out is None else out
         out[self.base_pos] = base_values
         out[self.col_pos] = columns
         out[self.row_pos] = rows
@@ -107,15 +108,15 @@ class BorderedAIJ:
     def __init__(self, indptr, indices, size: int, k: int):
         self.pattern = BorderedPattern(indptr, indices, size, k)
         self.csr, self.size, self.k = self.pattern.csr, size, k
+        # the matrix keeps this array (no copy): fill writes the values in place and
+        # assembles (which raises the matrix state: the LU is refactored), no setValuesCSR
         self.values = np.zeros(self.csr[0][-1])
-        self.mat = PETSc.Mat().createAIJ(size=(size + k, size + k), csr=(*self.csr,
-                                         self.values), comm=PETSc.COMM_SELF)
+        self.mat = PETSc.Mat().createAIJWithArrays((size + k, size + k),
+                                                   (*self.csr, self.values), comm=PETSc.COMM_SELF)
 
-    def fill(self, base_values, columns, rows, mat: PETSc.Mat | None = None) -> None:
-        self.values[:] = self.pattern.values(base_values, columns, rows)
-        target = self.mat if mat is None else mat
-        target.setValuesCSR(*self.csr, self.values)
-        target.assemble()
+    def fill(self, base_values, columns, rows) -> None:
+        self.pattern.values(base_values, columns, rows, out=self.values)
+        self.mat.assemble()
 
     def destroy(self) -> None:
         self.mat.destroy()

@@ -153,11 +153,10 @@ class DynamicsSolver:
         return self.disc.load_derivative(self.disc.consistent_state(theta))[:, : self.N]
 
     def residual(self, t, U, V, A) -> np.ndarray:
-        N, disc = self.N, self.disc
+        N = self.N
         theta, p = self.theta_of(U), V[N:]
-        u = disc.consistent_state(theta)
         out = np.empty(N + self.n)
-        out[:N] = self.inertia.force(theta, V[:N], A[:N]) + disc.residual(u, p)[:N]
+        out[:N] = self.inertia.residual(theta, V[:N], A[:N], p)
         if self.cables is not None:          # length control: the complementarity rows
             out[N:] = self.cables.rows(t, U, V, *self.stage)[0]
         else:
@@ -182,10 +181,11 @@ class DynamicsSolver:
         C = -(g[..., 0] * t_.d[:, :1] + g[..., 1] * t_.d[:, 1:]).T   # grad L_i, (N, n)
         Z = inv.solve(np.column_stack((Ut, C)))
         Zu, Zc = Z[:, : self.n], Z[:, self.n:]
-        cap = np.eye(self.n) + c[:, None] * (Ut.T @ Zu)
+        woodbury = np.linalg.solve(np.eye(self.n) + c[:, None] * (Ut.T @ Zu),
+                                   c[:, None] * Ut.T)       # cap^-1 diag(c) Ut^T, (n, N)
 
         def inverse(r2):           # (A + Ut diag(c) Ut^T)^{-1} r2 by Woodbury
-            return r2 - Zu @ np.linalg.solve(cap, c[:, None] * (Ut.T @ r2))
+            return r2 - Zu @ (woodbury @ r2)
 
         Y = inverse(Zc)                                      # A'^{-1} C
         gain, taut, row_scale = np.ones(self.n), np.zeros(self.n, bool), 1.0

@@ -21,7 +21,7 @@ cable has p_i = 0 and g_i > 0; a taut one p_i >= 0 and g_i = 0.  Angles and
 attachment unknowns are unbounded.  The consistent Jacobian is the bordered
 Jacobian, the columns dF/dp_i (:meth:`Discretisation.load_derivative`), and
 the rows dg_i/dy_i = d_i^T; its CSR pattern extends ``disc.pattern`` once
-and is filled with ``setValuesCSR``.  Natural-order LU fills only the
+and its values are written in place (``createAIJWithArrays``).  Natural-order LU fills only the
 border: O(N) per Newton step.
 
 Deflation
@@ -130,8 +130,12 @@ class AugmentedSystem:
         self._last_equations = None          # (key, (F, g)) of the last evaluation
         self._build_pattern()
         z0 = self.augment(disc.straight(), np.zeros(n))
-        self.J = PETSc.Mat().createAIJ(size=(self.size, self.size), comm=comm,
-                                       csr=(self.indptr, self.indices, self.jacobian_values(z0)))
+        # J keeps this array (no copy): the Jacobian callback writes its entries in
+        # place and assembles (as EquilibriumSolver), with no MatSetValuesCSR
+        self._values = self.jacobian_values(z0)
+        self.J = PETSc.Mat().createAIJWithArrays((self.size, self.size),
+                                                 (self.indptr, self.indices, self._values),
+                                                 comm=comm)
         self.x = PETSc.Vec().createSeq(self.size, comm=comm)
         self.f = self.x.duplicate()
         self.xl, self.xu = self.x.duplicate(), self.x.duplicate()
@@ -234,8 +238,8 @@ class AugmentedSystem:
         Fv.setArray(self.residual(X.getArray(readonly=True)))
 
     def _form_jacobian(self, snes, X, J, P) -> None:
-        P.setValuesCSR(self.indptr, self.indices, self.jacobian_values(X.getArray(readonly=True)))
-        P.assemble()
+        self._values[:] = self.jacobian_values(X.getArray(readonly=True))
+        P.assemble()                    # P is self.J: its entries are self._values
 
     def scipy_jacobian(self, z) -> sp.csr_matrix:
         return sp.csr_matrix((self.jacobian_values(z), self.indices, self.indptr),

@@ -197,6 +197,17 @@ class SeedLibrary:
                 raise
         return self._seeds
 
+    def adopt(self, seeds: list[Start], solves: int, stopped: bool, disc=None) -> None:
+        """Use the ``seeds`` of another library of the same arm and controller
+        (e.g. built on another rank: a fixed function of the arm), with its
+        count of ``solves`` and whether it ``stopped`` at the budget.  Their
+        equilibria are bound to ``disc`` (default the controller's: they may
+        come with a copy of it)."""
+        disc = self.controller.disc if disc is None else disc
+        self._seeds = [Start(dataclasses.replace(s.equilibrium, disc=disc), s.loading, s.label)
+                       for s in seeds]
+        self.solves, self.stopped = int(solves), bool(stopped)
+
     def _keep(self, eq: Equilibrium, loading: Loading, label: str) -> bool:
         ok = eq.converged and eq.stable and np.min(eq.cable_lengths) > 5 * COLLAPSE_LENGTH
         if ok:

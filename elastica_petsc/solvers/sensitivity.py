@@ -123,26 +123,9 @@ class SensitivitySolver:
             raise SensitivityError(
                 "sensitivities need a converged equilibrium: " + (eq.message or eq.reason))
         u, p = eq.u, np.asarray(eq.p, float)
-        self._assemble(u, p)
-        try:
-            self.ksp.setUp()
-        except PETSc.Error as err:
-            raise SensitivityError(
-                f"the tangent at p = {np.array2string(p, precision=4)} is singular "
-                "(a limit point: the sensitivities are unbounded)") from err
         dFdp = disc.load_derivative(u)
         n, N = disc.n_tendons, disc.n_elements
-        du = np.empty((n, disc.size))
-        for i in range(n):
-            self.rhs.setArray(-dFdp[i])
-            self.ksp.solve(self.rhs, self.sol)
-            reason = self.ksp.getConvergedReason()
-            if reason < 0:
-                raise SensitivityError("sensitivity solve failed, KSP reason "
-                                       + reason_name(KSP_REASONS, reason))
-            du[i] = self.sol.getArray(readonly=True)
-        if not np.all(np.isfinite(du)):
-            raise SensitivityError("non-finite sensitivities: the tangent is singular")
+        du = self.tangent_solves(u, p, -dFdp)
         alpha = np.zeros((n, N + 1))
         alpha[:, 1:] = du[:, :N]
         border = du[:, N:].reshape(n, -1, 2)
@@ -159,6 +142,35 @@ class SensitivitySolver:
             dL = -(attach * eq.directions[None]).sum(axis=2)            # -d_j . dx_j/dp_i
         return Sensitivity(p=p.copy(), alpha=alpha, tip=tip, attachments=attach,
                            attachments_border=border, cable_lengths=dL)
+
+    def tangent_solves(self, u: np.ndarray, p: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """Rows x_k with J(u, p) x_k = rhs_k (J = dF/du; one factorisation for
+        all rows), at any (u, p), an equilibrium or not; SensitivityError if J
+        is singular (a limit point) or a solve fails."""
+        self._assemble(u, p)
+        try:
+            self.ksp.setUp()
+        except PETSc.Error as err:
+            raise SensitivityError(
+                f"the tangent at p = {np.array2string(p, precision=4)} is singular "
+                "(a limit point: the sensitivities are unbounded)") from err
+        return self.solve_again(rhs)
+
+    def solve_again(self, rhs: np.ndarray) -> np.ndarray:
+        """Rows x_k with J x_k = rhs_k for the J factored last (by
+        :meth:`tangent_solves` or :meth:`compute`): no new factorisation."""
+        out = np.empty((len(rhs), self.disc.size))
+        for k, row in enumerate(rhs):
+            self.rhs.setArray(row)
+            self.ksp.solve(self.rhs, self.sol)
+            reason = self.ksp.getConvergedReason()
+            if reason < 0:
+                raise SensitivityError("sensitivity solve failed, KSP reason "
+                                       + reason_name(KSP_REASONS, reason))
+            out[k] = self.sol.getArray(readonly=True)
+        if not np.all(np.isfinite(out)):
+            raise SensitivityError("non-finite sensitivities: the tangent is singular")
+        return out
 
     def parameter_derivative(self, eq: Equilibrium, dFdq: np.ndarray):
         """du/dq and d x_t/dq at fixed tensions for a design parameter q whose

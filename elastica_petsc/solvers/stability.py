@@ -222,7 +222,20 @@ def schur_asymmetry(T, B, C, rng: np.random.Generator, probes: int = 4) -> float
     return float(np.linalg.norm(KV - KTV) / np.linalg.norm(KV))
 
 
-def _diag_mat(values: np.ndarray) -> PETSc.Mat:
+def gershgorin_lower_bound(disc: Discretisation, u, p, weights: np.ndarray) -> float:
+    """Gershgorin lower bound of the spectrum of (T, diag(weights)), hence of
+    (K, diag(weights)) since K - T = W W^T >= 0."""
+    theta, y = disc.split(np.asarray(u, float))
+    _, d = disc.cables(y)
+    band = disc.band(theta, d, np.asarray(p, float))
+    s = 1.0 / np.sqrt(weights)
+    lower = np.abs(band[1:, 0]) * s[1:] * s[:-1]      # |T[r, r-1]|, r >= 1
+    upper = np.abs(band[:-1, 2]) * s[:-1] * s[1:]     # |T[r, r+1]|, r < N-1
+    radius = np.append(0.0, lower) + np.append(upper, 0.0)
+    return float(np.min(band[:, 1] * s * s - radius))
+
+
+def diagonal_matrix(values: np.ndarray) -> PETSc.Mat:
     """A diagonal AIJ matrix on COMM_SELF."""
     n = len(values)
     idx = np.arange(n + 1, dtype=np.int32)
@@ -332,7 +345,7 @@ class StabilitySolver:
         self.n_border = size - N
         self.A = PETSc.Mat().createAIJ(size=(size, size), csr=(indptr, indices, values),
                                        comm=self.comm)
-        self.B = _diag_mat(np.concatenate((self.m, np.zeros(self.n_border))))
+        self.B = diagonal_matrix(np.concatenate((self.m, np.zeros(self.n_border))))
         self.options.label(self.A, self.B)
         # a fixed initial vector: each eigen solve is reproducible bit for bit,
         # whatever solves the process did before (workspace results must not
@@ -343,7 +356,7 @@ class StabilitySolver:
         self.nev = self.eps.getDimensions()[0]
         self.eps_raw = None
         if mass != "paper":
-            self.B_raw = _diag_mat(np.concatenate((np.ones(N), np.zeros(self.n_border))))
+            self.B_raw = diagonal_matrix(np.concatenate((np.ones(N), np.zeros(self.n_border))))
             self.eps_raw = self._make_eps(self.A, self.B_raw, 1, tol, prefix + "raw_")
         self.inertia = InertiaCounter(disc, comm=self.comm,
                                       options_prefix=self.options.name("inertia_"))
@@ -383,18 +396,8 @@ class StabilitySolver:
         self.A.assemble()
 
     def lower_bound(self, u, p, weights=None) -> float:
-        """Gershgorin lower bound of the spectrum of (T, diag(weights)), hence of
-        (K, diag(weights)) since K - T = W W^T >= 0 (default weights: the mass)."""
-        disc = self.disc
-        theta, y = disc.split(np.asarray(u, float))
-        _, d = disc.cables(y)
-        band = disc.band(theta, d, np.asarray(p, float))
-        w = self.m if weights is None else weights
-        s = 1.0 / np.sqrt(w)
-        lower = np.abs(band[1:, 0]) * s[1:] * s[:-1]      # |T[r, r-1]|, r >= 1
-        upper = np.abs(band[:-1, 2]) * s[:-1] * s[1:]     # |T[r, r+1]|, r < N-1
-        radius = np.append(0.0, lower) + np.append(upper, 0.0)
-        return float(np.min(band[:, 1] * s * s - radius))
+        """:func:`gershgorin_lower_bound` (default weights: the mass)."""
+        return gershgorin_lower_bound(self.disc, u, p, self.m if weights is None else weights)
 
     # --- asymmetry ----------------------------------------------------------------------
     def asymmetry(self, u, p, probes: int = 4) -> float:

@@ -17,8 +17,10 @@ covariance, correlations with theta included); a profile that does not curve
 up (c <= 0) leaves sigma undetermined.  The resolution is the element length h:
 a sigma far below h says the node is decided by the data (the attachment is
 then known to the resolution, not to sigma); finer attachments need more
-elements.  Under mpiexec every rank runs the same search (its fits on one rank);
-the final calibration spreads its rows.
+elements.  With ``comm`` (mpi4py) every fit of the search spreads its rows
+over the ranks as the final calibration does (:class:`.CalibrationProblem`):
+each rank solves its share of the rows, the residuals are gathered, and every
+rank takes the same search steps on the same (gathered) objective values.
 """
 from __future__ import annotations
 
@@ -101,9 +103,10 @@ class AttachmentSearch:
 
 def search_attachments(arm: Arm, data, vary, tendons, *, elements: int, bounds=None,
                        names=None, huber_mm=None, method: str = "brgn", progress=None,
-                       max_moves: int = 50) -> tuple[Arm, AttachmentSearch]:
+                       max_moves: int = 50, comm=None) -> tuple[Arm, AttachmentSearch]:
     """The arm with the attachments of ``tendons`` that minimise the fitted
-    objective, and the search's record (module docstring)."""
+    objective, and the search's record (module docstring); ``comm``: the rows
+    of every fit over its ranks."""
     h = arm.length_mm / elements
     cache: dict = {}
     theta_of: dict = {}
@@ -117,7 +120,7 @@ def search_attachments(arm: Arm, data, vary, tendons, *, elements: int, bounds=N
         if candidate is not None:
             try:
                 model = ParameterModel(candidate, vary, bounds, names)
-                problem = CalibrationProblem(model, data, elements)
+                problem = CalibrationProblem(model, data, elements, comm)
                 start = theta_of.get("best")
                 result = fit(problem, start, huber_mm=huber_mm, method=method)
                 value = 0.5 * float(np.sum(result.weights * result.evaluation.residual ** 2))
@@ -169,10 +172,12 @@ def search_attachments(arm: Arm, data, vary, tendons, *, elements: int, bounds=N
 
 def calibrate_with_attachments(arm: Arm, data, vary, *, bounds=None, names=None,
                                elements: int, huber_mm=None, method: str = "brgn",
-                               progress=None, **report):
+                               progress=None, comm=None, **report):
     """:func:`~elastica_petsc.studies.calibrate_report.calibrate` of the continuous
     parameters of ``vary`` at the attachments searched for the ``tendonK.attach``
-    names (none: the plain calibration); ``report``: its other keywords."""
+    names (none: the plain calibration); ``comm``: rows over its ranks, in the
+    search and in the final fit; ``report``: the other keywords of
+    :func:`~elastica_petsc.studies.calibrate_report.calibrate`."""
     from .calibrate_report import calibrate
 
     rest, tendons = split_attach_names(vary, arm, names)
@@ -180,10 +185,10 @@ def calibrate_with_attachments(arm: Arm, data, vary, *, bounds=None, names=None,
     if tendons:
         arm, search = search_attachments(arm, data, rest, tendons, elements=elements,
                                          bounds=bounds, names=names, huber_mm=huber_mm,
-                                         method=method, progress=progress)
+                                         method=method, progress=progress, comm=comm)
     model = ParameterModel(arm, rest, bounds, names)
     result = calibrate(model, data, elements=elements, huber_mm=huber_mm, method=method,
-                       progress=progress, **report)
+                       progress=progress, comm=comm, **report)
     if search is not None:
         search.residual_variance_mm2 = float(result.report["residual_variance_mm2"])
         result = dataclasses.replace(result, attachments=search)

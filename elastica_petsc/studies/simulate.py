@@ -22,7 +22,7 @@ from ..core.fem import Discretisation
 from ..core.model import Arm
 from ..core.results import Result
 from ..solvers.dynamics import SLACK, TAUT, DynamicsSolver, Trajectory
-from ..solvers.equilibrium import check_order, check_tensions, solve_equilibrium
+from ..solvers.equilibrium import Equilibrium, check_order, check_tensions, solve_equilibrium
 from ..solvers.stability import StabilitySolver
 
 # rho_inf under a motor schedule: the unresolved mesh modes that the impacts of rigid
@@ -66,6 +66,34 @@ class SimulationResult(Result):
     @property
     def tip_mm(self) -> np.ndarray:
         return self.x_mm[:, -1, :]
+
+    def snapshots(self, steps=None):
+        """The arm at the recorded ``steps`` (default: all), one at a time, as
+        non-dimensional states (an :class:`Equilibrium` holding the shape and the
+        tensions of the step, not an equilibrium: for drawing and export)."""
+        disc = Discretisation.from_arm(self.arm, self.elements)
+        p = self.arm.tensions_from_N(self.tensions_N)
+        for k in range(len(self.time_s)) if steps is None else steps:
+            yield Equilibrium(disc, p[k], disc.consistent_state(self.theta[k]), True,
+                              "in motion", 0, 0)
+
+    def to_vtk(self, directory, *, on_step=None) -> list:
+        """ParaView files in ``directory``, as ``simulate --vtk`` writes them:
+        ``simulation.pvd`` (the arm and its cables at every recorded step, time in s)
+        and ``simulation_tip.vtu`` (the tip's path with per-step fields);
+        ``on_step(done, total)`` after each step's file."""
+        from ..io.vtk import write_simulation
+
+        return write_simulation(directory, self, on_step=on_step)
+
+    def animate(self, path, *, slow_motion: float = 1.0, fps: float = 20.0, on_frame=None):
+        """A GIF/MP4 of the run (by the suffix of ``path``), in real time or
+        ``slow_motion`` times slower, as ``simulate --animate`` writes it;
+        ``on_frame(done, total)`` after each frame."""
+        import elastica_petsc             # the plots layer sits above this one
+
+        return elastica_petsc.animate_simulation(self, path, slow_motion=slow_motion, fps=fps,
+                                                 on_frame=on_frame)
 
     @property
     def real_time_factor(self) -> float:

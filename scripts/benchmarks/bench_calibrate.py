@@ -4,6 +4,7 @@ against the number of rows, and a large fit on 1 or more MPI ranks.
 
     .venv/bin/python scripts/benchmarks/bench_calibrate.py fit40 [elements] [repeats]
     .venv/bin/python scripts/benchmarks/bench_calibrate.py scaling [elements]
+    .venv/bin/python scripts/benchmarks/bench_calibrate.py iterations [elements] [repeats]
     mpiexec -n R .venv/bin/python scripts/benchmarks/bench_calibrate.py large [rows] [elements]
 
 Synthetic data (0.5 mm noise) as in tests/test_calibrate.py; medians of repeats.
@@ -70,6 +71,27 @@ def scaling(elements: int = 180) -> None:
               f"(x {t / rows / base:.2f} of the 25-row cost per row)")
 
 
+def iterations(elements: int = 60, repeats: int = 3) -> None:
+    """Whole fits (branch matching, TAO BRGN to convergence) against the rows: the
+    cost of one Gauss-Newton iteration, fit time / iterations, wall and CPU
+    (median of ``repeats``), and the evaluations each iteration needs."""
+    base = None
+    for rows in (25, 50, 100, 200, 400):
+        model, data = dataset(rows, elements)
+        walls, cpus = [], []
+        for _ in range(repeats):
+            t0, c0 = time.perf_counter(), time.process_time()
+            result = fit(CalibrationProblem(model, data))
+            walls.append((time.perf_counter() - t0) / result.iterations)
+            cpus.append((time.process_time() - c0) / result.iterations)
+        cpu = statistics.median(cpus)
+        base = base or cpu / rows
+        print(f"{rows:4d} rows: {result.iterations} GN iterations, {result.evaluations} "
+              f"evaluations; per iteration {statistics.median(walls):.3f} s wall, {cpu:.3f} s "
+              f"CPU, {1e3 * cpu / rows:.2f} ms CPU per row (x {cpu / rows / base:.2f} of the "
+              f"25-row cost per row)")
+
+
 def large(rows: int = 2000, elements: int = 60) -> None:
     from mpi4py import MPI
 
@@ -88,4 +110,4 @@ def large(rows: int = 2000, elements: int = 60) -> None:
 
 if __name__ == "__main__":
     what, rest = sys.argv[1], [int(v) for v in sys.argv[2:]]
-    {"fit40": fit40, "scaling": scaling, "large": large}[what](*rest)
+    {"fit40": fit40, "scaling": scaling, "iterations": iterations, "large": large}[what](*rest)

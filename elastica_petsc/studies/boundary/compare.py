@@ -52,8 +52,10 @@ def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np
     the map of Fig. 4 (the half-disc y >= 0 within reach) the polygon's area in
     y >= 0 with the sample count estimate (row y = 0 counts half a cell), for
     a map of the whole disc of reach (a user arm's default) the whole traced
-    area (``area_mm2``, the assembled W_0's, if given) with the full count; the
-    sampling error is half a cell per unit length of boundary.  A --box map is
+    area with the full count (``area_mm2``: W_0's area in the region if not
+    the polygon's by the winding rule, e.g. the assembled W_0's of
+    :func:`assembled_area_in_region`); the sampling error is half a cell per
+    unit length of boundary.  A --box map is
     not compared (the region cuts W_0).  ``region``: the map's region text.
     ``inside``: membership of the targets in W_0 if not the polygon's winding
     rule (:meth:`BoundaryResult.contains`); ``distance``: their distance (mm)
@@ -80,8 +82,8 @@ def compare_with_samples(poly_mm: np.ndarray, targets_mm: np.ndarray, status: np
     perimeter = float(np.sum(np.linalg.norm(np.diff(np.vstack((clipped, clipped[:1])), axis=0),
                                             axis=1)))
     traced = union_area(clipped) if len(clipped) > 2 else 0.0
-    if not half and area_mm2 is not None:
-        traced = float(area_mm2)         # W_0 as assembled lies within the disc of reach
+    if area_mm2 is not None:
+        traced = float(area_mm2)         # W_0 as assembled (faces covered twice too)
     areas = {"compared_region": "y >= 0" if half else "whole disc of reach",
              "area_in_region_mm2": traced, "sample_area_mm2": estimate,
              "sampling_error_mm2": 0.5 * spacing_mm * perimeter}
@@ -95,9 +97,30 @@ def compare_map(result: BoundaryResult, targets_mm: np.ndarray, status: np.ndarr
     the fold curves' images."""
     inside = result.contains(targets_mm) if result.faces else None
     distance = (result.outside_map.distance(targets_mm) if result.fold_polylines_mm else None)
+    half = sampled_region(targets_mm, spacing_mm, region) == "half-disc"
     return compare_with_samples(result.polygons_mm["W0"][0], targets_mm, status, spacing_mm,
                                 inside=inside, distance=distance, region=region,
-                                area_mm2=result.area_mm2)
+                                area_mm2=assembled_area_in_region(result, half))
+
+
+def assembled_area_in_region(result: BoundaryResult, half: bool) -> float:
+    """W_0 as assembled (:meth:`BoundaryResult.contains`: where the loop winds,
+    plus the faces of winding number 0 covered twice) within a map's region
+    [mm^2]: all of it for the disc of reach; for the half-disc, the loop
+    clipped to y >= 0 by the winding rule plus the cells of those faces with
+    their centres in y >= 0 (face areas count cells, as the assembled area
+    does), so that the area and the samples' membership cover one set."""
+    if not half:
+        return float(result.area_mm2)
+    clipped = clip_half_plane(result.polygons_mm["W0"][0])
+    area = union_area(clipped) if len(clipped) > 2 else 0.0
+    twice = [f["label"] for f in result.faces if f["winding"] == 0 and (f["preimages"] or 0) > 0]
+    if twice:
+        grid = result.outside_map
+        y_mm = grid.origin[1] + (np.arange(grid.shape[1]) + 0.5) * grid.cell
+        cells = np.isin(grid.labels, twice) & (y_mm >= 0.0)[None, :]
+        area += float(np.sum(cells)) * grid.cell ** 2
+    return area
 
 
 def curves_distance_mm(a: list, b: list) -> float:

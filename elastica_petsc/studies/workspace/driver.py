@@ -28,6 +28,7 @@ from .fill import BoundaryFillSampler
 from .samplers import TargetSampler, TensionSampler
 from .schema import Results, WorkspaceMap, limits_of
 from .settings import SamplerSettings
+from .shared_setup import share_fixed_costs
 
 
 def read_map(path) -> WorkspaceMap:
@@ -154,6 +155,8 @@ def _sample(arm, disc, grid: Grid, settings: SamplerSettings, path, comm, resume
     attrs = map_attrs(arm, disc, grid, dict(provenance or {}, **settings.attrs()))
     sampler = make_sampler(arm, disc, settings)
     try:
+        if settings.fill:
+            share_fixed_costs(sampler, comm, stop)      # trace and seeds once for all ranks
         return run(grid, sampler, path, attrs, limits_of(arm), comm=comm, resume=resume,
                    new_results=lambda: Results(grid, disc.n_tendons),
                    checkpoint_seconds=checkpoint_seconds, progress=progress,

@@ -57,7 +57,6 @@ class BoundaryFillSampler(TargetSampler):
     def boundary(self):
         """The traced W_0 boundary (traced once; None where it cannot be traced)."""
         if not self._traced:
-            self._traced = True
             if self.disc.n_tendons == 2:
                 from ..boundary import traced_w0
                 try:
@@ -66,7 +65,19 @@ class BoundaryFillSampler(TargetSampler):
                     self._boundary = None
                 if self._boundary is not None:
                     self._anchors = Anchors(self.newton, self._boundary)
+            self._traced = True
         return self._boundary
+
+    def adopt_boundary(self, boundary) -> None:
+        """Use ``boundary``, this arm's W_0 boundary traced by another rank (a
+        :func:`~.shared_setup.plain_boundary`; None: it cannot be traced)."""
+        from .shared_setup import AdoptedTraces
+
+        if boundary is None:
+            self._boundary, self._traced = None, True
+            return
+        self._traces = AdoptedTraces(self.arm, self.disc, boundary)
+        self.boundary()
 
     def solve_chunk(self, points: np.ndarray, stop) -> dict | None:
         out, states, runs = self._start_chunk(points)

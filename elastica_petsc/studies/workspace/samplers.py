@@ -13,7 +13,8 @@ not converged.
 ``TensionSampler`` (mode ``tensions``): the forward solve on a grid of
 tensions, each warm-started (continued) from the previous one.
 Both fill the same fields (:func:`elastica_petsc.studies.workspace.schema.fields`) and add
-the smallest stiffness eigenvalue (SLEPc) of every equilibrium reached.
+the smallest stiffness eigenvalue (SLEPc, :class:`~elastica_petsc.solvers.sweep_stability.SweepStability`,
+warm-started along each chunk) of every equilibrium reached.
 """
 from __future__ import annotations
 
@@ -25,7 +26,8 @@ from ...core.clearance import state_cable_clear
 from ...core.fem import Discretisation
 from ...core.model import Arm
 from ...solvers.equilibrium import Equilibrium, EquilibriumSolver
-from ...solvers.stability import StabilityError, StabilitySolver
+from ...solvers.stability import StabilityError
+from ...solvers.sweep_stability import SweepStability
 from ..chunks import empty_fields
 from .schema import Status, fields
 
@@ -34,7 +36,7 @@ class _Sampler:
     def __init__(self, arm: Arm, disc: Discretisation):
         self.arm, self.disc = arm, disc
         self.solver = EquilibriumSolver(disc)
-        self.stability = StabilitySolver(disc, nev=1)
+        self.stability = SweepStability(disc)     # warm-started along a chunk
         self.schema = fields(disc.n_tendons)
 
     def _empty(self, count: int) -> dict:
@@ -52,9 +54,7 @@ class _Sampler:
         out["cable_clear"][k] = state_cable_clear(eq)
         t0 = time.perf_counter()
         try:
-            result = self.stability.solve(eq.u, eq.p)
-            out["lambda_min"][k] = result.lambda_min
-            out["lambda_min_raw"][k] = result.raw_min
+            out["lambda_min"][k], out["lambda_min_raw"][k] = self.stability.solve(eq.u, eq.p)
         except StabilityError:
             pass                                        # NaN: eigen solve failed
         out["seconds_eigen"][k] = time.perf_counter() - t0
@@ -69,6 +69,7 @@ class TensionSampler(_Sampler):
 
     def solve_chunk(self, points: np.ndarray, stop) -> dict | None:
         out = self._empty(len(points))
+        self.stability.restart()           # results depend on the chunk alone
         previous = None
         for k, p in enumerate(points):
             if stop():
@@ -250,6 +251,7 @@ class TargetSampler(_Sampler):
         out = self._empty(len(points))
         out["target"][:] = points
         self._reached = {}
+        self.stability.restart()           # results depend on the chunk alone
         return out, {}, {}
 
     @staticmethod
