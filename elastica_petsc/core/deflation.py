@@ -56,7 +56,7 @@ class Deflation:
         self.shift = float(shift)
         self.roots: list[np.ndarray] = []
         self._stack = None                      # the roots as one (K, N) array, built on use
-        self._last = None                       # (theta's bytes, (M, grad)) of the last call
+        self._last = None                       # [theta's bytes, M, diff, s, grad] of the last call
 
     def add(self, theta: np.ndarray) -> None:
         """Deflate one more known solution (its free angles theta_1..theta_N)."""
@@ -83,6 +83,14 @@ class Deflation:
         diff = theta[None, :] - self._roots()
         return np.sqrt(self.h * np.sum(diff * diff, axis=1))
 
+    def factor(self, theta: np.ndarray) -> float:
+        """M(theta) alone (a residual needs no gradient: the line search's trial
+        points outnumber the Jacobians); its parts are kept, so that
+        :meth:`factor_and_gradient` at the same point only adds the gradient."""
+        if not self.roots:
+            return 1.0
+        return self._parts(theta)[1]
+
     def factor_and_gradient(self, theta: np.ndarray) -> tuple[float, np.ndarray]:
         """M(theta) and dM/dtheta; M = 1, grad = 0 when nothing is deflated.
 
@@ -91,21 +99,33 @@ class Deflation:
         root M is returned as +inf with a zero gradient, without a warning."""
         if not self.roots:
             return 1.0, np.zeros_like(theta)
-        key = np.asarray(theta, float).tobytes()
-        if self._last is not None and self._last[0] == key:
-            return self._last[1]        # the SNES asks for the Jacobian where it just had F
-        self._last = (key, self._factor_and_gradient(theta))
-        return self._last[1]
+        last = self._parts(theta)       # the SNES asks for the Jacobian where it just had F
+        if last[4] is None:
+            last[4] = self._gradient(theta, *last[1:4])
+        return last[1], last[4]
 
-    def _factor_and_gradient(self, theta: np.ndarray) -> tuple[float, np.ndarray]:
+    def _parts(self, theta: np.ndarray) -> list:
+        """[key, M, diff, s, gradient or None] of theta, the last point's if it is theta."""
+        key = np.asarray(theta, float).tobytes()
+        if self._last is None or self._last[0] != key:
+            self._last = [key, *self._factor(theta), None]
+        return self._last
+
+    def _factor(self, theta: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
         q, sigma = self.power, self.shift
-        diff = theta[None, :] - self._roots()                      # (K, N)
-        s = np.maximum(self.h * np.sum(diff * diff, axis=1), _TINY)
+        diff = theta - self._roots()                               # (K, N)
+        # ndarray.sum: the same reduction as np.sum without its Python wrapper
+        s = np.maximum(self.h * (diff * diff).sum(axis=1), _TINY)
         # log(s^(-q/2) + sigma) = -(q/2) log s + log(1 + sigma s^(q/2))
-        log_M = float(np.sum(-(q / 2.0) * np.log(s) + np.log1p(sigma * s ** (q / 2.0))))
+        log_M = float((-(q / 2.0) * np.log(s) + np.log1p(sigma * s ** (q / 2.0))).sum())
         if log_M > _LOG_MAX:
-            return math.inf, np.zeros_like(theta)
-        M = math.exp(log_M)
+            return math.inf, diff, s
+        return math.exp(log_M), diff, s
+
+    def _gradient(self, theta, M, diff, s) -> np.ndarray:
+        if math.isinf(M):
+            return np.zeros_like(theta)
+        q, sigma = self.power, self.shift
         # d/dtheta log(s^(-q/2) + sigma) = -(q/2) / (s (1 + sigma s^(q/2))) * 2 h diff
         coeff = -(q / 2.0) / (s * (1.0 + sigma * s ** (q / 2.0)))
-        return M, M * (coeff @ (2.0 * self.h * diff))
+        return M * (coeff @ (2.0 * self.h * diff))

@@ -68,9 +68,13 @@ class BorderedPattern:
         """Sign of det B from the SuperLU factors of B^T (:meth:`lu_of_transpose`):
         P_r B^T P_c = L U with L unit lower triangular, so
         sign det B = sign(P_r) sign(P_c) prod sign(U_kk) (no dense LU needed)."""
-        sign = float(np.prod(np.sign(lu.U.diagonal())))
+        U = lu.U
+        natural = np.arange(U.shape[0])
+        last = U.indptr[1:] - 1            # SuperLU keeps U_kk last in column k
+        diagonal = U.data[last] if np.array_equal(U.indices[last], natural) else U.diagonal()
+        sign = float(np.prod(np.sign(diagonal)))
         for perm in (lu.perm_r, lu.perm_c):         # perm_c: the identity in natural order
-            if np.any(perm != np.arange(len(perm))):
+            if np.any(perm != natural):
                 sign *= permutation_sign(perm)
         return sign
 

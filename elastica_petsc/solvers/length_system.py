@@ -128,6 +128,9 @@ class AugmentedSystem:
         self.deflation = deflation if deflation is not None else Deflation(disc.h)
         self.target = np.zeros(n)
         self._last_equations = None          # (key, (F, g)) of the last evaluation
+        # the pattern's fixed parts, asked once (not per Jacobian)
+        self._supports = list(enumerate(np.asarray(disc.length_supports)))
+        self._columns = [disc.length_columns(i) for i in range(n)]
         self._build_pattern()
         z0 = self.augment(disc.straight(), np.zeros(n))
         # J keeps this array (no copy): the Jacobian callback writes its entries in
@@ -164,7 +167,7 @@ class AugmentedSystem:
     def augment(self, u, p, mu: float | None = None) -> np.ndarray:
         z = np.empty(self.size)
         z[: self.nu], z[self.ip:self.imu] = u, p
-        z[self.imu] = self.deflation.factor_and_gradient(np.asarray(u)[: self.disc.n_elements])[0] \
+        z[self.imu] = self.deflation.factor(np.asarray(u)[: self.disc.n_elements]) \
             if mu is None else mu
         return z
 
@@ -212,8 +215,15 @@ class AugmentedSystem:
     def residual(self, z) -> np.ndarray:
         F, g = self.equations(z)
         mu = z[self.imu]
-        M, _ = self.deflation.factor_and_gradient(z[: self.disc.n_elements])
-        return np.concatenate((mu * F, mu * g if self.mode == "length" else g, [mu - M]))
+        M = self.deflation.factor(z[: self.disc.n_elements])
+        out = np.empty(self.size)
+        np.multiply(mu, F, out=out[: self.ip])
+        if self.mode == "length":
+            np.multiply(mu, g, out=out[self.ip:self.imu])
+        else:
+            out[self.ip:self.imu] = g
+        out[self.imu] = mu - M
+        return out
 
     def jacobian_values(self, z) -> np.ndarray:
         disc = self.disc
@@ -222,8 +232,8 @@ class AugmentedSystem:
         _, gradM = self.deflation.factor_and_gradient(u[: disc.n_elements])
         dFdp = disc.load_derivative(u)
         blocks = [mu * disc.jacobian_values(u, p)]
-        blocks += [mu * dFdp[i, :m] for i, m in enumerate(disc.length_supports)]
-        columns = [disc.length_columns(i) for i in range(self.n)]
+        blocks += [mu * dFdp[i, :m] for i, m in self._supports]
+        columns = self._columns
         if self.mode == "length":
             dLdy = disc.length_gradients(disc.split(u)[1])           # dg/dy = -dL/dy
             blocks += [-mu * dLdy[i, c] for i, c in enumerate(columns)]
@@ -254,7 +264,7 @@ class AugmentedSystem:
         z0 = np.array(z0, float)
         if self.mode == "length":
             z0[self.ip:self.imu] = np.maximum(z0[self.ip:self.imu], 0.0)
-        M, _ = self.deflation.factor_and_gradient(z0[: self.disc.n_elements])
+        M = self.deflation.factor(z0[: self.disc.n_elements])
         z0[self.imu] = M
         if not np.isfinite(M) or M > 1e12:       # the start sits on a deflated root
             return z0, 0, "START_ON_DEFLATED_ROOT", False
