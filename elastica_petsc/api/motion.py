@@ -9,12 +9,13 @@ from .arguments import takes_petsc_options as _takes_petsc_options
 def simulate(arm: Arm, *, tensions_N=None, history_csv=None, schedule_csv=None,
              initial_tensions_N=None, order=None, from_file=None, duration_s=None,
              settle_s: float = 0.0, dt_s: float | None = None, adaptive: bool = False,
-             rtol: float = 1e-6, atol: float = 1e-8, radius: float = 1.0,
+             rtol: float = 1e-6, atol: float = 1e-8, radius: float | None = None,
              elements: int | None = None):
     """The arm in motion (PETSc TS, docs/model.md §16) from rest: the straight arm, the
     equilibrium at ``initial_tensions_N`` (loaded in ``order``) or the last shape in
     ``from_file``; driven by constant ``tensions_N``, a tension history CSV or a motor
-    schedule CSV (cable lengths, slack cables as events).  Returns a
+    schedule CSV (cable lengths; slack and taut cables decided in every step).  ``radius``:
+    rho_inf of the alpha method (default 1 under tensions, 0.5 under a schedule).  Returns a
     ``SimulationResult`` (``time_s``, ``tip_mm``, ``x_mm``, ``tensions_N``,
     ``cable_lengths_mm``, ``energy_J``, ``summary()``); needs the arm's mass per length."""
     from ..core.friction import check_frictionless

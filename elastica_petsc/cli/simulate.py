@@ -68,9 +68,9 @@ def add_parser(sub) -> None:
                         "adaptive steps on the angles (default 1e-6)")
     parser.add_argument("--atol", type=float, default=1e-8, help="absolute tolerance [rad] "
                         "(default 1e-8)")
-    parser.add_argument("--radius", type=float, default=1.0, metavar="RHO",
+    parser.add_argument("--radius", type=float, default=None, metavar="RHO",
                         help="spectral radius at infinite step of the alpha method, in [0, 1] "
-                             "(1: no numerical dissipation; default 1)")
+                             "(1: no numerical dissipation; default 1, with --schedule 0.5)")
     parser.add_argument("--vtk", metavar="DIR",
                         help="write ParaView files into this folder: simulation.pvd (the arm and "
                              "cables at every recorded step, time in s) and simulation_tip.vtu "
@@ -100,7 +100,7 @@ def _check(args) -> None:
         raise InputError(f"--dt must be a positive number of seconds, got {args.dt:g}")
     if args.steps_per_period < 4:
         raise InputError(f"--steps-per-period must be at least 4, got {args.steps_per_period}")
-    if not 0 <= args.radius <= 1:
+    if args.radius is not None and not 0 <= args.radius <= 1:
         raise InputError(f"--radius must lie in [0, 1], got {args.radius:g}")
     if not (math.isfinite(args.slow_motion) and args.slow_motion > 0):
         raise InputError(f"--slow-motion must be positive, got {args.slow_motion:g}")

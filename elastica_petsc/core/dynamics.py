@@ -22,7 +22,6 @@ The O(N) loops are compiled (core/fem_dynamics.c, docs/model.md §30).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from itertools import combinations
 
 import numpy as np
 from . import fem_kernels
@@ -168,24 +167,3 @@ class BandedInverse:
         fem_kernels.principal_solve(self.ab, self.piv, r, out)
         return out
 
-
-def solve_lcp(W: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(lam, w) with w = q + W lam >= 0, lam >= 0, lam . w = 0 (docs/model.md §16.3).
-
-    W symmetric positive definite (the Delassus matrix C^T M^{-1} C of the
-    cables in contact), so the solution is unique; found by enumerating the
-    2^k active sets (k cables: a handful), the smallest first.
-    """
-    k = len(q)
-    scale = max(1.0, float(np.max(np.abs(q)))) if k else 1.0
-    tol = 1e-10 * scale
-    for size in range(k + 1):
-        for active in combinations(range(k), size):
-            lam = np.zeros(k)
-            if active:
-                idx = list(active)
-                lam[idx] = np.linalg.solve(W[np.ix_(idx, idx)], -q[idx])
-            w = q + W @ lam
-            if np.all(lam >= -tol) and np.all(w >= -tol):
-                return np.maximum(lam, 0.0), np.maximum(w, 0.0)
-    raise np.linalg.LinAlgError("no solution of the cables' complementarity problem")

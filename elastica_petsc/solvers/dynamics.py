@@ -9,27 +9,24 @@ for the alpha method's recursions).  The second-order residual (TSALPHA2,
 
     F_theta = M(theta) theta'' + c(theta, theta') + (a M + b L) theta' + R(theta, p)
     F_p_i   = p_i - pbar_i(t)                (force control)
-            = grad L_i . theta' - Lbar_i'(t) (taut cable: the tension is a multiplier)
-            = p_i                            (slack cable)
+            = max(-w_i, -s_i p_i)            (length control, :mod:`.cable_steps`)
 
 with the kernels of :mod:`elastica_petsc.core.dynamics` and R the static
 residual of docs/model.md §8 (so every load the static model has is in the
-dynamics).  A taut cable's constraint is imposed on the velocities (index
-2): then a step of any size starts from velocities that satisfy it, and the
-tension stays bounded as the step shrinks (at an event, say); imposed on the
-positions (index 3) the multiplier of a step dt grows like 1/dt.  Its
-length drifts by O(dt^2) (the rule integrates the rate; not yet reported).
+dynamics).  Under length control the cables' complementarity (slack or taut,
+impacts) is decided inside every step by a semismooth row on the step's mean
+tension and step-end gap rate (:mod:`.cable_steps`, docs/model.md §16.6).
 Time integration: generalized-alpha for second-order systems (TSALPHA2) in
 PETSc's parametrisation by the spectral radius rho_inf at infinite step
 (``radius``; 1, the default: the implicit midpoint member, no numerical
-dissipation; docs/model.md §16.4 on why alpha_f = 1 is not used).  Fixed
+dissipation), its start-up acceleration corrected (:mod:`.alpha2_start`).  Fixed
 equal steps by default, or (``adaptive``) TSAdapt ``basic`` on the alpha
 method's local error estimate of the angles (the tension impulses are
 left out of the norm).  Newton: SNES with KSP ``preonly`` and a PC that
 solves the principal part of the Jacobian exactly in O(N):
 
     J ~ [[sigma M + shift_V b L + K(theta, p),  shift_V C],   C = [grad L_i]
-         [shift_V C_taut^T or identity rows              ]]
+         [(shift_V / alpha_f) C_taut^T or diagonal rows   ]]
 
 (sigma = shift_A + a shift_V; K = T + W diag(p/L) W^T the static tangent of
 §2; the derivatives of M(theta) theta'' and of the velocity terms with respect
@@ -39,15 +36,9 @@ system (:class:`~elastica_petsc.core.dynamics.BandedInverse`), the tendon
 terms a Woodbury correction of rank n, the taut cables an n x n Schur
 complement: O(n N) per factorisation and per solve.
 
-Slack and taut cables (length control): TSEvent watches p_i of taut cables
-(going through 0 downwards: the cable goes slack) and the gap
-Lbar_i(t) - |r_i - x_i| of slack ones (through 0 downwards: it tightens).
-At an event the integration stops, the cable's mode switches and the
-integration restarts from the event's state.  A cable that tightens stops
-the attachment's motion along it at once: the velocities jump by the
-plastic impulse theta'+ = theta'- - M^{-1} C lambda with C^T theta'+ =
-Lbar' for the taut cables (M^{-1} is the banded solve with T = 0).
-Options prefix ``sim_`` (``-sim_ts_monitor``, ``-sim_snes_monitor``,
+Under length control each cable's row follows its branch at every Newton
+iterate (taut rows in the Schur complement, slack rows diagonal): a
+semismooth Newton method.  Options prefix ``sim_`` (``-sim_ts_monitor``, ``-sim_snes_monitor``,
 ``-sim_ts_adapt_monitor``, ...).
 """
 from __future__ import annotations
@@ -59,14 +50,17 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..core.drive import LengthDrive, TensionDrive
-from ..core.dynamics import BandedInverse, Inertia, elastic_band, solve_lcp
+from ..core.dynamics import BandedInverse, Inertia, elastic_band
 from ..core.fem import Discretisation
+from .alpha2_start import START_UP, Alpha2Params
+from .cable_steps import CableComplementarity
 from .options import SolverOptions, check_comm
 from .reasons import TS_REASONS, reason_name
 
 FORCE, TAUT, SLACK = 0, 1, 2
 MODE_NAMES = {FORCE: "force", TAUT: "taut", SLACK: "slack"}
 EXCLUDED = 1e30            # atol of the tension unknowns: out of the error norm
+TAUT_TENSION = 1e-9        # a step's mean tension above this (B/l^2): the cable was taut
 
 
 @dataclass
@@ -119,14 +113,14 @@ class DynamicsSolver:
     ``lag_jacobian``: the PC (principal Jacobian and its banded LU) is
     refreshed every this many Newton iterations, across steps
     (``-snes_lag_jacobian_persists``), with fixed steps and force control only
-    (adaptive steps and TSEvent's shortened ones refresh it every iteration);
+    (adaptive steps and length control refresh it every iteration);
     ``max_steps``: cap on accepted steps.  ``comm``, ``options_prefix``
     (``sim_``), ``petsc_options``: the contract of :mod:`.options`.
     """
 
     def __init__(self, disc: Discretisation, inertia: Inertia, *, rtol: float = 1e-6,
                  atol: float = 1e-8, radius: float = 1.0, dt0: float = 1e-3,
-                 adaptive: bool = True, contact_tol: float = 1e-6, max_steps: int = 10**7,
+                 adaptive: bool = True, max_steps: int = 10**7,
                  lag_jacobian: int = 10,
                  comm=None, options_prefix: str = "sim_", petsc_options=None):
         self.options = SolverOptions(options_prefix, petsc_options, {
@@ -142,12 +136,9 @@ class DynamicsSolver:
         self.L_band = elastic_band(disc)
         self.attach = list(disc.attach_nodes)
         self.modes = np.full(self.n, FORCE)
-        self.offsets = np.zeros(self.n)     # L_i - Lbar_i when cable i last went slack
-        # a slack cable tightens when its gap falls below -contact_tol (l): the start
-        # of a step's position error, not a cable that re-tightens on round-off
-        self.contact_tol = contact_tol
-        self._fired = []
-        self.drive = None
+        self.drive, self.cables = None, None
+        self._alpha2 = Alpha2Params()
+        self.stage = (0.5, dt0)          # alpha_f and step of the stage under way
 
     # --- model pieces -------------------------------------------------------------
     def theta_of(self, U: np.ndarray) -> np.ndarray:
@@ -157,40 +148,37 @@ class DynamicsSolver:
         x = self.disc.node_positions(theta)[self.attach]
         return np.linalg.norm(self.disc.routes - x, axis=1)
 
+    def grad_lengths(self, theta) -> np.ndarray:
+        """grad_theta L_i, (n, N)."""
+        return self.disc.load_derivative(self.disc.consistent_state(theta))[:, : self.N]
+
     def residual(self, t, U, V, A) -> np.ndarray:
         N = self.N
         theta, p = self.theta_of(U), V[N:]
         out = np.empty(N + self.n)
         out[:N] = self.inertia.residual(theta, V[:N], A[:N], p)
-        out[N:] = self._tendon_rows(t, theta, V[:N], p)
+        if self.cables is not None:          # length control: the complementarity rows
+            out[N:] = self.cables.rows(t, U, V, *self.stage)[0]
+        else:
+            out[N:] = p - self.drive.tensions(t)
         return out
 
-    def _tendon_rows(self, t, theta, omega, p) -> np.ndarray:
-        rows = p.copy()
-        force = self.modes == FORCE
-        if force.any():
-            rows[force] -= self.drive.tensions(t)[force]
-        taut = self.modes == TAUT
-        if taut.any():
-            grad = self._grad_lengths(theta)
-            rows[taut] = (grad @ omega - self.drive.rates(t))[taut]
-        return rows
-
-    def _factor(self, U, V, shift_v, shift_a):
+    def _factor(self, U, V, shift_v, shift_a, t=None):
         """Set the PC to the exact inverse of the principal Jacobian at (U, V)
-        (d p / d Lambda = shift_v)."""
+        (d p / d Lambda = shift_v); under length control each cable's row follows
+        the branch of its complementarity function at this iterate (:mod:`.cable_steps`)."""
         disc, inert, N = self.disc, self.inertia, self.N
         theta, p = self.theta_of(U), V[N:]
         u = disc.consistent_state(theta)
-        t = disc.terms(u, p)
-        g = disc.attachment_gradients(theta, (t.c, t.s))
+        t_ = disc.terms(u, p)
+        g = disc.attachment_gradients(theta, (t_.c, t_.s))
         sigma = shift_a + inert.viscous * shift_v
-        band = disc.band(theta, t.d, p, t) + shift_v * inert.kelvin_voigt * self.L_band \
+        band = disc.band(theta, t_.d, p, t_) + shift_v * inert.kelvin_voigt * self.L_band \
             + sigma * inert.rotary
         inv = BandedInverse(disc, theta, inert.weights, sigma, band)
-        Ut = disc.transverse_gradients(g, t.d).T            # (N, n)
-        c = p / t.lengths
-        C = -(g[..., 0] * t.d[:, :1] + g[..., 1] * t.d[:, 1:]).T   # grad L_i, (N, n)
+        Ut = disc.transverse_gradients(g, t_.d).T           # (N, n)
+        c = p / t_.lengths
+        C = -(g[..., 0] * t_.d[:, :1] + g[..., 1] * t_.d[:, 1:]).T   # grad L_i, (N, n)
         Z = inv.solve(np.column_stack((Ut, C)))
         Zu, Zc = Z[:, : self.n], Z[:, self.n:]
         woodbury = np.linalg.solve(np.eye(self.n) + c[:, None] * (Ut.T @ Zu),
@@ -200,81 +188,50 @@ class DynamicsSolver:
             return r2 - Zu @ (woodbury @ r2)
 
         Y = inverse(Zc)                                      # A'^{-1} C
-        taut = np.flatnonzero(self.modes == TAUT)
-        known = np.flatnonzero(self.modes != TAUT)
+        gain, taut, row_scale = np.ones(self.n), np.zeros(self.n, bool), 1.0
+        if self.cables is not None:
+            # slack branch -s p: dp = -r / s; taut branch -w, d w / d x = -(shift_v /
+            # alpha_f) C^T x (step-end velocities from the alpha point)
+            _, taut, s = self.cables.rows(t, U, V, *self.stage)
+            gain, row_scale = -1.0 / s, self.stage[0]
+        taut, known = np.flatnonzero(taut), np.flatnonzero(~taut)
         S = C[:, taut].T @ Y[:, taut]
 
         def apply(r):
             dp = np.zeros(self.n)
-            dp[known] = r[N:][known]
+            dp[known] = gain[known] * r[N:][known]
             x = inverse(inv.solve(r[:N] - C[:, known] @ dp[known])[:, None])[:, 0]
             if len(taut):
-                dp[taut] = np.linalg.solve(S, C[:, taut].T @ x - r[N:][taut] / shift_v)
+                dp[taut] = np.linalg.solve(S, C[:, taut].T @ x
+                                           - row_scale * r[N:][taut] / shift_v)
                 x = x - Y[:, taut] @ dp[taut]
             return np.concatenate((x, dp / shift_v))
 
         self.pc_ctx.apply_fn = apply
 
-    # --- contact: the cables' complementarity (docs/model.md §16.3) -----------------------
-    def _delassus(self, theta, idx):
-        """(C, M^{-1} C, W = C^T M^{-1} C, M^{-1}) of the cables ``idx``; C = [grad L_i]."""
-        C = self._grad_lengths(theta)[idx].T                  # (N, k)
+    def _delassus(self, theta) -> np.ndarray:
+        """diag(C^T M^{-1} C), C = [grad L_i]: 1 / the effective mass of each cable's end."""
+        C = self.grad_lengths(theta).T
         inv = BandedInverse(self.disc, theta, self.inertia.weights, 1.0, self.inertia.rotary)
-        MinvC = inv.solve(C).reshape(self.N, len(idx))
-        return C, MinvC, C.T @ MinvC, inv
+        return np.einsum("ki,ki->i", C, inv.solve(C).reshape(C.shape))
 
-    def _unforced(self, t, theta, omega, idx):
-        """(W, q) of the cables ``idx`` at the acceleration level: with tensions
-        p on them (and none on the others), gap_i'' = Lbar_i'' - d^2 L_i/dt^2 = q + W p."""
-        disc = self.disc
-        C, _, W, inv = self._delassus(theta, idx)
-        f = -(self.inertia.force(theta, omega, np.zeros(self.N))
-              + disc.residual(disc.consistent_state(theta), np.zeros(self.n))[: self.N])
-        eps = 1e-7
-        pad = np.concatenate(([0.0], omega))
-        curvature = (self._grad_lengths(theta + eps * pad)
-                     - self._grad_lengths(theta - eps * pad))[idx] @ omega / (2 * eps)
-        return W, self.drive.rates(t, 2)[idx] - curvature - C.T @ inv.solve(f)
+    @property
+    def alpha_f(self) -> float:
+        """alpha_f = 1 / (1 + rho_inf) of PETSc's alpha2 (the radius in force at the solve)."""
+        radius = PETSc.Options(self.prefix).getReal(
+            "ts_alpha_radius", float(self.options.options["ts_alpha_radius"]))
+        return 1.0 / (1.0 + radius)
 
-    def consistent_tensions(self, t, theta, omega, p) -> np.ndarray:
-        """The tensions of the taut cables that the equations of motion and
-        the constraints' second derivative (gap_i'' = 0) give at (t, theta,
-        theta'), negative values allowed (the event function); other entries
-        from ``p``.  A function of the state alone, continuous in time, unlike
-        the integrator's multiplier: the velocities are first projected on the
-        taut cables' constraints C^T theta' = Lbar' (the alpha method imposes
-        them at mid-step, so the step-end velocities carry a component
-        alternating in sign from step to step that does not vanish as the step
-        shrinks; left in, it makes the event function jump and TSEvent stall).
-        """
-        taut = np.flatnonzero(self.modes == TAUT)
-        p = np.array(p, float)
-        if len(taut):
-            C, MinvC, W, _ = self._delassus(theta, taut)
-            omega = omega - MinvC @ np.linalg.solve(W, C.T @ omega - self.drive.rates(t)[taut])
-            W, q = self._unforced(t, theta, omega, taut)
-            p[taut] = np.linalg.solve(W, -q)
-        return p
-
-    def _grad_lengths(self, theta) -> np.ndarray:
-        """grad_theta L_i, (n, N)."""
-        return self.disc.load_derivative(self.disc.consistent_state(theta))[:, : self.N]
-
-    def event_values(self, t, U, V) -> np.ndarray:
-        """p_i (taut, :meth:`consistent_tensions`), gap_i (slack), 1 (force
-        control): an event is a fall through 0."""
-        theta = self.theta_of(U)
-        p = self.consistent_tensions(t, theta, V[: self.N], V[self.N:])
-        out = np.ones(self.n)
-        taut, slack = self.modes == TAUT, self.modes == SLACK
-        out[taut] = p[taut]
-        if slack.any():
-            gap = self.drive.lengths(t) + self.offsets - self.cable_lengths(theta)
-            out[slack] = gap[slack] + self.contact_tol
-        return out
+    def _set_stage(self, ts) -> float:
+        """The stage under way: its alpha_f and step for the cables' rows; returns the
+        factor of the acceleration (2 in TSALPHA2's start-up, :mod:`.alpha2_start`)."""
+        params = self._alpha2.params(ts)
+        alpha_f = self.alpha_f if params is None else params[1]
+        self.stage = (alpha_f, ts.getTimeStep())
+        return 1.0 if params is None or params != START_UP else 2.0
 
     # --- the TS ----------------------------------------------------------------------
-    def _make_ts(self, t0, t_end, U0, V0, record, dt0):
+    def _make_ts(self, t0, t_end, U0, V0, record):
         comm = self.comm
         size = self.N + self.n
         ts = PETSc.TS().create(comm)
@@ -284,11 +241,14 @@ class DynamicsSolver:
         F = PETSc.Vec().createSeq(size, comm=comm)
 
         def i2function(ts_, t, U, V, A, Fv):
+            factor = self._set_stage(ts_)
             Fv.setArray(self.residual(t, U.getArray(readonly=True), V.getArray(readonly=True),
-                                      A.getArray(readonly=True)))
+                                      factor * A.getArray(readonly=True)))
 
         def i2jacobian(ts_, t, U, V, A, shift_v, shift_a, J, P):
-            self._factor(U.getArray(readonly=True), V.getArray(readonly=True), shift_v, shift_a)
+            factor = self._set_stage(ts_)
+            self._factor(U.getArray(readonly=True), V.getArray(readonly=True), shift_v,
+                         factor * shift_a, t)
 
         J = PETSc.Mat().createPython([size, size], _Operator(), comm=comm)
         J.setUp()
@@ -301,17 +261,17 @@ class DynamicsSolver:
         ts.setTime(t0)
         if self.adaptive:
             ts.setMaxTime(t_end)
-            ts.setTimeStep(dt0)
+            ts.setTimeStep(self.dt0)
             ts.setMaxSteps(self.max_steps)
             ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
-        elif (self.modes == FORCE).all():   # equal steps ending on t_end (no sliver)
-            count = max(1, math.ceil((t_end - t0) / dt0 - 1e-9))
+        elif self.cables is None:      # equal steps ending on t_end (no sliver)
+            count = max(1, math.ceil((t_end - t0) / self.dt0 - 1e-9))
             ts.setTimeStep((t_end - t0) / count)
             ts.setMaxTime(t_end + 0.5 * (t_end - t0) / count)
             ts.setMaxSteps(count)
             ts.setExactFinalTime(PETSc.TS.ExactFinalTime.STEPOVER)
-        else:       # steps dt0 with events (TSEvent may shorten some)
-            ts.setTimeStep(dt0)
+        else:      # equal steps (a failed Newton solve may shorten one: then MATCHSTEP)
+            ts.setTimeStep((t_end - t0) / max(1, math.ceil((t_end - t0) / self.dt0 - 1e-9)))
             ts.setMaxTime(t_end)
             ts.setMaxSteps(self.max_steps)
             ts.setExactFinalTime(PETSc.TS.ExactFinalTime.MATCHSTEP)
@@ -330,132 +290,121 @@ class DynamicsSolver:
         pc.setPythonContext(self.pc_ctx)
         snes.setTolerances(rtol=1e-12, atol=1e-14, stol=1e-14, max_it=30)
         ts.setMonitor(record)
-        if (self.modes != FORCE).any():
-            def events(ts_, t, U, fvalue):
-                V = ts_.getSolution2()[1]
-                fvalue[:] = self.event_values(t, U.getArray(readonly=True),
-                                              V.getArray(readonly=True))
-
-            def post(ts_, events_fired, t, U, forward):
-                self._fired = [int(i) for i in events_fired]
-
-            ts.setEventHandler([-1] * self.n, [True] * self.n, events, post)
+        if self.cables is not None:
+            ts.setPreStep(self._begin_step(ts, t_end))
+            ts.setPostStep(self._check_step)
         self.options.label(F, J, U, V)
         self.options.apply(ts)
         return ts, (U, V, F, J, atol, rtol)
+
+    def _begin_step(self, ts, t_end):
+        """TS pre-step: the state the step starts from (:mod:`.cable_steps`); a step that
+        a failed Newton solve shortened is followed by full ones again."""
+        step = ts.getTimeStep()
+
+        def prestep(ts_):
+            t, dt = ts_.getTime(), ts_.getTimeStep()
+            if dt < step and not self.adaptive:
+                dt = min(step, t_end - t)
+                ts_.setTimeStep(dt)
+            U, V = (v.getArray(readonly=True) for v in ts_.getSolution2())
+            self.cables.begin(t, U, V)
+        return prestep
+
+    def _check_step(self, ts):
+        """TS post-step: a step whose end has a cable stretched past
+        ``PENETRATION_TOL`` beyond its start is taken again with a quarter of the
+        step (:mod:`.cable_steps`: a spurious solution of a step too long for the
+        vibration); counted as a rejection."""
+        U = ts.getSolution2()[0].getArray(readonly=True)
+        if self.cables.penetrated(ts.getTime(), U):
+            dt = ts.getTime() - self.cables.start.t
+            ts.rollBack()
+            ts.setTimeStep(0.25 * dt)
+            self._rollbacks += 1
 
     def run(self, theta0, omega0, p0, drive, modes, t_end: float, *,
             on_step=None, trajectory: Trajectory | None = None) -> Trajectory:
         """Integrate from (theta0 (N+1,), omega0 (N,), p0 (n,)) at t = 0 to ``t_end``.
 
         ``drive``: a TensionDrive (every cable force-controlled) or a
-        LengthDrive; ``modes``: initial TAUT/SLACK of each cable under a
-        LengthDrive.  ``on_step(t)`` after every accepted step.  The trajectory
-        (also when interrupted) holds every accepted step.
+        LengthDrive; ``modes``: TAUT/SLACK of each cable at the start under a
+        LengthDrive (the first step decides; a change is recorded as an event).
+        ``on_step(t)`` after every accepted step.  The trajectory (also when
+        interrupted) holds every accepted step.
         """
         self.drive = drive
-        self.offsets = np.zeros(self.n)
-        self.modes = np.asarray(modes, int).copy() if isinstance(drive, LengthDrive) \
-            else np.full(self.n, FORCE)
-        if self.adaptive or isinstance(drive, LengthDrive):
-            # the step changes (TSAdapt, TSEvent's location): a PC kept for another step's
-            # shift stalls Newton, so it is refreshed at every iteration
-            self.options.update({"snes_lag_jacobian": 1})
-        traj = trajectory if trajectory is not None else Trajectory()
+        self.cables = None
+        self.modes = np.full(self.n, FORCE)
         U0 = np.concatenate((np.asarray(theta0, float)[1:], np.zeros(self.n)))
         V0 = np.concatenate((np.asarray(omega0, float), p0))
-        if isinstance(drive, LengthDrive):      # the start: cables at zero gap in contact
-            self._switch(None, 0.0, U0, V0, contact=self.modes == TAUT)
-        t, dt = 0.0, self.dt0
-        self._record(traj, t, U0, V0)
-        while True:
-            ts, objs = self._make_ts(t, t_end, U0, V0, self._monitor(traj, on_step), dt)
+        if isinstance(drive, LengthDrive):
+            self.modes = np.asarray(modes, int).copy()
+            self.cables = CableComplementarity(self, drive, self.alpha_f,
+                                               self._delassus(self.theta_of(U0)))
+        if self.adaptive or self.cables is not None:
+            # the step changes (TSAdapt) or the active set does: a PC kept for another
+            # step's shift or branch stalls Newton, so it is refreshed at every iteration
+            self.options.update({"snes_lag_jacobian": 1})
+        traj = trajectory if trajectory is not None else Trajectory()
+        self._rollbacks = 0
+        self._record(traj, 0.0, U0, V0, np.asarray(p0, float))
+        ts, objs = self._make_ts(0.0, t_end, U0, V0, self._monitor(traj, on_step))
+        try:
             try:
-                try:
-                    with np.errstate(all="ignore"):     # a diverged step is reported below
-                        ts.solve(objs[0])
-                    reason = ts.getConvergedReason()
-                except (np.linalg.LinAlgError, PETSc.Error) as err:   # a singular step
-                    traj.completed, traj.reason = False, f"DIVERGED: {str(err).splitlines()[0]}"
-                    traj.steps += ts.getStepNumber()
-                    return traj
+                with np.errstate(all="ignore"):     # a diverged step is reported below
+                    ts.solve(objs[0])
+                reason = ts.getConvergedReason()
+            except (np.linalg.LinAlgError, PETSc.Error) as err:   # a singular step
+                traj.completed, traj.reason = False, f"DIVERGED: {str(err).splitlines()[0]}"
                 traj.steps += ts.getStepNumber()
-                traj.rejected += ts.getStepRejections()
-                traj.snes_failures += ts.getSNESFailures()
-                t, dt = ts.getTime(), ts.getTimeStep()
-                U, V = (v.getArray().copy() for v in ts.getSolution2())
-            finally:
-                ts.destroy()
-                for obj in objs:
-                    obj.destroy()
-            if reason != PETSc.TS.ConvergedReason.CONVERGED_EVENT:
-                traj.completed = reason > 0 and t >= t_end * (1 - 1e-12)
-                traj.reason = _reason(reason)
                 return traj
-            U0, V0 = U, V
-            self._switch(traj, t, U0, V0)
-            dt = max(dt, self.dt0) if self.adaptive else self.dt0
-
-    def _switch(self, traj, t, U, V, contact=None):
-        """Resolve the cables' complementarity at an event (or at the start).
-
-        The cables in contact are the taut ones and those whose gap closed
-        (``contact``: a boolean mask; by default the taut cables and the fired
-        ones).  Velocity level (the impact, plastic): impulses lam >= 0 with
-        gap rates w = Lbar' - C^T theta'+ >= 0, lam w = 0, theta'+ = theta'- -
-        M^{-1} C lam; a cable with w > 0 separates.  Acceleration level for the
-        others: tensions p >= 0 with gap'' >= 0, p gap'' = 0; p > 0 keeps a
-        cable taut, otherwise it goes slack with its length drift (index 2,
-        module docstring) kept as an offset, so that its gap starts at exactly 0.
-        ``V`` is changed in place (velocities and tensions)."""
-        N = self.N
-        theta = self.theta_of(U)
-        if contact is None:
-            contact = self.modes == TAUT
-            contact[self._fired] = True
-        before = self.modes.copy()
-        idx = np.flatnonzero(contact)
-        new = np.full(self.n, SLACK)
-        p = np.zeros(self.n)
-        if len(idx):
-            _, MinvC, W, _ = self._delassus(theta, idx)
-            lam, w = solve_lcp(W, self.drive.rates(t)[idx]
-                               - self._grad_lengths(theta)[idx] @ V[:N])
-            V[:N] -= MinvC @ lam
-            stay = idx[w <= 1e-9 * max(1.0, float(np.max(np.abs(w))))]
-            if len(stay):
-                W2, q2 = self._unforced(t, theta, V[:N], stay)
-                p_stay, _ = solve_lcp(W2, q2)
-                p[stay] = p_stay
-                new[stay[p_stay > 1e-8 * max(1.0, float(np.max(p_stay)))]] = TAUT
-        lengths, Lbar = self.cable_lengths(theta), self.drive.lengths(t)
-        for i in range(self.n):
-            if new[i] == SLACK and contact[i]:
-                self.offsets[i] = lengths[i] - Lbar[i]
-            if new[i] != before[i] and traj is not None:
-                traj.events.append((t, i + 1, MODE_NAMES[new[i]]))
-        self.modes = new
-        V[N:] = p
+            traj.steps += ts.getStepNumber()
+            traj.rejected += ts.getStepRejections() + self._rollbacks
+            traj.snes_failures += ts.getSNESFailures()
+            t = ts.getTime()
+        finally:
+            ts.destroy()
+            for obj in objs:
+                obj.destroy()
+        traj.completed = bool(reason > 0 and t >= t_end * (1 - 1e-12))
+        traj.reason = _reason(reason)
+        return traj
 
     def _monitor(self, traj, on_step):
         def monitor(ts, step, t, U):
-            if step == 0:
+            if step == 0 or (traj.time and t <= traj.time[-1]):
                 return
-            u, v = ts.getSolution2()
-            self._record(traj, t, u.getArray(readonly=True).copy(),
-                         v.getArray(readonly=True).copy())
+            u, v = (x.getArray(readonly=True).copy() for x in ts.getSolution2())
+            p = None
+            if self.cables is not None:
+                p, taut = self.cables.mean_tensions(t, u, v)
+                self._note_switches(traj, taut & (p > TAUT_TENSION))
+            self._record(traj, t, u, v, p)
             if on_step is not None:
                 on_step(t)
         return monitor
 
-    def _record(self, traj, t, U, V):
+    def _note_switches(self, traj, taut):
+        """The modes in the step just taken (taut: a positive mean tension); a change
+        is an event at the step's start (its time known to within the step)."""
+        new = np.where(taut, TAUT, SLACK)
+        for i in np.flatnonzero(new != self.modes):
+            traj.events.append((self.cables.start.t, int(i) + 1, MODE_NAMES[new[i]]))
+        self.modes = new
+
+    def _record(self, traj, t, U, V, p=None):
+        """Append the state at t; ``p``: the tensions of the step that ended at t
+        (length control: its mean tensions, whose work on the step is p . Delta L)."""
         theta = self.theta_of(U)
-        p = self.drive.tensions(t) if isinstance(self.drive, TensionDrive) else \
-            self.consistent_tensions(t, theta, V[: self.N], V[self.N:])
+        mean = p is not None
+        if p is None:
+            p = self.drive.tensions(t)
         lengths = self.cable_lengths(theta)
         work = 0.0
         if traj.time:
-            work = traj.work[-1] - 0.5 * float((traj.p[-1] + p) @ (lengths - traj.lengths[-1]))
+            p_step = p if mean else 0.5 * (traj.p[-1] + p)
+            work = traj.work[-1] - float(p_step @ (lengths - traj.lengths[-1]))
         traj.time.append(float(t))
         traj.theta.append(theta)
         traj.omega.append(V[: self.N].copy())

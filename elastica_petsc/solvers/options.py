@@ -176,7 +176,7 @@ class SolverOptions:
         return True
 
 
-def _petsc_library():
+def petsc_library():
     """The loaded libpetsc (from /proc/self/maps), else the one in PETSC_DIR/lib."""
     paths = []
     try:
@@ -206,7 +206,7 @@ def unused_options(names=None, *, root_only: bool = False) -> list[str] | None:
     ``root_only``: [] on every rank of COMM_WORLD but 0 (one report per run)."""
     if root_only and PETSc.COMM_WORLD.rank != 0:
         return []
-    lib = _petsc_library()
+    lib = petsc_library()
     if lib is None:
         return None
     names = list(PETSc.Options().getAll()) if names is None else [n.lstrip("-") for n in names]

@@ -25,6 +25,10 @@ from ..solvers.dynamics import SLACK, TAUT, DynamicsSolver, Trajectory
 from ..solvers.equilibrium import Equilibrium, check_order, check_tensions, solve_equilibrium
 from ..solvers.stability import StabilitySolver
 
+# rho_inf under a motor schedule: the unresolved mesh modes that the impacts of rigid
+# cables excite are damped, the resolved ones are not (docs/model.md §16.6)
+SCHEDULE_RADIUS = 0.5
+
 
 def time_scale_s(arm: Arm) -> float:
     """tau = sqrt(rho_A l^4 / B) [s]; needs the mass per length."""
@@ -154,15 +158,21 @@ def build_inertia(arm: Arm, disc: Discretisation) -> Inertia:
 def simulate(arm: Arm, *, elements: int | None = None, initial_tensions_N=None, order=None,
              from_theta=None, tensions_N=None, history_csv=None, schedule_csv=None,
              settle_s: float = 0.0, duration_s: float | None = None, rtol: float = 1e-6,
-             atol: float = 1e-8, radius: float = 1.0, dt_s: float | None = None,
+             atol: float = 1e-8, radius: float | None = None, dt_s: float | None = None,
              adaptive: bool = False, steps_per_period: int = 200, on_step=None, trajectory: Trajectory | None = None) -> SimulationResult:
     """Run the arm from rest (module docstring); ``on_step(t_s)`` after each step.
 
     Steps: fixed, ``dt_s`` or the start state's first period / ``steps_per_period``
     (default); ``adaptive``: TSAdapt with ``rtol``/``atol`` from that step.
+    ``radius``: rho_inf of the alpha method; default 1 (no numerical dissipation)
+    under tensions, ``SCHEDULE_RADIUS`` under a motor schedule (docs/model.md §16.6).
     """
     tau = time_scale_s(arm)
     disc = Discretisation.from_arm(arm, elements)
+    if type(disc) is not Discretisation:
+        raise InputError("simulate handles arms with straight cables and no weight only: "
+                         "cable guides, offset cable ends and gravity are not in the dynamics "
+                         "yet (docs/model.md §16.6)")
     n = disc.n_tendons
     given = [x is not None for x in (tensions_N, history_csv, schedule_csv)]
     if sum(given) != 1:
@@ -201,6 +211,8 @@ def simulate(arm: Arm, *, elements: int | None = None, initial_tensions_N=None, 
         p0 = drive.tensions(0.0) if p_init is None else p0
     if not (end_s > 0 and math.isfinite(end_s)):
         raise InputError(f"the duration must be a positive number of seconds, got {end_s:g}")
+    if radius is None:
+        radius = SCHEDULE_RADIUS if kind == "schedule" else 1.0
     inertia = build_inertia(arm, disc)
     f1 = first_frequency(disc, arm, theta0, p0) / (2 * math.pi * tau)
     dt0 = (dt_s / tau) if dt_s else 1.0 / (f1 * tau * steps_per_period)
