@@ -348,7 +348,9 @@ class DynamicsSolver:
             self.options.update({"snes_lag_jacobian": 1})
         traj = trajectory if trajectory is not None else Trajectory()
         self._rollbacks = 0
-        self._record(traj, 0.0, U0, V0, np.asarray(p0, float))
+        # t = 0: the drive's tensions under force control (a release acts from t = 0),
+        # the start state's under length control
+        self._record(traj, 0.0, U0, V0, None if self.cables is None else np.asarray(p0, float))
         ts, objs = self._make_ts(0.0, t_end, U0, V0, self._monitor(traj, on_step))
         try:
             try:
