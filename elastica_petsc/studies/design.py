@@ -82,8 +82,8 @@ def parse_vary(names, n_tendons: int) -> list[int]:
 
     for name in names:
         if NAME.match(name):
-            raise DesignError(f"--vary {name}: attachments and guide positions sit on mesh "
-                              "nodes, so the path objective's gradient optimiser does not vary "
+            raise DesignError(f"--vary {name}: attachment points and guide positions sit on "
+                              "mesh nodes, so the path objective's gradient optimiser does not vary "
                               f"them; use --objective area or --sweep {name}=START:STOP:STEP")
     return parse_design_variables(names, n_tendons)[0]
 
