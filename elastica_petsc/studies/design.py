@@ -83,8 +83,8 @@ def parse_vary(names, n_tendons: int) -> list[int]:
     for name in names:
         if NAME.match(name):
             raise DesignError(f"--vary {name}: attachment points and guide positions sit on "
-                              "mesh nodes, so the path objective's gradient optimiser does not vary "
-                              f"them; use --objective area or --sweep {name}=START:STOP:STEP")
+                              "mesh nodes, so the path objective's gradient optimiser does not "
+                              f"vary them; use --objective area or --sweep {name}=START:STOP:STEP")
     return parse_design_variables(names, n_tendons)[0]
 
 
