@@ -59,18 +59,6 @@ def motor_of(args, arm):
     return motor
 
 
-def own_tip_speed(schedule) -> float | None:
-    """The fastest tip speed [mm/s] of a schedule's own time column (None: untimed)."""
-    import numpy as np
-
-    d = np.diff(schedule.time_s)
-    step = np.linalg.norm(np.diff(schedule.tips_mm, axis=0), axis=1)
-    moving = d > 0
-    if not np.all(np.isfinite(d)) or not moving.any():
-        return None
-    return float(np.max(step[moving] / d[moving]))
-
-
 def check_options(args, n_tendons: int) -> None:
     from ..core.errors import InputError
     from ..io.hdf5 import check_distinct, check_output_path
@@ -93,12 +81,13 @@ def check_options(args, n_tendons: int) -> None:
 
 def summary(schedule, violations, retimed: bool) -> dict:
     from ..core.motion import rates_and_accelerations
+    from ..core.schedule import tip_speed_max_mm_s
     from ..io.summary import rounded
 
     r, a = rates_and_accelerations(schedule.positions_steps, schedule.durations_s[1:])
     rows = sorted({v.row for v in violations})
     return {"rows": int(schedule.n_rows), "retimed": retimed,
-            "tip_speed_max_mm_s": own_tip_speed(schedule),
+            "tip_speed_max_mm_s": tip_speed_max_mm_s(schedule),
             "duration_s": round(schedule.duration_s, 6),
             "limits": schedule.limits.to_json(),
             "peak_speed_steps_s": rounded(abs(r).max(axis=0)) if len(r) else [],
@@ -132,14 +121,14 @@ def format_summary(s: dict) -> str:
 
 def run(args) -> int:
     from ..core.model import load_config
-    from ..core.schedule import motor_schedule, read_schedule_csv
+    from ..core.schedule import motor_schedule, read_schedule_csv, tip_speed_max_mm_s
 
     arm = load_config(args.config)
     motor = motor_of(args, arm)
     check_options(args, arm.n_tendons)
     schedule = read_schedule_csv(args.csv, motor)
     if args.retime:
-        speed = args.speed_mm_s if args.speed_mm_s is not None else own_tip_speed(schedule)
+        speed = args.speed_mm_s if args.speed_mm_s is not None else tip_speed_max_mm_s(schedule)
         schedule = motor_schedule(schedule.lengths_mm, motor, targets_mm=schedule.targets_mm,
                                   tips_mm=schedule.tips_mm, tensions_N=schedule.tensions_N,
                                   p=schedule.p, reached=schedule.reached, phase=schedule.phase,

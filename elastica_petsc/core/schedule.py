@@ -178,6 +178,16 @@ class MotorSchedule:
         return paths
 
 
+def tip_speed_max_mm_s(schedule: MotorSchedule) -> float | None:
+    """The fastest tip speed [mm/s] of a schedule's own time column (None: untimed)."""
+    d = np.diff(schedule.time_s)
+    step = np.linalg.norm(np.diff(schedule.tips_mm, axis=0), axis=1)
+    moving = d > 0
+    if not np.all(np.isfinite(d)) or not moving.any():
+        return None
+    return float(np.max(step[moving] / d[moving]))
+
+
 def write_table(path, header: list[str], rows: list[list]) -> Path:
     """A CSV written atomically (floats exactly, as Python's repr), with the
     file mode of any new file (0666 less the umask)."""
