@@ -47,7 +47,7 @@ _EXPORTS = {
     "workspace": ".api", "boundary": ".api", "design": ".api",
     "design_area": ".api", "design_sweep": ".api",
     "read": ".api", "save": ".api", "calibrate": ".api", "simulate": ".api",
-    "friction_path": ".api",
+    "friction_path": ".api", "fastest_speed": ".api",
     # result types: frozen, short repr, summary() -> dict, save(path); ep.read(path) -> same type
     "State": ".api", "Equilibrium": ".solvers.equilibrium",
     "ControlResult": ".solvers.control", "Stability": ".solvers.stability",
@@ -56,7 +56,8 @@ _EXPORTS = {
     "SearchResult": ".studies.search", "WorkspaceMap": ".studies.workspace",
     "BoundaryResult": ".studies.boundary", "DesignResult": ".studies.design",
     "AreaDesign": ".studies.design_area", "Sweep": ".studies.design_sweep",
-    "SimulationResult": ".studies.simulate", "CalibrationResult": ".studies.calibrate_report",
+    "SimulationResult": ".studies.simulate", "SpeedStudy": ".studies.speed",
+    "CalibrationResult": ".studies.calibrate_report",
     "FrictionResult": ".api",
     # solver classes, for loops
     "EquilibriumSolver": ".solvers.equilibrium",

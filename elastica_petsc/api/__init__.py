@@ -42,10 +42,10 @@ from .workspaces import MIN_SPACING_MM, boundary, workspace
 from .designs import DESIGN_NAMES, design, design_area, design_sweep
 from .files import read, save
 from .calibration import calibrate
-from .motion import simulate
+from .motion import fastest_speed, simulate
 from .friction import FrictionResult, friction_path
 
 __all__ = ["State", "solve", "stability", "frequencies", "lengths", "length_equilibria",
            "equilibria", "control", "trace", "schedule", "MIN_SPACING_MM", "workspace",
            "boundary", "design", "DESIGN_NAMES", "design_area", "design_sweep", "save", "read",
-           "calibrate", "simulate", "friction_path", "FrictionResult"]
+           "calibrate", "simulate", "friction_path", "FrictionResult", "fastest_speed"]

@@ -28,3 +28,26 @@ def simulate(arm: Arm, *, tensions_N=None, history_csv=None, schedule_csv=None,
                tensions_N=tensions_N, history_csv=history_csv, schedule_csv=schedule_csv,
                settle_s=settle_s, duration_s=duration_s, rtol=rtol, atol=atol, radius=radius,
                dt_s=dt_s, adaptive=adaptive)
+
+
+@_takes_petsc_options
+def fastest_speed(arm: Arm, schedule, max_deviation_mm: float, *, elements: int | None = None,
+                  settle_s: float | None = None, start_mm_s: float | None = None,
+                  rel_tol: float = 0.05, on_trial=None):
+    """The fastest constant tip speed [mm/s] at which the motor ``schedule`` (a CSV path as
+    ``trace --schedule`` writes it, a ``MotorSchedule`` or a ``TracedSchedule``), played from
+    rest under length control on a mesh of ``elements``, keeps the tip within
+    ``max_deviation_mm`` of its quasi-static tips and settles within it in ``settle_s``
+    (docs/model.md §34).  Returns a ``SpeedStudy`` (``fastest_mm_s``, every trial)."""
+    from ..core.schedule import read_schedule_csv
+    from ..studies.speed import SETTLE_S, check_study, fastest_speed as run
+
+    settle_s = SETTLE_S if settle_s is None else settle_s
+    check_study(max_deviation_mm, settle_s, rel_tol)
+    if hasattr(schedule, "schedule"):
+        schedule = schedule.schedule
+    elif not hasattr(schedule, "lengths_mm"):
+        schedule = read_schedule_csv(schedule, arm.motor)
+    return run(arm, schedule, max_deviation_mm, elements=elements,
+               settle_s=settle_s, start_mm_s=start_mm_s,
+               rel_tol=rel_tol, on_trial=on_trial)

@@ -33,6 +33,21 @@ def add_parser(sub) -> None:
     parser.add_argument("--step-table", metavar="STEM",
                         help="write one step/direction timing table per motor, STEM_motorI.csv "
                              "(time_s, direction +1 out / -1 in, position_steps)")
+    speed = parser.add_argument_group(
+        "fastest speed (docs/model.md §34)",
+        "simulate the schedule re-timed at candidate tip speeds (from --speed-mm-s, default "
+        "its own) and bisect for the fastest at which the tip stays within D mm of its "
+        "quasi-static tips and settles within D mm of the last one; no motor limits needed")
+    speed.add_argument("--max-deviation-mm", type=float, metavar="D",
+                       help="the largest tip deviation allowed, mm")
+    speed.add_argument("--elements", type=int, metavar="N",
+                       help="mesh of the simulations (default: the config's; 180 elements take "
+                            "minutes per candidate, 30 seconds)")
+    speed.add_argument("--settle-s", type=float, default=2.0, metavar="S",
+                       help="settling window after the motors stop, s (default 2)")
+    speed.add_argument("--rel-tol", type=float, default=0.05, metavar="R",
+                       help="stop when the failing speed is within this fraction of the "
+                            "passing one (default 0.05)")
     parser.add_argument("--json", action="store_true",
                         help="print one JSON object on stdout instead of the text summary")
     parser.add_argument("--overwrite", action="store_true", help="replace existing outputs")
@@ -119,11 +134,58 @@ def format_summary(s: dict) -> str:
     return "\n".join(lines)
 
 
+def run_speed(args, arm) -> int:
+    """``--max-deviation-mm``: the fastest speed study, printed."""
+    from ..core.errors import InputError
+    from ..ui.progress import Progress
+    from .. import api
+
+    if args.retime or args.step_table:
+        raise InputError("--max-deviation-mm runs a speed study: use it without --retime "
+                         "and --step-table")
+    if args.elements is not None:
+        from ..core.inputs import elements
+        elements(args.elements, "--elements")
+    played = []
+    with Progress(None, "schedule --max-deviation-mm", unit="speeds") as bar:
+        study = api.fastest_speed(arm, args.csv, args.max_deviation_mm, elements=args.elements,
+                                  settle_s=args.settle_s, start_mm_s=args.speed_mm_s,
+                                  rel_tol=args.rel_tol,
+                                  on_trial=lambda t: (played.append(t), bar.update(len(played))))
+    s = study.summary()
+    if args.json:
+        common.print_json(args.command, s)
+    else:
+        print(format_speed(s))
+    return 0 if s["fastest_mm_s"] is not None else 1
+
+
+def format_speed(s: dict) -> str:
+    lines = [f"speeds played ({s['elements']} elements, settling window {s['settle_s']:g} s, "
+             f"D = {s['max_deviation_mm']:g} mm):"]
+    for t in s["trials"]:
+        settle = "not settled" if t["settling_s"] is None else f"settled {t['settling_s']:.3g} s"
+        lines.append(f"  {t['speed_mm_s']:9.4g} mm/s: max deviation {t['max_deviation_mm']:.4g} mm"
+                     f" at {t['max_deviation_at_s']:.3g} s, end {t['end_deviation_mm']:.3g} mm, "
+                     f"{settle}: {'pass' if t['passed'] else 'fail'}")
+    rule = (f"rule of thumb 2 pi f1 D = {s['rule_of_thumb_mm_s']:.4g} mm/s "
+            f"(f1 = {s['f1_hz']:.4g} Hz at the start)")
+    if s["fastest_mm_s"] is None:
+        lines.append(f"no speed tried passes; {rule}")
+    else:
+        above = ("" if s["failing_mm_s"] is None
+                 else f" ({s['failing_mm_s']:.4g} mm/s fails)")
+        lines.append(f"fastest constant tip speed {s['fastest_mm_s']:.4g} mm/s{above}; {rule}")
+    return "\n".join(lines)
+
+
 def run(args) -> int:
     from ..core.model import load_config
     from ..core.schedule import motor_schedule, read_schedule_csv, tip_speed_max_mm_s
 
     arm = load_config(args.config)
+    if args.max_deviation_mm is not None:
+        return run_speed(args, arm)
     motor = motor_of(args, arm)
     check_options(args, arm.n_tendons)
     schedule = read_schedule_csv(args.csv, motor)

@@ -35,7 +35,6 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.model import Arm
-from ..core.results import Result
 from ..core.schedule import MotorSchedule, motor_schedule, tip_speed_max_mm_s
 from ..solvers.stability import max_tracing_speed_mm_s
 from .simulate import simulate
@@ -63,9 +62,10 @@ class SpeedTrial:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
-@dataclass(frozen=True, repr=False)
-class SpeedStudy(Result):
-    """The fastest passing speed found (None: no speed passed), the bracket and every trial."""
+@dataclass(frozen=True)
+class SpeedStudy:
+    """The fastest passing speed found (None: no speed passed), the bracket and every trial
+    (``summary()``: what ``schedule --max-deviation-mm --json`` prints; no HDF5 form)."""
 
     max_deviation_mm: float
     elements: int
@@ -127,6 +127,19 @@ def play(arm: Arm, schedule: MotorSchedule, speed_mm_s: float, max_deviation_mm:
     return judge(run, timed, max_deviation_mm, speed_mm_s), run
 
 
+def check_study(max_deviation_mm, settle_s, rel_tol) -> float:
+    """D [mm] as a float, or InputError (one line) for D, the window or the tolerance."""
+    D = float(max_deviation_mm)
+    if not (D > 0 and math.isfinite(D)):
+        raise InputError(f"the largest tip deviation must be a positive number of mm, got {D:g}")
+    if not (settle_s > 0 and math.isfinite(settle_s)):
+        raise InputError(f"the settling window must be a positive number of seconds, "
+                         f"got {settle_s:g}")
+    if not 0 < rel_tol < 1:
+        raise InputError(f"the relative tolerance must be in (0, 1), got {rel_tol:g}")
+    return D
+
+
 def fastest_speed(arm: Arm, schedule: MotorSchedule, max_deviation_mm: float, *,
                   elements: int | None = None, settle_s: float = SETTLE_S,
                   start_mm_s: float | None = None, rel_tol: float = 0.05,
@@ -136,14 +149,7 @@ def fastest_speed(arm: Arm, schedule: MotorSchedule, max_deviation_mm: float, *,
     on a mesh of ``elements``, stays within ``max_deviation_mm`` of its quasi-static
     tips and settles within it in ``settle_s`` (module docstring);
     ``on_trial(trial)`` after each candidate."""
-    D = float(max_deviation_mm)
-    if not (D > 0 and math.isfinite(D)):
-        raise InputError(f"the largest tip deviation must be a positive number of mm, got {D:g}")
-    if not (settle_s > 0 and math.isfinite(settle_s)):
-        raise InputError(f"the settling window must be a positive number of seconds, "
-                         f"got {settle_s:g}")
-    if not 0 < rel_tol < 1:
-        raise InputError(f"the relative tolerance must be in (0, 1), got {rel_tol:g}")
+    D = check_study(max_deviation_mm, settle_s, rel_tol)
     if schedule.n_rows < 2 or not np.all(np.isfinite(schedule.tips_mm)):
         raise InputError("the schedule needs at least two rows with tip_x_mm, tip_y_mm")
     own = tip_speed_max_mm_s(schedule)
