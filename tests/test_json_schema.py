@@ -48,6 +48,10 @@ RUNS = [
     ("equilibria", ["equilibria", "--tensions", "1", "1", "--effort", "1", *E, *Q], {0}),
     ("replay", ["replay", "t.h5", *Q], {0, 1}),
     ("schedule", ["schedule", "t.csv", "--max-speed-steps-s", "1000"], {0, 1}),
+    ("trace-short", ["trace", "--shape", "line", "--center", "599.5", "8", "--end", "599", "11",
+                     "--schedule", "short.csv", *E, *Q], {0}),
+    ("schedule-speed", ["schedule", "short.csv", "--max-deviation-mm", "1.3", "--rel-tol", "0.5",
+                        *E], {0, 1}),
     ("design-path", ["design", "--vary", "tendon2.route", "--objective", "path:path.csv",
                      "--iterations", "1", *E, *Q], {0, 1}),
     ("design-area-infeasible", ["design", "--config", "cross.toml", "--vary", "tendon1.route",
@@ -122,6 +126,17 @@ def test_the_checker_rejects_what_the_schema_forbids(outputs):
     ws = dict(outputs["workspace"], status_counts={"reached with P >= 0": 3})
     assert errors(ws, SCHEMA, SCHEMA)
     assert errors(dict(outputs["usage-error"], error="oops"), SCHEMA, SCHEMA)
+
+
+@pytest.mark.slow
+def test_speed_study_is_checked_as_such(outputs):
+    """schedule --max-deviation-mm: the study's fields, not the motor check's, are required."""
+    speed = outputs["schedule-speed"]
+    assert speed["elements"] == 30 and speed["trials"]
+    assert errors(dict(speed, trials=[{"speed_mm_s": 1.0}]), SCHEMA, SCHEMA)
+    assert errors({k: v for k, v in speed.items() if k != "fastest_mm_s"}, SCHEMA, SCHEMA)
+    assert errors({k: v for k, v in outputs["schedule"].items() if k != "playable"},
+                  SCHEMA, SCHEMA)
 
 
 @pytest.mark.slow

@@ -1,5 +1,5 @@
 """`schedule --max-deviation-mm`: the fastest constant tip speed within D mm (studies/speed.py,
-docs/model.md §34), on a short line near the straight arm at 30 elements (seconds per run)."""
+docs/model.md §16.8), on a short line near the straight arm at 30 elements (seconds per run)."""
 from __future__ import annotations
 
 import json

@@ -38,7 +38,7 @@ def fastest_speed(arm: Arm, schedule, max_deviation_mm: float, *, elements: int 
     ``trace --schedule`` writes it, a ``MotorSchedule`` or a ``TracedSchedule``), played from
     rest under length control on a mesh of ``elements``, keeps the tip within
     ``max_deviation_mm`` of its quasi-static tips and settles within it in ``settle_s``
-    (docs/model.md §34).  Returns a ``SpeedStudy`` (``fastest_mm_s``, every trial)."""
+    (docs/model.md §16.8).  Returns a ``SpeedStudy`` (``fastest_mm_s``, every trial)."""
     from ..core.schedule import read_schedule_csv
     from ..studies.speed import SETTLE_S, check_study, fastest_speed as run
 

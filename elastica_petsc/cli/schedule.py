@@ -34,7 +34,7 @@ def add_parser(sub) -> None:
                         help="write one step/direction timing table per motor, STEM_motorI.csv "
                              "(time_s, direction +1 out / -1 in, position_steps)")
     speed = parser.add_argument_group(
-        "fastest speed (docs/model.md §34)",
+        "fastest speed (docs/model.md §16.8)",
         "simulate the schedule re-timed at candidate tip speeds (from --speed-mm-s, default "
         "its own) and bisect for the fastest at which the tip stays within D mm of its "
         "quasi-static tips and settles within D mm of the last one; no motor limits needed")

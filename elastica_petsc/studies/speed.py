@@ -1,4 +1,4 @@
-"""The fastest constant tip speed at which a schedule stays within D mm (docs/model.md §34).
+"""The fastest constant tip speed at which a schedule stays within D mm (docs/model.md §16.8).
 
 A motor schedule (the rows of ``trace --schedule``: cable lengths and the
 quasi-static tips along an approach and a path) is re-timed so that the tip
