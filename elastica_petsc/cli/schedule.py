@@ -181,7 +181,7 @@ def format_speed(s: dict) -> str:
 
 def run(args) -> int:
     from ..core.model import load_config
-    from ..core.schedule import motor_schedule, read_schedule_csv, tip_speed_max_mm_s
+    from ..core.schedule import read_schedule_csv, retimed, tip_speed_max_mm_s
 
     arm = load_config(args.config)
     if args.max_deviation_mm is not None:
@@ -191,10 +191,7 @@ def run(args) -> int:
     schedule = read_schedule_csv(args.csv, motor)
     if args.retime:
         speed = args.speed_mm_s if args.speed_mm_s is not None else tip_speed_max_mm_s(schedule)
-        schedule = motor_schedule(schedule.lengths_mm, motor, targets_mm=schedule.targets_mm,
-                                  tips_mm=schedule.tips_mm, tensions_N=schedule.tensions_N,
-                                  p=schedule.p, reached=schedule.reached, phase=schedule.phase,
-                                  point=schedule.point, speed_mm_s=speed)
+        schedule = retimed(schedule, motor, speed)
         schedule.write_csv(args.retime)
     if args.step_table:
         schedule.write_step_tables(args.step_table)

@@ -286,6 +286,15 @@ def motor_schedule(lengths_mm, motor: Motor, *, targets_mm=None, tips_mm=None,
         limited_by=limited_by, limits=limits, speed_bound_s=bound_s)
 
 
+def retimed(schedule: MotorSchedule, motor: Motor, speed_mm_s: float | None) -> MotorSchedule:
+    """``schedule``'s rows with the tip moving at ``speed_mm_s`` [mm/s] between rows, under
+    ``motor``'s limits when it has any (``schedule --retime``)."""
+    return motor_schedule(schedule.lengths_mm, motor, targets_mm=schedule.targets_mm,
+                          tips_mm=schedule.tips_mm, tensions_N=schedule.tensions_N,
+                          p=schedule.p, reached=schedule.reached, phase=schedule.phase,
+                          point=schedule.point, speed_mm_s=speed_mm_s)
+
+
 def schedule_from_trace(trace, arm: Arm, *, approach=None,
                         speed_mm_s: float | None = None) -> MotorSchedule:
     """The timed motor schedule of a traced path

@@ -3,7 +3,7 @@
 A motor schedule (the rows of ``trace --schedule``: cable lengths and the
 quasi-static tips along an approach and a path) is re-timed so that the tip
 moves from row to row at a candidate speed v (core/schedule.py
-``motor_schedule``: under [motor] limits, also no faster than the motors
+``retimed``: under [motor] limits, also no faster than the motors
 allow), played under length control from rest by the dynamics of §16
 (studies/simulate.py, the schedule's own cables, slack and taut decided in
 every step), and judged by two numbers:
@@ -35,7 +35,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.model import Arm
-from ..core.schedule import MotorSchedule, motor_schedule, tip_speed_max_mm_s
+from ..core.schedule import MotorSchedule, retimed, tip_speed_max_mm_s
 from ..solvers.stability import max_tracing_speed_mm_s
 from .simulate import simulate
 
@@ -88,15 +88,6 @@ class SpeedStudy:
                 "trials": [t.to_json() for t in self.trials]}
 
 
-def retimed(schedule: MotorSchedule, arm: Arm, speed_mm_s: float) -> MotorSchedule:
-    """``schedule``'s rows with the tip moving at ``speed_mm_s`` between rows (as
-    ``schedule --retime --speed-mm-s`` does: under the arm's motor limits, if any)."""
-    return motor_schedule(schedule.lengths_mm, arm.motor, targets_mm=schedule.targets_mm,
-                          tips_mm=schedule.tips_mm, tensions_N=schedule.tensions_N,
-                          p=schedule.p, reached=schedule.reached, phase=schedule.phase,
-                          point=schedule.point, speed_mm_s=speed_mm_s)
-
-
 def judge(run, schedule: MotorSchedule, max_deviation_mm: float, speed_mm_s: float) -> SpeedTrial:
     """One played schedule (a ``SimulationResult``) measured against ``max_deviation_mm``."""
     T = schedule.duration_s
@@ -120,7 +111,7 @@ def judge(run, schedule: MotorSchedule, max_deviation_mm: float, speed_mm_s: flo
 def play(arm: Arm, schedule: MotorSchedule, speed_mm_s: float, max_deviation_mm: float, *,
          elements: int | None, settle_s: float):
     """(trial, simulation) of ``schedule`` re-timed to ``speed_mm_s``, from rest."""
-    timed = retimed(schedule, arm, speed_mm_s)
+    timed = retimed(schedule, arm.motor, speed_mm_s)
     with tempfile.TemporaryDirectory(prefix="ep-speed-") as d:
         path = timed.write_csv(Path(d) / "schedule.csv")
         run = simulate(arm, elements=elements, schedule_csv=path, settle_s=settle_s)
