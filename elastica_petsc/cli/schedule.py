@@ -13,7 +13,9 @@ def add_parser(sub) -> None:
                     "max_speed_steps_s and max_accel_steps_s2 of --config (or the options "
                     "below), and optionally re-time it to the shortest schedule that every "
                     "motor can play (docs/model.md, Motor-aware schedules). Exit status 1 if "
-                    "the checked schedule has rows a motor cannot play.")
+                    "the checked schedule has rows a motor cannot play. With --max-deviation-mm D: "
+                    "the fastest constant tip speed at which the simulated tip stays within D "
+                    "mm (exit status 1 if no speed tried passes).")
     parser.add_argument("csv", metavar="CSV", help="the schedule to check")
     parser.add_argument("--config", metavar="TOML",
                         help="the arm and motors the schedule was made for (default: the "
