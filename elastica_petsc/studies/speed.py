@@ -151,6 +151,8 @@ def fastest_speed(arm: Arm, schedule: MotorSchedule, max_deviation_mm: float, *,
 
     def trial(speed):
         t, run = play(arm, schedule, speed, D, elements=elements, settle_s=settle_s)
+        if run.reason == "INTERRUPTED":          # a stop, not a failing speed
+            raise KeyboardInterrupt
         trials.append(t)
         f1.append(run.f1_hz)
         if on_trial is not None:
