@@ -78,6 +78,26 @@ def elastic_band(disc: Discretisation) -> np.ndarray:
     return band
 
 
+def straight_cables(disc: Discretisation) -> tuple[Discretisation, np.ndarray]:
+    """The paper's cable kernel of an arm whose cables run straight to the centreline
+    and the weight beyond each element's midpoint G_e (N, 2) (docs/model.md §11.5; zero
+    without weight): the dynamics' preconditioner adds G_e to the cables' forces in T
+    (§16.4).  ValueError for cables through guides or with offset ends."""
+    if type(disc) is Discretisation:
+        return disc, np.zeros((disc.n_elements, 2))
+    if disc.point_nodes != tuple(disc.attach_nodes) or np.any(disc.point_offsets != 0.0):
+        raise ValueError("cables through guides or with offset ends")
+    return Discretisation(disc.n_elements, disc.attach_nodes, disc.routes), disc.element_weight
+
+
+def weight_potential(disc: Discretisation, theta: np.ndarray) -> float:
+    """Potential of the arm's weight and tip mass, -sum_k w_k q . x_k - q_t . x_N
+    (docs/model.md §11.5), units B/l; 0 without weight."""
+    if type(disc) is Discretisation:
+        return 0.0
+    return disc.potential(theta, np.zeros(disc.n_tendons)) - disc.strain_energy(theta)
+
+
 @dataclass(frozen=True)
 class Inertia:
     """Mass and damping data of one discretised arm (non-dimensional)."""
