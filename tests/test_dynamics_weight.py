@@ -65,10 +65,12 @@ def test_principal_pc_carries_the_weights_stiffness(arm):
     assert errors[True] < 1e-6 and errors[False] > 1e-3, errors
 
 
-def test_hanging_equilibrium_is_a_fixed_point(arm):
-    """Released at rest from its static equilibrium under its weight and the tensions, the
-    arm stays there: the dynamics' residual carries the same weight as the static model."""
-    r = simulate(arm, elements=30, initial_tensions_N=TENSIONS_N, tensions_N=TENSIONS_N,
+@pytest.mark.parametrize("tensions_N", [TENSIONS_N, [0.0, 0.0]])
+def test_hanging_equilibrium_is_a_fixed_point(arm, tensions_N):
+    """Released at rest from its static equilibrium under its weight and the tensions (at
+    zero tension: the arm sagging under its weight, §11.5), the arm stays there: the
+    dynamics' residual carries the same weight as the static model."""
+    r = simulate(arm, elements=30, initial_tensions_N=tensions_N, tensions_N=tensions_N,
                  duration_s=3.5, steps_per_period=100)
     assert r.completed and r.time_s[-1] * r.f1_hz > 3          # three periods
     motion = np.max(np.linalg.norm(r.tip_mm - r.tip_mm[0], axis=1)) / arm.length_mm

@@ -1,6 +1,6 @@
 """A simulation in user units: start state, motor input, the run (docs/model.md §16).
 
-Start states: the straight arm at rest, the static equilibrium at given
+Start states: the straight arm at rest (sagging under any weight), the static equilibrium at given
 tensions (loaded in a given order), or the last shape of a file the tool
 wrote (``theta``/``theta_rad`` dataset).  Inputs: constant tensions, a
 tension history (core/drive.py) or a motor schedule (cable lengths in time).
@@ -128,8 +128,8 @@ def _start_theta(disc: Discretisation, tensions, order, from_theta):
             raise InputError(f"the start shape has {theta.size - 1} elements, the mesh "
                              f"{disc.n_elements}; use --elements {theta.size - 1}")
         return theta, np.zeros(n)
-    if tensions is None or not np.any(tensions):
-        return np.zeros(disc.n_elements + 1), np.zeros(n)
+    if tensions is None or not np.any(tensions):      # at rest: sagging under any weight
+        return disc.split(disc.straight())[0], np.zeros(n)
     eq = solve_equilibrium(disc, tensions, order=order)
     if not eq.converged:
         raise InputError(f"no equilibrium at the initial tensions: {eq.message}")
@@ -146,11 +146,12 @@ def first_frequency(disc: Discretisation, arm: Arm, theta, p) -> float:
 
 def build_inertia(arm: Arm, disc: Discretisation) -> Inertia:
     """Masses and damping of the arm (docs/model.md §16.2); zeta_1 at the unloaded
-    first mode of this mesh with the tip mass."""
+    first mode of this mesh with the tip mass (sagging under any weight, §11.5)."""
     tip = arm.tip_mass_kg / (arm.mass_per_length_kg_m * arm.length_mm * 1e-3)
     dyn = arm.dynamics
     rotary = (arm.thickness_mm / arm.length_mm) ** 2 / 12.0 if dyn.rotary_inertia else 0.0
-    omega1 = first_frequency(disc, arm, np.zeros(disc.n_elements + 1), np.zeros(disc.n_tendons))
+    omega1 = first_frequency(disc, arm, disc.split(disc.straight())[0],
+                             np.zeros(disc.n_tendons))
     return Inertia.build(disc, tip_mass=tip, rotary=rotary, damping_ratio=dyn.damping_ratio,
                          kelvin_voigt_fraction=dyn.kelvin_voigt_fraction, omega1=omega1)
 
