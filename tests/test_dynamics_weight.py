@@ -128,3 +128,16 @@ def test_energy_with_weight_conserved_without_damping(arm):
         assert tr.completed
         errors.append(np.max(np.abs(E - E[0])) / vibration)
     assert errors[1] < 1e-6 and errors[0] / errors[1] > 3.5, errors
+
+
+def test_weighted_motion_residual_is_force_plus_static_residual(arm):
+    """The compiled residual of the cables plus the weight's rows equals the inertial force
+    plus §11's static residual (core/guided.py) at a bent, moving state with tensions."""
+    disc, _ = _hanging(arm, 30)
+    rng = np.random.default_rng(4)
+    theta = np.concatenate(([0.0], np.cumsum(0.05 * rng.standard_normal(30))))
+    v, a, p = rng.standard_normal(30), rng.standard_normal(30), np.array([2.0, 5.0])
+    inert = Inertia.build(disc, tip_mass=_tip_mass(arm), rotary=0.01, damping_ratio=0.1)
+    expected = inert.force(theta, v, a) + disc.residual(disc.consistent_state(theta), p)[:30]
+    np.testing.assert_allclose(inert.residual(theta, v, a, p), expected, rtol=1e-12,
+                               atol=1e-12 * np.abs(expected).max())

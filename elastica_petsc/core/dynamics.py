@@ -22,6 +22,7 @@ The O(N) loops are compiled (core/fem_dynamics.c, docs/model.md §30).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from . import fem_kernels
@@ -134,12 +135,13 @@ class Inertia:
     def residual(self, theta, v, a, p) -> np.ndarray:
         """The angle rows of the equations of motion (docs/model.md §16.1): ``force``
         plus the static residual R(theta, p) of §8 with the cables ending at the nodes
-        x_{m_i}(theta), in one compiled call; an arm with guides, offsets or weight
-        (core/guided.py) adds its own residual to ``force``."""
-        disc = self.disc
-        if type(disc) is not Discretisation:
+        x_{m_i}(theta), in one compiled call, plus the weight's angle rows (§11.5); an arm
+        with guides or offsets (core/guided.py) adds its own residual to ``force``."""
+        if self._cables is None:                   # guides or offset ends
+            disc = self.disc
             u = disc.consistent_state(theta)
             return self.force(theta, v, a) + disc.residual(u, p)[: disc.n_elements]
+        disc, weight = self._cables
         out = np.empty(disc.n_elements)
         dense = np.ascontiguousarray
         fem_kernels.motion_residual(dense(theta, dtype=float), dense(v, dtype=float),
@@ -147,7 +149,20 @@ class Inertia:
                                     dense(disc.routes, dtype=float), disc.attach_index,
                                     self.weights, self.rotary, self.elastic,
                                     float(self.viscous), float(self.kelvin_voigt), out)
+        if weight.any():        # the weight's -(h/2) n_e . G_e on both nodes of e (§11.5)
+            c, s = disc.trig(theta)
+            q = 0.5 * disc.h * (c * weight[:, 1] - s * weight[:, 0])
+            out -= q
+            out[:-1] -= q[1:]
         return out
+
+    @cached_property
+    def _cables(self):
+        """:func:`straight_cables` of the arm, None with guides or offset ends."""
+        try:
+            return straight_cables(self.disc)
+        except ValueError:
+            return None
 
     def kinetic_energy(self, theta, v) -> float:
         """(1/2) v . M(theta) v = (1/2) sum m_k |x_k'|^2 + (1/2) v M_rot v, units B/l."""
