@@ -79,7 +79,6 @@ class Trajectory:
     steps: int = 0
     rejected: int = 0
     snes_failures: int = 0
-    newton_iterations: int = 0                      # of every step tried
     reason: str = ""
     completed: bool = False
 
@@ -113,8 +112,8 @@ class DynamicsSolver:
     steps ``dt0`` (tau).  ``radius``: rho_inf of the alpha method;
     ``lag_jacobian``: the PC (principal Jacobian and its banded LU) is
     refreshed every this many Newton iterations, across steps
-    (``-snes_lag_jacobian_persists``); with adaptive steps and under length
-    control also at once when the step (the shifts) or a cable's branch changes;
+    (``-snes_lag_jacobian_persists``), with fixed steps and force control only
+    (adaptive steps and length control refresh it every iteration);
     ``max_steps``: cap on accepted steps.  ``comm``, ``options_prefix``
     (``sim_``), ``petsc_options``: the contract of :mod:`.options`.
     """
@@ -132,7 +131,6 @@ class DynamicsSolver:
         self.adaptive = adaptive
         self.disc, self.inertia = disc, inertia
         self.rtol, self.atol, self.radius, self.dt0 = rtol, atol, radius, dt0
-        self.lag_jacobian = lag_jacobian
         self.prefix, self.max_steps = self.options.prefix, max_steps
         self.N, self.n = disc.n_elements, disc.n_tendons
         self.L_band = elastic_band(disc)
@@ -141,10 +139,6 @@ class DynamicsSolver:
         self.drive, self.cables = None, None
         self._alpha2 = Alpha2Params()
         self.stage = (0.5, dt0)          # alpha_f and step of the stage under way
-        # the PC kept by _factor: its key (shifts, stage, branches), its age in calls,
-        # the calls it may serve (set by run); the cables' rows at the last residual
-        self._pc_key, self._pc_age, self.pc_lag = None, 0, 1
-        self._rows_at = None
 
     # --- model pieces -------------------------------------------------------------
     def theta_of(self, U: np.ndarray) -> np.ndarray:
@@ -164,42 +158,15 @@ class DynamicsSolver:
         out = np.empty(N + self.n)
         out[:N] = self.inertia.residual(theta, V[:N], A[:N], p)
         if self.cables is not None:          # length control: the complementarity rows
-            phi, taut, scale = self.cables.rows(t, U, V, *self.stage)
-            out[N:] = phi
-            self._rows_at = (t, U.copy(), V.copy(), (taut, scale))
+            out[N:] = self.cables.rows(t, U, V, *self.stage)[0]
         else:
             out[N:] = p - self.drive.tensions(t)
         return out
 
     def _factor(self, U, V, shift_v, shift_a, t=None):
-        """Set the PC for the iterate (U, V): the one in place while its shifts, stage
-        and cables' branches are this iterate's and it is younger than ``pc_lag``
-        calls (docs/model.md §16.4: a modified Newton), else a fresh one."""
-        branches = self._branches(t, U, V)
-        key = (shift_v, shift_a, self.stage, None if branches is None else
-               branches[0].tobytes())
-        if key == self._pc_key and self._pc_age < self.pc_lag:
-            self._pc_age += 1
-            return
-        self._pc_key, self._pc_age = key, 1
-        self._refactor(U, V, shift_v, shift_a, branches)
-
-    def _branches(self, t, U, V):
-        """(taut, s) of the cables at (t, U, V) (None under force control), from the
-        residual's evaluation at the same point when there was one."""
-        if self.cables is None:
-            return None
-        last = self._rows_at
-        if last is not None and last[0] == t and np.array_equal(last[1], U) \
-                and np.array_equal(last[2], V):
-            return last[3]
-        return self.cables.rows(t, U, V, *self.stage)[1:]
-
-    def _refactor(self, U, V, shift_v, shift_a, branches):
         """Set the PC to the exact inverse of the principal Jacobian at (U, V)
         (d p / d Lambda = shift_v); under length control each cable's row follows
-        the branch ``branches`` = (taut, s) of its complementarity function at this
-        iterate (:mod:`.cable_steps`)."""
+        the branch of its complementarity function at this iterate (:mod:`.cable_steps`)."""
         disc, inert, N = self.disc, self.inertia, self.N
         theta, p = self.theta_of(U), V[N:]
         u = disc.consistent_state(theta)
@@ -222,10 +189,10 @@ class DynamicsSolver:
 
         Y = inverse(Zc)                                      # A'^{-1} C
         gain, taut, row_scale = np.ones(self.n), np.zeros(self.n, bool), 1.0
-        if branches is not None:
+        if self.cables is not None:
             # slack branch -s p: dp = -r / s; taut branch -w, d w / d x = -(shift_v /
             # alpha_f) C^T x (step-end velocities from the alpha point)
-            taut, s = branches
+            _, taut, s = self.cables.rows(t, U, V, *self.stage)
             gain, row_scale = -1.0 / s, self.stage[0]
         taut, known = np.flatnonzero(taut), np.flatnonzero(~taut)
         S = C[:, taut].T @ Y[:, taut]
@@ -375,13 +342,9 @@ class DynamicsSolver:
             self.modes = np.asarray(modes, int).copy()
             self.cables = CableComplementarity(self, drive, self.alpha_f,
                                                self._delassus(self.theta_of(U0)))
-        self.pc_lag, self._pc_key, self._rows_at = 1, None, None
         if self.adaptive or self.cables is not None:
             # the step changes (TSAdapt) or the active set does: a PC kept for another
-            # step's shift or branch stalls Newton, so SNES asks for it at every
-            # iteration and _factor keeps it for pc_lag calls while its key holds
-            self.pc_lag = max(1, PETSc.Options(self.prefix).getInt(
-                "snes_lag_jacobian", int(self.lag_jacobian)))
+            # step's shift or branch stalls Newton, so it is refreshed at every iteration
             self.options.update({"snes_lag_jacobian": 1})
         traj = trajectory if trajectory is not None else Trajectory()
         self._rollbacks = 0
@@ -401,7 +364,6 @@ class DynamicsSolver:
             traj.steps += ts.getStepNumber()
             traj.rejected += ts.getStepRejections() + self._rollbacks
             traj.snes_failures += ts.getSNESFailures()
-            traj.newton_iterations += ts.getSNESIterations()
             t = ts.getTime()
         finally:
             ts.destroy()
