@@ -193,7 +193,7 @@ def test_cli_free_vibration_writes_file(tmp_path):
     with h5py.File(out) as fh:
         T = len(fh["time_s"])
         assert fh["tip_mm"].shape == (T, 2) and fh["x_mm"].shape == (T, 31, 2)
-        assert fh["energy_J"].shape == (T, 3) and fh["tensions_N"].shape == (T, 2)
+        assert fh["energy_J"].shape == (T, 4) and fh["tensions_N"].shape == (T, 2)
         assert fh["time_s"].attrs["units"] == "s" and fh.attrs["kind"] == "simulation"
         assert abs(fh["time_s"][-1] - 1.0) < 1e-9
         # released from a tension pulling the tip up: it swings back below its start

@@ -141,13 +141,14 @@ def test_cli_trace_schedule_then_simulate_it(tmp_path):
 
 
 def test_cli_refuses_an_arm_the_dynamics_does_not_model(tmp_path):
-    """Gravity (and guides, offset ends) are not in the dynamics: one line, status 2, no file."""
+    """Cable guides and offset ends are not in the dynamics (the weight is, §16.4): one
+    line, status 2, no file."""
     from importlib.resources import files
 
-    config = files("elastica_petsc") / "configs" / "paper_vertical.toml"
+    config = files("elastica_petsc") / "configs" / "guided.toml"
     r = _cli("simulate", "--config", str(config), "--tensions-N", "0", "0", "--duration", "1",
              "--out", "v.h5", cwd=tmp_path)
-    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "gravity" in r.stderr, r.stderr
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "guides" in r.stderr, r.stderr
     assert not (tmp_path / "v.h5").exists()
 
 

@@ -102,7 +102,7 @@ def test_tension_history_is_piecewise_linear():
 def test_motion_residual_is_force_plus_static_residual(disc):
     """The fused kernel (one call per residual of the integrator) equals the inertial
     force plus the static residual at the consistent state, with damping and tip mass;
-    an arm with weight (core/guided.py) takes the two-call path, gravity included."""
+    an arm with weight (core/guided.py) adds the weight's rows, gravity included."""
     theta, v = _state(9)
     a = np.random.default_rng(10).standard_normal(N)
     p = np.array([2.0, 5.0])

@@ -121,10 +121,25 @@ def main(argv: list[str] | None = None) -> int:
     # SIGTERM (a batch system, kill) ends a command like Ctrl-C: "interrupted", 130
     signal.signal(signal.SIGTERM, _interrupt)
     try:
-        return _main(argv)
+        status = _main(argv)
     except KeyboardInterrupt:                   # during start-up
         print("elastica-petsc: interrupted", file=sys.stderr)
-        return 130
+        status = 130
+    if status == 130:
+        _forget_unhandled_interrupt()
+    return status
+
+
+def _forget_unhandled_interrupt() -> None:
+    """Let an interrupted command exit with status 130.  CPython marks a
+    KeyboardInterrupt that leaves code run by ``PyRun_String`` as unhandled (petsc4py's
+    module initialisation runs such code), keeps the mark after the interrupt was
+    handled here, and at the end of ``python -m`` kills itself with SIGINT (status
+    -2) instead: a SIGTERM about 0.2 s into PETSc's start-up did so (1 run in 50).
+    Running an empty string through ``PyRun_String`` resets the mark."""
+    import ctypes
+
+    ctypes.pythonapi.PyRun_SimpleString(b"")
 
 
 def warn_unused(petsc_options: list[str]) -> None:

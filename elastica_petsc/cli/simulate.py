@@ -12,7 +12,7 @@ HDF5 layout (``--out``), every accepted step of the integrator::
 
     time_s (T) s, tip_mm (T, 2), x_mm (T, N+1, 2) mm, theta (T, N+1) rad,
     tensions_N (T, n) N, cable_lengths_mm (T, n) mm,
-    energy_J (T, 3) J: kinetic, strain, work done by the tensions,
+    energy_J (T, 4) J: kinetic, strain, work done by the tensions, potential of the weight,
     event_time_s, event_tendon, event_kind (slack/taut events),
     planned_tip_mm (T, 2) mm (schedule: the quasi-static tip at time_s)
 

@@ -22,6 +22,7 @@ The O(N) loops are compiled (core/fem_dynamics.c, docs/model.md §30).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from . import fem_kernels
@@ -78,6 +79,26 @@ def elastic_band(disc: Discretisation) -> np.ndarray:
     return band
 
 
+def straight_cables(disc: Discretisation) -> tuple[Discretisation, np.ndarray]:
+    """The paper's cable kernel of an arm whose cables run straight to the centreline
+    and the weight beyond each element's midpoint G_e (N, 2) (docs/model.md §11.5; zero
+    without weight): the dynamics' preconditioner adds G_e to the cables' forces in T
+    (§16.4).  ValueError for cables through guides or with offset ends."""
+    if type(disc) is Discretisation:
+        return disc, np.zeros((disc.n_elements, 2))
+    if disc.point_nodes != tuple(disc.attach_nodes) or np.any(disc.point_offsets != 0.0):
+        raise ValueError("cables through guides or with offset ends")
+    return Discretisation(disc.n_elements, disc.attach_nodes, disc.routes), disc.element_weight
+
+
+def weight_potential(disc: Discretisation, theta: np.ndarray) -> float:
+    """Potential of the arm's weight and tip mass, -sum_k w_k q . x_k - q_t . x_N
+    (docs/model.md §11.5), units B/l; 0 without weight."""
+    if type(disc) is Discretisation:
+        return 0.0
+    return disc.potential(theta, np.zeros(disc.n_tendons)) - disc.strain_energy(theta)
+
+
 @dataclass(frozen=True)
 class Inertia:
     """Mass and damping data of one discretised arm (non-dimensional)."""
@@ -114,12 +135,13 @@ class Inertia:
     def residual(self, theta, v, a, p) -> np.ndarray:
         """The angle rows of the equations of motion (docs/model.md §16.1): ``force``
         plus the static residual R(theta, p) of §8 with the cables ending at the nodes
-        x_{m_i}(theta), in one compiled call; an arm with guides, offsets or weight
-        (core/guided.py) adds its own residual to ``force``."""
-        disc = self.disc
-        if type(disc) is not Discretisation:
+        x_{m_i}(theta), in one compiled call, plus the weight's angle rows (§11.5); an arm
+        with guides or offsets (core/guided.py) adds its own residual to ``force``."""
+        if self._cables is None:                   # guides or offset ends
+            disc = self.disc
             u = disc.consistent_state(theta)
             return self.force(theta, v, a) + disc.residual(u, p)[: disc.n_elements]
+        disc, weight = self._cables
         out = np.empty(disc.n_elements)
         dense = np.ascontiguousarray
         fem_kernels.motion_residual(dense(theta, dtype=float), dense(v, dtype=float),
@@ -127,7 +149,20 @@ class Inertia:
                                     dense(disc.routes, dtype=float), disc.attach_index,
                                     self.weights, self.rotary, self.elastic,
                                     float(self.viscous), float(self.kelvin_voigt), out)
+        if weight.any():        # the weight's -(h/2) n_e . G_e on both nodes of e (§11.5)
+            c, s = disc.trig(theta)
+            q = 0.5 * disc.h * (c * weight[:, 1] - s * weight[:, 0])
+            out -= q
+            out[:-1] -= q[1:]
         return out
+
+    @cached_property
+    def _cables(self):
+        """:func:`straight_cables` of the arm, None with guides or offset ends."""
+        try:
+            return straight_cables(self.disc)
+        except ValueError:
+            return None
 
     def kinetic_energy(self, theta, v) -> float:
         """(1/2) v . M(theta) v = (1/2) sum m_k |x_k'|^2 + (1/2) v M_rot v, units B/l."""

@@ -35,8 +35,9 @@ def simulation_layout(fh, result) -> None:
     put(fh, "cable_lengths_mm", result.cable_lengths_mm, "mm",
         "cable lengths |r_i - x(s_i)|", ("step", "tendon"))
     put(fh, "energy_J", result.energy_J, "J",
-        "kinetic, strain, work done on the arm by the tensions (columns)",
-        ("step", "energy"), {"energy": ["kinetic", "strain", "work"]})
+        "kinetic, strain, work done on the arm by the tensions, potential of the weight "
+        "(columns; kinetic + strain - work + weight is conserved without damping)",
+        ("step", "energy"), {"energy": ["kinetic", "strain", "work", "gravity"]})
     ev = result.events
     put(fh, "event_time_s", np.array([e[0] for e in ev], float), "s", "slack/taut events", ("event",))
     put(fh, "event_tendon", np.array([e[1] for e in ev], int), "1", "tendon of each event", ("event",))

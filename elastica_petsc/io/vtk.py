@@ -239,7 +239,8 @@ def write_simulation(directory, result, *, name: str = "simulation",
     its cables at every recorded step (``<name>_<K>.vtu``, as :func:`write_state`),
     ``<name>.pvd`` listing them with their time in seconds, and ``<name>_tip.vtu``:
     the tip's path as line cells with per-step ``time_s``, ``tension_i_N``,
-    ``cable_length_i_mm`` and the energies ``kinetic_J``, ``strain_J``, ``work_J``;
+    ``cable_length_i_mm`` and the energies ``kinetic_J``, ``strain_J``, ``work_J``,
+    ``gravity_J``;
     ``on_step(done, total)`` after each state file."""
     directory = Path(directory)
     directory.mkdir(exist_ok=True)
@@ -256,7 +257,7 @@ def write_simulation(directory, result, *, name: str = "simulation",
     for i in range(result.tensions_N.shape[1]):
         data[f"tension_{i + 1}_N"] = result.tensions_N[:, i]
         data[f"cable_length_{i + 1}_mm"] = result.cable_lengths_mm[:, i]
-    for c, kind in enumerate(("kinetic", "strain", "work")):
+    for c, kind in enumerate(("kinetic", "strain", "work", "gravity")):
         data[f"{kind}_J"] = result.energy_J[:, c]
     cells = (VTK_LINE, np.column_stack((np.arange(T - 1), np.arange(1, T)))) if T > 1 else \
         (VTK_VERTEX, np.zeros((1, 1), np.int64))        # a run stopped at its first step

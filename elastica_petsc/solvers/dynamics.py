@@ -50,7 +50,8 @@ import numpy as np
 from petsc4py import PETSc
 
 from ..core.drive import LengthDrive, TensionDrive
-from ..core.dynamics import BandedInverse, Inertia, elastic_band
+from ..core.dynamics import (BandedInverse, Inertia, elastic_band, straight_cables,
+                             weight_potential)
 from ..core.fem import Discretisation
 from .alpha2_start import START_UP, Alpha2Params
 from .cable_steps import CableComplementarity
@@ -74,6 +75,7 @@ class Trajectory:
     lengths: list = field(default_factory=list)     # (n,) |r_i - x_i|
     kinetic: list = field(default_factory=list)     # B/l
     strain: list = field(default_factory=list)      # B/l
+    gravity: list = field(default_factory=list)     # potential of the weight, B/l (§11.5)
     work: list = field(default_factory=list)        # work of the tensions on the arm, B/l
     events: list = field(default_factory=list)      # (time, tendon from 1, "slack"|"taut")
     steps: int = 0
@@ -130,6 +132,8 @@ class DynamicsSolver:
         self.comm = check_comm(comm)
         self.adaptive = adaptive
         self.disc, self.inertia = disc, inertia
+        # the cables' kernel and the weight G_e of an arm with weight (docs/model.md §16.4)
+        self.cable_disc, self.weight = straight_cables(disc)
         self.rtol, self.atol, self.radius, self.dt0 = rtol, atol, radius, dt0
         self.prefix, self.max_steps = self.options.prefix, max_steps
         self.N, self.n = disc.n_elements, disc.n_tendons
@@ -145,12 +149,13 @@ class DynamicsSolver:
         return np.concatenate(([0.0], U[: self.N]))
 
     def cable_lengths(self, theta: np.ndarray) -> np.ndarray:
-        x = self.disc.node_positions(theta)[self.attach]
-        return np.linalg.norm(self.disc.routes - x, axis=1)
+        x = self.cable_disc.node_positions(theta)[self.attach]
+        return np.linalg.norm(self.cable_disc.routes - x, axis=1)
 
     def grad_lengths(self, theta) -> np.ndarray:
         """grad_theta L_i, (n, N)."""
-        return self.disc.load_derivative(self.disc.consistent_state(theta))[:, : self.N]
+        disc = self.cable_disc
+        return disc.load_derivative(disc.consistent_state(theta))[:, : self.N]
 
     def residual(self, t, U, V, A) -> np.ndarray:
         N = self.N
@@ -167,13 +172,15 @@ class DynamicsSolver:
         """Set the PC to the exact inverse of the principal Jacobian at (U, V)
         (d p / d Lambda = shift_v); under length control each cable's row follows
         the branch of its complementarity function at this iterate (:mod:`.cable_steps`)."""
-        disc, inert, N = self.disc, self.inertia, self.N
+        disc, inert, N = self.cable_disc, self.inertia, self.N
         theta, p = self.theta_of(U), V[N:]
         u = disc.consistent_state(theta)
         t_ = disc.terms(u, p)
         g = disc.attachment_gradients(theta, (t_.c, t_.s))
         sigma = shift_a + inert.viscous * shift_v
-        band = disc.band(theta, t_.d, p, t_) + shift_v * inert.kelvin_voigt * self.L_band \
+        # the weight is a dead load: its stiffness (h/4) t_e . G_e is T's (§11.5)
+        weighted = t_._replace(force=t_.force + self.weight)
+        band = disc.band(theta, t_.d, p, weighted) + shift_v * inert.kelvin_voigt * self.L_band \
             + sigma * inert.rotary
         inv = BandedInverse(disc, theta, inert.weights, sigma, band)
         Ut = disc.transverse_gradients(g, t_.d).T           # (N, n)
@@ -212,7 +219,8 @@ class DynamicsSolver:
     def _delassus(self, theta) -> np.ndarray:
         """diag(C^T M^{-1} C), C = [grad L_i]: 1 / the effective mass of each cable's end."""
         C = self.grad_lengths(theta).T
-        inv = BandedInverse(self.disc, theta, self.inertia.weights, 1.0, self.inertia.rotary)
+        inv = BandedInverse(self.cable_disc, theta, self.inertia.weights, 1.0,
+                            self.inertia.rotary)
         return np.einsum("ki,ki->i", C, inv.solve(C).reshape(C.shape))
 
     @property
@@ -414,6 +422,7 @@ class DynamicsSolver:
         traj.lengths.append(lengths)
         traj.kinetic.append(self.inertia.kinetic_energy(theta, V[: self.N]))
         traj.strain.append(self.disc.strain_energy(theta))
+        traj.gravity.append(weight_potential(self.disc, theta))
         traj.work.append(work)
 
 

@@ -1,6 +1,6 @@
 """A simulation in user units: start state, motor input, the run (docs/model.md §16).
 
-Start states: the straight arm at rest, the static equilibrium at given
+Start states: the straight arm at rest (sagging under any weight), the static equilibrium at given
 tensions (loaded in a given order), or the last shape of a file the tool
 wrote (``theta``/``theta_rad`` dataset).  Inputs: constant tensions, a
 tension history (core/drive.py) or a motor schedule (cable lengths in time).
@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.drive import LengthDrive, TensionDrive, read_schedule, read_tension_history
-from ..core.dynamics import Inertia
+from ..core.dynamics import Inertia, straight_cables
 from ..core.errors import InputError
 from ..core.fem import Discretisation
 from ..core.model import Arm
@@ -52,7 +52,7 @@ class SimulationResult(Result):
     x_mm: np.ndarray                    # (T, N+1, 2)
     tensions_N: np.ndarray              # (T, n)
     cable_lengths_mm: np.ndarray        # (T, n)
-    energy_J: np.ndarray                # (T, 3): kinetic, strain, work of the tensions
+    energy_J: np.ndarray                # (T, 4): kinetic, strain, work of the tensions, weight's potential
     events: list                        # (time_s, tendon, "slack"|"taut")
     steps: int
     rejected: int
@@ -104,7 +104,7 @@ class SimulationResult(Result):
         if self.planned_tip_mm is not None:
             dev = float(np.max(np.linalg.norm(self.tip_mm - self.planned_tip_mm, axis=1)))
         E = self.energy_J
-        total = E[:, 0] + E[:, 1] - E[:, 2]
+        total = E[:, 0] + E[:, 1] - E[:, 2] + E[:, 3]
         return {"input": self.input, "elements": self.elements, "completed": self.completed,
                 "reason": self.reason, "duration_s": float(self.time_s[-1]),
                 "steps": self.steps, "rejected": self.rejected,
@@ -128,8 +128,8 @@ def _start_theta(disc: Discretisation, tensions, order, from_theta):
             raise InputError(f"the start shape has {theta.size - 1} elements, the mesh "
                              f"{disc.n_elements}; use --elements {theta.size - 1}")
         return theta, np.zeros(n)
-    if tensions is None or not np.any(tensions):
-        return np.zeros(disc.n_elements + 1), np.zeros(n)
+    if tensions is None or not np.any(tensions):      # at rest: sagging under any weight
+        return disc.split(disc.straight())[0], np.zeros(n)
     eq = solve_equilibrium(disc, tensions, order=order)
     if not eq.converged:
         raise InputError(f"no equilibrium at the initial tensions: {eq.message}")
@@ -146,11 +146,12 @@ def first_frequency(disc: Discretisation, arm: Arm, theta, p) -> float:
 
 def build_inertia(arm: Arm, disc: Discretisation) -> Inertia:
     """Masses and damping of the arm (docs/model.md §16.2); zeta_1 at the unloaded
-    first mode of this mesh with the tip mass."""
+    first mode of this mesh with the tip mass (sagging under any weight, §11.5)."""
     tip = arm.tip_mass_kg / (arm.mass_per_length_kg_m * arm.length_mm * 1e-3)
     dyn = arm.dynamics
     rotary = (arm.thickness_mm / arm.length_mm) ** 2 / 12.0 if dyn.rotary_inertia else 0.0
-    omega1 = first_frequency(disc, arm, np.zeros(disc.n_elements + 1), np.zeros(disc.n_tendons))
+    omega1 = first_frequency(disc, arm, disc.split(disc.straight())[0],
+                             np.zeros(disc.n_tendons))
     return Inertia.build(disc, tip_mass=tip, rotary=rotary, damping_ratio=dyn.damping_ratio,
                          kelvin_voigt_fraction=dyn.kelvin_voigt_fraction, omega1=omega1)
 
@@ -169,10 +170,12 @@ def simulate(arm: Arm, *, elements: int | None = None, initial_tensions_N=None, 
     """
     tau = time_scale_s(arm)
     disc = Discretisation.from_arm(arm, elements)
-    if type(disc) is not Discretisation:
-        raise InputError("simulate handles arms with straight cables and no weight only: "
-                         "cable guides, offset cable ends and gravity are not in the dynamics "
-                         "yet (docs/model.md §16.6)")
+    try:
+        straight_cables(disc)
+    except ValueError:
+        raise InputError("simulate handles arms with straight cables only: cable guides and "
+                         "offset cable ends are not in the dynamics yet (docs/model.md §16.6)"
+                         ) from None
     n = disc.n_tendons
     given = [x is not None for x in (tensions_N, history_csv, schedule_csv)]
     if sum(given) != 1:
@@ -240,7 +243,7 @@ def _result(arm, disc, kind, traj, tau, wall, f1, rows) -> SimulationResult:
     theta = np.asarray(traj.theta)
     x = np.array([disc.node_positions(th) for th in theta]) * arm.length_mm
     B_over_l = arm.bending_stiffness_Nm2 / (arm.length_mm * 1e-3)
-    energy = np.column_stack((traj.kinetic, traj.strain, traj.work)) * B_over_l
+    energy = np.column_stack((traj.kinetic, traj.strain, traj.work, traj.gravity)) * B_over_l
     planned = None
     if rows is not None and rows.tips_mm is not None:      # the quasi-static path in time
         t_rows = rows.time_s - rows.time_s[0]
